@@ -1,0 +1,86 @@
+// Unidirectional path tracing with next-event estimation and MIS (power heuristic) at diffuse
+// vertices, Russian roulette after `rr_start` bounces. integrator.max_bounces is only a safety cap far beyond
+// where roulette ends any path that carries energy.
+
+// Offsets a ray origin off the surface to the side `dir` leaves towards.
+vec3 offset_origin(vec3 p, vec3 n, vec3 dir) {
+    float scale = 1e-4 * max(1.0, max3(abs(p)));
+    return p + (dot(dir, n) > 0.0 ? n : -n) * scale;
+}
+
+// Survival probability for Russian roulette at a bounce past rr_start.
+float survival_probability(vec3 throughput) {
+    float absorption = frame.roulette.x;
+    if (absorption >= 0.0) return 1.0 - absorption;
+    return clamp(max3(throughput), frame.roulette.y, frame.roulette.z);
+}
+
+vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
+    vec3 radiance = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    bool nee = frame.integrator.y != 0u;
+    uint rr_start = frame.integrator.x;
+    // Where the previous bounce came from, for the MIS weight of emitters hit by BSDF sampling.
+    bool after_diffuse = false;
+    float bsdf_pdf = 0.0;
+    vec3 prev_point = origin;
+
+    uint max_bounces = frame.integrator.w;
+    for (uint depth = 0u; depth < max_bounces; ++depth) {
+        Hit hit;
+        rays += 1u;
+        if (!trace_ray(origin, dir, 1e30, false, hit)) {
+            radiance += throughput * environment_radiance(dir);
+            break;
+        }
+        Primitive p = prims[hit.prim];
+        Material m = materials[prim_material(p)];
+        vec3 point = origin + hit.t * dir;
+        vec3 n = primitive_normal(p, point);
+        bool front = dot(n, dir) < 0.0;
+
+        vec3 le = emitted_radiance(m, front);
+        if (max3(le) > 0.0) {
+            float weight = 1.0;
+            if (nee && after_diffuse) {
+                weight = power_heuristic(bsdf_pdf, light_pdf(p, prev_point, dir, hit.t));
+            }
+            radiance += throughput * le * weight;
+        }
+
+        if (depth >= rr_start) {
+            float q = survival_probability(throughput);
+            if (rng_next(rng) >= q) break;
+            throughput /= q;
+        }
+
+        Scatter s = scatter(m, dir, n, front, rng);
+        throughput *= s.weight;
+        after_diffuse = s.event == EVENT_DIFFUSE;
+        if (after_diffuse) {
+            vec3 n_in = front ? n : -n;
+            if (nee) {
+                LightSample ls;
+                if (sample_light(point, rng, ls)) {
+                    float cos_surface = dot(n_in, ls.dir);
+                    if (cos_surface > 0.0) {
+                        rays += 1u;
+                        vec3 shadow_origin = offset_origin(point, n, ls.dir);
+                        // Stop short of the light so its own surface does not count as a blocker.
+                        if (!occluded(shadow_origin, ls.dir, ls.dist * (1.0 - 1e-4))) {
+                            float brdf_pdf = cos_surface * INV_PI;
+                            float weight = power_heuristic(ls.pdf, brdf_pdf);
+                            radiance += throughput * ls.radiance * (cos_surface * INV_PI * weight / ls.pdf);
+                        }
+                    }
+                }
+            }
+            bsdf_pdf = max(0.0, dot(n_in, s.dir)) * INV_PI;
+            prev_point = point;
+        }
+        if (max3(throughput) <= 0.0) break;
+        origin = offset_origin(point, n, s.dir);
+        dir = s.dir;
+    }
+    return radiance;
+}

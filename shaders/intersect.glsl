@@ -1,0 +1,67 @@
+// Ray/primitive intersection. Each returns the hit distance in (0, t_max) or -1.
+
+const float NO_HIT = -1.0;
+
+float intersect_sphere(vec3 center, float radius, vec3 o, vec3 d, float t_max) {
+    vec3 oc = o - center;
+    float b = dot(oc, d);
+    // Distance-to-plane form of the discriminant keeps precision for distant small spheres.
+    vec3 perp = oc - b * d;
+    float disc = radius * radius - dot(perp, perp);
+    if (disc < 0.0) return NO_HIT;
+    float root = sqrt(disc);
+    float t_near = -b - root;
+    float t_far = -b + root;
+    if (t_near > 0.0 && t_near < t_max) return t_near;
+    if (t_far > 0.0 && t_far < t_max) return t_far;
+    return NO_HIT;
+}
+
+float intersect_quad(vec3 origin, vec3 eu, vec3 ev, vec3 o, vec3 d, float t_max) {
+    vec3 n = cross(eu, ev);
+    float denom = dot(n, d);
+    if (abs(denom) < 1e-20) return NO_HIT;
+    float t = dot(n, origin - o) / denom;
+    if (!(t > 0.0 && t < t_max)) return NO_HIT;
+    vec3 rel = o + t * d - origin;
+    vec3 w = n / dot(n, n);
+    float alpha = dot(w, cross(rel, ev));
+    float beta = dot(w, cross(eu, rel));
+    return (alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0) ? t : NO_HIT;
+}
+
+// Moller-Trumbore.
+float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max) {
+    vec3 p = cross(d, e2);
+    float det = dot(e1, p);
+    if (abs(det) < 1e-20) return NO_HIT;
+    float inv_det = 1.0 / det;
+    vec3 s = o - v0;
+    float u = dot(s, p) * inv_det;
+    if (u < 0.0 || u > 1.0) return NO_HIT;
+    vec3 q = cross(s, e1);
+    float v = dot(d, q) * inv_det;
+    if (v < 0.0 || u + v > 1.0) return NO_HIT;
+    float t = dot(e2, q) * inv_det;
+    return (t > 0.0 && t < t_max) ? t : NO_HIT;
+}
+
+float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
+    uint kind = prim_kind(p);
+    if (kind == PRIM_SPHERE) return intersect_sphere(p.a.xyz, p.a.w, o, d, t_max);
+    if (kind == PRIM_QUAD) return intersect_quad(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max);
+    return intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max);
+}
+
+// Outward (sphere) or front-side (quad, triangle) unit normal at a point on the primitive.
+vec3 primitive_normal(Primitive p, vec3 point) {
+    if (prim_kind(p) == PRIM_SPHERE) return (point - p.a.xyz) / p.a.w;
+    return normalize(cross(p.b.xyz, p.c.xyz));
+}
+
+float primitive_area(Primitive p) {
+    uint kind = prim_kind(p);
+    if (kind == PRIM_SPHERE) return 4.0 * PI * p.a.w * p.a.w;
+    float parallelogram = length(cross(p.b.xyz, p.c.xyz));
+    return kind == PRIM_QUAD ? parallelogram : 0.5 * parallelogram;
+}

@@ -1,0 +1,72 @@
+// GPU data layout: every struct here has a twin in src/render/layout.rs, pinned by size/offset tests.
+// Only vec4/uvec4 members in the uniform block, so std140 and std430 agree.
+
+// Primitive kinds (PRIM_* must match layout.rs).
+const uint PRIM_SPHERE = 0u;
+const uint PRIM_QUAD = 1u;
+const uint PRIM_TRIANGLE = 2u;
+
+// Sphere:   a.xyz = center, a.w = radius.
+// Quad:     a.xyz = origin, b.xyz = edge u, c.xyz = edge v; the emitting side faces cross(u, v).
+// Triangle: a.xyz = v0, b.xyz = v1 - v0, c.xyz = v2 - v0; the front side faces cross(e1, e2).
+// b.w holds the kind and c.w the material index, as raw uint bits.
+struct Primitive {
+    vec4 a;
+    vec4 b;
+    vec4 c;
+};
+
+// albedo_r.w = reflectivity R, emission_t.w = transparency T, params.x = ior,
+// params.y = 1 when the emitter radiates from both sides.
+struct Material {
+    vec4 albedo_r;
+    vec4 emission_t;
+    vec4 params;
+};
+
+// Flattened BVH node (src/bvh): first child is the next node, `offset` is the second child for an
+// interior node or the first primitive for a leaf; meta = prim_count << 2 | split_axis.
+struct BvhNode {
+    vec3 bmin;
+    uint offset;
+    vec3 bmax;
+    uint meta;
+};
+
+// Environment kinds (ENV_* must match layout.rs).
+const uint ENV_CONSTANT = 0u;
+const uint ENV_ANGULAR = 1u;
+const uint ENV_LATLONG = 2u;
+
+layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
+    vec4 cam_origin;    // w unused
+    vec4 cam_forward;   // w = tan(vertical fov / 2)
+    vec4 cam_right;     // w = width / height
+    vec4 cam_up;        // w unused
+    vec4 env_color;     // constant radiance, or the map's intensity multiplier (rgb)
+    vec4 env_rotation;  // x = cos, y = sin of the map's rotation about +y
+    uvec4 image;        // width, height, seed, light count
+    uvec4 integrator;   // rr_start, nee (0/1), env kind, max depth
+    uvec4 env_size;     // map width, map height, primitive count, node count
+    vec4 roulette;      // x = fixed absorption (< 0: derive from throughput), y = q min, z = q max
+} frame;
+
+layout(push_constant) uniform PassBlock {
+    uint sample_base;   // index of the first sample this dispatch adds
+    uint sample_count;  // samples per pixel this dispatch adds
+    uint row_offset;    // first image row of this dispatch's band
+    uint row_count;     // rows in the band
+} pass;
+
+layout(std430, set = 0, binding = 1) readonly buffer NodeBuffer { BvhNode nodes[]; };
+layout(std430, set = 0, binding = 2) readonly buffer PrimitiveBuffer { Primitive prims[]; };
+layout(std430, set = 0, binding = 3) readonly buffer MaterialBuffer { Material materials[]; };
+layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { uint light_prims[]; };
+layout(std430, set = 0, binding = 5) readonly buffer EnvironmentBuffer { vec4 env_texels[]; };
+// Per pixel: rgb = sum of sample radiance, a = samples accumulated.
+layout(std430, set = 0, binding = 6) buffer AccumBuffer { vec4 accum[]; };
+// x = rays traced (wraps per dispatch; the host reads and clears it each dispatch).
+layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; } stats;
+
+uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
+uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }

@@ -1,0 +1,65 @@
+// Area lights: every emissive primitive. One is picked uniformly, then a point (or, for spheres, a
+// direction in the cone they subtend) is sampled on it. Pdfs are per unit solid angle at `ref`.
+
+struct LightSample {
+    vec3 dir;
+    float dist;
+    float pdf;      // solid angle, including the 1 / light count of the pick
+    vec3 radiance;
+};
+
+// Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, otherwise by area).
+float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
+    float light_count = float(frame.image.w);
+    if (prim_kind(p) == PRIM_SPHERE) {
+        vec3 to_center = p.a.xyz - ref;
+        float d2 = dot(to_center, to_center);
+        float r2 = p.a.w * p.a.w;
+        if (d2 > r2) {
+            float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
+            return 1.0 / (2.0 * PI * (1.0 - cos_max) * light_count);
+        }
+    }
+    vec3 point = ref + dist * dir;
+    float cos_light = abs(dot(primitive_normal(p, point), dir));
+    if (cos_light <= 0.0) return 0.0;
+    return dist * dist / (cos_light * primitive_area(p) * light_count);
+}
+
+bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
+    uint count = frame.image.w;
+    ls.pdf = 0.0;
+    if (count == 0u) return false;
+    uint index = min(uint(rng_next(rng) * float(count)), count - 1u);
+    Primitive p = prims[light_prims[index]];
+    vec2 u = rng_next2(rng);
+    vec3 point;
+    uint kind = prim_kind(p);
+    if (kind == PRIM_SPHERE) {
+        vec3 to_center = p.a.xyz - ref;
+        float d2 = dot(to_center, to_center);
+        float r2 = p.a.w * p.a.w;
+        if (d2 > r2) {
+            float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
+            vec3 dir = sample_cone(u, to_center / sqrt(d2), cos_max);
+            float t = intersect_sphere(p.a.xyz, p.a.w, ref, dir, 1e30);
+            // Grazing directions can miss by rounding: use the tangent distance.
+            point = ref + dir * (t > 0.0 ? t : sqrt(max(0.0, d2 - r2)));
+        } else {
+            point = p.a.xyz + p.a.w * sample_uniform_sphere(u);
+        }
+    } else if (kind == PRIM_QUAD) {
+        point = p.a.xyz + u.x * p.b.xyz + u.y * p.c.xyz;
+    } else {
+        vec2 b = sample_triangle(u);
+        point = p.a.xyz + b.x * p.b.xyz + b.y * p.c.xyz;
+    }
+    vec3 to_point = point - ref;
+    ls.dist = length(to_point);
+    if (ls.dist <= 0.0) return false;
+    ls.dir = to_point / ls.dist;
+    bool front = dot(primitive_normal(p, point), ls.dir) < 0.0;
+    ls.radiance = emitted_radiance(materials[prim_material(p)], front);
+    ls.pdf = light_pdf(p, ref, ls.dir, ls.dist);
+    return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
+}

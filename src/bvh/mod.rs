@@ -1,0 +1,74 @@
+//! Bounding volume hierarchy over primitive bounds: built on the CPU with binned SAH, flattened into
+//! the 32-byte `BvhNode` layout the GLSL kernel walks, and walkable on the CPU by the same algorithm.
+//!
+//! A BVH over zero primitives is the single node `BvhNode::EMPTY_ROOT`: an inverted box that the
+//! sign-ordered slab test (`ray_box`, mirrored by the kernel) never hits, so no traversal reads past it.
+
+mod aabb;
+mod flatten;
+mod node;
+mod sah;
+mod stats;
+#[cfg(test)]
+mod test_scenes;
+mod traverse;
+
+use sah::BuildPrim;
+
+pub use aabb::Aabb;
+pub use node::BvhNode;
+pub use stats::BuildStats;
+pub use traverse::{any_hit, closest_hit, ray_box, Ray};
+
+/// Deepest leaf level (root = 0) the builder emits. It is also the traversal stack size: the stack
+/// holds at most one pending far child per level above the current node.
+pub const MAX_DEPTH: usize = 64;
+
+/// Most primitives in one leaf; larger sets are always split.
+pub const MAX_LEAF_SIZE: usize = 8;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bvh {
+    /// Depth-first node array, root at 0 (layout contract on `BvhNode`).
+    pub nodes: Vec<BvhNode>,
+    /// `prim_order[i]` = original index of the i-th primitive in leaf order.
+    pub prim_order: Vec<u32>,
+}
+
+impl Bvh {
+    pub fn is_empty(&self) -> bool {
+        self.prim_order.is_empty()
+    }
+}
+
+/// Builds from per-primitive bounds. Deterministic: the same input gives the same nodes whatever the
+/// thread count. Non-finite bounds do not panic or stall the build but give useless boxes; callers
+/// are expected to have rejected them (`Aabb::is_valid`).
+///
+/// Panics when there are more than `u32::MAX` primitives, which the node format cannot index.
+pub fn build(prim_bounds: &[Aabb]) -> Bvh {
+    if prim_bounds.is_empty() {
+        return Bvh {
+            nodes: vec![BvhNode::EMPTY_ROOT],
+            prim_order: Vec::new(),
+        };
+    }
+    assert!(
+        u32::try_from(prim_bounds.len()).is_ok(),
+        "{} primitives exceed u32 indices",
+        prim_bounds.len()
+    );
+    let mut prims: Vec<BuildPrim> = prim_bounds
+        .iter()
+        .enumerate()
+        .map(|(index, &bounds)| BuildPrim {
+            bounds,
+            index: index as u32,
+        })
+        .collect();
+    let tree = sah::build_tree(&mut prims, MAX_DEPTH);
+    Bvh {
+        nodes: flatten::flatten(&tree, prims.len()),
+        prim_order: prims.iter().map(|p| p.index).collect(),
+    }
+}

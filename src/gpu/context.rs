@@ -1,0 +1,290 @@
+//! Vulkan instance, physical-device choice, logical device, queue and memory allocator.
+
+use super::validation::{self, ValidationLog};
+use anyhow::{anyhow, bail, Context as _, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::mem::ManuallyDrop;
+use std::sync::Mutex;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum DeviceType {
+    // Declared in order of preference: a discrete GPU first, a CPU implementation (lavapipe) last.
+    Discrete,
+    Integrated,
+    Virtual,
+    Other,
+    Cpu,
+}
+
+impl DeviceType {
+    fn from_vk(t: vk::PhysicalDeviceType) -> Self {
+        match t {
+            vk::PhysicalDeviceType::DISCRETE_GPU => Self::Discrete,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => Self::Integrated,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => Self::Virtual,
+            vk::PhysicalDeviceType::CPU => Self::Cpu,
+            _ => Self::Other,
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Discrete => "discrete GPU",
+            Self::Integrated => "integrated GPU",
+            Self::Virtual => "virtual GPU",
+            Self::Other => "other",
+            Self::Cpu => "CPU",
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub index: usize,
+    pub name: String,
+    pub kind: DeviceType,
+    pub api_version: String,
+    pub driver: String,
+    pub max_storage_buffer_range: u64,
+    pub device_local_bytes: u64,
+    has_compute_queue: bool,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Case-insensitive substring of a device name, or a device index from `caustica devices`.
+    pub device: Option<String>,
+    /// Enable the Khronos validation layer (when installed) and record its messages.
+    pub validation: bool,
+}
+
+pub struct GpuContext {
+    _entry: ash::Entry,
+    pub(super) instance: ash::Instance,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    // Boxed so the pointer handed to the validation callback stays put.
+    validation_log: Box<ValidationLog>,
+    pub(super) device: ash::Device,
+    pub(super) queue: vk::Queue,
+    pub(super) command_pool: vk::CommandPool,
+    pub(super) allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub info: DeviceInfo,
+}
+
+fn load_entry() -> Result<ash::Entry> {
+    unsafe { ash::Entry::load() }.map_err(|e| {
+        anyhow!(
+            "cannot load the Vulkan loader (libvulkan.so.1): {e}. Install it, e.g. `apt-get install libvulkan1 mesa-vulkan-drivers`"
+        )
+    })
+}
+
+fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instance, bool)> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"caustica")
+        .engine_name(c"caustica")
+        .api_version(vk::API_VERSION_1_2);
+    let layer_available = validation
+        && unsafe { entry.enumerate_instance_layer_properties() }
+            .unwrap_or_default()
+            .iter()
+            .any(|l| l.layer_name_as_c_str().ok() == Some(validation::LAYER_NAME));
+    if validation && !layer_available {
+        eprintln!("caustica: validation requested but {:?} is not installed; running without it", validation::LAYER_NAME);
+    }
+    let layers = if layer_available { vec![validation::LAYER_NAME.as_ptr()] } else { vec![] };
+    let extensions = if layer_available { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+    let info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&extensions);
+    let instance = unsafe { entry.create_instance(&info, None) }
+        .map_err(|e| anyhow!("vkCreateInstance failed: {e} (is a Vulkan driver installed? try mesa-vulkan-drivers)"))?;
+    Ok((instance, layer_available))
+}
+
+fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> DeviceInfo {
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let queues = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let device_local_bytes = memory.memory_heaps[..memory.memory_heap_count as usize]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
+    let v = props.api_version;
+    DeviceInfo {
+        index,
+        name: props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
+        kind: DeviceType::from_vk(props.device_type),
+        api_version: format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v)),
+        driver: format!("{:#x}", props.driver_version),
+        max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
+        device_local_bytes,
+        has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
+    }
+}
+
+fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {
+    let devices = unsafe { instance.enumerate_physical_devices() }.context("vkEnumeratePhysicalDevices failed")?;
+    Ok(devices.into_iter().enumerate().map(|(i, pd)| (pd, describe(instance, pd, i))).collect())
+}
+
+/// Every Vulkan device the loader sees, in the loader's order.
+pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+    let entry = load_entry()?;
+    let (instance, _) = create_instance(&entry, false)?;
+    let devices = enumerate(&instance);
+    unsafe { instance.destroy_instance(None) };
+    Ok(devices?.into_iter().map(|(_, info)| info).collect())
+}
+
+/// The requested device, or the most preferred kind (discrete GPU first, CPU last).
+fn choose(devices: Vec<(vk::PhysicalDevice, DeviceInfo)>, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, DeviceInfo)> {
+    let names = devices.iter().map(|(_, d)| format!("{}: {}", d.index, d.name)).collect::<Vec<_>>().join(", ");
+    let usable = devices.into_iter().filter(|(_, d)| d.has_compute_queue);
+    match wanted {
+        Some(w) => {
+            let w_lower = w.to_lowercase();
+            usable
+                .filter(|(_, d)| d.index.to_string() == w || d.name.to_lowercase().contains(&w_lower))
+                .min_by_key(|(_, d)| d.index)
+                .ok_or_else(|| anyhow!("no Vulkan device matches --device '{w}' (devices: {names})"))
+        }
+        None => usable
+            .min_by_key(|(_, d)| (d.kind, d.index))
+            .ok_or_else(|| anyhow!("no Vulkan device with a compute queue was found (devices: [{names}])")),
+    }
+}
+
+impl GpuContext {
+    pub fn new(options: &ContextOptions) -> Result<Self> {
+        let entry = load_entry()?;
+        let (instance, validating) = create_instance(&entry, options.validation)?;
+        let validation_log = Box::<ValidationLog>::default();
+        let debug = if validating {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let messenger = unsafe { loader.create_debug_utils_messenger(&validation::messenger_info(&validation_log), None) }
+                .context("creating the validation messenger")?;
+            Some((loader, messenger))
+        } else {
+            None
+        };
+        let (physical, info) = choose(enumerate(&instance)?, options.device.as_deref())?;
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let family = families
+            .iter()
+            .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
+            .ok_or_else(|| anyhow!("{} has no compute queue", info.name))? as u32;
+        let priorities = [1.0f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        let device = unsafe { instance.create_device(physical, &device_info, None) }
+            .with_context(|| format!("creating a logical device on {}", info.name))?;
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        let command_pool = unsafe {
+            device.create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )
+        }?;
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .context("creating the GPU memory allocator")?;
+        Ok(Self {
+            _entry: entry,
+            instance,
+            debug,
+            validation_log,
+            device,
+            queue,
+            command_pool,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            info,
+        })
+    }
+
+    /// Validation messages recorded since the last call (empty when validation is off).
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        self.validation_log.take()
+    }
+
+    pub fn validating(&self) -> bool {
+        self.debug.is_some()
+    }
+
+    /// Fails when the validation layer reported anything: the results can no longer be trusted.
+    pub fn check_validation(&self) -> Result<()> {
+        let messages = self.take_validation_messages();
+        if messages.is_empty() {
+            return Ok(());
+        }
+        bail!("the Vulkan validation layer reported {} message(s); first: {}", messages.len(), messages[0])
+    }
+
+    pub(super) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Records commands into a one-off command buffer, submits it and waits for it to finish.
+    pub fn submit_and_wait(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
+        let device = &self.device;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cb = unsafe { device.allocate_command_buffers(&alloc) }?[0];
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
+        let result = (|| -> Result<()> {
+            unsafe {
+                device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT))?;
+                record(device, cb);
+                device.end_command_buffer(cb)?;
+                let cbs = [cb];
+                let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
+                device.queue_submit(self.queue, &submit, fence).map_err(describe_vk_error)?;
+                device.wait_for_fences(&[fence], true, u64::MAX).map_err(describe_vk_error)?;
+            }
+            Ok(())
+        })();
+        unsafe {
+            device.destroy_fence(fence, None);
+            device.free_command_buffers(self.command_pool, &[cb]);
+        }
+        result
+    }
+}
+
+fn describe_vk_error(e: vk::Result) -> anyhow::Error {
+    match e {
+        vk::Result::ERROR_DEVICE_LOST => anyhow!("the GPU was lost (VK_ERROR_DEVICE_LOST): the driver reset it, or a dispatch ran too long"),
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => anyhow!("the GPU ran out of memory (VK_ERROR_OUT_OF_DEVICE_MEMORY)"),
+        vk::Result::ERROR_OUT_OF_HOST_MEMORY => anyhow!("out of host memory (VK_ERROR_OUT_OF_HOST_MEMORY)"),
+        other => anyhow!("Vulkan error {other}"),
+    }
+}
+
+impl Drop for GpuContext {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_command_pool(self.command_pool, None);
+            self.device.destroy_device(None);
+            if let Some((loader, messenger)) = self.debug.take() {
+                loader.destroy_debug_utils_messenger(messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! OpenEXR via the `exr` crate: 32-bit float RGB out, first RGB(A) layer in.
+
+use std::path::Path;
+
+use ::exr::meta::MetaData;
+use ::exr::prelude::{read_first_rgba_layer_from_file, write_rgb_file, Vec2};
+
+use super::{check_size, file_name, ImageError, RgbImage};
+
+/// Writes full-precision f32 RGB with the crate's default lossless compression.
+pub fn write(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
+    write_rgb_file(path, img.width as usize, img.height as usize, |x, y| {
+        let [r, g, b] = img.get(x as u32, y as u32);
+        (r, g, b)
+    })
+    .map_err(|source| exr_error(path, source))
+}
+
+/// Reads the first layer that has R, G and B channels; alpha is dropped and
+/// half or u32 samples are converted to f32.
+pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
+    let file = std::fs::File::open(path).map_err(|source| ImageError::Io {
+        file: file_name(path),
+        source,
+    })?;
+    // The pixel reader allocates from the header without asking us, so check
+    // sizes from the headers alone first. Any oversized layer rejects the file,
+    // which is stricter than needed but avoids duplicating the crate's choice
+    // of "first valid layer".
+    let meta = MetaData::read_from_unbuffered(file, false).map_err(|e| exr_error(path, e))?;
+    for header in &meta.headers {
+        let Vec2(width, height) = header.layer_size;
+        check_size(&file_name(path), width as u64, height as u64)?;
+    }
+
+    let image = read_first_rgba_layer_from_file(
+        path,
+        // Sizes fit in u32: check_size bounded them by 2^28 above.
+        |size: Vec2<usize>, _| RgbImage::new(size.0 as u32, size.1 as u32),
+        |img: &mut RgbImage, pos: Vec2<usize>, (r, g, b, _): (f32, f32, f32, f32)| {
+            img.set(pos.0 as u32, pos.1 as u32, [r, g, b])
+        },
+    )
+    .map_err(|e| exr_error(path, e))?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+fn exr_error(path: &Path, source: ::exr::error::Error) -> ImageError {
+    ImageError::Exr {
+        file: file_name(path),
+        source,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_path(tag: &str) -> std::path::PathBuf {
+        std::env::temp_dir().join(format!("caustica-exr-{tag}-{}.exr", std::process::id()))
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let mut img = RgbImage::new(5, 3);
+        for y in 0..3 {
+            for x in 0..5 {
+                // Values that f16 could not hold, to prove f32 storage.
+                let v = 1.0 + (y * 5 + x) as f32 * 1e-6;
+                img.set(x, y, [v, -v * 3.0, v * 1e20]);
+            }
+        }
+        let path = temp_path("roundtrip");
+        write(&path, &img).unwrap();
+        let back = read(&path);
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(back.unwrap(), img);
+    }
+
+    #[test]
+    fn garbage_is_rejected_with_file_name() {
+        let path = temp_path("garbage");
+        std::fs::write(&path, b"not an exr file at all").unwrap();
+        let err = read(&path).unwrap_err().to_string();
+        std::fs::remove_file(&path).unwrap();
+        assert!(
+            err.starts_with(&format!("{}: EXR: ", path.display())),
+            "{err}"
+        );
+    }
+}

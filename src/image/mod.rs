@@ -1,0 +1,227 @@
+//! Linear RGB float images and the file formats the renderer reads and writes:
+//! PFM and EXR for radiance (light probes in, renders out), PNG for viewing.
+
+pub mod exr;
+pub mod pfm;
+pub mod png;
+pub mod tonemap;
+
+use std::path::Path;
+
+/// Largest accepted image, in pixels. Checked against header sizes before any
+/// pixel buffer is allocated, so a corrupt or hostile header cannot make a
+/// loader reserve gigabytes (2^28 RGB f32 pixels is already 3 GiB).
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// Linear RGB float image, rows top to bottom, row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl RgbImage {
+    /// A black image.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![[0.0; 3]; width as usize * height as usize],
+        }
+    }
+
+    /// Pixel at column `x`, row `y` (row 0 is the top). Panics out of bounds.
+    pub fn get(&self, x: u32, y: u32) -> [f32; 3] {
+        self.pixels[self.index(x, y)]
+    }
+
+    /// Sets the pixel at column `x`, row `y`. Panics out of bounds.
+    pub fn set(&mut self, x: u32, y: u32, rgb: [f32; 3]) {
+        let i = self.index(x, y);
+        self.pixels[i] = rgb;
+    }
+
+    fn index(&self, x: u32, y: u32) -> usize {
+        assert!(
+            x < self.width && y < self.height,
+            "pixel ({x}, {y}) outside {} x {} image",
+            self.width,
+            self.height
+        );
+        y as usize * self.width as usize + x as usize
+    }
+}
+
+/// Every variant names the file first so a failed load of one of many inputs
+/// (scene, probes, outputs) is traceable from the message alone.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("{file}: {source}")]
+    Io {
+        file: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{file}: unsupported image format: expected extension {expected}")]
+    UnsupportedExtension {
+        file: String,
+        expected: &'static str,
+    },
+    #[error("{file}: bad PFM header: {reason}")]
+    PfmHeader { file: String, reason: String },
+    #[error("{file}: truncated: expected {expected} bytes of pixel data, found {found}")]
+    Truncated {
+        file: String,
+        expected: usize,
+        found: usize,
+    },
+    #[error("{file}: image of {width} x {height} pixels is too large (limit 2^28 pixels)")]
+    TooLarge {
+        file: String,
+        width: u64,
+        height: u64,
+    },
+    #[error("{file}: pixel ({x}, {y}) is not finite: {value:?}")]
+    NonFinite {
+        file: String,
+        x: u32,
+        y: u32,
+        value: [f32; 3],
+    },
+    #[error("{file}: EXR: {source}")]
+    Exr {
+        file: String,
+        #[source]
+        source: ::exr::error::Error,
+    },
+    #[error("{file}: PNG: {source}")]
+    Png {
+        file: String,
+        #[source]
+        source: ::png::EncodingError,
+    },
+}
+
+/// Rejects images whose pixel count overflows or exceeds [`MAX_PIXELS`].
+pub(crate) fn check_size(file: &str, width: u64, height: u64) -> Result<(), ImageError> {
+    match width.checked_mul(height) {
+        Some(n) if n <= MAX_PIXELS => Ok(()),
+        _ => Err(ImageError::TooLarge {
+            file: file.to_owned(),
+            width,
+            height,
+        }),
+    }
+}
+
+/// The path as it appears in error messages.
+pub(crate) fn file_name(path: &Path) -> String {
+    path.display().to_string()
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+}
+
+/// Reads a radiance image, choosing the format by extension (case-insensitive).
+pub fn read_image(path: &Path) -> Result<RgbImage, ImageError> {
+    match extension(path).as_deref() {
+        Some("pfm") => pfm::read(path),
+        Some("exr") => exr::read(path),
+        _ => Err(ImageError::UnsupportedExtension {
+            file: file_name(path),
+            expected: ".pfm or .exr",
+        }),
+    }
+}
+
+/// Checks, before any work is done, that `write_image` can take this path: a known extension and
+/// an existing directory.
+pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
+    if !matches!(extension(path).as_deref(), Some("pfm" | "exr" | "png")) {
+        return Err(ImageError::UnsupportedExtension { file: file_name(path), expected: ".pfm, .exr or .png" });
+    }
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(ImageError::Io {
+            file: file_name(path),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, format!("directory {} does not exist", dir.display())),
+        });
+    }
+    Ok(())
+}
+
+/// Writes an image, choosing the format by extension (case-insensitive).
+/// `exposure` (in stops) applies only to PNG: the float formats keep the raw
+/// radiance so that no information is lost.
+pub fn write_image(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), ImageError> {
+    match extension(path).as_deref() {
+        Some("pfm") => pfm::write(path, img),
+        Some("exr") => exr::write(path, img),
+        Some("png") => png::write(path, img, exposure),
+        _ => Err(ImageError::UnsupportedExtension {
+            file: file_name(path),
+            expected: ".pfm, .exr or .png",
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn get_set_are_row_major_top_down() {
+        let mut img = RgbImage::new(3, 2);
+        img.set(2, 1, [1.0, 2.0, 3.0]);
+        assert_eq!(img.pixels[5], [1.0, 2.0, 3.0]);
+        assert_eq!(img.get(2, 1), [1.0, 2.0, 3.0]);
+        assert_eq!(img.get(1, 1), [0.0; 3]);
+    }
+
+    #[test]
+    #[should_panic(expected = "outside 3 x 2 image")]
+    fn get_out_of_bounds_panics() {
+        RgbImage::new(3, 2).get(3, 0);
+    }
+
+    #[test]
+    fn unknown_extension_is_rejected_with_file_name() {
+        let img = RgbImage::new(1, 1);
+        let err = write_image(Path::new("out.tga"), &img, 0.0).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "out.tga: unsupported image format: expected extension .pfm, .exr or .png"
+        );
+        let err = read_image(Path::new("probe.png")).unwrap_err();
+        assert!(
+            err.to_string().starts_with("probe.png: unsupported"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn read_dispatch_is_case_insensitive() {
+        let path =
+            std::env::temp_dir().join(format!("caustica-dispatch-{}.PFM", std::process::id()));
+        let mut img = RgbImage::new(2, 1);
+        img.set(1, 0, [0.5, 1.5, 2.5]);
+        write_image(&path, &img, 0.0).unwrap();
+        let back = read_image(&path);
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(back.unwrap(), img);
+    }
+
+    #[test]
+    fn missing_file_error_names_the_file() {
+        let err = read_image(Path::new("/nonexistent/caustica/probe.exr")).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("/nonexistent/caustica/probe.exr: "),
+            "{err}"
+        );
+    }
+}

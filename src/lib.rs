@@ -1,0 +1,10 @@
+//! caustica: a physically based path tracer with a Rust host and a GLSL compute kernel on Vulkan.
+//!
+//! Rooms: `scene` (TOML scenes, meshes, environment maps), `bvh` (build, flatten, CPU traversal),
+//! `image` (PFM/EXR/PNG), `gpu` (all Vulkan), `render` (the kernel and progressive passes).
+
+pub mod bvh;
+pub mod gpu;
+pub mod image;
+pub mod render;
+pub mod scene;

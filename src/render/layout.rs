@@ -1,0 +1,129 @@
+//! Host twins of the GPU structs in shaders/layout.glsl. Field order, sizes and the kind constants
+//! must match the GLSL; the tests below pin every offset.
+
+use bytemuck::{Pod, Zeroable};
+
+pub const PRIM_SPHERE: u32 = 0;
+pub const PRIM_QUAD: u32 = 1;
+pub const PRIM_TRIANGLE: u32 = 2;
+
+pub const ENV_CONSTANT: u32 = 0;
+pub const ENV_ANGULAR: u32 = 1;
+pub const ENV_LATLONG: u32 = 2;
+
+/// `struct Primitive`: see layout.glsl for what a, b and c hold per kind.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuPrimitive {
+    pub a: [f32; 4],
+    pub b: [f32; 4],
+    pub c: [f32; 4],
+}
+
+/// `struct Material`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuMaterial {
+    pub albedo_r: [f32; 4],
+    pub emission_t: [f32; 4],
+    pub params: [f32; 4],
+}
+
+/// `uniform FrameParamsBlock` (std140; only 16-byte members, so it equals std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct FrameParams {
+    pub cam_origin: [f32; 4],
+    pub cam_forward: [f32; 4],
+    pub cam_right: [f32; 4],
+    pub cam_up: [f32; 4],
+    pub env_color: [f32; 4],
+    pub env_rotation: [f32; 4],
+    /// width, height, seed, light count
+    pub image: [u32; 4],
+    /// rr_start, nee, env kind, max bounces (safety cap)
+    pub integrator: [u32; 4],
+    /// map width, map height, primitive count, node count
+    pub env_size: [u32; 4],
+    /// fixed absorption (< 0: derive from throughput), q min, q max, unused
+    pub roulette: [f32; 4],
+}
+
+/// `push_constant PassBlock`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct PassParams {
+    pub sample_base: u32,
+    pub sample_count: u32,
+    pub row_offset: u32,
+    pub row_count: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::BvhNode;
+    use std::mem::{offset_of, size_of};
+
+    #[test]
+    fn primitive_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuPrimitive>(), 48);
+        assert_eq!(offset_of!(GpuPrimitive, b), 16);
+        assert_eq!(offset_of!(GpuPrimitive, c), 32);
+    }
+
+    #[test]
+    fn material_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuMaterial>(), 48);
+        assert_eq!(offset_of!(GpuMaterial, emission_t), 16);
+        assert_eq!(offset_of!(GpuMaterial, params), 32);
+    }
+
+    #[test]
+    fn bvh_node_matches_glsl_std430() {
+        assert_eq!(size_of::<BvhNode>(), 32);
+        assert_eq!(offset_of!(BvhNode, offset), 12);
+        assert_eq!(offset_of!(BvhNode, max), 16);
+        assert_eq!(offset_of!(BvhNode, meta), 28);
+    }
+
+    #[test]
+    fn frame_params_match_glsl_std140() {
+        assert_eq!(size_of::<FrameParams>(), 160);
+        let offsets = [
+            offset_of!(FrameParams, cam_origin),
+            offset_of!(FrameParams, cam_forward),
+            offset_of!(FrameParams, cam_right),
+            offset_of!(FrameParams, cam_up),
+            offset_of!(FrameParams, env_color),
+            offset_of!(FrameParams, env_rotation),
+            offset_of!(FrameParams, image),
+            offset_of!(FrameParams, integrator),
+            offset_of!(FrameParams, env_size),
+            offset_of!(FrameParams, roulette),
+        ];
+        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144]);
+    }
+
+    #[test]
+    fn pass_params_fit_the_push_constant_minimum() {
+        assert_eq!(size_of::<PassParams>(), 16);
+        assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
+    }
+
+    /// The GLSL side declares the same kinds; a renumbering on one side only must fail here.
+    #[test]
+    fn kind_constants_match_glsl() {
+        let glsl = include_str!("../../shaders/layout.glsl");
+        for (name, value) in [
+            ("PRIM_SPHERE", PRIM_SPHERE),
+            ("PRIM_QUAD", PRIM_QUAD),
+            ("PRIM_TRIANGLE", PRIM_TRIANGLE),
+            ("ENV_CONSTANT", ENV_CONSTANT),
+            ("ENV_ANGULAR", ENV_ANGULAR),
+            ("ENV_LATLONG", ENV_LATLONG),
+        ] {
+            assert!(glsl.contains(&format!("const uint {name} = {value}u;")), "{name} = {value} not found in layout.glsl");
+        }
+    }
+}

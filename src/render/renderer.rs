@@ -1,0 +1,173 @@
+//! Progressive rendering: uploads a scene, then adds samples in dispatches sized to take about
+//! `DISPATCH_TARGET_S` each, so a desktop GPU's watchdog never fires and progress stays smooth.
+
+use super::kernel::{kernel_spirv, WORKGROUP};
+use super::layout::{FrameParams, PassParams};
+use super::scene_data::SceneData;
+use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
+use crate::image::RgbImage;
+use crate::scene::Scene;
+use anyhow::{Context as _, Result};
+use std::time::Instant;
+
+/// Wall time one dispatch aims for. Windows' GPU watchdog fires at 2 s.
+const DISPATCH_TARGET_S: f64 = 0.2;
+/// Upper bound on pixel-samples in one dispatch, so the 32-bit ray counter cannot wrap in practice.
+const MAX_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 24;
+
+pub struct Renderer<'a> {
+    ctx: &'a GpuContext,
+    kernel: Option<ComputeKernel>,
+    buffers: Vec<Buffer>,
+    width: u32,
+    height: u32,
+    /// Samples per pixel accumulated so far.
+    pub samples_done: u32,
+    pub rays_traced: u64,
+    pub seconds: f64,
+    /// Estimated seconds per pixel-row-sample, refined after every dispatch.
+    cost_per_row_sample: Option<f64>,
+}
+
+// Binding indices of shaders/layout.glsl.
+const ACCUM: usize = 6;
+const STATS: usize = 7;
+
+pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
+    let cam = &scene.camera;
+    let forward = (cam.look_at - cam.position).normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    let aspect = scene.film.width as f32 / scene.film.height as f32;
+    let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
+    let rot = data.env_rotation_deg.to_radians();
+    let i = &scene.integrator;
+    FrameParams {
+        cam_origin: cam.position.extend(0.0).into(),
+        cam_forward: forward.extend(tan_half).into(),
+        cam_right: right.extend(aspect).into(),
+        cam_up: up.extend(0.0).into(),
+        env_color: data.env_color.extend(0.0).into(),
+        env_rotation: [rot.cos(), rot.sin(), 0.0, 0.0],
+        image: [scene.film.width, scene.film.height, seed, data.lights.len() as u32],
+        integrator: [i.rr_start, u32::from(i.nee), data.env_kind, i.max_bounces],
+        env_size: [data.env_size[0], data.env_size[1], data.primitives.len() as u32, if data.primitives.is_empty() { 0 } else { data.nodes.len() as u32 }],
+        roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
+    }
+}
+
+impl<'a> Renderer<'a> {
+    pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
+        let (data, _bvh) = SceneData::new(scene);
+        let (width, height) = (scene.film.width, scene.film.height);
+        let accum_bytes = width as u64 * height as u64 * 16;
+        let needed = data.gpu_bytes() + accum_bytes;
+        if needed > ctx.info.device_local_bytes && ctx.info.device_local_bytes > 0 {
+            anyhow::bail!(
+                "{}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB",
+                scene.name,
+                needed as f64 / 1048576.0,
+                ctx.info.name,
+                ctx.info.device_local_bytes as f64 / 1048576.0
+            );
+        }
+        let params = frame_params(scene, &data, seed);
+        let mut buffers = Vec::new();
+        let mut make = |name: &str, kind: BufferKind, bytes: &[u8]| -> Result<()> {
+            buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
+            Ok(())
+        };
+        make("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params))?;
+        make("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&data.nodes))?;
+        make("primitives", BufferKind::Storage, bytemuck::cast_slice(&data.primitives))?;
+        make("materials", BufferKind::Storage, bytemuck::cast_slice(&data.materials))?;
+        make("lights", BufferKind::Storage, bytemuck::cast_slice(&data.lights))?;
+        make("environment map", BufferKind::Storage, bytemuck::cast_slice(&data.env_texels))?;
+        make("accumulation image", BufferKind::Storage, &vec![0u8; accum_bytes as usize])?;
+        make("statistics", BufferKind::HostStorage, &[0u8; 16])?;
+        let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
+        let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
+        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, cost_per_row_sample: None })
+    }
+
+    /// Adds `spp` samples per pixel, calling `progress(samples_done)` after each full pass.
+    pub fn render(&mut self, spp: u32, mut progress: impl FnMut(u32)) -> Result<()> {
+        let target = self.samples_done + spp;
+        while self.samples_done < target {
+            let remaining = target - self.samples_done;
+            let (samples, band) = self.plan_pass(remaining);
+            let mut row = 0;
+            while row < self.height {
+                let rows = band.min(self.height - row);
+                self.dispatch(PassParams { sample_base: self.samples_done, sample_count: samples, row_offset: row, row_count: rows })?;
+                row += rows;
+            }
+            self.samples_done += samples;
+            progress(self.samples_done);
+        }
+        self.ctx.check_validation()
+    }
+
+    /// Samples per pixel and rows per dispatch for the next pass.
+    fn plan_pass(&self, remaining: u32) -> (u32, u32) {
+        let Some(cost) = self.cost_per_row_sample else {
+            // First dispatch: one sample over a band small enough for any device.
+            return (1, self.height.min(32));
+        };
+        let budget_row_samples = (DISPATCH_TARGET_S / cost.max(1e-12)).max(1.0);
+        let max_samples = (MAX_PIXEL_SAMPLES_PER_DISPATCH / (self.width as u64 * self.height as u64)).max(1) as f64;
+        if budget_row_samples >= self.height as f64 {
+            let samples = (budget_row_samples / self.height as f64).min(max_samples).min(remaining as f64).max(1.0);
+            (samples as u32, self.height)
+        } else {
+            (1, budget_row_samples as u32)
+        }
+    }
+
+    fn dispatch(&mut self, pass: PassParams) -> Result<()> {
+        let kernel = self.kernel.as_ref().expect("kernel lives until drop");
+        self.buffers[STATS].write(&[0u8; 4])?;
+        let groups = [self.width.div_ceil(WORKGROUP), pass.row_count.div_ceil(WORKGROUP), 1];
+        let start = Instant::now();
+        kernel.dispatch(self.ctx, bytemuck::bytes_of(&pass), groups)?;
+        let elapsed = start.elapsed().as_secs_f64();
+        self.seconds += elapsed;
+        let rays = u32::from_le_bytes(self.buffers[STATS].read()?[..4].try_into().expect("4 bytes"));
+        self.rays_traced += rays as u64;
+        let cost = elapsed / (pass.row_count as f64 * pass.sample_count as f64);
+        // Smooth, but follow quickly: scenes differ in cost across the image.
+        self.cost_per_row_sample = Some(match self.cost_per_row_sample {
+            Some(c) => 0.5 * c + 0.5 * cost,
+            None => cost,
+        });
+        Ok(())
+    }
+
+    /// Raw accumulation: per pixel (sum of radiance, sample count), top row first.
+    pub fn accumulation(&self) -> Result<Vec<[f32; 4]>> {
+        let bytes = self.buffers[ACCUM].download(self.ctx, self.width as u64 * self.height as u64 * 16)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// The mean radiance per pixel so far.
+    pub fn image(&self) -> Result<RgbImage> {
+        let accum = self.accumulation()?;
+        let mut image = RgbImage::new(self.width, self.height);
+        for (dst, a) in image.pixels.iter_mut().zip(&accum) {
+            let n = a[3].max(1.0);
+            *dst = [a[0] / n, a[1] / n, a[2] / n];
+        }
+        Ok(image)
+    }
+}
+
+impl Drop for Renderer<'_> {
+    fn drop(&mut self) {
+        if let Some(k) = self.kernel.take() {
+            k.destroy(self.ctx);
+        }
+        for b in self.buffers.drain(..) {
+            b.destroy(self.ctx);
+        }
+    }
+}

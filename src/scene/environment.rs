@@ -1,0 +1,108 @@
+//! Environment lighting: a constant sky or an HDR map (Debevec angular light probe, or lat-long).
+//! The direction conventions are those of shaders/environment.glsl: +y up, -z forward.
+
+use super::format::EnvironmentFile;
+use crate::image::{self, RgbImage};
+use anyhow::{bail, Result};
+use glam::{Vec2, Vec3};
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapProjection {
+    /// Debevec's angular map: image centre looks down -z, the circumference straight back (+z).
+    Angular,
+    /// Equirectangular: centre column looks down -z, top row straight up.
+    LatLong,
+}
+
+#[derive(Clone, Debug)]
+pub struct EnvironmentMap {
+    pub projection: MapProjection,
+    pub image: RgbImage,
+    pub intensity: f32,
+    /// Degrees about +y.
+    pub rotation_deg: f32,
+}
+
+#[derive(Clone, Debug)]
+pub enum Environment {
+    /// Radiance of a uniform sky.
+    Constant(Vec3),
+    Map(EnvironmentMap),
+}
+
+pub(super) fn from_file(e: &EnvironmentFile, base: &Path) -> Result<Environment> {
+    let maps = [(e.probe.as_ref(), MapProjection::Angular), (e.latlong.as_ref(), MapProjection::LatLong)];
+    let given: Vec<_> = maps.iter().filter_map(|(f, p)| f.map(|f| (f, *p))).collect();
+    if given.len() + usize::from(e.color.is_some()) > 1 {
+        bail!("environment: give only one of color, probe and latlong");
+    }
+    if !(e.intensity.is_finite() && e.intensity >= 0.0) {
+        bail!("environment.intensity must be finite and >= 0, got {}", e.intensity);
+    }
+    if !e.rotation.is_finite() {
+        bail!("environment.rotation must be finite, got {}", e.rotation);
+    }
+    let Some(&(file, projection)) = given.first() else {
+        let color = Vec3::from(e.color.unwrap_or([0.0; 3]));
+        if !color.is_finite() || color.min_element() < 0.0 {
+            bail!("environment.color must be finite and >= 0, got {color:?}");
+        }
+        return Ok(Environment::Constant(color * e.intensity));
+    };
+    let path = base.join(file);
+    let mut image = image::read_image(&path)?;
+    let name = path.display().to_string();
+    image::pfm::check_finite(&image, &name)?;
+    if image.pixels.iter().flatten().any(|&c| c < 0.0) {
+        bail!("{name}: the environment map has negative radiance");
+    }
+    if projection == MapProjection::Angular {
+        if image.width != image.height {
+            bail!("{name}: an angular light probe must be square, got {} x {}", image.width, image.height);
+        }
+        fill_outside_disk(&mut image);
+    }
+    Ok(Environment::Map(EnvironmentMap { projection, image, intensity: e.intensity, rotation_deg: e.rotation }))
+}
+
+/// Debevec angular map (u, v) in [-1, 1]^2 for a unit direction, u right and v up; the mirror of
+/// `angular_map_uv` in shaders/environment.glsl.
+pub fn angular_map_uv(d: Vec3) -> Vec2 {
+    let xy = Vec2::new(d.x, d.y).length();
+    if xy < 1e-7 {
+        return Vec2::new(0.0, if d.z < 0.0 { 0.0 } else { 1.0 });
+    }
+    let r = (-d.z).clamp(-1.0, 1.0).acos() / (std::f32::consts::PI * xy);
+    Vec2::new(d.x, d.y) * r
+}
+
+/// Replaces every texel whose centre lies outside the probe's circle with the texel just inside the
+/// circle on the same radius. The kernel filters bilinearly, so without this the black corners (and
+/// the credit text printed there) would bleed into directions near straight back.
+fn fill_outside_disk(image: &mut RgbImage) {
+    let n = image.width as f32;
+    let texel_uv = |x: u32, y: u32| Vec2::new((x as f32 + 0.5) / n * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / n * 2.0);
+    let source = image.clone();
+    let inner_radius = 1.0 - 1.0 / n;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let uv = texel_uv(x, y);
+            if uv.length() <= 1.0 {
+                continue;
+            }
+            // Step inward along the radius until the texel centre is inside the disk.
+            let mut r = inner_radius;
+            let value = loop {
+                let p = uv.normalize() * r;
+                let sx = (((p.x + 1.0) * 0.5 * n) as u32).min(image.width - 1);
+                let sy = (((1.0 - p.y) * 0.5 * n) as u32).min(image.height - 1);
+                if texel_uv(sx, sy).length() <= 1.0 || r <= 0.0 {
+                    break source.get(sx, sy);
+                }
+                r -= 0.5 / n;
+            };
+            image.set(x, y, value);
+        }
+    }
+}

@@ -1,0 +1,160 @@
+//! The TOML scene file as written by people: serde structs that reject unknown keys. `scene::load`
+//! turns them into a validated `Scene`.
+
+use serde::Deserialize;
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub camera: CameraFile,
+    #[serde(default)]
+    pub film: FilmFile,
+    #[serde(default)]
+    pub integrator: IntegratorFile,
+    #[serde(default)]
+    pub materials: std::collections::BTreeMap<String, MaterialFile>,
+    #[serde(default)]
+    pub spheres: Vec<SphereFile>,
+    #[serde(default)]
+    pub quads: Vec<QuadFile>,
+    #[serde(default)]
+    pub triangles: Vec<TriangleFile>,
+    #[serde(default)]
+    pub meshes: Vec<MeshFile>,
+    pub environment: Option<EnvironmentFile>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CameraFile {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    pub up: [f32; 3],
+    /// Vertical field of view in degrees.
+    #[serde(default = "default_fov")]
+    pub fov: f32,
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn default_fov() -> f32 {
+    40.0
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields, default)]
+pub struct FilmFile {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+}
+
+impl Default for FilmFile {
+    fn default() -> Self {
+        Self { width: 512, height: 512, spp: 64 }
+    }
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields, default)]
+pub struct IntegratorFile {
+    /// Bounces always traced before Russian roulette starts.
+    pub rr_start: u32,
+    /// Fixed absorption probability per bounce past rr_start; absent: derived from the throughput.
+    pub absorption: Option<f32>,
+    /// Next-event estimation with MIS; false gives pure BSDF sampling.
+    pub nee: bool,
+    /// Safety cap on the path length; roulette ends paths long before it.
+    pub max_bounces: u32,
+}
+
+impl Default for IntegratorFile {
+    fn default() -> Self {
+        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024 }
+    }
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaterialFile {
+    pub albedo: [f32; 3],
+    pub reflectivity: f32,
+    pub transparency: f32,
+    pub ior: f32,
+    pub emission: [f32; 3],
+    pub two_sided: bool,
+}
+
+impl Default for MaterialFile {
+    fn default() -> Self {
+        Self { albedo: [0.8; 3], reflectivity: 0.0, transparency: 0.0, ior: 1.5, emission: [0.0; 3], two_sided: false }
+    }
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SphereFile {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: String,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct QuadFile {
+    pub origin: [f32; 3],
+    pub edge_u: [f32; 3],
+    pub edge_v: [f32; 3],
+    pub material: String,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleFile {
+    pub vertices: [[f32; 3]; 3],
+    pub material: String,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MeshFile {
+    pub file: String,
+    pub material: String,
+    #[serde(default)]
+    pub translate: [f32; 3],
+    /// Uniform scale, or per axis.
+    #[serde(default)]
+    pub scale: Option<Scale>,
+    /// Euler angles in degrees, applied about x, then y, then z.
+    #[serde(default)]
+    pub rotate: [f32; 3],
+}
+
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentFile {
+    /// Constant sky radiance (when no map is given).
+    pub color: Option<[f32; 3]>,
+    /// Debevec angular-map light probe (PFM).
+    pub probe: Option<String>,
+    /// Equirectangular (lat-long) map, PFM or EXR.
+    pub latlong: Option<String>,
+    #[serde(default = "one")]
+    pub intensity: f32,
+    /// Degrees about +y.
+    #[serde(default)]
+    pub rotation: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}

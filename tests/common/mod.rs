@@ -1,0 +1,88 @@
+//! Shared by the GPU tests: a lavapipe context with validation, scene construction and the
+//! statistics that turn sample counts into tolerances.
+#![allow(dead_code)]
+
+use caustica::gpu::{ContextOptions, GpuContext};
+use caustica::image::RgbImage;
+use caustica::render::Renderer;
+use caustica::scene::Scene;
+use std::path::Path;
+use std::sync::{Mutex, MutexGuard, Once};
+
+pub const LAVAPIPE_ICD: &str = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
+
+/// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
+/// lavapipe already uses every core for one dispatch.
+pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
+    static LOCK: Mutex<()> = Mutex::new(());
+    static FORCE: Once = Once::new();
+    let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    FORCE.call_once(|| {
+        if std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists() {
+            std::env::set_var("VK_DRIVER_FILES", LAVAPIPE_ICD);
+        }
+    });
+    let ctx = GpuContext::new(&ContextOptions { device: None, validation: true }).expect("a Vulkan device (install mesa-vulkan-drivers)");
+    if std::env::var_os("CI").is_some() {
+        assert!(ctx.validating(), "CI must run with the Khronos validation layer (vulkan-validationlayers)");
+    }
+    (guard, ctx)
+}
+
+pub fn render(ctx: &GpuContext, scene: &Scene, seed: u32) -> RgbImage {
+    let mut r = Renderer::new(ctx, scene, seed).expect("scene uploads");
+    r.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
+    r.image().expect("readback")
+}
+
+pub fn parse(toml: &str) -> Scene {
+    Scene::parse(toml, "test scene", Path::new(".")).expect("valid test scene")
+}
+
+pub fn luminance(p: [f32; 3]) -> f64 {
+    (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64
+}
+
+/// Mean and standard error of `values` about `center` when every value is an independent
+/// estimate of `center` (the error of the mean, from the scatter of the values themselves).
+pub fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Per-pixel noise variance of an image rendered with `spp` samples, from two renders with
+/// different seeds: Var(a - b) = 2 sigma^2, so the estimate needs no knowledge of the true image.
+pub fn pixel_noise_variance(a: &RgbImage, b: &RgbImage) -> f64 {
+    let n = a.pixels.len() as f64;
+    a.pixels.iter().zip(&b.pixels).map(|(p, q)| (luminance(*p) - luminance(*q)).powi(2)).sum::<f64>() / (2.0 * n)
+}
+
+/// Asserts that two independent renders of what should be the same expected image agree: the
+/// mean of the per-pixel difference, over the whole image and each quadrant, is within `k`
+/// standard errors of zero, the standard error coming from the differences themselves.
+pub fn assert_same_mean(a: &RgbImage, b: &RgbImage, k: f64, what: &str) {
+    let (w, h) = (a.width, a.height);
+    let regions = [(0, 0, w, h), (0, 0, w / 2, h / 2), (w / 2, 0, w, h / 2), (0, h / 2, w / 2, h), (w / 2, h / 2, w, h)];
+    for (x0, y0, x1, y1) in regions {
+        let mut diffs = vec![];
+        let mut mean_a = 0.0;
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let (pa, pb) = (luminance(a.get(x, y)), luminance(b.get(x, y)));
+                diffs.push(pa - pb);
+                mean_a += pa;
+            }
+        }
+        let n = diffs.len() as f64;
+        let mean = diffs.iter().sum::<f64>() / n;
+        // Under the hypothesis each difference has mean zero, so its second moment is its variance.
+        let stderr = (diffs.iter().map(|d| d * d).sum::<f64>() / n / n).sqrt();
+        assert!(
+            mean.abs() <= k * stderr,
+            "{what}: region ({x0},{y0})-({x1},{y1}): mean difference {mean:.5} exceeds {k} standard errors ({stderr:.5}); mean of the first image {:.4}",
+            mean_a / n
+        );
+    }
+}

@@ -1,0 +1,213 @@
+//! Analytic checks of the light transport on lavapipe. Each tolerance is a number of standard errors,
+//! the standard error coming from the renders' own noise at the sample count used.
+
+mod common;
+
+use caustica::image::RgbImage;
+use caustica::render::frame_params;
+use caustica::render::SceneData;
+use caustica::scene::Scene;
+use common::*;
+use glam::Vec3;
+
+/// A sphere of radius 1 at the origin, seen from z = 3.5, in a uniform environment of radiance 1.
+fn furnace(material: &str, size: u32, spp: u32) -> Scene {
+    parse(&format!(
+        r#"
+        [camera]
+        position = [0.0, 0.0, 3.5]
+        look_at = [0.0, 0.0, 0.0]
+        fov = 40.0
+        [film]
+        width = {size}
+        height = {size}
+        spp = {spp}
+        [materials.m]
+        {material}
+        [[spheres]]
+        center = [0.0, 0.0, 0.0]
+        radius = 1.0
+        material = "m"
+        [environment]
+        color = [1.0, 1.0, 1.0]
+        "#
+    ))
+}
+
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Coverage {
+    Sphere,
+    Background,
+    Edge,
+}
+
+/// Which pixels see only the unit sphere at the origin, only the background, or both, from the
+/// camera's own ray directions with a margin of 1.5 pixels around the silhouette.
+fn coverage(scene: &Scene) -> Vec<Coverage> {
+    let (data, _) = SceneData::new(scene);
+    let p = frame_params(scene, &data, 0);
+    let (w, h) = (scene.film.width, scene.film.height);
+    let eye = Vec3::from_slice(&p.cam_origin);
+    let forward = Vec3::from_slice(&p.cam_forward);
+    let right = Vec3::from_slice(&p.cam_right);
+    let up = Vec3::from_slice(&p.cam_up);
+    let tan_half = p.cam_forward[3];
+    let to_center = (-eye).normalize();
+    let silhouette = (1.0 / eye.length()).asin();
+    let margin = 1.5 * 2.0 * tan_half / h as f32;
+    let mut out = vec![];
+    for y in 0..h {
+        for x in 0..w {
+            let fx = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0) * tan_half * p.cam_right[3];
+            let fy = (1.0 - 2.0 * (y as f32 + 0.5) / h as f32) * tan_half;
+            let d = (forward + fx * right + fy * up).normalize();
+            let angle = d.dot(to_center).clamp(-1.0, 1.0).acos();
+            out.push(if angle < silhouette - margin {
+                Coverage::Sphere
+            } else if angle > silhouette + margin {
+                Coverage::Background
+            } else {
+                Coverage::Edge
+            });
+        }
+    }
+    out
+}
+
+/// Asserts the mean over the pixels of `region` equals `expected` within 5 standard errors, the
+/// per-pixel noise estimated from two independent renders of the region.
+fn assert_region_mean(a: &RgbImage, b: &RgbImage, cover: &[Coverage], region: Coverage, expected: f64, what: &str) {
+    let mut sum = 0.0;
+    let mut noise = 0.0;
+    let mut n = 0.0;
+    for (i, c) in cover.iter().enumerate() {
+        if *c != region {
+            continue;
+        }
+        for ch in 0..3 {
+            let (pa, pb) = (a.pixels[i][ch] as f64, b.pixels[i][ch] as f64);
+            sum += 0.5 * (pa + pb);
+            noise += 0.5 * (pa - pb).powi(2) / 2.0; // variance of the two-render average
+            n += 1.0;
+        }
+    }
+    assert!(n > 30.0, "{what}: only {n} samples in region {region:?}");
+    let mean = sum / n;
+    let stderr = (noise / n / n).sqrt();
+    let tolerance = 5.0 * stderr + 1e-5 * expected; // float rounding where a region has no noise
+    assert!(
+        (mean - expected).abs() <= tolerance,
+        "{what}: {region:?} mean {mean:.5}, expected {expected} within {tolerance:.5} (5 standard errors = {:.5})",
+        5.0 * stderr
+    );
+}
+
+fn furnace_check(material: &str, sphere_expected: f64, what: &str) {
+    let (_lock, ctx) = gpu();
+    let scene = furnace(material, 32, 64);
+    let cover = coverage(&scene);
+    let a = render(&ctx, &scene, 1);
+    let b = render(&ctx, &scene, 2);
+    assert_region_mean(&a, &b, &cover, Coverage::Sphere, sphere_expected, what);
+    assert_region_mean(&a, &b, &cover, Coverage::Background, 1.0, what);
+}
+
+#[test]
+fn furnace_albedo_one_is_one() {
+    furnace_check("albedo = [1.0, 1.0, 1.0]", 1.0, "diffuse albedo 1 in a white furnace");
+}
+
+#[test]
+fn furnace_albedo_half_is_half() {
+    // A convex diffuse surface sees only the environment: one bounce, L = albedo * 1.
+    furnace_check("albedo = [0.5, 0.5, 0.5]", 0.5, "diffuse albedo 0.5 in a white furnace");
+}
+
+#[test]
+fn glass_sphere_invisible_in_furnace() {
+    furnace_check("albedo = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5", 1.0, "glass sphere in a white furnace");
+}
+
+#[test]
+fn mirror_sphere_invisible_in_furnace() {
+    furnace_check("albedo = [0.0, 0.0, 0.0]\nreflectivity = 1.0", 1.0, "mirror sphere in a white furnace");
+}
+
+#[test]
+fn mixed_rt_material_is_invisible_in_furnace() {
+    // R = 0.3 mirror, T = 0.4 glass, 0.3 diffuse with albedo 1: every event preserves energy.
+    furnace_check("albedo = [1.0, 1.0, 1.0]\nreflectivity = 0.3\ntransparency = 0.4", 1.0, "R/T material in a white furnace");
+}
+
+fn cornell(size: u32, spp: u32) -> Scene {
+    let mut scene = Scene::default_scene();
+    scene.film.width = size;
+    scene.film.height = size;
+    scene.film.spp = spp;
+    scene
+}
+
+#[test]
+fn russian_roulette_start_does_not_change_the_mean() {
+    let (_lock, ctx) = gpu();
+    let mut early = cornell(32, 64);
+    early.integrator.rr_start = 0;
+    let mut late = cornell(32, 64);
+    late.integrator.rr_start = 8;
+    let a = render(&ctx, &early, 11);
+    let b = render(&ctx, &late, 12);
+    assert_same_mean(&a, &b, 5.0, "Cornell box, rr_start 0 against 8");
+}
+
+#[test]
+fn fixed_absorption_roulette_does_not_change_the_mean() {
+    let (_lock, ctx) = gpu();
+    let mut fixed = cornell(32, 64);
+    fixed.integrator.rr_start = 1;
+    fixed.integrator.absorption = Some(0.5);
+    let a = render(&ctx, &fixed, 21);
+    let b = render(&ctx, &cornell(32, 64), 22);
+    assert_same_mean(&a, &b, 5.0, "Cornell box, fixed absorption 0.5 against throughput roulette");
+}
+
+#[test]
+fn nee_with_mis_agrees_with_bsdf_sampling() {
+    let (_lock, ctx) = gpu();
+    let nee = cornell(32, 64);
+    let mut bsdf = cornell(32, 256);
+    bsdf.integrator.nee = false;
+    let a = render(&ctx, &nee, 31);
+    let b = render(&ctx, &bsdf, 32);
+    assert_same_mean(&a, &b, 5.0, "Cornell box, NEE + MIS against pure BSDF sampling");
+}
+
+#[test]
+fn nee_lowers_the_noise_on_the_cornell_box() {
+    // Same sample count: explicit light sampling must beat hitting a small light by chance.
+    let (_lock, ctx) = gpu();
+    let nee = cornell(24, 16);
+    let mut bsdf = cornell(24, 16);
+    bsdf.integrator.nee = false;
+    let nee_var = pixel_noise_variance(&render(&ctx, &nee, 1), &render(&ctx, &nee, 2));
+    let bsdf_var = pixel_noise_variance(&render(&ctx, &bsdf, 1), &render(&ctx, &bsdf, 2));
+    assert!(nee_var * 2.0 < bsdf_var, "NEE variance {nee_var:.5} should be well below BSDF-only {bsdf_var:.5}");
+}
+
+#[test]
+fn emissive_sphere_seen_directly_has_its_radiance() {
+    // A camera ray that hits an emitter sees exactly its emission (plus nothing: black surroundings).
+    let (_lock, ctx) = gpu();
+    let scene = furnace("albedo = [0.0, 0.0, 0.0]\nemission = [2.0, 3.0, 4.0]", 16, 4);
+    let mut scene = scene;
+    scene.environment = caustica::scene::Environment::Constant(Vec3::ZERO);
+    let image = render(&ctx, &scene, 1);
+    let cover = coverage(&scene);
+    for (i, c) in cover.iter().enumerate() {
+        let expected = match c {
+            Coverage::Sphere => [2.0, 3.0, 4.0],
+            Coverage::Background => [0.0; 3],
+            Coverage::Edge => continue,
+        };
+        assert_eq!(image.pixels[i], expected, "pixel {i} ({c:?})");
+    }
+}
