@@ -6,7 +6,7 @@ mod common;
 use caustica::image::read_image;
 use caustica::render::Renderer;
 use common::*;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 fn caustica(args: &[&str]) -> std::process::Output {
@@ -17,15 +17,9 @@ fn caustica(args: &[&str]) -> std::process::Output {
     cmd.args(args).output().expect("run caustica")
 }
 
-fn out_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("caustica-cli-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn every_scene_renders_to_pfm_exr_and_png() {
-    let dir = out_dir("scenes");
+    let dir = temp_dir("cli-scenes");
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let mut rendered = 0;
     for entry in std::fs::read_dir(&scenes).unwrap() {
@@ -52,7 +46,7 @@ fn every_scene_renders_to_pfm_exr_and_png() {
 
 #[test]
 fn default_scene_renders_with_no_scene_argument() {
-    let dir = out_dir("default");
+    let dir = temp_dir("cli-default");
     let out = dir.join("default.pfm");
     let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "1", "-q"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -80,7 +74,7 @@ fn same_seed_gives_the_same_image_however_samples_are_split() {
 
 #[test]
 fn bad_input_fails_with_a_message_and_nonzero_exit() {
-    let dir = out_dir("bad");
+    let dir = temp_dir("cli-bad");
     std::fs::write(dir.join("typo.toml"), "[camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\nfovv = 30.0\n").unwrap();
     std::fs::write(dir.join("probe.toml"), "[camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\n[environment]\nprobe = \"broken.pfm\"\n").unwrap();
     std::fs::write(dir.join("broken.pfm"), "PF\n4 4\n-1.0\nshort").unwrap();

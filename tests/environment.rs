@@ -81,8 +81,7 @@ fn angular_probe_never_uses_texels_outside_the_circle() {
     }
     assert!(img.pixels.iter().any(|p| p[0] == 1000.0), "the test probe has texels outside the circle");
     // Through the scene loader, which prepares probes for the kernel.
-    let dir = std::env::temp_dir().join(format!("caustica-rim-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("rim");
     image::pfm::write(&dir.join("rim.pfm"), &img).unwrap();
     let scene_text = "[camera]\nposition = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\n[environment]\nprobe = \"rim.pfm\"\n";
     std::fs::write(dir.join("rim.toml"), scene_text).unwrap();
@@ -160,7 +159,7 @@ fn grace_probe_texel_centres_are_seen_in_their_directions() {
             let u = (x as f32 + 0.5) / n as f32 * 2.0 - 1.0;
             let v = 1.0 - (y as f32 + 0.5) / n as f32 * 2.0;
             let r = (u * u + v * v).sqrt();
-            if r > 0.95 || r < 1e-3 {
+            if !(1e-3..=0.95).contains(&r) {
                 continue;
             }
             let (phi, theta) = (PI * r, v.atan2(u));

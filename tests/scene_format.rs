@@ -1,22 +1,19 @@
 //! The TOML scene format: what it accepts and how it rejects mistakes (naming the key and line).
 
+mod common;
+
 use caustica::scene::{Environment, Scene, Shape};
-use std::path::{Path, PathBuf};
+use common::temp_dir;
+use std::path::Path;
 
 const MINIMAL: &str = "[camera]\nposition = [0.0, 1.0, 3.0]\nlook_at = [0.0, 1.0, 0.0]\n";
 
-fn parse(text: &str) -> anyhow::Result<Scene> {
+fn parse_result(text: &str) -> anyhow::Result<Scene> {
     Scene::parse(text, "test.toml", Path::new("."))
 }
 
 fn error_of(text: &str) -> String {
-    format!("{:#}", parse(text).expect_err("scene must be rejected"))
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("caustica-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    format!("{:#}", parse_result(text).expect_err("scene must be rejected"))
 }
 
 #[test]
@@ -44,7 +41,7 @@ fn default_scene_is_the_cornell_box_with_a_light() {
 
 #[test]
 fn defaults_fill_in_film_integrator_and_a_black_environment() {
-    let scene = parse(MINIMAL).unwrap();
+    let scene = parse_result(MINIMAL).unwrap();
     assert_eq!((scene.film.width, scene.film.height, scene.film.spp), (512, 512, 64));
     assert_eq!(scene.integrator.rr_start, 4);
     assert!(scene.integrator.nee && scene.integrator.absorption.is_none());

@@ -29,6 +29,13 @@ pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
     (guard, ctx)
 }
 
+/// A fresh scratch directory for one test, unique per process.
+pub fn temp_dir(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("caustica-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("create a scratch directory");
+    dir
+}
+
 pub fn render(ctx: &GpuContext, scene: &Scene, seed: u32) -> RgbImage {
     let mut r = Renderer::new(ctx, scene, seed).expect("scene uploads");
     r.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
