@@ -37,7 +37,10 @@ Scatter scatter(Material m, vec3 d, vec3 n, bool entering, inout Rng rng) {
         float eta = entering ? 1.0 / ior : ior;
         float cos_i = -dot(d, n_in);
         float f = fresnel_dielectric(cos_i, eta);
-        s.dir = rng_next(rng) < f ? reflect(d, n_in) : refract(d, n_in, eta);
+        vec3 refracted = refract(d, n_in, eta);
+        // refract() returns 0 at total internal reflection; rounding can put that just below f = 1.
+        bool reflects = rng_next(rng) < f || dot(refracted, refracted) == 0.0;
+        s.dir = reflects ? reflect(d, n_in) : refracted;
         s.weight = vec3(1.0);
         s.event = EVENT_SPECULAR;
     } else {

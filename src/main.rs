@@ -152,6 +152,8 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, gpu: &DeviceArgs) 
     println!("scene:        {}", scene.name);
     println!("device:       {} ({})", ctx.info.name, ctx.info.kind.label());
     println!("image:        {width}x{height}, {spp} spp");
+    let bvh = renderer.bvh_stats;
+    println!("primitives:   {} ({} BVH nodes, depth {}, SAH cost {:.2})", scene.shapes.len(), bvh.nodes, bvh.max_depth, bvh.sah_cost);
     println!("setup:        {setup_s:.3} s (BVH, upload, kernel compile)");
     println!("render:       {seconds:.3} s");
     println!("samples/s:    {:.3} M", samples / seconds / 1e6);

@@ -44,7 +44,7 @@ enum Coverage {
 /// Which pixels see only the unit sphere at the origin, only the background, or both, from the
 /// camera's own ray directions with a margin of 1.5 pixels around the silhouette.
 fn coverage(scene: &Scene) -> Vec<Coverage> {
-    let (data, _) = SceneData::new(scene);
+    let data = SceneData::new(scene);
     let p = frame_params(scene, &data, 0);
     let (w, h) = (scene.film.width, scene.film.height);
     let eye = Vec3::from_slice(&p.cam_origin);
@@ -210,4 +210,46 @@ fn emissive_sphere_seen_directly_has_its_radiance() {
         };
         assert_eq!(image.pixels[i], expected, "pixel {i} ({c:?})");
     }
+}
+
+#[test]
+fn glass_sphere_reflects_by_fresnel_at_normal_incidence() {
+    // Looking along +z at the centre of a glass sphere (ior 1.5) with rays on its axis: every path
+    // stays on the axis and leaves either back towards the camera (-z) or straight on (+z). The
+    // environment is 1 in a cone around -z (the centre of an angular map) and 0 elsewhere, so the
+    // pixel sees the total back-reflection F + (1-F)^2 F + (1-F)^2 F^3 + ... = 2F / (1 + F),
+    // with F = ((ior - 1) / (ior + 1))^2 = 0.04.
+    let (_lock, ctx) = gpu();
+    let size = 64;
+    let mut probe = RgbImage::new(size, size);
+    for y in 0..size {
+        for x in 0..size {
+            let u = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
+            let v = 1.0 - (y as f32 + 0.5) / size as f32 * 2.0;
+            if u * u + v * v < 0.2 * 0.2 {
+                probe.set(x, y, [1.0; 3]);
+            }
+        }
+    }
+    let mut scene = furnace("albedo = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5", 16, 64);
+    scene.camera.position = Vec3::new(0.0, 0.0, -3.5);
+    scene.camera.fov_deg = 0.001;
+    scene.environment = caustica::scene::Environment::Map(caustica::scene::EnvironmentMap {
+        projection: caustica::scene::MapProjection::Angular,
+        image: probe,
+        intensity: 1.0,
+        rotation_deg: 0.0,
+    });
+    let image = render(&ctx, &scene, 5);
+    let f = 0.04f64;
+    let expected = 2.0 * f / (1.0 + f);
+    let n = (scene.film.width * scene.film.height * scene.film.spp) as f64;
+    let mean = image.pixels.iter().map(|p| p[1] as f64).sum::<f64>() / image.pixels.len() as f64;
+    // Each sample is (nearly) Bernoulli(expected); roulette past rr_start only adds a little variance.
+    let stderr = (expected * (1.0 - expected) / n).sqrt();
+    assert!(
+        (mean - expected).abs() <= 5.0 * stderr,
+        "back-reflection {mean:.5}, expected 2F/(1+F) = {expected:.5} within 5 standard errors ({:.5}) of {n} samples",
+        5.0 * stderr
+    );
 }

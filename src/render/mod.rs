@@ -7,4 +7,4 @@ mod scene_data;
 
 pub use kernel::{kernel_source, kernel_spirv};
 pub use renderer::{frame_params, Renderer};
-pub use scene_data::{gpu_primitive, shape_bounds, SceneData};
+pub use scene_data::SceneData;

@@ -4,6 +4,7 @@
 use super::kernel::{kernel_spirv, WORKGROUP};
 use super::layout::{FrameParams, PassParams};
 use super::scene_data::SceneData;
+use crate::bvh::BuildStats;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
 use crate::scene::Scene;
@@ -25,6 +26,7 @@ pub struct Renderer<'a> {
     pub samples_done: u32,
     pub rays_traced: u64,
     pub seconds: f64,
+    pub bvh_stats: BuildStats,
     /// Estimated seconds per pixel-row-sample, refined after every dispatch.
     cost_per_row_sample: Option<f64>,
 }
@@ -58,7 +60,7 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
 
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
-        let (data, _bvh) = SceneData::new(scene);
+        let data = SceneData::new(scene);
         let (width, height) = (scene.film.width, scene.film.height);
         let accum_bytes = width as u64 * height as u64 * 16;
         let needed = data.gpu_bytes() + accum_bytes;
@@ -87,7 +89,7 @@ impl<'a> Renderer<'a> {
         make("statistics", BufferKind::HostStorage, &[0u8; 16])?;
         let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, cost_per_row_sample: None })
+        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, bvh_stats: data.bvh_stats, cost_per_row_sample: None })
     }
 
     /// Adds `spp` samples per pixel, calling `progress(samples_done)` after each full pass.

@@ -2,7 +2,7 @@
 //! nodes, materials, the emitter list and the environment texels.
 
 use super::layout::*;
-use crate::bvh::{self, Aabb, Bvh, BvhNode};
+use crate::bvh::{self, Aabb, BuildStats, BvhNode};
 use crate::scene::{Environment, MapProjection, Scene, Shape};
 use glam::Vec3;
 
@@ -19,9 +19,10 @@ pub struct SceneData {
     /// Multiplier for a map, or the radiance of a constant sky.
     pub env_color: Vec3,
     pub env_rotation_deg: f32,
+    pub bvh_stats: BuildStats,
 }
 
-pub fn shape_bounds(shape: &Shape) -> Aabb {
+fn shape_bounds(shape: &Shape) -> Aabb {
     match *shape {
         Shape::Sphere { center, radius, .. } => Aabb { min: center - Vec3::splat(radius), max: center + Vec3::splat(radius) },
         Shape::Quad { origin, u, v, .. } => corners_bounds(&[origin, origin + u, origin + v, origin + u + v]),
@@ -37,7 +38,7 @@ fn corners_bounds(points: &[Vec3]) -> Aabb {
     b
 }
 
-pub fn gpu_primitive(shape: &Shape) -> GpuPrimitive {
+fn gpu_primitive(shape: &Shape) -> GpuPrimitive {
     let tag = |kind: u32, material: u32| (f32::from_bits(kind), f32::from_bits(material));
     match *shape {
         Shape::Sphere { center, radius, material } => {
@@ -56,7 +57,7 @@ pub fn gpu_primitive(shape: &Shape) -> GpuPrimitive {
 }
 
 impl SceneData {
-    pub fn new(scene: &Scene) -> (SceneData, Bvh) {
+    pub fn new(scene: &Scene) -> SceneData {
         let bounds: Vec<Aabb> = scene.shapes.iter().map(shape_bounds).collect();
         let bvh = bvh::build(&bounds);
         let primitives: Vec<GpuPrimitive> = bvh.prim_order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
@@ -89,9 +90,10 @@ impl SceneData {
                 map.rotation_deg,
             ),
         };
-        let data = SceneData {
+        SceneData {
+            bvh_stats: bvh.stats(),
             primitives,
-            nodes: bvh.nodes.clone(),
+            nodes: bvh.nodes,
             materials,
             lights,
             env_texels,
@@ -99,8 +101,7 @@ impl SceneData {
             env_size,
             env_color,
             env_rotation_deg,
-        };
-        (data, bvh)
+        }
     }
 
     /// Bytes of GPU memory the scene needs (excluding the image).
