@@ -2,7 +2,8 @@
 //! the 32-byte `BvhNode` layout the GLSL kernel walks, and walkable on the CPU by the same algorithm.
 //!
 //! A BVH over zero primitives is the single node `BvhNode::EMPTY_ROOT`: an inverted box that the
-//! sign-ordered slab test (`ray_box`, mirrored by the kernel) never hits, so no traversal reads past it.
+//! sign-ordered slab test of `ray_box` never hits. The kernel's min/max slab test would enter it, so
+//! the host passes a node count of 0 for an empty scene and the kernel then skips traversal.
 
 mod aabb;
 mod flatten;
