@@ -215,7 +215,7 @@ impl GpuContext {
     }
 
     /// Validation messages recorded since the last call (empty when validation is off).
-    pub fn take_validation_messages(&self) -> Vec<String> {
+    fn take_validation_messages(&self) -> Vec<String> {
         self.validation_log.take()
     }
 
@@ -237,7 +237,7 @@ impl GpuContext {
     }
 
     /// Records commands into a one-off command buffer, submits it and waits for it to finish.
-    pub fn submit_and_wait(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
+    pub(super) fn submit_and_wait(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
         let device = &self.device;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.command_pool)
