@@ -33,15 +33,7 @@ fn map(projection: MapProjection, image: RgbImage, rotation_deg: f32) -> Environ
 /// An angular map whose texels hold their own (u, v) + 2, so the radiance seen names the texel.
 /// Bilinear filtering of a linear ramp is exact, so the lookup returns the continuous (u, v).
 fn coordinate_probe(size: u32) -> RgbImage {
-    let mut img = RgbImage::new(size, size);
-    for y in 0..size {
-        for x in 0..size {
-            let u = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
-            let v = 1.0 - (y as f32 + 0.5) / size as f32 * 2.0;
-            img.set(x, y, [u + 2.0, v + 2.0, 1.0]);
-        }
-    }
-    img
+    angular_probe(size, |u, v| [u + 2.0, v + 2.0, 1.0])
 }
 
 #[test]
@@ -71,14 +63,7 @@ fn angular_probe_never_uses_texels_outside_the_circle() {
     // Texels outside the disk are bright; inside 1. Directions near straight back read the rim.
     let (_lock, ctx) = gpu();
     let size = 64;
-    let mut img = RgbImage::new(size, size);
-    for y in 0..size {
-        for x in 0..size {
-            let u = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
-            let v = 1.0 - (y as f32 + 0.5) / size as f32 * 2.0;
-            img.set(x, y, if u * u + v * v > 1.0 { [1000.0; 3] } else { [1.0; 3] });
-        }
-    }
+    let img = angular_probe(size, |u, v| if u * u + v * v > 1.0 { [1000.0; 3] } else { [1.0; 3] });
     assert!(img.pixels.iter().any(|p| p[0] == 1000.0), "the test probe has texels outside the circle");
     // Through the scene loader, which prepares probes for the kernel.
     let dir = temp_dir("rim");
@@ -156,8 +141,7 @@ fn grace_probe_texel_centres_are_seen_in_their_directions() {
     let mut checked = 0;
     for y in (20..n - 20).step_by(61) {
         for x in (20..n - 20).step_by(53) {
-            let u = (x as f32 + 0.5) / n as f32 * 2.0 - 1.0;
-            let v = 1.0 - (y as f32 + 0.5) / n as f32 * 2.0;
+            let (u, v) = texel_centre_uv(x, y, n);
             let r = (u * u + v * v).sqrt();
             if !(1e-3..=0.95).contains(&r) {
                 continue;

@@ -220,17 +220,7 @@ fn glass_sphere_reflects_by_fresnel_at_normal_incidence() {
     // pixel sees the total back-reflection F + (1-F)^2 F + (1-F)^2 F^3 + ... = 2F / (1 + F),
     // with F = ((ior - 1) / (ior + 1))^2 = 0.04.
     let (_lock, ctx) = gpu();
-    let size = 64;
-    let mut probe = RgbImage::new(size, size);
-    for y in 0..size {
-        for x in 0..size {
-            let u = (x as f32 + 0.5) / size as f32 * 2.0 - 1.0;
-            let v = 1.0 - (y as f32 + 0.5) / size as f32 * 2.0;
-            if u * u + v * v < 0.2 * 0.2 {
-                probe.set(x, y, [1.0; 3]);
-            }
-        }
-    }
+    let probe = angular_probe(64, |u, v| if u * u + v * v < 0.2 * 0.2 { [1.0; 3] } else { [0.0; 3] });
     let mut scene = furnace("albedo = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5", 16, 64);
     scene.camera.position = Vec3::new(0.0, 0.0, -3.5);
     scene.camera.fov_deg = 0.001;

@@ -36,6 +36,24 @@ pub fn temp_dir(tag: &str) -> std::path::PathBuf {
     dir
 }
 
+/// A square angular-map probe whose texel at map coordinates (u, v) in [-1, 1]^2 (u right, v up,
+/// at the texel centre) has the value `texel(u, v)`.
+pub fn angular_probe(size: u32, texel: impl Fn(f32, f32) -> [f32; 3]) -> RgbImage {
+    let mut img = RgbImage::new(size, size);
+    for y in 0..size {
+        for x in 0..size {
+            let (u, v) = texel_centre_uv(x, y, size);
+            img.set(x, y, texel(u, v));
+        }
+    }
+    img
+}
+
+/// Angular-map coordinates of the centre of texel (x, y) of a size x size probe.
+pub fn texel_centre_uv(x: u32, y: u32, size: u32) -> (f32, f32) {
+    ((x as f32 + 0.5) / size as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / size as f32 * 2.0)
+}
+
 pub fn render(ctx: &GpuContext, scene: &Scene, seed: u32) -> RgbImage {
     let mut r = Renderer::new(ctx, scene, seed).expect("scene uploads");
     r.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
