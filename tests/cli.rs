@@ -11,8 +11,8 @@ use std::process::Command;
 
 fn caustica(args: &[&str]) -> std::process::Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustica"));
-    if std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists() {
-        cmd.env("VK_DRIVER_FILES", LAVAPIPE_ICD);
+    if let Some(icd) = lavapipe_override() {
+        cmd.env("VK_DRIVER_FILES", icd);
     }
     cmd.args(args).output().expect("run caustica")
 }

@@ -197,8 +197,7 @@ fn nee_lowers_the_noise_on_the_cornell_box() {
 fn emissive_sphere_seen_directly_has_its_radiance() {
     // A camera ray that hits an emitter sees exactly its emission (plus nothing: black surroundings).
     let (_lock, ctx) = gpu();
-    let scene = furnace("albedo = [0.0, 0.0, 0.0]\nemission = [2.0, 3.0, 4.0]", 16, 4);
-    let mut scene = scene;
+    let mut scene = furnace("albedo = [0.0, 0.0, 0.0]\nemission = [2.0, 3.0, 4.0]", 16, 4);
     scene.environment = caustica::scene::Environment::Constant(Vec3::ZERO);
     let image = render(&ctx, &scene, 1);
     let cover = coverage(&scene);

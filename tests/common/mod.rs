@@ -11,6 +11,12 @@ use std::sync::{Mutex, MutexGuard, Once};
 
 pub const LAVAPIPE_ICD: &str = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
 
+/// Lavapipe's ICD when the caller has not chosen a driver already (VK_DRIVER_FILES unset) and
+/// Mesa's lavapipe is installed.
+pub fn lavapipe_override() -> Option<&'static str> {
+    (std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists()).then_some(LAVAPIPE_ICD)
+}
+
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
 /// lavapipe already uses every core for one dispatch.
 pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
@@ -18,8 +24,8 @@ pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
     static FORCE: Once = Once::new();
     let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
     FORCE.call_once(|| {
-        if std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists() {
-            std::env::set_var("VK_DRIVER_FILES", LAVAPIPE_ICD);
+        if let Some(icd) = lavapipe_override() {
+            std::env::set_var("VK_DRIVER_FILES", icd);
         }
     });
     let ctx = GpuContext::new(&ContextOptions { device: None, validation: true }).expect("a Vulkan device (install mesa-vulkan-drivers)");
