@@ -1,9 +1,20 @@
-// Flattened BVH traversal (layout in src/bvh): explicit stack, nearer child first.
-// BVH_MAX_DEPTH is injected by the host from bvh::MAX_DEPTH, which the builder guarantees.
+// Two-level BVH traversal (layout in src/bvh and src/render/acceleration.rs). Node 0 is the root of
+// the top-level BVH, whose leaves list instances; each instance points at the root of its own
+// bottom-level BVH in the same node array. One explicit stack serves both levels: a top-level leaf
+// pushes its instances as tagged entries, and popping one transforms the ray into the instance's
+// object space until the stack falls back below that entry.
+// BVH_MAX_DEPTH and BVH_MAX_LEAF_SIZE are injected by the host from the builder's bounds.
+
+const uint NO_INDEX = 0xffffffffu;
+const uint INSTANCE_ENTRY = 0x80000000u;
+// Pending far children of the top level, one leaf's instances, then the bottom level's.
+const uint STACK_SIZE = 2u * BVH_MAX_DEPTH + BVH_MAX_LEAF_SIZE + 1u;
 
 struct Hit {
     float t;
-    uint prim;
+    uint prim;      // index into prims (group instance) or mesh_triangles (mesh instance)
+    uint instance;
+    vec2 bary;      // barycentric (u, v) on a mesh triangle
 };
 
 // Slab test against [bmin, bmax]; true when the box overlaps (0, t_max).
@@ -24,40 +35,93 @@ vec3 safe_inverse(vec3 d) {
     return 1.0 / vec3(abs(d.x) > tiny ? d.x : tiny, abs(d.y) > tiny ? d.y : tiny, abs(d.z) > tiny ? d.z : tiny);
 }
 
+vec3 affine_point(vec4 rows[3], vec3 p) {
+    return vec3(dot(rows[0].xyz, p) + rows[0].w, dot(rows[1].xyz, p) + rows[1].w, dot(rows[2].xyz, p) + rows[2].w);
+}
+
+vec3 affine_vector(vec4 rows[3], vec3 v) {
+    return vec3(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
+}
+
+vec3 vertex_position(uint v) {
+    return vec3(vertex_positions[3u * v], vertex_positions[3u * v + 1u], vertex_positions[3u * v + 2u]);
+}
+
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found (shadow rays).
+// The object-space ray keeps the world parameter t: its direction is transformed, not renormalised.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit.t = t_max;
-    hit.prim = 0xffffffffu;
+    hit.prim = NO_INDEX;
+    hit.instance = NO_INDEX;
+    hit.bary = vec2(0.0);
     if (frame.env_size.w == 0u) return false;  // empty scene: no root node to test
+    vec3 ro = o;
+    vec3 rd = d;
     vec3 inv_d = safe_inverse(d);
-    uint stack[BVH_MAX_DEPTH + 1];
+    uint stack[STACK_SIZE];
     uint sp = 0u;
     uint node_index = 0u;
+    uint instance = NO_INDEX;  // the instance whose bottom level is being walked
+    uint instance_kind = INSTANCE_PRIMITIVES;
+    uint instance_sp = 0u;     // stack height when it was entered
     while (true) {
         BvhNode node = nodes[node_index];
-        if (ray_box(node.bmin, node.bmax, o, inv_d, hit.t)) {
+        if (ray_box(node.bmin, node.bmax, ro, inv_d, hit.t)) {
             uint count = node.meta >> 2u;
             if (count == 0u) {
                 // Interior: descend into the child on the ray's near side, keep the other.
                 uint axis = node.meta & 3u;
-                bool second_first = d[axis] < 0.0;
+                bool second_first = rd[axis] < 0.0;
                 stack[sp++] = second_first ? node_index + 1u : node.offset;
                 node_index = second_first ? node.offset : node_index + 1u;
                 continue;
             }
-            for (uint i = node.offset; i < node.offset + count; ++i) {
-                float t = intersect_primitive(prims[i], o, d, hit.t);
-                if (t > 0.0) {
-                    hit.t = t;
-                    hit.prim = i;
-                    if (any_hit) return true;
+            if (instance == NO_INDEX) {
+                for (uint i = 0u; i < count; ++i) stack[sp++] = INSTANCE_ENTRY | (node.offset + i);
+            } else if (instance_kind == INSTANCE_MESH) {
+                for (uint i = node.offset; i < node.offset + count; ++i) {
+                    uvec4 tri = mesh_triangles[i];
+                    vec3 v0 = vertex_position(tri.x);
+                    vec2 bary;
+                    float t = intersect_triangle(v0, vertex_position(tri.y) - v0, vertex_position(tri.z) - v0, ro, rd, hit.t, bary);
+                    if (t > 0.0) {
+                        hit = Hit(t, i, instance, bary);
+                        if (any_hit) return true;
+                    }
+                }
+            } else {
+                for (uint i = node.offset; i < node.offset + count; ++i) {
+                    float t = intersect_primitive(prims[i], ro, rd, hit.t);
+                    if (t > 0.0) {
+                        hit = Hit(t, i, instance, vec2(0.0));
+                        if (any_hit) return true;
+                    }
                 }
             }
         }
+        // Next entry: leave the instance once its part of the stack is used up.
+        if (instance != NO_INDEX && sp == instance_sp) {
+            instance = NO_INDEX;
+            ro = o;
+            rd = d;
+            inv_d = safe_inverse(d);
+        }
         if (sp == 0u) break;
-        node_index = stack[--sp];
+        uint entry = stack[--sp];
+        if ((entry & INSTANCE_ENTRY) != 0u) {
+            instance = entry & ~INSTANCE_ENTRY;
+            Instance inst = instances[instance];
+            instance_kind = inst.info.x;
+            instance_sp = sp;
+            ro = affine_point(inst.world_to_object, o);
+            rd = affine_vector(inst.world_to_object, d);
+            inv_d = safe_inverse(rd);
+            node_index = inst.info.y;
+        } else {
+            node_index = entry;
+        }
     }
-    return hit.prim != 0xffffffffu;
+    return hit.prim != NO_INDEX;
 }
 
 bool occluded(vec3 o, vec3 d, float t_max) {

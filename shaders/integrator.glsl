@@ -33,17 +33,17 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
             radiance += throughput * environment_radiance(dir);
             break;
         }
-        Primitive p = prims[hit.prim];
-        Material m = materials[prim_material(p)];
-        vec3 point = origin + hit.t * dir;
-        vec3 n = primitive_normal(p, point);
+        Surface surface = surface_at(hit, origin, dir);
+        Material m = surface_material(surface);
+        vec3 point = surface.point;
+        vec3 n = surface.ng;
         bool front = dot(n, dir) < 0.0;
 
         vec3 le = emitted_radiance(m, front);
         if (max3(le) > 0.0) {
             float weight = 1.0;
             if (nee && after_diffuse) {
-                weight = power_heuristic(bsdf_pdf, light_pdf(p, prev_point, dir, hit.t));
+                weight = power_heuristic(bsdf_pdf, light_pdf(world_primitive(hit), prev_point, dir, hit.t));
             }
             radiance += throughput * le * weight;
         }
@@ -54,16 +54,18 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
             throughput /= q;
         }
 
-        Scatter s = scatter(m, dir, n, front, rng);
+        Scatter s = scatter(m, dir, surface.ns, front, rng);
+        // Shading normals can send a ray through the geometric surface; such paths end here.
+        if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) break;
         throughput *= s.weight;
         after_diffuse = s.event == EVENT_DIFFUSE;
         if (after_diffuse) {
-            vec3 n_in = front ? n : -n;
+            vec3 n_in = front ? surface.ns : -surface.ns;
             if (nee) {
                 LightSample ls;
                 if (sample_light(point, rng, ls)) {
                     float cos_surface = dot(n_in, ls.dir);
-                    if (cos_surface > 0.0) {
+                    if (cos_surface > 0.0 && (dot(ls.dir, n) > 0.0) == front) {
                         rays += 1u;
                         vec3 shadow_origin = offset_origin(point, n, ls.dir);
                         // Stop short of the light so its own surface does not count as a blocker.

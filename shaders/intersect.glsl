@@ -30,8 +30,9 @@ float intersect_quad(vec3 origin, vec3 eu, vec3 ev, vec3 o, vec3 d, float t_max)
     return (alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0) ? t : NO_HIT;
 }
 
-// Moller-Trumbore.
-float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max) {
+// Moller-Trumbore; `bary` gets the hit's (u, v) weights of v1 and v2. `d` need not be unit length
+// (instanced meshes are hit in object space).
+float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max, out vec2 bary) {
     vec3 p = cross(d, e2);
     float det = dot(e1, p);
     if (abs(det) < 1e-20) return NO_HIT;
@@ -43,6 +44,7 @@ float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max)
     float v = dot(d, q) * inv_det;
     if (v < 0.0 || u + v > 1.0) return NO_HIT;
     float t = dot(e2, q) * inv_det;
+    bary = vec2(u, v);
     return (t > 0.0 && t < t_max) ? t : NO_HIT;
 }
 
@@ -50,7 +52,8 @@ float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
     uint kind = prim_kind(p);
     if (kind == PRIM_SPHERE) return intersect_sphere(p.a.xyz, p.a.w, o, d, t_max);
     if (kind == PRIM_QUAD) return intersect_quad(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max);
-    return intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max);
+    vec2 unused_bary;
+    return intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max, unused_bary);
 }
 
 // Outward (sphere) or front-side (quad, triangle) unit normal at a point on the primitive.

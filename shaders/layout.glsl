@@ -17,7 +17,8 @@ struct Primitive {
 };
 
 // albedo_r.w = reflectivity R, emission_t.w = transparency T, params.x = ior,
-// params.y = 1 when the emitter radiates from both sides.
+// params.y = 1 when the emitter radiates from both sides, params.z = albedo texture index (uint
+// bits; NO_TEXTURE for none).
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;
@@ -31,6 +32,31 @@ struct BvhNode {
     uint offset;
     vec3 bmax;
     uint meta;
+};
+
+// Instance kinds (INSTANCE_* must match layout.rs): the scene's own spheres, quads and triangles
+// (one group, identity transform), or a placed triangle mesh.
+const uint INSTANCE_PRIMITIVES = 0u;
+const uint INSTANCE_MESH = 1u;
+// Instance flags: the mesh has per-vertex normals / texture coordinates.
+const uint INSTANCE_HAS_NORMALS = 1u;
+const uint INSTANCE_HAS_UVS = 2u;
+const uint NO_TEXTURE = 0xffffffffu;
+
+// One placement of a bottom-level BVH. Rows of the 3x4 affine maps; info.x = kind, info.y = root
+// node of its BVH, info.z = flags.
+struct Instance {
+    vec4 world_to_object[3];
+    vec4 object_to_world[3];
+    uvec4 info;
+};
+
+// Texture descriptor: texels offset..offset + width * height (RGBA8, sRGB-encoded, top row first).
+struct TextureInfo {
+    uint offset;
+    uint width;
+    uint height;
+    uint unused;
 };
 
 // Environment kinds (ENV_* must match layout.rs).
@@ -47,7 +73,7 @@ layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
     vec4 env_rotation;  // x = cos, y = sin of the map's rotation about +y
     uvec4 image;        // width, height, seed, light count
     uvec4 integrator;   // rr_start, nee (0/1), env kind, max depth
-    uvec4 env_size;     // map width, map height, primitive count, node count
+    uvec4 env_size;     // map width, map height, instance count, node count
     vec4 roulette;      // x = fixed absorption (< 0: derive from throughput), y = q min, z = q max
 } frame;
 
@@ -61,12 +87,24 @@ layout(push_constant) uniform PassBlock {
 layout(std430, set = 0, binding = 1) readonly buffer NodeBuffer { BvhNode nodes[]; };
 layout(std430, set = 0, binding = 2) readonly buffer PrimitiveBuffer { Primitive prims[]; };
 layout(std430, set = 0, binding = 3) readonly buffer MaterialBuffer { Material materials[]; };
-layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { uint light_prims[]; };
+// Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
+layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { Primitive lights[]; };
 layout(std430, set = 0, binding = 5) readonly buffer EnvironmentBuffer { vec4 env_texels[]; };
 // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
 layout(std430, set = 0, binding = 6) buffer AccumBuffer { vec4 accum[]; };
 // x = rays traced (wraps per dispatch; the host reads and clears it each dispatch).
 layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; } stats;
+// Top-level BVH leaves index instances; node 0 is the top-level root.
+layout(std430, set = 0, binding = 8) readonly buffer InstanceBuffer { Instance instances[]; };
+// Mesh triangles in their BVH's leaf order: xyz = global vertex indices, w = material.
+layout(std430, set = 0, binding = 9) readonly buffer TriangleBuffer { uvec4 mesh_triangles[]; };
+// Vertex attributes of every mesh, indexed by global vertex index. Positions are packed floats
+// (12 bytes a vertex), normals octahedral snorm16x2.
+layout(std430, set = 0, binding = 10) readonly buffer PositionBuffer { float vertex_positions[]; };
+layout(std430, set = 0, binding = 11) readonly buffer NormalBuffer { uint vertex_normals[]; };
+layout(std430, set = 0, binding = 12) readonly buffer UvBuffer { vec2 vertex_uvs[]; };
+layout(std430, set = 0, binding = 13) readonly buffer TextureInfoBuffer { TextureInfo texture_infos[]; };
+layout(std430, set = 0, binding = 14) readonly buffer TexelBuffer { uint texels[]; };
 
 uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
 uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }

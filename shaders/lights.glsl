@@ -1,4 +1,4 @@
-// Area lights: every emissive primitive. One is picked uniformly, then a point (or, for spheres, a
+// Area lights: every emissive primitive and mesh triangle, in world space (the `lights` buffer). One is picked uniformly, then a point (or, for spheres, a
 // direction in the cone they subtend) is sampled on it. Pdfs are per unit solid angle at `ref`.
 
 struct LightSample {
@@ -31,7 +31,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     ls.pdf = 0.0;
     if (count == 0u) return false;
     uint index = min(uint(rng_next(rng) * float(count)), count - 1u);
-    Primitive p = prims[light_prims[index]];
+    Primitive p = lights[index];
     vec2 u = rng_next2(rng);
     vec3 point;
     uint kind = prim_kind(p);

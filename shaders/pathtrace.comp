@@ -1,7 +1,7 @@
 #version 460
 // caustica's path tracing kernel: one invocation per pixel of the dispatched row band, adding
 // `pass.sample_count` samples to the pixel's running sum.
-// The host prepends `#define BVH_MAX_DEPTH` (the BVH builder's depth bound).
+// The host prepends `#define BVH_MAX_DEPTH` and `BVH_MAX_LEAF_SIZE` (the BVH builder's bounds).
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -10,6 +10,8 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "sampling.glsl"
 #include "intersect.glsl"
 #include "bvh.glsl"
+#include "textures.glsl"
+#include "surface.glsl"
 #include "materials.glsl"
 #include "lights.glsl"
 #include "environment.glsl"

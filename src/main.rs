@@ -3,7 +3,7 @@
 use anyhow::{Context as _, Result};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::write_image;
-use caustica::render::Renderer;
+use caustica::render::{GeometryReport, Renderer};
 use caustica::scene::{check_film, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -152,14 +152,32 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, gpu: &DeviceArgs) 
     println!("scene:        {}", scene.name);
     println!("device:       {} ({})", ctx.info.name, ctx.info.kind.label());
     println!("image:        {width}x{height}, {spp} spp");
-    let bvh = renderer.bvh_stats;
-    println!("primitives:   {} ({} BVH nodes, depth {}, SAH cost {:.2})", scene.shapes.len(), bvh.nodes, bvh.max_depth, bvh.sah_cost);
-    println!("setup:        {setup_s:.3} s (BVH, upload, kernel compile)");
+    print_geometry(&renderer.geometry);
+    println!("setup:        {setup_s:.3} s (load excluded: BVH, upload, kernel compile)");
     println!("render:       {seconds:.3} s");
     println!("samples/s:    {:.3} M", samples / seconds / 1e6);
     println!("rays/s:       {:.3} M", rays / seconds / 1e6);
     println!("rays/sample:  {:.2}", rays / samples);
     Ok(())
+}
+
+fn print_geometry(g: &GeometryReport) {
+    let a = &g.acceleration;
+    let mib = |b: u64| b as f64 / 1048576.0;
+    println!(
+        "geometry:     {} primitives, {} mesh triangles stored, {} in the world, {} instances, {} lights",
+        a.primitives, a.mesh_triangles, a.instanced_triangles, a.instances, g.lights
+    );
+    let rate = a.mesh_triangles as f64 / a.build_seconds.max(1e-9) / 1e6;
+    println!("BVH build:    {:.3} s ({rate:.2} M triangles/s), {} nodes", a.build_seconds, a.nodes);
+    if let Some(b) = &a.largest_mesh {
+        println!("largest mesh: {} nodes, depth {}, SAH cost {:.2}", b.nodes, b.max_depth, b.sah_cost);
+    }
+    if let Some(t) = &a.top {
+        println!("top level:    {} nodes, depth {}, SAH cost {:.2}", t.nodes, t.max_depth, t.sah_cost);
+    }
+    let per_triangle = if a.mesh_triangles > 0 { format!(", {:.1} B/triangle", a.bytes_per_triangle(g.geometry_bytes)) } else { String::new() };
+    println!("GPU memory:   {:.1} MiB geometry + BVH{per_triangle}, {:.1} MiB textures, {:.1} MiB in all", mib(g.geometry_bytes), mib(g.texture_bytes), mib(g.gpu_bytes));
 }
 
 fn run() -> Result<()> {

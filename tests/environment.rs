@@ -21,6 +21,9 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
         integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16 },
         materials: vec![],
         shapes: vec![],
+        meshes: vec![],
+        instances: vec![],
+        textures: vec![],
         environment: environment.clone(),
     };
     render(ctx, &scene, 1).pixels[0]

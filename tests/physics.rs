@@ -44,7 +44,7 @@ enum Coverage {
 /// Which pixels see only the unit sphere at the origin, only the background, or both, from the
 /// camera's own ray directions with a margin of 1.5 pixels around the silhouette.
 fn coverage(scene: &Scene) -> Vec<Coverage> {
-    let data = SceneData::new(scene);
+    let data = SceneData::new(scene, 0);
     let p = frame_params(scene, &data, 0);
     let (w, h) = (scene.film.width, scene.film.height);
     let eye = Vec3::from_slice(&p.cam_origin);

@@ -11,6 +11,8 @@ pub const SHADERS: ShaderSources = &[
     ("sampling.glsl", include_str!("../../shaders/sampling.glsl")),
     ("intersect.glsl", include_str!("../../shaders/intersect.glsl")),
     ("bvh.glsl", include_str!("../../shaders/bvh.glsl")),
+    ("textures.glsl", include_str!("../../shaders/textures.glsl")),
+    ("surface.glsl", include_str!("../../shaders/surface.glsl")),
     ("materials.glsl", include_str!("../../shaders/materials.glsl")),
     ("lights.glsl", include_str!("../../shaders/lights.glsl")),
     ("environment.glsl", include_str!("../../shaders/environment.glsl")),
@@ -22,7 +24,10 @@ pub const SHADERS: ShaderSources = &[
 pub const WORKGROUP: u32 = 8;
 
 pub fn kernel_source() -> Result<String> {
-    assemble_source(SHADERS, "pathtrace.comp", &[("BVH_MAX_DEPTH", crate::bvh::MAX_DEPTH.to_string())])
+    assemble_source(SHADERS, "pathtrace.comp", &[
+            ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
+            ("BVH_MAX_LEAF_SIZE", format!("{}u", crate::bvh::MAX_LEAF_SIZE)),
+        ],)
 }
 
 /// SPIR-V of the kernel; compiled on first use (glslang takes about a second the first time).

@@ -7,6 +7,12 @@ pub const PRIM_SPHERE: u32 = 0;
 pub const PRIM_QUAD: u32 = 1;
 pub const PRIM_TRIANGLE: u32 = 2;
 
+pub const INSTANCE_PRIMITIVES: u32 = 0;
+pub const INSTANCE_MESH: u32 = 1;
+pub const INSTANCE_HAS_NORMALS: u32 = 1;
+pub const INSTANCE_HAS_UVS: u32 = 2;
+pub const NO_TEXTURE: u32 = u32::MAX;
+
 pub const ENV_CONSTANT: u32 = 0;
 pub const ENV_ANGULAR: u32 = 1;
 pub const ENV_LATLONG: u32 = 2;
@@ -29,6 +35,25 @@ pub struct GpuMaterial {
     pub params: [f32; 4],
 }
 
+/// `struct Instance`: rows of the two 3x4 affine maps, then kind, BVH root node and flags.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuInstance {
+    pub world_to_object: [[f32; 4]; 3],
+    pub object_to_world: [[f32; 4]; 3],
+    pub info: [u32; 4],
+}
+
+/// `struct TextureInfo`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuTexture {
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    pub unused: u32,
+}
+
 /// `uniform FrameParamsBlock` (std140; only 16-byte members, so it equals std430).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -43,7 +68,7 @@ pub struct FrameParams {
     pub image: [u32; 4],
     /// rr_start, nee, env kind, max bounces (safety cap)
     pub integrator: [u32; 4],
-    /// map width, map height, primitive count, node count
+    /// map width, map height, instance count, node count (0: empty scene)
     pub env_size: [u32; 4],
     /// fixed absorption (< 0: derive from throughput), q min, q max, unused
     pub roulette: [f32; 4],
@@ -77,6 +102,20 @@ mod tests {
         assert_eq!(size_of::<GpuMaterial>(), 48);
         assert_eq!(offset_of!(GpuMaterial, emission_t), 16);
         assert_eq!(offset_of!(GpuMaterial, params), 32);
+    }
+
+    #[test]
+    fn instance_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuInstance>(), 112);
+        assert_eq!(offset_of!(GpuInstance, object_to_world), 48);
+        assert_eq!(offset_of!(GpuInstance, info), 96);
+    }
+
+    #[test]
+    fn texture_info_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuTexture>(), 16);
+        assert_eq!(offset_of!(GpuTexture, width), 4);
+        assert_eq!(offset_of!(GpuTexture, height), 8);
     }
 
     #[test]
@@ -119,11 +158,17 @@ mod tests {
             ("PRIM_SPHERE", PRIM_SPHERE),
             ("PRIM_QUAD", PRIM_QUAD),
             ("PRIM_TRIANGLE", PRIM_TRIANGLE),
+            ("INSTANCE_PRIMITIVES", INSTANCE_PRIMITIVES),
+            ("INSTANCE_MESH", INSTANCE_MESH),
+            ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
+            ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
+            ("NO_TEXTURE", NO_TEXTURE),
             ("ENV_CONSTANT", ENV_CONSTANT),
             ("ENV_ANGULAR", ENV_ANGULAR),
             ("ENV_LATLONG", ENV_LATLONG),
         ] {
-            assert!(glsl.contains(&format!("const uint {name} = {value}u;")), "{name} = {value} not found in layout.glsl");
+            let literal = if value == u32::MAX { "0xffffffffu".to_string() } else { format!("{value}u") };
+            assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl");
         }
     }
 }

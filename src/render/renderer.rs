@@ -3,8 +3,8 @@
 
 use super::kernel::{kernel_spirv, WORKGROUP};
 use super::layout::{FrameParams, PassParams};
+use super::acceleration::AccelerationStats;
 use super::scene_data::SceneData;
-use crate::bvh::BuildStats;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
 use crate::scene::Scene;
@@ -26,10 +26,26 @@ pub struct Renderer<'a> {
     pub samples_done: u32,
     pub rays_traced: u64,
     pub seconds: f64,
-    pub bvh_stats: BuildStats,
+    pub geometry: GeometryReport,
     /// Estimated seconds per pixel-row-sample, refined after every dispatch.
     cost_per_row_sample: Option<f64>,
 }
+
+/// What was uploaded, for logs and `caustica bench`.
+#[derive(Clone, Debug)]
+pub struct GeometryReport {
+    pub acceleration: AccelerationStats,
+    /// Geometry and BVH bytes (nodes, instances, primitives, triangles, vertex attributes).
+    pub geometry_bytes: u64,
+    pub texture_bytes: u64,
+    pub texture_bytes_requested: u64,
+    pub lights: usize,
+    /// Everything the scene occupies on the device, the image excluded.
+    pub gpu_bytes: u64,
+}
+
+/// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so).
+pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 
 // Binding indices of shaders/layout.glsl.
 const ACCUM: usize = 6;
@@ -53,14 +69,24 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         env_rotation: [rot.cos(), rot.sin(), 0.0, 0.0],
         image: [scene.film.width, scene.film.height, seed, data.lights.len() as u32],
         integrator: [i.rr_start, u32::from(i.nee), data.env_kind, i.max_bounces],
-        env_size: [data.env_size[0], data.env_size[1], data.primitives.len() as u32, if data.primitives.is_empty() { 0 } else { data.nodes.len() as u32 }],
+        env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
     }
 }
 
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
-        let data = SceneData::new(scene);
+        // One texel buffer holds every texture, so it must fit one storage binding too.
+        let texture_budget = TEXTURE_BUDGET_BYTES.min(ctx.info.max_storage_buffer_range);
+        let data = SceneData::new(scene, texture_budget);
+        if data.texture_bytes() < data.texture_bytes_requested {
+            eprintln!(
+                "caustica: {}: textures downsampled from {:.1} MiB to {:.1} MiB to fit the texture budget",
+                scene.name,
+                data.texture_bytes_requested as f64 / 1048576.0,
+                data.texture_bytes() as f64 / 1048576.0
+            );
+        }
         let (width, height) = (scene.film.width, scene.film.height);
         let accum_bytes = width as u64 * height as u64 * 16;
         let needed = data.gpu_bytes() + accum_bytes;
@@ -80,16 +106,31 @@ impl<'a> Renderer<'a> {
             Ok(())
         };
         make("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params))?;
-        make("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&data.nodes))?;
-        make("primitives", BufferKind::Storage, bytemuck::cast_slice(&data.primitives))?;
+        let a = &data.acceleration;
+        make("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes))?;
+        make("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives))?;
         make("materials", BufferKind::Storage, bytemuck::cast_slice(&data.materials))?;
         make("lights", BufferKind::Storage, bytemuck::cast_slice(&data.lights))?;
         make("environment map", BufferKind::Storage, bytemuck::cast_slice(&data.env_texels))?;
         make("accumulation image", BufferKind::Storage, &vec![0u8; accum_bytes as usize])?;
         make("statistics", BufferKind::HostStorage, &[0u8; 16])?;
+        make("instances", BufferKind::Storage, bytemuck::cast_slice(&a.instances))?;
+        make("mesh triangles", BufferKind::Storage, bytemuck::cast_slice(&a.triangles))?;
+        make("vertex positions", BufferKind::Storage, bytemuck::cast_slice(&a.positions))?;
+        make("vertex normals", BufferKind::Storage, bytemuck::cast_slice(&a.normals))?;
+        make("vertex texture coordinates", BufferKind::Storage, bytemuck::cast_slice(&a.uvs))?;
+        make("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures))?;
+        make("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels))?;
         let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, bvh_stats: data.bvh_stats, cost_per_row_sample: None })
+        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, geometry: GeometryReport {
+            acceleration: data.acceleration.stats.clone(),
+            geometry_bytes: data.acceleration.gpu_bytes(),
+            texture_bytes: data.texture_bytes(),
+            texture_bytes_requested: data.texture_bytes_requested,
+            lights: data.lights.len(),
+            gpu_bytes: data.gpu_bytes(),
+        }, cost_per_row_sample: None })
     }
 
     /// Adds `spp` samples per pixel, calling `progress(samples_done)` after each full pass.

@@ -1,17 +1,21 @@
-//! Flattens a `Scene` into the arrays the kernel reads: primitives in BVH leaf order, the BVH
-//! nodes, materials, the emitter list and the environment texels.
+//! Flattens a `Scene` into the arrays the kernel reads: the two-level acceleration structure,
+//! materials, textures, the emitter list and the environment texels.
 
+use super::acceleration::{gpu_primitive, triangle_primitive, Acceleration};
 use super::layout::*;
-use crate::bvh::{self, Aabb, BuildStats, BvhNode};
-use crate::scene::{Environment, MapProjection, Scene, Shape};
+use crate::scene::{downsample_to_fit, Environment, MapProjection, Scene};
 use glam::Vec3;
 
 pub struct SceneData {
-    pub primitives: Vec<GpuPrimitive>,
-    pub nodes: Vec<BvhNode>,
+    pub acceleration: Acceleration,
     pub materials: Vec<GpuMaterial>,
-    /// Indices into `primitives` of every emitter.
-    pub lights: Vec<u32>,
+    /// Every emitter in world space.
+    pub lights: Vec<GpuPrimitive>,
+    pub textures: Vec<GpuTexture>,
+    /// RGBA8 texels of every texture, packed little-endian (red in the low byte).
+    pub texels: Vec<u32>,
+    /// Texture bytes before any downsampling to the budget.
+    pub texture_bytes_requested: u64,
     /// Environment map texels, top row first (one black texel for a constant sky).
     pub env_texels: Vec<[f32; 4]>,
     pub env_kind: u32,
@@ -19,66 +23,50 @@ pub struct SceneData {
     /// Multiplier for a map, or the radiance of a constant sky.
     pub env_color: Vec3,
     pub env_rotation_deg: f32,
-    pub bvh_stats: BuildStats,
 }
 
-fn shape_bounds(shape: &Shape) -> Aabb {
-    match *shape {
-        Shape::Sphere { center, radius, .. } => Aabb { min: center - Vec3::splat(radius), max: center + Vec3::splat(radius) },
-        Shape::Quad { origin, u, v, .. } => corners_bounds(&[origin, origin + u, origin + v, origin + u + v]),
-        Shape::Triangle { v, .. } => corners_bounds(&v),
-    }
-}
-
-fn corners_bounds(points: &[Vec3]) -> Aabb {
-    let mut b = Aabb::EMPTY;
-    for &p in points {
-        b.grow(p);
-    }
-    b
-}
-
-fn gpu_primitive(shape: &Shape) -> GpuPrimitive {
-    let tag = |kind: u32, material: u32| (f32::from_bits(kind), f32::from_bits(material));
-    match *shape {
-        Shape::Sphere { center, radius, material } => {
-            let (k, m) = tag(PRIM_SPHERE, material);
-            GpuPrimitive { a: center.extend(radius).into(), b: [0.0, 0.0, 0.0, k], c: [0.0, 0.0, 0.0, m] }
-        }
-        Shape::Quad { origin, u, v, material } => {
-            let (k, m) = tag(PRIM_QUAD, material);
-            GpuPrimitive { a: origin.extend(0.0).into(), b: u.extend(k).into(), c: v.extend(m).into() }
-        }
-        Shape::Triangle { v, material } => {
-            let (k, m) = tag(PRIM_TRIANGLE, material);
-            GpuPrimitive { a: v[0].extend(0.0).into(), b: (v[1] - v[0]).extend(k).into(), c: (v[2] - v[0]).extend(m).into() }
+/// Every emissive shape and every emissive triangle of every mesh instance, in world space.
+fn world_lights(scene: &Scene) -> Vec<GpuPrimitive> {
+    let emissive = |m: u32| scene.materials[m as usize].is_emissive();
+    let mut lights: Vec<GpuPrimitive> = scene.shapes.iter().filter(|s| emissive(s.material())).map(gpu_primitive).collect();
+    for inst in &scene.instances {
+        let mesh = &scene.meshes[inst.mesh as usize];
+        // A mirroring placement flips the winding; swap two vertices to keep the front side.
+        let mirrored = inst.transform.determinant() < 0.0;
+        for (t, &m) in mesh.triangles.iter().zip(&mesh.triangle_materials).filter(|(_, &m)| emissive(m)) {
+            let mut v = t.map(|i| inst.transform.transform_point3(mesh.positions[i as usize]));
+            if mirrored {
+                v.swap(1, 2);
+            }
+            lights.push(triangle_primitive(v, m));
         }
     }
+    lights
 }
 
 impl SceneData {
-    pub fn new(scene: &Scene) -> SceneData {
-        let bounds: Vec<Aabb> = scene.shapes.iter().map(shape_bounds).collect();
-        let bvh = bvh::build(&bounds);
-        let primitives: Vec<GpuPrimitive> = bvh.prim_order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
-        let lights = bvh
-            .prim_order
-            .iter()
-            .enumerate()
-            .filter(|(_, &i)| scene.materials[scene.shapes[i as usize].material() as usize].is_emissive())
-            .map(|(leaf_index, _)| leaf_index as u32)
-            .collect();
+    /// `texture_budget`: most bytes of texels to upload; larger texture sets are downsampled.
+    pub fn new(scene: &Scene, texture_budget: u64) -> SceneData {
+        let acceleration = Acceleration::build(scene);
         let materials = scene
             .materials
             .iter()
             .map(|m| GpuMaterial {
                 albedo_r: m.albedo.extend(m.reflectivity).into(),
                 emission_t: m.emission.extend(m.transparency).into(),
-                params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, 0.0, 0.0],
+                params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)), 0.0],
             })
             .collect();
-        let (env_texels, env_kind, env_size, env_color, env_rotation_deg) = match &scene.environment {
-            Environment::Constant(c) => (vec![[0.0; 4]], ENV_CONSTANT, [1, 1], *c, 0.0),
+        let texture_bytes_requested = scene.textures.iter().map(|t| t.width as u64 * t.height as u64 * 4).sum();
+        let mut textures = Vec::new();
+        let mut texels = Vec::new();
+        let mut fitted = scene.textures.clone();
+        downsample_to_fit(&mut fitted, texture_budget);
+        for t in fitted {
+            textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, unused: 0 });
+            texels.extend(t.texels.iter().map(|&p| u32::from_le_bytes(p)));
+        }
+        let (env_texels, env_kind, env_size, env_color, env_rotation_deg) = match &scene.environment {            Environment::Constant(c) => (vec![[0.0; 4]], ENV_CONSTANT, [1, 1], *c, 0.0),
             Environment::Map(map) => (
                 map.image.pixels.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect(),
                 match map.projection {
@@ -91,11 +79,12 @@ impl SceneData {
             ),
         };
         SceneData {
-            bvh_stats: bvh.stats(),
-            primitives,
-            nodes: bvh.nodes,
+            lights: world_lights(scene),
+            acceleration,
             materials,
-            lights,
+            textures,
+            texels,
+            texture_bytes_requested,
             env_texels,
             env_kind,
             env_size,
@@ -106,10 +95,15 @@ impl SceneData {
 
     /// Bytes of GPU memory the scene needs (excluding the image).
     pub fn gpu_bytes(&self) -> u64 {
-        (std::mem::size_of_val(&self.primitives[..])
-            + std::mem::size_of_val(&self.nodes[..])
-            + std::mem::size_of_val(&self.materials[..])
+        self.acceleration.gpu_bytes()
+            + self.texture_bytes()
+            + (std::mem::size_of_val(&self.materials[..])
             + std::mem::size_of_val(&self.lights[..])
             + std::mem::size_of_val(&self.env_texels[..])) as u64
+    }
+
+    /// Bytes of texels uploaded (after any downsampling).
+    pub fn texture_bytes(&self) -> u64 {
+        std::mem::size_of_val(&self.texels[..]) as u64
     }
 }

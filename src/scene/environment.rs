@@ -50,7 +50,7 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path) -> Result<Environment>
         }
         return Ok(Environment::Constant(color * e.intensity));
     };
-    let path = base.join(file);
+    let path = super::resolve(base, file);
     let mut image = image::read_image(&path)?;
     let name = path.display().to_string();
     image::pfm::check_finite(&image, &name)?;

@@ -120,8 +120,33 @@ pub struct TriangleFile {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct MeshFile {
+    /// OBJ (with its MTL), PLY, glTF or GLB.
     pub file: String,
-    pub material: String,
+    /// Replaces every material the file defines.
+    pub material: Option<String>,
+    /// Where the file's meshes go (after the file's own node transforms). Listed here rather than
+    /// as a flattened `Placement`, which serde cannot combine with deny_unknown_fields.
+    #[serde(default)]
+    pub translate: [f32; 3],
+    #[serde(default)]
+    pub scale: Option<Scale>,
+    #[serde(default)]
+    pub rotate: [f32; 3],
+    /// Several placements of the same geometry, each applied after the entry's own translate,
+    /// scale and rotate (which can thus size and centre the model once); stored once on the GPU.
+    #[serde(default)]
+    pub instances: Vec<Placement>,
+}
+
+impl MeshFile {
+    pub fn placement(&self) -> Placement {
+        Placement { translate: self.translate, scale: self.scale, rotate: self.rotate }
+    }
+}
+
+#[derive(Deserialize, Debug, Default, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct Placement {
     #[serde(default)]
     pub translate: [f32; 3],
     /// Uniform scale, or per axis.

@@ -1,44 +1,120 @@
-//! Triangle meshes from OBJ files (via tobj), transformed into world space.
+//! Meshes in a scene: shared triangle geometry, its placements (instances), and the import of
+//! mesh files (OBJ + MTL, PLY, glTF) into the scene's materials, meshes and textures.
 
-use anyhow::{anyhow, bail, Result};
-use glam::{Mat4, Vec3};
-use std::path::Path;
+use super::asset::{self, Asset, AssetMaterial};
+use super::{Material, Scene};
+use anyhow::{bail, Result};
+use glam::{Mat4, Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
-/// World-space triangles of every object in an OBJ file. Degenerate (zero-area) triangles are
-/// dropped with a note on stderr; non-finite vertices and out-of-range indices are errors.
-pub fn load_obj(path: &Path, transform: Mat4) -> Result<Vec<[Vec3; 3]>> {
-    let options = tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
-    let (models, _materials) = tobj::load_obj(path, &options).map_err(|e| anyhow!("{}: cannot load OBJ: {e}", path.display()))?;
-    let mut triangles = Vec::new();
-    let mut degenerate = 0usize;
-    for model in &models {
-        let mesh = &model.mesh;
-        let positions = &mesh.positions;
-        if positions.iter().any(|p| !p.is_finite()) {
-            bail!("{}: object '{}' has a non-finite vertex coordinate", path.display(), model.name);
-        }
-        let vertex_count = positions.len() / 3;
-        let vertex = |i: u32| -> Result<Vec3> {
-            let i = i as usize;
-            if i >= vertex_count {
-                bail!("{}: object '{}' has a face index {} past its {} vertices", path.display(), model.name, i + 1, vertex_count);
+pub use asset::{AssetCamera, TextureImage as Texture};
+
+/// Triangles in object space; `Instance`s place them in the world, so a mesh used several times
+/// is stored once.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// Where it came from, for messages.
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Empty, or one unit normal a vertex.
+    pub normals: Vec<Vec3>,
+    /// Empty, or one a vertex; (0, 0) is the texture's top-left corner.
+    pub uvs: Vec<Vec2>,
+    /// Front side faces (v1 - v0) x (v2 - v0).
+    pub triangles: Vec<[u32; 3]>,
+    /// One a triangle: index into `Scene::materials`.
+    pub triangle_materials: Vec<u32>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    pub mesh: u32,
+    /// Object to world; invertible.
+    pub transform: Mat4,
+}
+
+/// A loaded file: where its meshes sit in the scene, with the file's own placements of them, and
+/// its camera.
+struct LoadedFile {
+    placements: Vec<(u32, Mat4)>,
+    camera: Option<AssetCamera>,
+}
+
+/// Loads each (file, material override) once: later placements of the same file share its
+/// meshes, materials and textures.
+#[derive(Default)]
+pub struct MeshImporter {
+    /// The file's own placements of its meshes, as scene mesh indices.
+    loaded: HashMap<(PathBuf, Option<u32>), LoadedFile>,
+}
+
+impl MeshImporter {
+    /// Places the meshes of `path` with `transform` applied after the file's own node transforms.
+    /// `material` replaces every material of the file. Returns the file's camera, if it has one.
+    pub fn place(&mut self, scene: &mut Scene, path: &Path, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
+        let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), material);
+        if !self.loaded.contains_key(&key) {
+            let asset = asset::load_asset(path)?;
+            if asset.dropped_triangles > 0 {
+                eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }
-            Ok(transform.transform_point3(Vec3::new(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2])))
-        };
-        for face in mesh.indices.chunks_exact(3) {
-            let v = [vertex(face[0])?, vertex(face[1])?, vertex(face[2])?];
-            if (v[1] - v[0]).cross(v[2] - v[0]).length_squared() > 0.0 {
-                triangles.push(v);
-            } else {
-                degenerate += 1;
-            }
+            let camera = asset.camera;
+            let placements = add_asset(scene, path, asset, material)?;
+            self.loaded.insert(key.clone(), LoadedFile { placements, camera });
         }
+        let file = &self.loaded[&key];
+        for &(mesh, local) in &file.placements {
+            let world = transform * local;
+            if !(world.determinant().abs() > 1e-30 && world.is_finite()) {
+                bail!("{}: a placement of its mesh {mesh} is not invertible (zero scale?)", path.display());
+            }
+            scene.instances.push(Instance { mesh, transform: world });
+        }
+        Ok(file.camera)
     }
-    if degenerate > 0 {
-        eprintln!("caustica: {}: dropped {degenerate} zero-area triangle(s)", path.display());
+}
+
+/// Appends the asset's materials (unless overridden), textures and meshes to the scene.
+fn add_asset(scene: &mut Scene, path: &Path, asset: Asset, material: Option<u32>) -> Result<Vec<(u32, Mat4)>> {
+    let file_name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let material_base = scene.materials.len() as u32;
+    if material.is_none() {
+        let texture_base = scene.textures.len() as u32;
+        for m in &asset.materials {
+            scene.materials.push(scene_material(path, &file_name, m, texture_base)?);
+        }
+        scene.textures.extend(asset.textures);
     }
-    if triangles.is_empty() {
-        bail!("{}: the OBJ file has no triangles", path.display());
+    let mesh_base = scene.meshes.len() as u32;
+    for (k, m) in asset.meshes.into_iter().enumerate() {
+        scene.meshes.push(Mesh {
+            name: format!("{} mesh {k}", path.display()),
+            triangle_materials: m.triangle_materials.iter().map(|&t| material.unwrap_or(material_base + t)).collect(),
+            positions: m.positions,
+            normals: m.normals,
+            uvs: m.uvs,
+            triangles: m.triangles,
+        });
     }
-    Ok(triangles)
+    Ok(asset.instances.iter().map(|&(mesh, local)| (mesh_base + mesh as u32, local)).collect())
+}
+
+/// A file's material in the scene's model; albedo above 1 (some MTL files have it) is clamped so
+/// no surface creates energy.
+fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base: u32) -> Result<Material> {
+    let values = [m.albedo.to_array(), m.emission.to_array()].concat();
+    if values.iter().chain([m.reflectivity, m.transparency, m.ior].iter()).any(|v| !v.is_finite()) || m.albedo.min_element() < 0.0 || m.emission.min_element() < 0.0 {
+        bail!("{}: material '{}' has a negative or non-finite value", path.display(), m.name);
+    }
+    Ok(Material {
+        name: format!("{file_name}:{}", m.name),
+        albedo: m.albedo.min(Vec3::ONE),
+        reflectivity: m.reflectivity,
+        transparency: m.transparency,
+        ior: m.ior,
+        emission: m.emission,
+        two_sided: false,
+        albedo_texture: m.albedo_texture.map(|t| texture_base + t as u32),
+    })
 }

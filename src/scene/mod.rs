@@ -1,13 +1,16 @@
 //! Scenes: the TOML format (`format`), validation into a `Scene`, meshes and environment maps.
 
+mod asset;
 mod environment;
 mod format;
 mod mesh;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
+pub use asset::{downsample_to_fit, AssetError};
+pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 
 use anyhow::{bail, Context as _, Result};
-use format::{Scale, SceneFile};
+use format::{FilmFile, IntegratorFile, Placement, Scale, SceneFile};
 use glam::{Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -48,6 +51,8 @@ pub struct Material {
     pub ior: f32,
     pub emission: Vec3,
     pub two_sided: bool,
+    /// Index into `Scene::textures`; multiplies `albedo`.
+    pub albedo_texture: Option<u32>,
 }
 
 impl Material {
@@ -81,16 +86,54 @@ pub struct Scene {
     pub film: Film,
     pub integrator: Integrator,
     pub materials: Vec<Material>,
+    /// The scene's own spheres, quads and triangles.
     pub shapes: Vec<Shape>,
+    /// Triangle meshes, each stored once, and their placements.
+    pub meshes: Vec<Mesh>,
+    pub instances: Vec<Instance>,
+    pub textures: Vec<Texture>,
     pub environment: Environment,
 }
 
 impl Scene {
     /// Reads a scene file; relative paths inside it are relative to the file.
     pub fn load(path: &Path) -> Result<Scene> {
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        if matches!(extension.as_str(), "gltf" | "glb" | "obj" | "ply") {
+            return Scene::from_model(path);
+        }
         let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read scene", path.display()))?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scene::parse(&text, &path.display().to_string(), &base)
+    }
+
+    /// A mesh file as a whole scene: its own camera (glTF) or one framing it from the front, under
+    /// a white sky, with the default film and integrator.
+    pub fn from_model(path: &Path) -> Result<Scene> {
+        let name = path.display().to_string();
+        let film = FilmFile::default();
+        let mut scene = Scene {
+            name: name.clone(),
+            camera: Camera { position: Vec3::Z, look_at: Vec3::ZERO, up: Vec3::Y, fov_deg: 40.0 },
+            film: Film { width: film.width, height: film.height, spp: film.spp },
+            integrator: integrator_from(&IntegratorFile::default())?,
+            materials: vec![],
+            shapes: vec![],
+            meshes: vec![],
+            instances: vec![],
+            textures: vec![],
+            environment: Environment::Constant(Vec3::ONE),
+        };
+        match MeshImporter::default().place(&mut scene, path, None, Mat4::IDENTITY)? {
+            Some(c) => {
+                scene.camera = Camera { position: c.position, look_at: c.look_at, up: c.up, fov_deg: c.yfov_degrees };
+                if let Some(aspect) = c.aspect.filter(|a| a.is_finite() && *a > 0.0) {
+                    scene.film.height = ((scene.film.width as f32 / aspect).round() as u32).clamp(1, 16384);
+                }
+            }
+            None => scene.camera = framing_camera(&scene),
+        }
+        Ok(scene)
     }
 
     /// The built-in Cornell box.
@@ -104,8 +147,11 @@ impl Scene {
         build(file, name, base).with_context(|| name.to_string())
     }
 
+    /// Emissive shapes plus emissive mesh triangles, each instance counted.
     pub fn light_count(&self) -> usize {
-        self.shapes.iter().filter(|s| self.materials[s.material() as usize].is_emissive()).count()
+        let emissive = |m: u32| self.materials[m as usize].is_emissive();
+        let mesh_lights: Vec<usize> = self.meshes.iter().map(|m| m.triangle_materials.iter().filter(|&&t| emissive(t)).count()).collect();
+        self.shapes.iter().filter(|s| emissive(s.material())).count() + self.instances.iter().map(|i| mesh_lights[i.mesh as usize]).sum::<usize>()
     }
 }
 
@@ -152,15 +198,7 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     let film = Film { width: file.film.width, height: file.film.height, spp: file.film.spp };
     check_film(&film)?;
     let i = &file.integrator;
-    if let Some(a) = i.absorption {
-        if !(a.is_finite() && (0.0..1.0).contains(&a)) {
-            bail!("integrator.absorption must be in [0, 1), got {a}");
-        }
-    }
-    if i.max_bounces == 0 {
-        bail!("integrator.max_bounces must be at least 1");
-    }
-    let integrator = Integrator { rr_start: i.rr_start, absorption: i.absorption, nee: i.nee, max_bounces: i.max_bounces };
+    let integrator = integrator_from(i)?;
 
     let mut materials = Vec::new();
     let mut by_name = HashMap::new();
@@ -174,6 +212,7 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
             ior: finite(&key("ior"), m.ior)?,
             emission: non_negative3(&key("emission"), m.emission)?,
             two_sided: m.two_sided,
+            albedo_texture: None,
         };
         if material.albedo.max_element() > 1.0 {
             bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);
@@ -231,30 +270,69 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
         }
         shapes.push(Shape::Triangle { v, material: material(format!("triangles[{k}].material"), &t.material)? });
     }
-    for (k, m) in file.meshes.iter().enumerate() {
-        let key = format!("meshes[{k}]");
-        let mat = material(format!("{key}.material"), &m.material)?;
-        let scale = match m.scale {
-            None => Vec3::ONE,
-            Some(Scale::Uniform(s)) => Vec3::splat(finite(&format!("{key}.scale"), s)?),
-            Some(Scale::PerAxis(s)) => vec3(&format!("{key}.scale"), s)?,
-        };
-        if scale.min_element().abs() == 0.0 {
-            bail!("{key}.scale must not be zero");
-        }
-        let r = vec3(&format!("{key}.rotate"), m.rotate)?;
-        let rotation = Quat::from_euler(glam::EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
-        let transform = Mat4::from_scale_rotation_translation(scale, rotation, vec3(&format!("{key}.translate"), m.translate)?);
-        let path = resolve(base, &m.file);
-        let triangles = mesh::load_obj(&path, transform)?;
-        shapes.extend(triangles.into_iter().map(|v| Shape::Triangle { v, material: mat }));
-    }
-
     let environment = match &file.environment {
         None => Environment::Constant(Vec3::ZERO),
         Some(e) => environment::from_file(e, base)?,
     };
-    Ok(Scene { name: name.to_string(), camera, film, integrator, materials, shapes, environment })
+    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures: vec![], environment };
+    let mut importer = MeshImporter::default();
+    for (k, m) in file.meshes.iter().enumerate() {
+        let key = format!("meshes[{k}]");
+        let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;
+        let outer = placement(&key, &m.placement())?;
+        let path = resolve(base, &m.file);
+        if m.instances.is_empty() {
+            importer.place(&mut scene, &path, override_material, outer)?;
+        }
+        for (j, p) in m.instances.iter().enumerate() {
+            importer.place(&mut scene, &path, override_material, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
+        }
+    }
+    Ok(scene)
+}
+
+fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {
+    if let Some(a) = i.absorption {
+        if !(a.is_finite() && (0.0..1.0).contains(&a)) {
+            bail!("integrator.absorption must be in [0, 1), got {a}");
+        }
+    }
+    if i.max_bounces == 0 {
+        bail!("integrator.max_bounces must be at least 1");
+    }
+    Ok(Integrator { rr_start: i.rr_start, absorption: i.absorption, nee: i.nee, max_bounces: i.max_bounces })
+}
+
+/// Looks at the scene's world bounds from the front (+z), far enough for a 40 degree view to hold them.
+fn framing_camera(scene: &Scene) -> Camera {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for inst in &scene.instances {
+        for p in &scene.meshes[inst.mesh as usize].positions {
+            let w = inst.transform.transform_point3(*p);
+            lo = lo.min(w);
+            hi = hi.max(w);
+        }
+    }
+    let center = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    let fov_deg: f32 = 40.0;
+    let distance = radius / (0.5 * fov_deg).to_radians().sin() * 1.05;
+    Camera { position: center + Vec3::Z * distance, look_at: center, up: Vec3::Y, fov_deg }
+}
+
+/// Object-to-world transform: scale, then rotate about x, y and z (degrees), then translate.
+fn placement(key: &str, p: &Placement) -> Result<Mat4> {
+    let scale = match p.scale {
+        None => Vec3::ONE,
+        Some(Scale::Uniform(s)) => Vec3::splat(finite(&format!("{key}.scale"), s)?),
+        Some(Scale::PerAxis(s)) => vec3(&format!("{key}.scale"), s)?,
+    };
+    if scale.x * scale.y * scale.z == 0.0 {
+        bail!("{key}.scale must not be zero");
+    }
+    let r = vec3(&format!("{key}.rotate"), p.rotate)?;
+    let rotation = Quat::from_euler(glam::EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
+    Ok(Mat4::from_scale_rotation_translation(scale, rotation, vec3(&format!("{key}.translate"), p.translate)?))
 }
 
 /// Checks a film after command-line overrides too.
@@ -271,7 +349,18 @@ pub fn check_film(film: &Film) -> Result<()> {
     Ok(())
 }
 
+/// Folder of caustica's shared test data: `$CAUSTICA_DATA`, or `../shared/data` from the
+/// working directory.
+pub fn data_dir() -> PathBuf {
+    std::env::var_os("CAUSTICA_DATA").map(PathBuf::from).unwrap_or_else(|| PathBuf::from("../shared/data"))
+}
+
+/// A path in a scene file: absolute, relative to the scene file, or `$CAUSTICA_DATA/...` inside
+/// the shared data folder.
 fn resolve(base: &Path, file: &str) -> PathBuf {
+    if let Some(rest) = file.strip_prefix("$CAUSTICA_DATA/") {
+        return data_dir().join(rest);
+    }
     let p = Path::new(file);
     if p.is_absolute() {
         p.to_path_buf()

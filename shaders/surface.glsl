@@ -1,0 +1,79 @@
+// What a ray hit: the world-space surface of an analytic primitive or of an instanced mesh
+// triangle, with its geometric normal (for sides and ray offsets) and shading normal (for BSDFs).
+
+struct Surface {
+    vec3 point;
+    vec3 ng;        // unit geometric normal on the front side (outward, or by winding)
+    vec3 ns;        // unit shading normal: interpolated vertex normals, turned to ng's side
+    vec2 uv;
+    uint material;
+};
+
+// Octahedral decoding of a snorm16x2 unit vector (Cigolle et al. 2014).
+vec3 unpack_normal(uint packed) {
+    vec2 e = unpackSnorm2x16(packed);
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    }
+    return normalize(n);
+}
+
+// Normals map by the inverse transpose of the placement, i.e. the transpose of world_to_object.
+vec3 normal_to_world(vec4 world_to_object[3], vec3 n) {
+    return normalize(world_to_object[0].xyz * n.x + world_to_object[1].xyz * n.y + world_to_object[2].xyz * n.z);
+}
+
+Surface surface_at(Hit hit, vec3 o, vec3 d) {
+    Surface s;
+    s.point = o + hit.t * d;
+    Instance inst = instances[hit.instance];
+    if (inst.info.x == INSTANCE_PRIMITIVES) {
+        Primitive p = prims[hit.prim];
+        s.ng = primitive_normal(p, s.point);
+        s.ns = s.ng;
+        s.uv = vec2(0.0);
+        s.material = prim_material(p);
+        return s;
+    }
+    uvec4 tri = mesh_triangles[hit.prim];
+    vec3 v0 = vertex_position(tri.x);
+    vec3 w = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
+    s.ng = normal_to_world(inst.world_to_object, cross(vertex_position(tri.y) - v0, vertex_position(tri.z) - v0));
+    s.ns = s.ng;
+    if ((inst.info.z & INSTANCE_HAS_NORMALS) != 0u) {
+        vec3 n = w.x * unpack_normal(vertex_normals[tri.x]) + w.y * unpack_normal(vertex_normals[tri.y])
+               + w.z * unpack_normal(vertex_normals[tri.z]);
+        if (dot(n, n) > 1e-12) {
+            vec3 ns = normal_to_world(inst.world_to_object, n);
+            s.ns = dot(ns, s.ng) < 0.0 ? -ns : ns;
+        }
+    }
+    s.uv = vec2(0.0);
+    if ((inst.info.z & INSTANCE_HAS_UVS) != 0u) {
+        s.uv = w.x * vertex_uvs[tri.x] + w.y * vertex_uvs[tri.y] + w.z * vertex_uvs[tri.z];
+    }
+    s.material = tri.w;
+    return s;
+}
+
+// The hit emitter as a world-space primitive, for its light-sampling pdf.
+Primitive world_primitive(Hit hit) {
+    Instance inst = instances[hit.instance];
+    if (inst.info.x == INSTANCE_PRIMITIVES) return prims[hit.prim];
+    uvec4 tri = mesh_triangles[hit.prim];
+    vec3 v0 = vertex_position(tri.x);
+    Primitive p;
+    p.a = vec4(affine_point(inst.object_to_world, v0), 0.0);
+    p.b = vec4(affine_vector(inst.object_to_world, vertex_position(tri.y) - v0), uintBitsToFloat(PRIM_TRIANGLE));
+    p.c = vec4(affine_vector(inst.object_to_world, vertex_position(tri.z) - v0), uintBitsToFloat(tri.w));
+    return p;
+}
+
+// Material at the surface, with the albedo texture applied.
+Material surface_material(Surface s) {
+    Material m = materials[s.material];
+    uint texture_index = floatBitsToUint(m.params.z);
+    if (texture_index != NO_TEXTURE) m.albedo_r.rgb *= texture_rgb(texture_index, s.uv);
+    return m;
+}

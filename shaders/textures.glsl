@@ -1,0 +1,23 @@
+// Base-colour textures: RGBA8 texels stored as written (sRGB-encoded), decoded to linear here,
+// filtered bilinearly with wrapping (repeat) coordinates. uv (0, 0) is the image's top-left corner.
+
+vec3 srgb_to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+}
+
+vec3 texel_rgb(TextureInfo t, uint x, uint y) {
+    return srgb_to_linear(unpackUnorm4x8(texels[t.offset + y * t.width + x]).rgb);
+}
+
+vec3 texture_rgb(uint index, vec2 uv) {
+    TextureInfo t = texture_infos[index];
+    vec2 size = vec2(t.width, t.height);
+    vec2 p = uv * size - 0.5;  // texel centres sit at half-integer coordinates
+    vec2 f = p - floor(p);
+    // mod() can round up to `size` itself for tiny negative inputs; clamp keeps the index in range.
+    uvec2 i0 = uvec2(min(mod(floor(p), size), size - 1.0));
+    uvec2 i1 = uvec2(i0.x + 1u == t.width ? 0u : i0.x + 1u, i0.y + 1u == t.height ? 0u : i0.y + 1u);
+    vec3 top = mix(texel_rgb(t, i0.x, i0.y), texel_rgb(t, i1.x, i0.y), f.x);
+    vec3 bottom = mix(texel_rgb(t, i0.x, i1.y), texel_rgb(t, i1.x, i1.y), f.x);
+    return mix(top, bottom, f.y);
+}

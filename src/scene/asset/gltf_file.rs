@@ -1,0 +1,784 @@
+//! glTF 2.0 (`.gltf` with external or data-URI buffers and images, and binary `.glb`), via the
+//! gltf crate for parsing and accessors. Buffers and images are loaded here rather than with
+//! `gltf::import`, so that only albedo textures are decoded, under our size limit.
+//!
+//! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
+//! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
+//!   sets, the sampler and alpha are ignored).
+//! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission, for materials without an
+//!   emissive texture. With one, the material does not emit (with a note on stderr): the renderer
+//!   has no textured emission, and the factor alone would make the whole surface glow (as it
+//!   would DamagedHelmet, whose factor is 1 and whose texture lights only small details).
+//! - reflectivity = metallic × (1 − roughness): a rough stand-in, since the renderer has no
+//!   glossy lobe; a polished metal becomes a mirror, a rough one stays diffuse.
+//! - `KHR_materials_transmission` factor → transparency (R is lowered so that R + T <= 1);
+//!   `KHR_materials_ior` → ior (1.5 by default).
+//! - Primitives without a material get [`AssetMaterial::default_grey`].
+//!
+//! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
+//! converted to triangles; points and lines are skipped with a note on stderr.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use base64::Engine as _;
+use glam::{Mat4, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+use gltf::{Accessor, Document, Semantic};
+
+use super::{texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, MeshData};
+
+/// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
+const MAX_NODE_DEPTH: usize = 1000;
+
+/// Loads a `.gltf` or `.glb` file: its default scene (else scene 0, else every root node).
+pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
+    let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
+        .map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
+    let directory = path.parent().unwrap_or(Path::new("."));
+    let buffers =
+        load_buffers(&document, blob, directory).map_err(|m| AssetError::invalid(path, m))?;
+
+    let mut asset = Asset::default();
+    let mut decoded_images = HashMap::new();
+    for material in document.materials() {
+        let converted = convert_material(
+            &material,
+            &buffers,
+            directory,
+            &mut decoded_images,
+            &mut asset,
+        )
+        .map_err(|m| AssetError::invalid(path, m))?;
+        asset.materials.push(converted);
+    }
+    let mut skipped_primitives = 0;
+    let mut default_material = None;
+    for mesh in document.meshes() {
+        let mut converted = convert_mesh(
+            &mesh,
+            &buffers,
+            &mut asset.materials,
+            &mut default_material,
+            &mut skipped_primitives,
+        )
+        .map_err(|m| AssetError::invalid(path, format!("mesh {}: {m}", mesh.index())))?;
+        asset.dropped_triangles += converted.drop_degenerate();
+        asset.meshes.push(converted);
+    }
+    if skipped_primitives > 0 {
+        eprintln!(
+            "caustica: {}: skipped {skipped_primitives} point or line primitive(s)",
+            path.display()
+        );
+    }
+
+    let mut walk = Walk {
+        ancestors: Vec::new(),
+        visited: vec![false; document.nodes().len()],
+        asset: &mut asset,
+    };
+    for root in root_nodes(&document) {
+        walk.visit(root, Mat4::IDENTITY)
+            .map_err(|m| AssetError::invalid(path, m))?;
+    }
+    Ok(asset)
+}
+
+/// Loads every buffer: the GLB binary chunk, a base64 data URI, or a file next to the glTF.
+fn load_buffers(
+    document: &Document,
+    mut blob: Option<Vec<u8>>,
+    directory: &Path,
+) -> Result<Vec<Vec<u8>>, String> {
+    document
+        .buffers()
+        .map(|buffer| {
+            let data = match buffer.source() {
+                gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                    format!(
+                        "buffer {} refers to a missing GLB binary chunk",
+                        buffer.index()
+                    )
+                })?,
+                gltf::buffer::Source::Uri(uri) => read_uri(uri, directory)
+                    .map_err(|m| format!("buffer {}: {m}", buffer.index()))?,
+            };
+            if data.len() < buffer.length() {
+                return Err(format!(
+                    "buffer {} has {} bytes but declares {}",
+                    buffer.index(),
+                    data.len(),
+                    buffer.length()
+                ));
+            }
+            Ok(data)
+        })
+        .collect()
+}
+
+/// The bytes behind a URI: a base64 `data:` URI, or a percent-encoded path relative to the glTF.
+fn read_uri(uri: &str, directory: &Path) -> Result<Vec<u8>, String> {
+    if let Some(data) = uri.strip_prefix("data:") {
+        let (_, payload) = data
+            .split_once(";base64,")
+            .ok_or("only base64 data URIs are supported")?;
+        return base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| format!("bad base64 data URI: {e}"));
+    }
+    if uri.contains("://") {
+        return Err(format!("'{uri}' is not a local file"));
+    }
+    let relative = urlencoding::decode(uri).map_err(|e| format!("bad URI '{uri}': {e}"))?;
+    let file = directory.join(relative.as_ref());
+    std::fs::read(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))
+}
+
+/// Decodes each image the first time a material uses it as albedo, into `asset.textures`.
+fn albedo_texture(
+    image: gltf::Image,
+    buffers: &[Vec<u8>],
+    directory: &Path,
+    decoded_images: &mut HashMap<usize, usize>,
+    asset: &mut Asset,
+) -> Result<usize, String> {
+    if let Some(&index) = decoded_images.get(&image.index()) {
+        return Ok(index);
+    }
+    let (bytes, name) = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let bytes = view_bytes(&view, buffers).ok_or_else(|| {
+                format!(
+                    "image {}: its buffer view lies outside the buffer",
+                    image.index()
+                )
+            })?;
+            (
+                bytes.to_vec(),
+                image
+                    .name()
+                    .map_or_else(|| format!("image {}", image.index()), str::to_owned),
+            )
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let name = image.name().map_or_else(
+                || {
+                    if uri.starts_with("data:") {
+                        format!("image {}", image.index())
+                    } else {
+                        uri.to_owned()
+                    }
+                },
+                str::to_owned,
+            );
+            (
+                read_uri(uri, directory).map_err(|m| format!("image {}: {m}", image.index()))?,
+                name,
+            )
+        }
+    };
+    asset.textures.push(texture::decode_texture(&bytes, name)?);
+    decoded_images.insert(image.index(), asset.textures.len() - 1);
+    Ok(asset.textures.len() - 1)
+}
+
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Option<&'b [u8]> {
+    let end = view.offset().checked_add(view.length())?;
+    buffers.get(view.buffer().index())?.get(view.offset()..end)
+}
+
+fn convert_material(
+    material: &gltf::Material,
+    buffers: &[Vec<u8>],
+    directory: &Path,
+    decoded_images: &mut HashMap<usize, usize>,
+    asset: &mut Asset,
+) -> Result<AssetMaterial, String> {
+    let index = material.index().unwrap_or(0);
+    let pbr = material.pbr_metallic_roughness();
+    let [r, g, b, _] = pbr.base_color_factor();
+    let albedo_texture = match pbr.base_color_texture() {
+        Some(info) if info.tex_coord() == 0 => Some(albedo_texture(
+            info.texture().source(),
+            buffers,
+            directory,
+            decoded_images,
+            asset,
+        )?),
+        _ => None,
+    };
+    let mut emission =
+        Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
+    if material.emissive_texture().is_some() && emission.max_element() > 0.0 {
+        eprintln!(
+            "caustica: glTF material {index} ('{}') has an emissive texture, which caustica cannot render; it does not emit",
+            material.name().unwrap_or("unnamed")
+        );
+        emission = Vec3::ZERO;
+    }
+    if !emission.is_finite() {
+        return Err(format!("material {index}: emission overflows"));
+    }
+    let transparency = material
+        .transmission()
+        .map_or(0.0, |t| t.transmission_factor())
+        .clamp(0.0, 1.0);
+    let reflectivity =
+        (pbr.metallic_factor() * (1.0 - pbr.roughness_factor())).clamp(0.0, 1.0 - transparency);
+    Ok(AssetMaterial {
+        name: material
+            .name()
+            .map_or_else(|| format!("material {index}"), str::to_owned),
+        albedo: Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE),
+        albedo_texture,
+        emission: emission.max(Vec3::ZERO),
+        reflectivity,
+        transparency,
+        ior: material.ior().filter(|&n| n > 0.0).unwrap_or(1.5),
+    })
+}
+
+/// Merges a mesh's triangle primitives. An attribute (normals, uvs) is kept only when every
+/// primitive has it, since the result needs exactly one per position.
+fn convert_mesh(
+    mesh: &gltf::Mesh,
+    buffers: &[Vec<u8>],
+    materials: &mut Vec<AssetMaterial>,
+    default_material: &mut Option<u32>,
+    skipped_primitives: &mut usize,
+) -> Result<MeshData, String> {
+    let mut out = MeshData::default();
+    let (mut all_normals, mut all_uvs) = (true, true);
+    let mut normals = Vec::new();
+    for primitive in mesh.primitives() {
+        let p = primitive.index();
+        if matches!(
+            primitive.mode(),
+            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
+        ) {
+            *skipped_primitives += 1;
+            continue;
+        }
+        let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(Vec::as_slice));
+        let outside =
+            |what: &str| format!("primitive {p}: the {what} accessor lies outside its buffer");
+
+        let position_accessor = primitive
+            .get(&Semantic::Positions)
+            .ok_or_else(|| format!("primitive {p} has no POSITION"))?;
+        check_accessor(&position_accessor, Dimensions::Vec3, &[DataType::F32])
+            .map_err(|m| format!("primitive {p}: POSITION {m}"))?;
+        let positions: Vec<Vec3> = reader
+            .read_positions()
+            .ok_or_else(|| outside("POSITION"))?
+            .map(Vec3::from)
+            .collect();
+        if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
+            return Err(format!(
+                "primitive {p}: vertex {i} has a non-finite position"
+            ));
+        }
+        let base = u32::try_from(out.positions.len() + positions.len())
+            .map_err(|_| "more than 2^32 vertices".to_owned())?
+            - positions.len() as u32;
+
+        match primitive.get(&Semantic::Normals) {
+            Some(accessor) if all_normals => {
+                check_accessor(&accessor, Dimensions::Vec3, &[DataType::F32])
+                    .map_err(|m| format!("primitive {p}: NORMAL {m}"))?;
+                normals.extend(
+                    reader
+                        .read_normals()
+                        .ok_or_else(|| outside("NORMAL"))?
+                        .map(Vec3::from),
+                );
+                all_normals = normals.len() == out.positions.len() + positions.len();
+            }
+            _ => all_normals = false,
+        }
+        match primitive.get(&Semantic::TexCoords(0)) {
+            Some(accessor) if all_uvs => {
+                check_accessor(
+                    &accessor,
+                    Dimensions::Vec2,
+                    &[DataType::F32, DataType::U8, DataType::U16],
+                )
+                .map_err(|m| format!("primitive {p}: TEXCOORD_0 {m}"))?;
+                out.uvs.extend(
+                    reader
+                        .read_tex_coords(0)
+                        .ok_or_else(|| outside("TEXCOORD_0"))?
+                        .into_f32()
+                        .map(Vec2::from),
+                );
+                all_uvs = out.uvs.len() == out.positions.len() + positions.len();
+            }
+            _ => all_uvs = false,
+        }
+
+        let indices: Vec<u32> = match primitive.indices() {
+            Some(accessor) => {
+                check_accessor(
+                    &accessor,
+                    Dimensions::Scalar,
+                    &[DataType::U8, DataType::U16, DataType::U32],
+                )
+                .map_err(|m| format!("primitive {p}: indices {m}"))?;
+                reader
+                    .read_indices()
+                    .ok_or_else(|| outside("indices"))?
+                    .into_u32()
+                    .collect()
+            }
+            None => (0..positions.len() as u32).collect(),
+        };
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(format!(
+                "primitive {p} uses vertex {bad} but has {} vertices",
+                positions.len()
+            ));
+        }
+        let material = match primitive.material().index() {
+            Some(m) => m as u32,
+            None => *default_material.get_or_insert_with(|| {
+                materials.push(AssetMaterial::default_grey());
+                materials.len() as u32 - 1
+            }),
+        };
+        let triangles = triangulate(primitive.mode(), &indices);
+        out.triangle_materials
+            .extend(std::iter::repeat_n(material, triangles.len()));
+        out.triangles
+            .extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
+        out.positions.extend(positions);
+    }
+    out.normals = if all_normals {
+        unit_normals(&normals)
+    } else {
+        Vec::new()
+    };
+    if !all_uvs || out.uvs.iter().any(|uv| !uv.is_finite()) {
+        out.uvs.clear();
+    }
+    Ok(out)
+}
+
+/// Rejects accessor shapes the crate's readers would panic on (they assume a valid file).
+fn check_accessor(
+    accessor: &Accessor,
+    dimensions: Dimensions,
+    types: &[DataType],
+) -> Result<(), String> {
+    if accessor.dimensions() != dimensions || !types.contains(&accessor.data_type()) {
+        return Err(format!(
+            "accessor {} has an unsupported type {:?} {:?}",
+            accessor.index(),
+            accessor.dimensions(),
+            accessor.data_type()
+        ));
+    }
+    let stride_too_small = accessor
+        .view()
+        .and_then(|view| view.stride())
+        .is_some_and(|stride| stride < accessor.size());
+    let sparse_empty = accessor.sparse().is_some_and(|sparse| sparse.count() == 0);
+    if accessor.count() == 0 || sparse_empty || stride_too_small {
+        return Err(format!(
+            "accessor {} is empty or has a byte stride below its element size",
+            accessor.index()
+        ));
+    }
+    Ok(())
+}
+
+/// Triangles of a triangle-list, strip or fan primitive; strips alternate winding so that every
+/// triangle keeps the orientation of the first.
+fn triangulate(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+    match mode {
+        Mode::TriangleStrip => indices
+            .windows(3)
+            .enumerate()
+            .map(|(i, w)| {
+                if i % 2 == 0 {
+                    [w[0], w[1], w[2]]
+                } else {
+                    [w[1], w[0], w[2]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => indices
+            .windows(2)
+            .skip(1)
+            .map(|w| [indices[0], w[0], w[1]])
+            .collect(),
+        _ => indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect(),
+    }
+}
+
+/// The default scene's nodes, else scene 0's, else every node that is no other node's child.
+fn root_nodes(document: &Document) -> Vec<gltf::Node<'_>> {
+    if let Some(scene) = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        return scene.nodes().collect();
+    }
+    let mut is_child = vec![false; document.nodes().len()];
+    for child in document.nodes().flat_map(|node| node.children()) {
+        is_child[child.index()] = true;
+    }
+    document
+        .nodes()
+        .filter(|node| !is_child[node.index()])
+        .collect()
+}
+
+/// Depth-first walk of the node hierarchy collecting instances and the first camera. Each node
+/// may be reached once: a cycle or a node with two parents is an invalid file, not a hang.
+struct Walk<'a> {
+    ancestors: Vec<usize>,
+    visited: Vec<bool>,
+    asset: &'a mut Asset,
+}
+
+impl Walk<'_> {
+    fn visit(&mut self, node: gltf::Node, parent: Mat4) -> Result<(), String> {
+        let index = node.index();
+        if self.ancestors.contains(&index) {
+            return Err(format!(
+                "node {index} is its own ancestor (cyclic node graph)"
+            ));
+        }
+        if std::mem::replace(&mut self.visited[index], true) {
+            return Err(format!(
+                "node {index} is reached twice (it has two parents, or two scenes list it)"
+            ));
+        }
+        if self.ancestors.len() >= MAX_NODE_DEPTH {
+            return Err(format!(
+                "node {index} is nested deeper than {MAX_NODE_DEPTH} levels"
+            ));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !local.is_finite() {
+            return Err(format!("node {index} has a non-finite transform"));
+        }
+        let world = parent * local;
+        if let Some(mesh) = node.mesh() {
+            self.asset.instances.push((mesh.index(), world));
+        }
+        if let (None, Some(camera)) = (&self.asset.camera, node.camera()) {
+            if let gltf::camera::Projection::Perspective(perspective) = camera.projection() {
+                self.asset.camera = Some(world_camera(index, world, &perspective)?);
+            }
+        }
+        self.ancestors.push(index);
+        for child in node.children() {
+            self.visit(child, world)?;
+        }
+        self.ancestors.pop();
+        Ok(())
+    }
+}
+
+/// A glTF camera looks down its node's −Z with +Y up.
+fn world_camera(
+    node: usize,
+    world: Mat4,
+    perspective: &gltf::camera::Perspective,
+) -> Result<AssetCamera, String> {
+    let position = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+    if forward == Vec3::ZERO || up == Vec3::ZERO || forward.cross(up) == Vec3::ZERO {
+        return Err(format!("camera node {node} has a degenerate transform"));
+    }
+    let yfov_degrees = perspective.yfov().to_degrees();
+    if !(yfov_degrees > 0.0 && yfov_degrees < 180.0) {
+        return Err(format!(
+            "camera node {node} has a vertical field of view of {yfov_degrees} degrees"
+        ));
+    }
+    Ok(AssetCamera {
+        position,
+        look_at: position + forward,
+        up,
+        yfov_degrees,
+        aspect: perspective.aspect_ratio().filter(|&a| a > 0.0),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{load_asset, real_data, test_dir};
+    use super::*;
+    use std::path::PathBuf;
+
+    /// One triangle: positions, normals (length 2, to be normalized), uvs, u16 indices.
+    fn triangle_bin() -> Vec<u8> {
+        let floats: [f32; 24] = [
+            0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 2., 0., 0., 2., 0., 0., 2., 0., 0., 1., 0.,
+            0., 1.,
+        ];
+        let mut bin: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+        bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
+        bin.extend([0, 0]);
+        bin
+    }
+
+    fn png_bytes() -> Vec<u8> {
+        let mut bytes = Vec::new();
+        let mut encoder = png::Encoder::new(&mut bytes, 1, 1);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder
+            .write_header()
+            .unwrap()
+            .write_image_data(&[10, 20, 30])
+            .unwrap();
+        bytes
+    }
+
+    /// A glTF document around `buffer` (its JSON object) and `images` (a JSON array): node 0
+    /// (translated) and its child node 1 (scaled) both place mesh 0, node 2 holds a camera.
+    /// Mesh 0 has an indexed primitive with material 0 and a non-indexed one without normals
+    /// or material.
+    fn document(buffer: &str, images: &str) -> String {
+        let base64 = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
+        format!(
+            r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior"],
+  "scene": 0,
+  "scenes": [{{"nodes": [0, 2]}}],
+  "nodes": [
+    {{"translation": [1, 2, 3], "children": [1], "mesh": 0}},
+    {{"scale": [2, 2, 2], "mesh": 0}},
+    {{"translation": [0, 0, 5], "camera": 0}}
+  ],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.5, "aspectRatio": 1.5, "znear": 0.1}}}}],
+  "meshes": [{{"primitives": [
+    {{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "indices": 3, "material": 0}},
+    {{"attributes": {{"POSITION": 0, "TEXCOORD_0": 2}}}}
+  ]}}],
+  "materials": [{{
+    "name": "glowing glass",
+    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2}},
+    "emissiveFactor": [1, 0.5, 0.25],
+    "extensions": {{
+      "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
+      "KHR_materials_transmission": {{"transmissionFactor": 0.5}},
+      "KHR_materials_ior": {{"ior": 1.4}}
+    }}
+  }}],
+  "textures": [{{"source": 0}}, {{"source": 1}}],
+  "images": {images},
+  "buffers": [{buffer}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 36}},
+    {{"buffer": 0, "byteOffset": 36, "byteLength": 36}},
+    {{"buffer": 0, "byteOffset": 72, "byteLength": 24}},
+    {{"buffer": 0, "byteOffset": 96, "byteLength": 6}},
+    {{"buffer": 0, "byteOffset": 104, "byteLength": {png_len}}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC2"}},
+    {{"bufferView": 3, "componentType": 5123, "count": 3, "type": "SCALAR"}}
+  ]
+}}"#,
+            png_len = png_bytes().len(),
+        )
+        // The emissive image (index 1) is garbage: it must never be decoded.
+        .replace("GARBAGE", &format!("data:image/png;base64,{}", base64(b"garbage")))
+        .replace("PNG_URI", &format!("data:image/png;base64,{}", base64(&png_bytes())))
+    }
+
+    fn check_scene(asset: &Asset) {
+        assert_eq!(asset.meshes.len(), 1);
+        let mesh = &asset.meshes[0];
+        assert_eq!(mesh.positions.len(), 6);
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [3, 4, 5]]);
+        assert!(
+            mesh.normals.is_empty(),
+            "the second primitive has no normals"
+        );
+        assert_eq!(
+            mesh.uvs[1],
+            Vec2::new(1.0, 0.0),
+            "glTF uvs are kept as stored"
+        );
+        assert_eq!(mesh.uvs[2], Vec2::new(0.0, 1.0));
+        assert_eq!(mesh.triangle_materials, vec![0, 1]);
+
+        let parent = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(
+            asset.instances,
+            vec![
+                (0, parent),
+                (0, parent * Mat4::from_scale(Vec3::splat(2.0)))
+            ]
+        );
+
+        let glass = &asset.materials[0];
+        assert_eq!(glass.name, "glowing glass");
+        assert_eq!(glass.albedo, Vec3::new(0.5, 0.6, 0.7));
+        assert_eq!(glass.emission, Vec3::new(4.0, 2.0, 1.0));
+        assert_eq!(
+            (glass.transparency, glass.reflectivity, glass.ior),
+            (0.5, 0.5, 1.4),
+            "metallic 1 x (1 - 0.2) lowered to 1 - T"
+        );
+        assert_eq!(asset.materials[1], AssetMaterial::default_grey());
+        assert_eq!(glass.albedo_texture, Some(0));
+        assert_eq!(asset.textures.len(), 1, "only albedo images are decoded");
+        assert_eq!(asset.textures[0].texels, vec![[10, 20, 30, 255]]);
+
+        let camera = asset.camera.unwrap();
+        assert_eq!(
+            (camera.position, camera.look_at, camera.up),
+            (Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, 4.0), Vec3::Y)
+        );
+        assert!((camera.yfov_degrees - 0.5f32.to_degrees()).abs() < 1e-4);
+        assert_eq!(camera.aspect, Some(1.5));
+    }
+
+    fn write(tag: &str, name: &str, bytes: &[u8]) -> PathBuf {
+        let path = test_dir(tag).join(name);
+        std::fs::write(&path, bytes).unwrap();
+        path
+    }
+
+    #[test]
+    fn gltf_with_external_bin_and_data_uri_images() {
+        let bin = triangle_bin();
+        let json = document(
+            &format!(
+                r#"{{"uri": "tri%20angle.bin", "byteLength": {}}}"#,
+                bin.len()
+            ),
+            r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#,
+        );
+        let path = write("gltf-external", "scene.gltf", json.as_bytes());
+        std::fs::write(path.with_file_name("tri angle.bin"), &bin).unwrap();
+        check_scene(&load_asset(&path).unwrap());
+
+        std::fs::remove_file(path.with_file_name("tri angle.bin")).unwrap();
+        let err = load_asset(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("scene.gltf") && err.contains("tri angle.bin"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn glb_with_embedded_image() {
+        let mut bin = triangle_bin();
+        bin.extend(png_bytes());
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let json = document(
+            &format!(r#"{{"byteLength": {}}}"#, bin.len()),
+            r#"[{"bufferView": 4, "mimeType": "image/png"}, {"uri": "GARBAGE"}]"#,
+        );
+        let mut json = json.into_bytes();
+        while !json.len().is_multiple_of(4) {
+            json.push(b' ');
+        }
+        let mut glb = Vec::new();
+        glb.extend(b"glTF");
+        glb.extend(2u32.to_le_bytes());
+        glb.extend(((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
+        glb.extend((json.len() as u32).to_le_bytes());
+        glb.extend(b"JSON");
+        glb.extend(&json);
+        glb.extend((bin.len() as u32).to_le_bytes());
+        glb.extend(b"BIN\0");
+        glb.extend(&bin);
+        check_scene(&load_asset(&write("glb", "scene.GLB", &glb)).unwrap());
+
+        let err = load_asset(&write("glb-cut", "cut.glb", &glb[..glb.len() - 40]))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("cut.glb"), "{err}");
+    }
+
+    #[test]
+    fn cyclic_node_graph_is_an_error() {
+        let json = r#"{"asset": {"version": "2.0"}, "nodes": [{"children": [1]}, {"children": [0]}], "scenes": [{"nodes": [0]}]}"#;
+        let path = write("gltf-cycle", "cycle.gltf", json.as_bytes());
+        let err = load_asset(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("cycle.gltf") && err.contains("cyclic"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn out_of_range_index_is_an_error() {
+        let mut bin = triangle_bin();
+        bin[96..98].copy_from_slice(&7u16.to_le_bytes());
+        let json = document(
+            &format!(r#"{{"uri": "t.bin", "byteLength": {}}}"#, bin.len()),
+            r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#,
+        );
+        let path = write("gltf-index", "scene.gltf", json.as_bytes());
+        std::fs::write(path.with_file_name("t.bin"), &bin).unwrap();
+        let err = load_asset(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("mesh 0") && err.contains("uses vertex 7 but has 3 vertices"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn strips_and_fans_keep_winding() {
+        assert_eq!(
+            triangulate(Mode::TriangleStrip, &[0, 1, 2, 3]),
+            vec![[0, 1, 2], [2, 1, 3]]
+        );
+        assert_eq!(
+            triangulate(Mode::TriangleFan, &[0, 1, 2, 3]),
+            vec![[0, 1, 2], [0, 2, 3]]
+        );
+        assert_eq!(triangulate(Mode::Triangles, &[0, 1, 2, 3]), vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn real_damaged_helmet() {
+        let Some(path) = real_data("meshes/DamagedHelmet/glTF/DamagedHelmet.gltf") else {
+            return;
+        };
+        let start = std::time::Instant::now();
+        let asset = load_asset(&path).unwrap();
+        let triangles: usize = asset.meshes.iter().map(|m| m.triangles.len()).sum();
+        println!(
+            "{}: {triangles} triangles, {} textures in {:?}",
+            path.display(),
+            asset.textures.len(),
+            start.elapsed()
+        );
+        assert_eq!(
+            asset.textures.len(),
+            1,
+            "only the albedo texture is decoded"
+        );
+        assert_eq!(
+            (asset.textures[0].width, asset.textures[0].height),
+            (2048, 2048)
+        );
+        assert_eq!(asset.instances.len(), 1);
+        assert_eq!(
+            asset.meshes[0].normals.len(),
+            asset.meshes[0].positions.len()
+        );
+        assert_eq!(asset.meshes[0].uvs.len(), asset.meshes[0].positions.len());
+    }
+}

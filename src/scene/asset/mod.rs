@@ -1,0 +1,267 @@
+//! Mesh assets (OBJ + MTL, PLY, glTF 2.0) loaded into one GPU-agnostic form: meshes, materials,
+//! textures, instances and an optional camera. The renderer turns an [`Asset`] into GPU buffers;
+//! nothing here knows about Vulkan.
+
+mod gltf_file;
+mod obj;
+mod ply;
+mod texture;
+
+pub use texture::downsample_to_fit;
+
+use glam::{Mat4, Vec2, Vec3};
+use std::path::{Path, PathBuf};
+
+/// Everything a mesh file contributes to a scene.
+#[derive(Debug, Clone, Default)]
+pub struct Asset {
+    pub meshes: Vec<MeshData>,
+    pub materials: Vec<AssetMaterial>,
+    pub textures: Vec<TextureImage>,
+    /// Placements of meshes: (index into meshes, object-to-world transform). OBJ and PLY give one
+    /// instance of their single mesh with the identity; glTF gives one per node that has a mesh,
+    /// with the node hierarchy's transforms composed (parent * child).
+    pub instances: Vec<(usize, Mat4)>,
+    /// glTF only: the first camera found in the node hierarchy, in world space.
+    pub camera: Option<AssetCamera>,
+    /// Zero-area or degenerate triangles dropped while loading (for a note on stderr by the caller).
+    pub dropped_triangles: usize,
+}
+
+/// One indexed triangle mesh in object space.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshData {
+    pub positions: Vec<Vec3>,
+    /// Empty, or exactly one unit vector per position (empty: the renderer uses flat normals).
+    pub normals: Vec<Vec3>,
+    /// Empty, or exactly one per position. (0, 0) is the top-left corner of a texture (the glTF
+    /// convention); OBJ and PLY store v upwards, so their v is flipped to 1 - v on load.
+    pub uvs: Vec<Vec2>,
+    /// Indices into positions, counter-clockwise = front.
+    pub triangles: Vec<[u32; 3]>,
+    /// One per triangle: index into [`Asset::materials`].
+    pub triangle_materials: Vec<u32>,
+}
+
+/// The renderer's material model: a diffuse base that is, per bounce, replaced with probability
+/// `reflectivity` by a perfect mirror and with probability `transparency` by a Fresnel dielectric.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AssetMaterial {
+    pub name: String,
+    /// Linear RGB.
+    pub albedo: Vec3,
+    /// Index into [`Asset::textures`]; multiplies `albedo`.
+    pub albedo_texture: Option<usize>,
+    /// Linear radiance.
+    pub emission: Vec3,
+    /// R: probability of a perfect mirror bounce.
+    pub reflectivity: f32,
+    /// T: probability of a Fresnel dielectric event; R + T <= 1.
+    pub transparency: f32,
+    pub ior: f32,
+}
+
+impl AssetMaterial {
+    /// The material of faces that name none: 0.8 grey diffuse.
+    pub fn default_grey() -> Self {
+        AssetMaterial {
+            name: "default".to_owned(),
+            albedo: Vec3::splat(0.8),
+            albedo_texture: None,
+            emission: Vec3::ZERO,
+            reflectivity: 0.0,
+            transparency: 0.0,
+            ior: 1.5,
+        }
+    }
+}
+
+/// An 8-bit RGBA texture as stored in the file (sRGB-encoded colour), top row first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureImage {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[u8; 4]>,
+}
+
+/// A perspective camera in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AssetCamera {
+    pub position: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    pub yfov_degrees: f32,
+    /// Width / height, when the file gives one.
+    pub aspect: Option<f32>,
+}
+
+/// Every way loading can fail; the message always starts with the file's path.
+#[derive(Debug, thiserror::Error)]
+pub enum AssetError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: {message}", path.display())]
+    Invalid { path: PathBuf, message: String },
+    #[error("{}: unsupported mesh format '{extension}' (expected .obj, .ply, .gltf or .glb)", path.display())]
+    UnsupportedExtension { path: PathBuf, extension: String },
+}
+
+impl AssetError {
+    fn invalid(path: &Path, message: impl Into<String>) -> Self {
+        AssetError::Invalid {
+            path: path.to_owned(),
+            message: message.into(),
+        }
+    }
+
+    fn io(path: &Path, source: std::io::Error) -> Self {
+        AssetError::Io {
+            path: path.to_owned(),
+            source,
+        }
+    }
+}
+
+/// Loads a mesh file, choosing the format by its extension (case-insensitive). A file that ends
+/// up without a single triangle is an error: there would be nothing to render.
+pub fn load_asset(path: &Path) -> Result<Asset, AssetError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let asset = match extension.as_str() {
+        "obj" => obj::load(path)?,
+        "ply" => ply::load(path)?,
+        "gltf" | "glb" => gltf_file::load(path)?,
+        _ => {
+            return Err(AssetError::UnsupportedExtension {
+                path: path.to_owned(),
+                extension,
+            })
+        }
+    };
+    let instanced_triangles: usize = asset
+        .instances
+        .iter()
+        .map(|&(mesh, _)| asset.meshes.get(mesh).map_or(0, |m| m.triangles.len()))
+        .sum();
+    if instanced_triangles == 0 {
+        return Err(AssetError::invalid(path, "no triangles to render"));
+    }
+    Ok(asset)
+}
+
+/// Wraps a single object-space mesh (OBJ, PLY) as an asset with one identity instance.
+fn single_mesh_asset(
+    mesh: MeshData,
+    materials: Vec<AssetMaterial>,
+    textures: Vec<TextureImage>,
+    dropped_triangles: usize,
+) -> Asset {
+    Asset {
+        meshes: vec![mesh],
+        materials,
+        textures,
+        instances: vec![(0, Mat4::IDENTITY)],
+        camera: None,
+        dropped_triangles,
+    }
+}
+
+impl MeshData {
+    /// Removes triangles with repeated corners or zero (or non-finite) area, which only cost
+    /// BVH nodes and can produce NaN normals; returns how many were removed.
+    /// Indices must already be checked against `positions`.
+    fn drop_degenerate(&mut self) -> usize {
+        let before = self.triangles.len();
+        let positions = &self.positions;
+        let (triangles, materials) = self
+            .triangles
+            .iter()
+            .zip(&self.triangle_materials)
+            .filter(|(&[a, b, c], _)| {
+                let [a, b, c] = [a, b, c].map(|i| positions[i as usize]);
+                let area2 = (b - a).cross(c - a).length_squared();
+                area2 > 0.0 && area2.is_finite()
+            })
+            .map(|(&triangle, &material)| (triangle, material))
+            .unzip();
+        self.triangles = triangles;
+        self.triangle_materials = materials;
+        before - self.triangles.len()
+    }
+}
+
+/// Normalized copies of per-vertex normals, or nothing when any of them is zero or non-finite:
+/// one bad normal would make shading wrong, and flat normals are always correct.
+fn unit_normals(normals: &[Vec3]) -> Vec<Vec3> {
+    let unit: Vec<Vec3> = normals.iter().map(|n| n.normalize_or_zero()).collect();
+    if unit.contains(&Vec3::ZERO) {
+        Vec::new()
+    } else {
+        unit
+    }
+}
+
+/// A fresh, empty directory for one test's files.
+#[cfg(test)]
+fn test_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("caustica-asset-{tag}-{}", std::process::id()));
+    // A leftover from an earlier run with the same pid is harmless to remove.
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("cannot create a temporary test directory");
+    dir
+}
+
+/// A file of the shared real-data set ($CAUSTICA_DATA, default ../shared/data), or `None` with a
+/// SKIPPED note when it is not there (the data is not part of the repository).
+#[cfg(test)]
+fn real_data(relative: &str) -> Option<PathBuf> {
+    let root = std::env::var("CAUSTICA_DATA")
+        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data").to_owned());
+    let path = Path::new(&root).join(relative);
+    if path.is_file() {
+        Some(path)
+    } else {
+        println!("SKIPPED: {} not found", path.display());
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_extension_is_named() {
+        let err = load_asset(Path::new("scene/model.STL"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("model.STL") && err.contains("'stl'"), "{err}");
+    }
+
+    #[test]
+    fn degenerate_triangles_are_dropped_with_their_materials() {
+        let mut mesh = MeshData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(2.0, 0.0, 0.0)],
+            triangles: vec![[0, 1, 2], [0, 1, 3], [2, 2, 1]],
+            triangle_materials: vec![5, 6, 7],
+            ..Default::default()
+        };
+        assert_eq!(mesh.drop_degenerate(), 2);
+        assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+        assert_eq!(mesh.triangle_materials, vec![5]);
+    }
+
+    #[test]
+    fn one_zero_normal_discards_all_normals() {
+        assert_eq!(unit_normals(&[Vec3::new(0.0, 2.0, 0.0)]), vec![Vec3::Y]);
+        assert!(unit_normals(&[Vec3::Y, Vec3::ZERO]).is_empty());
+        assert!(unit_normals(&[Vec3::new(f32::NAN, 0.0, 1.0)]).is_empty());
+    }
+}

@@ -1,0 +1,279 @@
+//! PNG and JPEG textures as RGBA8, and shrinking a set of textures to fit a memory budget.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use image::ImageReader;
+
+use super::{AssetError, TextureImage};
+
+/// Largest accepted width or height: GPUs commonly cap 2D images at 16384, and the check runs
+/// before any pixel is decoded so a hostile header cannot demand gigabytes.
+const MAX_TEXTURE_SIDE: u32 = 16384;
+
+/// Reads a PNG or JPEG file (format guessed from its bytes) as RGBA8.
+pub fn load_texture(path: &Path) -> Result<TextureImage, AssetError> {
+    let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
+    let name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    decode_texture(&bytes, name).map_err(|message| AssetError::invalid(path, message))
+}
+
+/// Decodes an in-memory PNG or JPEG (grey, RGB, 16-bit, ... all become RGBA8). The error is the
+/// reason only, naming the image; the caller adds the file it came from.
+pub(super) fn decode_texture(bytes: &[u8], name: String) -> Result<TextureImage, String> {
+    let reader = || {
+        ImageReader::new(Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| format!("image '{name}': {e}"))
+    };
+    let (width, height) = reader()?
+        .into_dimensions()
+        .map_err(|e| format!("image '{name}': {e}"))?;
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+        return Err(format!("image '{name}' is {width}x{height}; at most {MAX_TEXTURE_SIDE} pixels per side are supported"));
+    }
+    let rgba = reader()?
+        .decode()
+        .map_err(|e| format!("image '{name}': {e}"))?
+        .into_rgba8();
+    let texels = rgba
+        .as_raw()
+        .chunks_exact(4)
+        .map(|t| [t[0], t[1], t[2], t[3]])
+        .collect();
+    Ok(TextureImage {
+        name,
+        width,
+        height,
+        texels,
+    })
+}
+
+/// Halves the largest textures (2x2 box filter) until their total size, width * height * 4 bytes,
+/// fits `budget_bytes`, or every texture is 1x1; returns the final total. Colour is averaged in
+/// linear light, as sRGB averages would darken edges; alpha is averaged as stored.
+pub fn downsample_to_fit(textures: &mut [TextureImage], budget_bytes: u64) -> u64 {
+    let bytes = |t: &TextureImage| u64::from(t.width) * u64::from(t.height) * 4;
+    let mut total: u64 = textures.iter().map(bytes).sum();
+    while total > budget_bytes {
+        let Some(largest) = textures
+            .iter_mut()
+            .filter(|t| t.width > 1 || t.height > 1)
+            .max_by_key(|t| bytes(t))
+        else {
+            break;
+        };
+        total -= bytes(largest);
+        halve(largest);
+        total += bytes(largest);
+    }
+    total
+}
+
+/// Halves each side (rounding down, at least 1); an odd last row or column is folded into its
+/// neighbour's box by clamping.
+fn halve(texture: &mut TextureImage) {
+    let (width, height) = (texture.width as usize, texture.height as usize);
+    let (new_width, new_height) = ((width / 2).max(1), (height / 2).max(1));
+    let mut texels = Vec::with_capacity(new_width * new_height);
+    for y in 0..new_height {
+        let rows = [2 * y, (2 * y + 1).min(height - 1)];
+        for x in 0..new_width {
+            let columns = [2 * x, (2 * x + 1).min(width - 1)];
+            let mut sum = [0.0f32; 4];
+            for row in rows {
+                for column in columns {
+                    let texel = texture.texels[row * width + column];
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        *s += if c < 3 {
+                            srgb_to_linear(texel[c])
+                        } else {
+                            f32::from(texel[c]) / 255.0
+                        };
+                    }
+                }
+            }
+            let [r, g, b, a] = sum.map(|s| s / 4.0);
+            let alpha = (a * 255.0).round() as u8;
+            texels.push([
+                linear_to_srgb(r),
+                linear_to_srgb(g),
+                linear_to_srgb(b),
+                alpha,
+            ]);
+        }
+    }
+    texture.width = new_width as u32;
+    texture.height = new_height as u32;
+    texture.texels = texels;
+}
+
+fn srgb_to_linear(value: u8) -> f32 {
+    let v = f32::from(value) / 255.0;
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn linear_to_srgb(linear: f32) -> u8 {
+    let v = if linear <= 0.003_130_8 {
+        linear * 12.92
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    };
+    (v.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_dir;
+    use super::*;
+
+    fn write_png(
+        path: &Path,
+        width: u32,
+        height: u32,
+        color: png::ColorType,
+        depth: png::BitDepth,
+        data: &[u8],
+    ) {
+        let file = std::fs::File::create(path).unwrap();
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+        encoder.set_color(color);
+        encoder.set_depth(depth);
+        encoder
+            .write_header()
+            .unwrap()
+            .write_image_data(data)
+            .unwrap();
+    }
+
+    #[test]
+    fn png_rgba_decodes_top_row_first() {
+        let dir = test_dir("png-rgba");
+        let path = dir.join("tex.png");
+        let data: Vec<u8> = (0..32).collect();
+        write_png(
+            &path,
+            4,
+            2,
+            png::ColorType::Rgba,
+            png::BitDepth::Eight,
+            &data,
+        );
+        let texture = load_texture(&path).unwrap();
+        assert_eq!(
+            (texture.width, texture.height, texture.name.as_str()),
+            (4, 2, "tex.png")
+        );
+        assert_eq!(texture.texels.len(), 8);
+        assert_eq!(texture.texels[0], [0, 1, 2, 3]);
+        assert_eq!(texture.texels[4], [16, 17, 18, 19]);
+        assert_eq!(texture.texels[7], [28, 29, 30, 31]);
+    }
+
+    #[test]
+    fn grey_and_sixteen_bit_become_rgba8() {
+        let dir = test_dir("png-grey");
+        let grey = dir.join("grey.png");
+        write_png(
+            &grey,
+            2,
+            1,
+            png::ColorType::Grayscale,
+            png::BitDepth::Eight,
+            &[10, 200],
+        );
+        assert_eq!(
+            load_texture(&grey).unwrap().texels,
+            vec![[10, 10, 10, 255], [200, 200, 200, 255]]
+        );
+        let rgb16 = dir.join("rgb16.png");
+        write_png(
+            &rgb16,
+            1,
+            1,
+            png::ColorType::Rgb,
+            png::BitDepth::Sixteen,
+            &[0xff, 0xff, 0x80, 0x00, 0x00, 0x00],
+        );
+        assert_eq!(
+            load_texture(&rgb16).unwrap().texels,
+            vec![[255, 128, 0, 255]]
+        );
+    }
+
+    #[test]
+    fn oversized_or_broken_images_are_errors() {
+        let dir = test_dir("png-bad");
+        let huge = dir.join("huge.png");
+        // A valid 20000x1 PNG: its header alone must get it rejected.
+        write_png(
+            &huge,
+            20000,
+            1,
+            png::ColorType::Grayscale,
+            png::BitDepth::Eight,
+            &[0; 20000],
+        );
+        let err = load_texture(&huge).unwrap_err().to_string();
+        assert!(err.contains("huge.png") && err.contains("20000x1"), "{err}");
+
+        let junk = dir.join("junk.png");
+        std::fs::write(&junk, b"not an image at all").unwrap();
+        assert!(load_texture(&junk)
+            .unwrap_err()
+            .to_string()
+            .contains("junk.png"));
+        assert!(load_texture(&dir.join("missing.png"))
+            .unwrap_err()
+            .to_string()
+            .contains("missing.png"));
+    }
+
+    #[test]
+    fn downsampling_halves_the_largest_until_the_budget_fits() {
+        let texture = |name: &str, width: u32, height: u32, texel: [u8; 4]| TextureImage {
+            name: name.to_owned(),
+            width,
+            height,
+            texels: vec![texel; (width * height) as usize],
+        };
+        let mut textures = vec![
+            texture("big", 8, 8, [255, 0, 128, 255]),
+            texture("small", 2, 2, [9, 9, 9, 9]),
+        ];
+        assert_eq!(
+            downsample_to_fit(&mut textures, 1 << 20),
+            8 * 8 * 4 + 2 * 2 * 4
+        );
+        assert_eq!(downsample_to_fit(&mut textures, 100), 4 * 4 * 4 + 2 * 2 * 4);
+        assert_eq!((textures[0].width, textures[0].height), (4, 4));
+        assert_eq!(
+            textures[0].texels,
+            vec![[255, 0, 128, 255]; 16],
+            "a uniform colour survives the filter"
+        );
+        assert_eq!(textures[1].width, 2);
+        assert_eq!(
+            downsample_to_fit(&mut textures, 0),
+            8,
+            "stops when everything is 1x1"
+        );
+
+        // Black and white average to mid grey in linear light (sRGB 188), not sRGB 128.
+        let mut stripes = vec![TextureImage {
+            name: "s".into(),
+            width: 2,
+            height: 1,
+            texels: vec![[0, 0, 0, 0], [255, 255, 255, 255]],
+        }];
+        assert_eq!(downsample_to_fit(&mut stripes, 4), 4);
+        assert_eq!(stripes[0].texels, vec![[188, 188, 188, 128]]);
+    }
+}
