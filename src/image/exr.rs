@@ -3,39 +3,37 @@
 use std::path::Path;
 
 use ::exr::meta::MetaData;
-use ::exr::prelude::{read_first_rgba_layer_from_file, write_rgb_file, Vec2};
+use ::exr::prelude::{
+    read_first_rgba_layer_from_file, Image, SpecificChannels, Vec2, WritableImage,
+};
 
+use super::atomic::write_atomically;
 use super::{check_size, file_name, ImageError, RgbImage};
 
-/// Writes full-precision f32 RGB with the crate's default lossless compression.
+/// Writes full-precision f32 RGB with the crate's default lossless
+/// compression, atomically.
 pub fn write(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
-    write_rgb_file(path, img.width as usize, img.height as usize, |x, y| {
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
         let [r, g, b] = img.get(x as u32, y as u32);
         (r, g, b)
+    });
+    let image = Image::from_channels((img.width as usize, img.height as usize), channels);
+    write_atomically(path, |out| {
+        image
+            .write()
+            .to_buffered(out)
+            .map_err(|e| exr_error(path, e))
     })
-    .map_err(|source| exr_error(path, source))
 }
 
 /// Reads the first layer that has R, G and B channels; alpha is dropped and
-/// half or u32 samples are converted to f32.
+/// half or u32 samples are converted to f32. In a layered file written by
+/// [`super::write_exr_document`] that is the top-level (beauty) layer.
 pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
-    let file = std::fs::File::open(path).map_err(|source| ImageError::Io {
-        file: file_name(path),
-        source,
-    })?;
-    // The pixel reader allocates from the header without asking us, so check
-    // sizes from the headers alone first. Any oversized layer rejects the file,
-    // which is stricter than needed but avoids duplicating the crate's choice
-    // of "first valid layer".
-    let meta = MetaData::read_from_unbuffered(file, false).map_err(|e| exr_error(path, e))?;
-    for header in &meta.headers {
-        let Vec2(width, height) = header.layer_size;
-        check_size(&file_name(path), width as u64, height as u64)?;
-    }
-
+    check_header_sizes(path)?;
     let image = read_first_rgba_layer_from_file(
         path,
-        // Sizes fit in u32: check_size bounded them by 2^28 above.
+        // Sizes fit in u32: check_header_sizes bounded them by 2^28.
         |size: Vec2<usize>, _| RgbImage::new(size.0 as u32, size.1 as u32),
         |img: &mut RgbImage, pos: Vec2<usize>, (r, g, b, _): (f32, f32, f32, f32)| {
             img.set(pos.0 as u32, pos.1 as u32, [r, g, b])
@@ -45,7 +43,24 @@ pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
     Ok(image.layer_data.channel_data.pixels)
 }
 
-fn exr_error(path: &Path, source: ::exr::error::Error) -> ImageError {
+/// The pixel readers allocate from the header without asking us, so this
+/// checks sizes from the headers alone first. Any oversized layer rejects the
+/// file, which is stricter than needed but avoids duplicating the crate's
+/// choice of "first valid layer".
+pub(crate) fn check_header_sizes(path: &Path) -> Result<(), ImageError> {
+    let file = std::fs::File::open(path).map_err(|source| ImageError::Io {
+        file: file_name(path),
+        source,
+    })?;
+    let meta = MetaData::read_from_unbuffered(file, false).map_err(|e| exr_error(path, e))?;
+    for header in &meta.headers {
+        let Vec2(width, height) = header.layer_size;
+        check_size(&file_name(path), width as u64, height as u64)?;
+    }
+    Ok(())
+}
+
+pub(crate) fn exr_error(path: &Path, source: ::exr::error::Error) -> ImageError {
     ImageError::Exr {
         file: file_name(path),
         source,

@@ -1,12 +1,19 @@
 //! Linear RGB float images and the file formats the renderer reads and writes:
 //! PFM and EXR for radiance (light probes in, renders out), PNG for viewing.
+//! Every writer replaces its target atomically (see `atomic`).
 
+mod atomic;
 pub mod exr;
+pub mod exr_layers;
 pub mod pfm;
 pub mod png;
 pub mod tonemap;
 
 use std::path::Path;
+
+pub use exr_layers::{read_exr_document, write_exr_document, ExrDocument, ExrLayer};
+pub use png::PngDepth;
+pub use tonemap::Tonemap;
 
 /// Largest accepted image, in pixels. Checked against header sizes before any
 /// pixel buffer is allocated, so a corrupt or hostile header cannot make a
@@ -95,6 +102,8 @@ pub enum ImageError {
         #[source]
         source: ::exr::error::Error,
     },
+    #[error("{file}: invalid EXR layers: {reason}")]
+    ExrLayout { file: String, reason: String },
     #[error("{file}: PNG: {source}")]
     Png {
         file: String,
@@ -154,14 +163,37 @@ pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     Ok(())
 }
 
-/// Writes an image, choosing the format by extension (case-insensitive).
-/// `exposure` (in stops) applies only to PNG: the float formats keep the raw
-/// radiance so that no information is lost.
+/// How to turn radiance into display values. Only PNG uses these: the float
+/// formats keep the raw radiance so that no information is lost. The default
+/// (no exposure change, clamp, 8 bits) is what `write_image` has always done.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OutputOptions {
+    /// In stops: values are scaled by 2^exposure before the tone curve.
+    pub exposure: f32,
+    pub tonemap: Tonemap,
+    pub png_depth: PngDepth,
+}
+
+/// Writes an image with default [`OutputOptions`] except `exposure`.
 pub fn write_image(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), ImageError> {
+    let options = OutputOptions {
+        exposure,
+        ..OutputOptions::default()
+    };
+    write_image_with(path, img, &options)
+}
+
+/// Writes an image atomically, choosing the format by extension
+/// (case-insensitive).
+pub fn write_image_with(
+    path: &Path,
+    img: &RgbImage,
+    options: &OutputOptions,
+) -> Result<(), ImageError> {
     match extension(path).as_deref() {
         Some("pfm") => pfm::write(path, img),
         Some("exr") => exr::write(path, img),
-        Some("png") => png::write(path, img, exposure),
+        Some("png") => png::write(path, img, options),
         _ => Err(ImageError::UnsupportedExtension {
             file: file_name(path),
             expected: ".pfm, .exr or .png",
@@ -213,6 +245,41 @@ mod tests {
         let back = read_image(&path);
         std::fs::remove_file(&path).unwrap();
         assert_eq!(back.unwrap(), img);
+    }
+
+    #[test]
+    fn every_format_leaves_only_the_target() {
+        let dir = std::env::temp_dir().join(format!("caustica-formats-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut img = RgbImage::new(2, 1);
+        img.set(0, 0, [0.5, 1.5, 2.5]);
+        let options = OutputOptions {
+            exposure: -1.0,
+            tonemap: Tonemap::AcesFilmic,
+            png_depth: PngDepth::Sixteen,
+        };
+        for name in ["a.pfm", "b.exr", "c.png"] {
+            write_image_with(&dir.join(name), &img, &options).unwrap();
+        }
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        let exr = read_image(&dir.join("b.exr"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(names, ["a.pfm", "b.exr", "c.png"]);
+        assert_eq!(exr.unwrap(), img);
+    }
+
+    #[test]
+    fn writing_into_missing_directory_names_the_file() {
+        for name in ["out.pfm", "out.exr", "out.png"] {
+            let path = Path::new("/nonexistent/caustica").join(name);
+            let err = write_image(&path, &RgbImage::new(1, 1), 0.0).unwrap_err();
+            let expected = format!("{}: ", path.display());
+            assert!(err.to_string().starts_with(&expected), "{err}");
+        }
     }
 
     #[test]

@@ -2,8 +2,10 @@
 //! and reference renders. Header is three whitespace-separated ASCII tokens
 //! (`PF`/`Pf`, `width height`, `scale`), then raw f32 rows stored bottom to top.
 
+use std::io::Write;
 use std::path::Path;
 
+use super::atomic::write_atomically;
 use super::{check_size, file_name, ImageError, RgbImage};
 
 /// Reads a PFM file. Non-finite pixels are kept; see [`check_finite`].
@@ -16,11 +18,14 @@ pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
     decode(&bytes, &file)
 }
 
-/// Writes a little-endian RGB PFM file.
+/// Writes a little-endian RGB PFM file, atomically.
 pub fn write(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
-    std::fs::write(path, encode(img)).map_err(|source| ImageError::Io {
-        file: file_name(path),
-        source,
+    write_atomically(path, |out| {
+        out.write_all(&encode(img))
+            .map_err(|source| ImageError::Io {
+                file: file_name(path),
+                source,
+            })
     })
 }
 
