@@ -1,5 +1,5 @@
-//! BVH build throughput: `cargo bench --bench bvh_build`. Builds each input three times and reports
-//! the best time, throughput and the tree's shape and SAH cost. Real meshes are read from
+//! BVH build throughput: `cargo bench --bench bvh_build`. Builds each input three times (or
+//! $BVH_BENCH_RUNS, for a noisy machine) and reports the best time, throughput and the tree's shape and SAH cost. Real meshes are read from
 //! $CAUSTICA_DATA (default ../shared/data next to the crate) and skipped when missing.
 
 use std::path::PathBuf;
@@ -40,9 +40,10 @@ fn report(name: &str, tris: &[Triangle]) {
         .iter()
         .map(|t| Aabb::new(t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
         .collect();
+    let runs = std::env::var("BVH_BENCH_RUNS").map_or(3, |r| r.parse().expect("BVH_BENCH_RUNS"));
     let mut best = Duration::MAX;
     let mut built = None;
-    for _ in 0..3 {
+    for _ in 0..runs {
         let start = Instant::now();
         let bvh = std::hint::black_box(bvh::build(std::hint::black_box(&bounds)));
         best = best.min(start.elapsed());
@@ -101,7 +102,12 @@ fn terrain(cells: usize) -> Vec<Triangle> {
     let mut tris = Vec::with_capacity(2 * cells * cells);
     for i in 0..cells {
         for j in 0..cells {
-            let [a, b, c, d] = [vertex(i, j), vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1)];
+            let [a, b, c, d] = [
+                vertex(i, j),
+                vertex(i + 1, j),
+                vertex(i, j + 1),
+                vertex(i + 1, j + 1),
+            ];
             tris.extend([[a, b, c], [b, d, c]]);
         }
     }
@@ -111,7 +117,11 @@ fn terrain(cells: usize) -> Vec<Triangle> {
 /// Just enough PLY for the scanned meshes: float vertex properties (x, y, z first), polygon faces
 /// as `list uchar int`, ASCII or binary little-endian. Polygons are fanned into triangles.
 fn read_ply(bytes: &[u8]) -> Vec<Triangle> {
-    let header_end = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let header_end = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
     let header = std::str::from_utf8(&bytes[..header_end]).unwrap();
     let (mut vertices, mut faces, mut vertex_props, mut in_vertex) = (0, 0, 0, false);
     for line in header.lines() {
@@ -126,27 +136,52 @@ fn read_ply(bytes: &[u8]) -> Vec<Triangle> {
     let body = &bytes[header_end..];
     let (positions, polygons): (Vec<Vec3>, Vec<Vec<usize>>) = if header.contains("ascii") {
         let mut lines = std::str::from_utf8(body).unwrap().lines();
-        let mut numbers = |n: usize| lines.next().unwrap().split_whitespace().take(n).map(|w| w.parse::<f32>().unwrap()).collect::<Vec<_>>();
-        let positions = (0..vertices).map(|_| Vec3::from_slice(&numbers(3))).collect();
-        let polygons = (0..faces).map(|_| numbers(usize::MAX)[1..].iter().map(|&i| i as usize).collect()).collect();
+        let mut numbers = |n: usize| {
+            lines
+                .next()
+                .unwrap()
+                .split_whitespace()
+                .take(n)
+                .map(|w| w.parse::<f32>().unwrap())
+                .collect::<Vec<_>>()
+        };
+        let positions = (0..vertices)
+            .map(|_| Vec3::from_slice(&numbers(3)))
+            .collect();
+        let polygons = (0..faces)
+            .map(|_| {
+                numbers(usize::MAX)[1..]
+                    .iter()
+                    .map(|&i| i as usize)
+                    .collect()
+            })
+            .collect();
         (positions, polygons)
     } else {
         let word = |at: usize| <[u8; 4]>::try_from(&body[at..at + 4]).unwrap();
         let positions = (0..vertices)
-            .map(|v| Vec3::from_array(std::array::from_fn(|k| f32::from_le_bytes(word(4 * (v * vertex_props + k))))))
+            .map(|v| {
+                Vec3::from_array(std::array::from_fn(|k| {
+                    f32::from_le_bytes(word(4 * (v * vertex_props + k)))
+                }))
+            })
             .collect();
         let mut at = 4 * vertices * vertex_props;
         let polygons = (0..faces)
             .map(|_| {
                 let n = body[at] as usize;
                 at += 1 + 4 * n;
-                (0..n).map(|k| i32::from_le_bytes(word(at - 4 * (n - k))) as usize).collect()
+                (0..n)
+                    .map(|k| i32::from_le_bytes(word(at - 4 * (n - k))) as usize)
+                    .collect()
             })
             .collect();
         (positions, polygons)
     };
     polygons
         .iter()
-        .flat_map(|p| (1..p.len() - 1).map(|k| [positions[p[0]], positions[p[k]], positions[p[k + 1]]]))
+        .flat_map(|p| {
+            (1..p.len() - 1).map(|k| [positions[p[0]], positions[p[k]], positions[p[k + 1]]])
+        })
         .collect()
 }

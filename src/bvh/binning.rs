@@ -74,8 +74,7 @@ impl Bins {
     fn add(&mut self, binning: &Binning, prims: &[BoxA]) {
         for p in prims {
             let bins = binning.bins(p.centroid2());
-            for axis in 0..3 {
-                let bin = bins[axis];
+            for (axis, &bin) in bins.iter().enumerate() {
                 self.boxes[axis][bin] = self.boxes[axis][bin].union(p);
                 self.counts[axis][bin] += 1;
             }

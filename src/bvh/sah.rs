@@ -45,7 +45,8 @@ fn build_parallel(range: Range) -> Subtree {
         return Subtree::Block(nodes);
     }
     let bounds = Aabb::from(&range.set.bounds);
-    let (axis, [left, right]) = split(range, &mut Bins::new()).expect("large sets are always split");
+    let (axis, [left, right]) =
+        split(range, &mut Bins::new()).expect("large sets are always split");
     let children = rayon::join(|| build_parallel(left), || build_parallel(right));
     Subtree::split(BvhNode::interior(&bounds, axis, 0), children)
 }
