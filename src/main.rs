@@ -11,11 +11,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(
-    name = "caustica",
-    version,
-    about = "A physically based GPU path tracer (Vulkan compute)"
-)]
+#[command(name = "caustica", version, about = "A physically based GPU path tracer (Vulkan compute)")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -34,10 +30,7 @@ struct DeviceArgs {
 
 impl DeviceArgs {
     fn context(&self) -> Result<GpuContext> {
-        GpuContext::new(&ContextOptions {
-            device: self.device.clone(),
-            validation: self.validation,
-        })
+        GpuContext::new(&ContextOptions { device: self.device.clone(), validation: self.validation })
     }
 }
 
@@ -95,12 +88,7 @@ fn load_scene(path: Option<&PathBuf>) -> Result<Scene> {
     }
 }
 
-fn apply_overrides(
-    scene: &mut Scene,
-    width: Option<u32>,
-    height: Option<u32>,
-    spp: Option<u32>,
-) -> Result<()> {
+fn apply_overrides(scene: &mut Scene, width: Option<u32>, height: Option<u32>, spp: Option<u32>) -> Result<()> {
     scene.film.width = width.unwrap_or(scene.film.width);
     scene.film.height = height.unwrap_or(scene.film.height);
     scene.film.spp = spp.unwrap_or(scene.film.spp);
@@ -113,23 +101,14 @@ fn progress_bar(total: u32, quiet: bool) -> ProgressBar {
     }
     let bar = ProgressBar::new(total as u64);
     bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} spp  {per_sec}  ETA {eta}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} spp  {per_sec}  ETA {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
     );
     bar
 }
 
-fn render(
-    scene: Scene,
-    output: PathBuf,
-    seed: u32,
-    exposure: f32,
-    quiet: bool,
-    gpu: &DeviceArgs,
-) -> Result<()> {
+fn render(scene: Scene, output: PathBuf, seed: u32, exposure: f32, quiet: bool, gpu: &DeviceArgs) -> Result<()> {
     // Fail on a bad output path before spending minutes rendering.
     caustica::image::check_output_path(&output)?;
     let ctx = gpu.context()?;
@@ -141,8 +120,7 @@ fn render(
     let image = renderer.image()?;
     write_image(&output, &image, exposure)?;
     if !quiet {
-        let pixel_samples =
-            scene.film.width as f64 * scene.film.height as f64 * renderer.samples_done as f64;
+        let pixel_samples = scene.film.width as f64 * scene.film.height as f64 * renderer.samples_done as f64;
         eprintln!(
             "wrote {} ({}x{}, {} spp) in {:.2} s on {}: {:.2} Msamples/s, {:.1} Mrays/s",
             output.display(),
@@ -166,30 +144,16 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, gpu: &DeviceArgs) 
     let setup_s = setup.elapsed().as_secs_f64();
     // Warm-up pass: first-dispatch costs (pipeline caches, page faults) are not throughput.
     renderer.render(1, |_| {})?;
-    let (rays0, secs0, spp0) = (
-        renderer.rays_traced,
-        renderer.seconds,
-        renderer.samples_done,
-    );
+    let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
     renderer.render(spp, |_| {})?;
     let seconds = renderer.seconds - secs0;
     let samples = (renderer.samples_done - spp0) as f64 * width as f64 * height as f64;
     let rays = (renderer.rays_traced - rays0) as f64;
     println!("scene:        {}", scene.name);
-    println!(
-        "device:       {} ({})",
-        ctx.info.name,
-        ctx.info.kind.label()
-    );
+    println!("device:       {} ({})", ctx.info.name, ctx.info.kind.label());
     println!("image:        {width}x{height}, {spp} spp");
     let bvh = renderer.bvh_stats;
-    println!(
-        "primitives:   {} ({} BVH nodes, depth {}, SAH cost {:.2})",
-        scene.shapes.len(),
-        bvh.nodes,
-        bvh.max_depth,
-        bvh.sah_cost
-    );
+    println!("primitives:   {} ({} BVH nodes, depth {}, SAH cost {:.2})", scene.shapes.len(), bvh.nodes, bvh.max_depth, bvh.sah_cost);
     println!("setup:        {setup_s:.3} s (BVH, upload, kernel compile)");
     println!("render:       {seconds:.3} s");
     println!("samples/s:    {:.3} M", samples / seconds / 1e6);
@@ -200,17 +164,7 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, gpu: &DeviceArgs) 
 
 fn run() -> Result<()> {
     match Cli::parse().command {
-        Command::Render {
-            scene,
-            output,
-            spp,
-            width,
-            height,
-            seed,
-            exposure,
-            quiet,
-            gpu,
-        } => {
+        Command::Render { scene, output, spp, width, height, seed, exposure, quiet, gpu } => {
             let mut s = load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
             render(s, output, seed, exposure, quiet, &gpu)
@@ -233,13 +187,7 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench {
-            width,
-            height,
-            spp,
-            scene,
-            gpu,
-        } => bench(load_scene(scene.as_ref())?, width, height, spp, &gpu),
+        Command::Bench { width, height, spp, scene, gpu } => bench(load_scene(scene.as_ref())?, width, height, spp, &gpu),
     }
 }
 

@@ -5,9 +5,7 @@ mod common;
 
 use caustica::gpu::GpuContext;
 use caustica::image::{self, RgbImage};
-use caustica::scene::{
-    angular_map_uv, Camera, Environment, EnvironmentMap, Film, Integrator, MapProjection, Scene,
-};
+use caustica::scene::{angular_map_uv, Camera, Environment, EnvironmentMap, Film, Integrator, MapProjection, Scene};
 use common::*;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -15,30 +13,12 @@ use std::path::PathBuf;
 
 /// Radiance the kernel returns for a camera ray along `dir` in an otherwise empty scene.
 fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f32; 3] {
-    let up = if dir.normalize().y.abs() > 0.9 {
-        Vec3::Z
-    } else {
-        Vec3::Y
-    };
+    let up = if dir.normalize().y.abs() > 0.9 { Vec3::Z } else { Vec3::Y };
     let scene = Scene {
         name: "environment probe".into(),
-        camera: Camera {
-            position: Vec3::ZERO,
-            look_at: dir,
-            up,
-            fov_deg: 0.001,
-        },
-        film: Film {
-            width: 1,
-            height: 1,
-            spp: 1,
-        },
-        integrator: Integrator {
-            rr_start: 4,
-            absorption: None,
-            nee: true,
-            max_bounces: 16,
-        },
+        camera: Camera { position: Vec3::ZERO, look_at: dir, up, fov_deg: 0.001 },
+        film: Film { width: 1, height: 1, spp: 1 },
+        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16 },
         materials: vec![],
         shapes: vec![],
         environment: environment.clone(),
@@ -47,12 +27,7 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
 }
 
 fn map(projection: MapProjection, image: RgbImage, rotation_deg: f32) -> Environment {
-    Environment::Map(EnvironmentMap {
-        projection,
-        image,
-        intensity: 1.0,
-        rotation_deg,
-    })
+    Environment::Map(EnvironmentMap { projection, image, intensity: 1.0, rotation_deg })
 }
 
 /// An angular map whose texels hold their own (u, v) + 2, so the radiance seen names the texel.
@@ -77,15 +52,9 @@ fn angular_probe_maps_known_directions_to_debevec_coordinates() {
     for (dir, expected) in cases {
         let seen = radiance_along(&ctx, &env, dir);
         let uv = Vec2::new(seen[0] - 2.0, seen[1] - 2.0);
-        assert!(
-            (uv - expected).length() < 2e-3,
-            "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}"
-        );
+        assert!((uv - expected).length() < 2e-3, "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}");
         let host = angular_map_uv(dir.normalize());
-        assert!(
-            (host - expected).length() < 1e-5,
-            "host mapping of {dir:?} is {host:?}"
-        );
+        assert!((host - expected).length() < 1e-5, "host mapping of {dir:?} is {host:?}");
     }
 }
 
@@ -94,17 +63,8 @@ fn angular_probe_never_uses_texels_outside_the_circle() {
     // Texels outside the disk are bright; inside 1. Directions near straight back read the rim.
     let (_lock, ctx) = gpu();
     let size = 64;
-    let img = angular_probe(size, |u, v| {
-        if u * u + v * v > 1.0 {
-            [1000.0; 3]
-        } else {
-            [1.0; 3]
-        }
-    });
-    assert!(
-        img.pixels.iter().any(|p| p[0] == 1000.0),
-        "the test probe has texels outside the circle"
-    );
+    let img = angular_probe(size, |u, v| if u * u + v * v > 1.0 { [1000.0; 3] } else { [1.0; 3] });
+    assert!(img.pixels.iter().any(|p| p[0] == 1000.0), "the test probe has texels outside the circle");
     // Through the scene loader, which prepares probes for the kernel.
     let dir = temp_dir("rim");
     image::pfm::write(&dir.join("rim.pfm"), &img).unwrap();
@@ -116,10 +76,7 @@ fn angular_probe_never_uses_texels_outside_the_circle() {
         // 2 degrees from straight back, all around.
         let back = Vec3::new(a.cos() * 0.035, a.sin() * 0.035, 1.0);
         let seen = radiance_along(&ctx, &loaded.environment, back);
-        assert!(
-            seen.iter().all(|&c| (c - 1.0).abs() < 1e-4),
-            "direction {back:?} saw {seen:?}: a texel outside the circle was used"
-        );
+        assert!(seen.iter().all(|&c| (c - 1.0).abs() < 1e-4), "direction {back:?} saw {seen:?}: a texel outside the circle was used");
     }
     std::fs::remove_dir_all(dir).ok();
 }
@@ -129,15 +86,7 @@ fn coordinate_latlong(w: u32, h: u32) -> RgbImage {
     let mut img = RgbImage::new(w, h);
     for y in 0..h {
         for x in 0..w {
-            img.set(
-                x,
-                y,
-                [
-                    (x as f32 + 0.5) / w as f32 + 1.0,
-                    (y as f32 + 0.5) / h as f32 + 1.0,
-                    1.0,
-                ],
-            );
+            img.set(x, y, [(x as f32 + 0.5) / w as f32 + 1.0, (y as f32 + 0.5) / h as f32 + 1.0, 1.0]);
         }
     }
     img
@@ -148,8 +97,8 @@ fn latlong_map_maps_known_directions() {
     let (_lock, ctx) = gpu();
     let env = map(MapProjection::LatLong, coordinate_latlong(512, 256), 0.0);
     let cases = [
-        (Vec3::new(0.0, 0.0, -1.0), Vec2::new(0.5, 0.5)), // forward: centre of the image
-        (Vec3::new(1.0, 0.0, 0.0), Vec2::new(0.75, 0.5)), // right
+        (Vec3::new(0.0, 0.0, -1.0), Vec2::new(0.5, 0.5)),  // forward: centre of the image
+        (Vec3::new(1.0, 0.0, 0.0), Vec2::new(0.75, 0.5)),  // right
         (Vec3::new(-1.0, 0.0, 0.0), Vec2::new(0.25, 0.5)), // left
         (Vec3::new(0.0, 1.0, -1.0), Vec2::new(0.5, 0.25)), // 45 degrees up
         (Vec3::new(0.0, -1.0, -1.0), Vec2::new(0.5, 0.75)),
@@ -157,10 +106,7 @@ fn latlong_map_maps_known_directions() {
     for (dir, expected) in cases {
         let seen = radiance_along(&ctx, &env, dir);
         let uv = Vec2::new(seen[0] - 1.0, seen[1] - 1.0);
-        assert!(
-            (uv - expected).length() < 2e-3,
-            "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}"
-        );
+        assert!((uv - expected).length() < 2e-3, "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}");
     }
 }
 
@@ -170,17 +116,11 @@ fn rotation_turns_the_map_about_up_by_the_right_hand_rule() {
     let (_lock, ctx) = gpu();
     let env = map(MapProjection::LatLong, coordinate_latlong(512, 256), 90.0);
     let seen = radiance_along(&ctx, &env, Vec3::new(0.0, 0.0, -1.0));
-    assert!(
-        (seen[0] - 1.75).abs() < 2e-3 && (seen[1] - 1.5).abs() < 2e-3,
-        "front saw (u, v) = ({}, {})",
-        seen[0] - 1.0,
-        seen[1] - 1.0
-    );
+    assert!((seen[0] - 1.75).abs() < 2e-3 && (seen[1] - 1.5).abs() < 2e-3, "front saw (u, v) = ({}, {})", seen[0] - 1.0, seen[1] - 1.0);
 }
 
 fn data_dir() -> Option<PathBuf> {
-    let dir =
-        PathBuf::from(std::env::var("CAUSTICA_DATA").unwrap_or_else(|_| "../shared/data".into()));
+    let dir = PathBuf::from(std::env::var("CAUSTICA_DATA").unwrap_or_else(|_| "../shared/data".into()));
     if dir.join("probes/grace_probe_512.pfm").exists() {
         Some(dir)
     } else {
@@ -193,8 +133,7 @@ fn data_dir() -> Option<PathBuf> {
 fn grace_probe_texel_centres_are_seen_in_their_directions() {
     let Some(data) = data_dir() else { return };
     let (_lock, ctx) = gpu();
-    let probe =
-        image::read_image(&data.join("probes/grace_probe_512.pfm")).expect("grace probe reads");
+    let probe = image::read_image(&data.join("probes/grace_probe_512.pfm")).expect("grace probe reads");
     let n = probe.width;
     let env = map(MapProjection::Angular, probe.clone(), 0.0);
     // Texel centres on a grid inside the disk: the camera looking along each texel's direction
@@ -212,10 +151,7 @@ fn grace_probe_texel_centres_are_seen_in_their_directions() {
             let seen = radiance_along(&ctx, &env, dir);
             let want = probe.get(x, y);
             for c in 0..3 {
-                assert!(
-                    (seen[c] - want[c]).abs() <= 2e-2 * want[c].abs() + 1e-3,
-                    "texel ({x}, {y}) direction {dir:?}: saw {seen:?}, texel {want:?}"
-                );
+                assert!((seen[c] - want[c]).abs() <= 2e-2 * want[c].abs() + 1e-3, "texel ({x}, {y}) direction {dir:?}: saw {seen:?}, texel {want:?}");
             }
             checked += 1;
         }

@@ -76,14 +76,7 @@ fn coverage(scene: &Scene) -> Vec<Coverage> {
 
 /// Asserts the mean over the pixels of `region` equals `expected` within 5 standard errors, the
 /// per-pixel noise estimated from two independent renders of the region.
-fn assert_region_mean(
-    a: &RgbImage,
-    b: &RgbImage,
-    cover: &[Coverage],
-    region: Coverage,
-    expected: f64,
-    what: &str,
-) {
+fn assert_region_mean(a: &RgbImage, b: &RgbImage, cover: &[Coverage], region: Coverage, expected: f64, what: &str) {
     let mut sum = 0.0;
     let mut noise = 0.0;
     let mut n = 0.0;
@@ -121,49 +114,29 @@ fn furnace_check(material: &str, sphere_expected: f64, what: &str) {
 
 #[test]
 fn furnace_albedo_one_is_one() {
-    furnace_check(
-        "albedo = [1.0, 1.0, 1.0]",
-        1.0,
-        "diffuse albedo 1 in a white furnace",
-    );
+    furnace_check("albedo = [1.0, 1.0, 1.0]", 1.0, "diffuse albedo 1 in a white furnace");
 }
 
 #[test]
 fn furnace_albedo_half_is_half() {
     // A convex diffuse surface sees only the environment: one bounce, L = albedo * 1.
-    furnace_check(
-        "albedo = [0.5, 0.5, 0.5]",
-        0.5,
-        "diffuse albedo 0.5 in a white furnace",
-    );
+    furnace_check("albedo = [0.5, 0.5, 0.5]", 0.5, "diffuse albedo 0.5 in a white furnace");
 }
 
 #[test]
 fn glass_sphere_invisible_in_furnace() {
-    furnace_check(
-        "albedo = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5",
-        1.0,
-        "glass sphere in a white furnace",
-    );
+    furnace_check("albedo = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5", 1.0, "glass sphere in a white furnace");
 }
 
 #[test]
 fn mirror_sphere_invisible_in_furnace() {
-    furnace_check(
-        "albedo = [0.0, 0.0, 0.0]\nreflectivity = 1.0",
-        1.0,
-        "mirror sphere in a white furnace",
-    );
+    furnace_check("albedo = [0.0, 0.0, 0.0]\nreflectivity = 1.0", 1.0, "mirror sphere in a white furnace");
 }
 
 #[test]
 fn mixed_rt_material_is_invisible_in_furnace() {
     // R = 0.3 mirror, T = 0.4 glass, 0.3 diffuse with albedo 1: every event preserves energy.
-    furnace_check(
-        "albedo = [1.0, 1.0, 1.0]\nreflectivity = 0.3\ntransparency = 0.4",
-        1.0,
-        "R/T material in a white furnace",
-    );
+    furnace_check("albedo = [1.0, 1.0, 1.0]\nreflectivity = 0.3\ntransparency = 0.4", 1.0, "R/T material in a white furnace");
 }
 
 fn cornell(size: u32, spp: u32) -> Scene {
@@ -194,12 +167,7 @@ fn fixed_absorption_roulette_does_not_change_the_mean() {
     fixed.integrator.absorption = Some(0.5);
     let a = render(&ctx, &fixed, 21);
     let b = render(&ctx, &cornell(32, 64), 22);
-    assert_same_mean(
-        &a,
-        &b,
-        5.0,
-        "Cornell box, fixed absorption 0.5 against throughput roulette",
-    );
+    assert_same_mean(&a, &b, 5.0, "Cornell box, fixed absorption 0.5 against throughput roulette");
 }
 
 #[test]
@@ -210,12 +178,7 @@ fn nee_with_mis_agrees_with_bsdf_sampling() {
     bsdf.integrator.nee = false;
     let a = render(&ctx, &nee, 31);
     let b = render(&ctx, &bsdf, 32);
-    assert_same_mean(
-        &a,
-        &b,
-        5.0,
-        "Cornell box, NEE + MIS against pure BSDF sampling",
-    );
+    assert_same_mean(&a, &b, 5.0, "Cornell box, NEE + MIS against pure BSDF sampling");
 }
 
 #[test]
@@ -227,21 +190,14 @@ fn nee_lowers_the_noise_on_the_cornell_box() {
     bsdf.integrator.nee = false;
     let nee_var = pixel_noise_variance(&render(&ctx, &nee, 1), &render(&ctx, &nee, 2));
     let bsdf_var = pixel_noise_variance(&render(&ctx, &bsdf, 1), &render(&ctx, &bsdf, 2));
-    assert!(
-        nee_var * 2.0 < bsdf_var,
-        "NEE variance {nee_var:.5} should be well below BSDF-only {bsdf_var:.5}"
-    );
+    assert!(nee_var * 2.0 < bsdf_var, "NEE variance {nee_var:.5} should be well below BSDF-only {bsdf_var:.5}");
 }
 
 #[test]
 fn emissive_sphere_seen_directly_has_its_radiance() {
     // A camera ray that hits an emitter sees exactly its emission (plus nothing: black surroundings).
     let (_lock, ctx) = gpu();
-    let mut scene = furnace(
-        "albedo = [0.0, 0.0, 0.0]\nemission = [2.0, 3.0, 4.0]",
-        16,
-        4,
-    );
+    let mut scene = furnace("albedo = [0.0, 0.0, 0.0]\nemission = [2.0, 3.0, 4.0]", 16, 4);
     scene.environment = caustica::scene::Environment::Constant(Vec3::ZERO);
     let image = render(&ctx, &scene, 1);
     let cover = coverage(&scene);
@@ -263,18 +219,8 @@ fn glass_sphere_reflects_by_fresnel_at_normal_incidence() {
     // pixel sees the total back-reflection F + (1-F)^2 F + (1-F)^2 F^3 + ... = 2F / (1 + F),
     // with F = ((ior - 1) / (ior + 1))^2 = 0.04.
     let (_lock, ctx) = gpu();
-    let probe = angular_probe(64, |u, v| {
-        if u * u + v * v < 0.2 * 0.2 {
-            [1.0; 3]
-        } else {
-            [0.0; 3]
-        }
-    });
-    let mut scene = furnace(
-        "albedo = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5",
-        16,
-        64,
-    );
+    let probe = angular_probe(64, |u, v| if u * u + v * v < 0.2 * 0.2 { [1.0; 3] } else { [0.0; 3] });
+    let mut scene = furnace("albedo = [0.0, 0.0, 0.0]\ntransparency = 1.0\nior = 1.5", 16, 64);
     scene.camera.position = Vec3::new(0.0, 0.0, -3.5);
     scene.camera.fov_deg = 0.001;
     scene.environment = caustica::scene::Environment::Map(caustica::scene::EnvironmentMap {

@@ -13,10 +13,7 @@ fn parse_result(text: &str) -> anyhow::Result<Scene> {
 }
 
 fn error_of(text: &str) -> String {
-    format!(
-        "{:#}",
-        parse_result(text).expect_err("scene must be rejected")
-    )
+    format!("{:#}", parse_result(text).expect_err("scene must be rejected"))
 }
 
 #[test]
@@ -31,31 +28,21 @@ fn every_scene_in_scenes_dir_loads() {
             count += 1;
         }
     }
-    assert!(
-        count >= 3,
-        "expected at least the Cornell box, sky and probe scenes"
-    );
+    assert!(count >= 3, "expected at least the Cornell box, sky and probe scenes");
 }
 
 #[test]
 fn default_scene_is_the_cornell_box_with_a_light() {
     let scene = Scene::default_scene();
     assert_eq!(scene.light_count(), 1);
-    let spheres = scene
-        .shapes
-        .iter()
-        .filter(|s| matches!(s, Shape::Sphere { .. }))
-        .count();
+    let spheres = scene.shapes.iter().filter(|s| matches!(s, Shape::Sphere { .. })).count();
     assert_eq!(spheres, 2, "a mirror and a glass sphere");
 }
 
 #[test]
 fn defaults_fill_in_film_integrator_and_a_black_environment() {
     let scene = parse_result(MINIMAL).unwrap();
-    assert_eq!(
-        (scene.film.width, scene.film.height, scene.film.spp),
-        (512, 512, 64)
-    );
+    assert_eq!((scene.film.width, scene.film.height, scene.film.spp), (512, 512, 64));
     assert_eq!(scene.integrator.rr_start, 4);
     assert!(scene.integrator.nee && scene.integrator.absorption.is_none());
     assert!(matches!(scene.environment, Environment::Constant(c) if c == glam::Vec3::ZERO));
@@ -70,13 +57,8 @@ fn unknown_key_is_named_with_its_line() {
 
 #[test]
 fn unknown_material_is_named() {
-    let e = error_of(&format!(
-        "{MINIMAL}[[spheres]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"gold\"\n"
-    ));
-    assert!(
-        e.contains("spheres[0].material") && e.contains("gold"),
-        "{e}"
-    );
+    let e = error_of(&format!("{MINIMAL}[[spheres]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"gold\"\n"));
+    assert!(e.contains("spheres[0].material") && e.contains("gold"), "{e}");
 }
 
 #[test]
@@ -97,18 +79,13 @@ fn out_of_range_values_are_errors_naming_the_key() {
     ];
     for (text, key) in cases {
         let e = error_of(&text);
-        assert!(
-            e.contains(key),
-            "expected an error naming '{key}', got: {e}"
-        );
+        assert!(e.contains(key), "expected an error naming '{key}', got: {e}");
     }
 }
 
 #[test]
 fn missing_probe_file_is_named() {
-    let e = error_of(&format!(
-        "{MINIMAL}[environment]\nprobe = \"no/such/probe.pfm\"\n"
-    ));
+    let e = error_of(&format!("{MINIMAL}[environment]\nprobe = \"no/such/probe.pfm\"\n"));
     assert!(e.contains("no/such/probe.pfm"), "{e}");
 }
 
@@ -116,29 +93,15 @@ fn missing_probe_file_is_named() {
 fn obj_mesh_loads_with_transform() {
     let dir = temp_dir("obj");
     // A unit square in the xy plane as two triangles, plus one zero-area face that is dropped.
-    std::fs::write(
-        dir.join("square.obj"),
-        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\nf 1 1 2\n",
-    )
-    .unwrap();
+    std::fs::write(dir.join("square.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\nf 1 1 2\n").unwrap();
     let text = format!(
         "{MINIMAL}[materials.m]\n[[meshes]]\nfile = \"square.obj\"\nmaterial = \"m\"\nscale = 2.0\nrotate = [0.0, 90.0, 0.0]\ntranslate = [0.0, 0.0, -5.0]\n"
     );
     let scene = Scene::parse(&text, "mesh.toml", &dir).unwrap();
-    assert_eq!(
-        scene.shapes.len(),
-        2,
-        "two triangles, the degenerate face dropped"
-    );
-    let Shape::Triangle { v, .. } = scene.shapes[0] else {
-        panic!("expected a triangle")
-    };
+    assert_eq!(scene.shapes.len(), 2, "two triangles, the degenerate face dropped");
+    let Shape::Triangle { v, .. } = scene.shapes[0] else { panic!("expected a triangle") };
     // (1, 0, 0) scaled by 2 -> (2, 0, 0), rotated 90 degrees about +y -> (0, 0, -2), translated -> (0, 0, -7).
-    assert!(
-        (v[1] - glam::Vec3::new(0.0, 0.0, -7.0)).length() < 1e-5,
-        "{:?}",
-        v[1]
-    );
+    assert!((v[1] - glam::Vec3::new(0.0, 0.0, -7.0)).length() < 1e-5, "{:?}", v[1]);
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -146,18 +109,10 @@ fn obj_mesh_loads_with_transform() {
 fn malformed_obj_is_rejected_with_the_file_name() {
     let dir = temp_dir("badobj");
     std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
-    std::fs::write(
-        dir.join("nan.obj"),
-        "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-    )
-    .unwrap();
+    std::fs::write(dir.join("nan.obj"), "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     for file in ["bad.obj", "nan.obj", "missing.obj"] {
-        let text =
-            format!("{MINIMAL}[materials.m]\n[[meshes]]\nfile = \"{file}\"\nmaterial = \"m\"\n");
-        let e = format!(
-            "{:#}",
-            Scene::parse(&text, "mesh.toml", &dir).expect_err("bad mesh rejected")
-        );
+        let text = format!("{MINIMAL}[materials.m]\n[[meshes]]\nfile = \"{file}\"\nmaterial = \"m\"\n");
+        let e = format!("{:#}", Scene::parse(&text, "mesh.toml", &dir).expect_err("bad mesh rejected"));
         assert!(e.contains(file), "{file}: {e}");
     }
     std::fs::remove_dir_all(dir).ok();

@@ -27,14 +27,7 @@ pub struct Buffer {
 const MIN_SIZE: u64 = 16;
 
 impl Buffer {
-    fn create(
-        ctx: &GpuContext,
-        name: &str,
-        size: u64,
-        usage: vk::BufferUsageFlags,
-        location: MemoryLocation,
-        kind: BufferKind,
-    ) -> Result<Self> {
+    fn create(ctx: &GpuContext, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation, kind: BufferKind) -> Result<Self> {
         let size = size.max(MIN_SIZE);
         let limit = ctx.info.max_storage_buffer_range;
         if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && size > limit {
@@ -46,12 +39,8 @@ impl Buffer {
             ));
         }
         let device = &ctx.device;
-        let info = vk::BufferCreateInfo::default()
-            .size(size)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        let buffer = unsafe { device.create_buffer(&info, None) }
-            .with_context(|| format!("creating buffer {name}"))?;
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let buffer = unsafe { device.create_buffer(&info, None) }.with_context(|| format!("creating buffer {name}"))?;
         let requirements = unsafe { device.get_buffer_memory_requirements(buffer) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
             name,
@@ -64,20 +53,11 @@ impl Buffer {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_buffer(buffer, None) };
-                return Err(anyhow!(
-                    "allocating {:.1} MiB for {name} on {}: {e}",
-                    size as f64 / 1048576.0,
-                    ctx.info.name
-                ));
+                return Err(anyhow!("allocating {:.1} MiB for {name} on {}: {e}", size as f64 / 1048576.0, ctx.info.name));
             }
         };
         unsafe { device.bind_buffer_memory(buffer, allocation.memory(), allocation.offset()) }?;
-        Ok(Self {
-            buffer,
-            allocation: Some(allocation),
-            size,
-            kind,
-        })
+        Ok(Self { buffer, allocation: Some(allocation), size, kind })
     }
 
     /// A device-local buffer of `kind` holding `bytes`, uploaded through a staging buffer.
@@ -87,26 +67,12 @@ impl Buffer {
             BufferKind::Storage | BufferKind::HostStorage => vk::BufferUsageFlags::STORAGE_BUFFER,
         };
         if kind == BufferKind::HostStorage {
-            let mut buffer = Self::create(
-                ctx,
-                name,
-                bytes.len() as u64,
-                usage,
-                MemoryLocation::GpuToCpu,
-                kind,
-            )?;
+            let mut buffer = Self::create(ctx, name, bytes.len() as u64, usage, MemoryLocation::GpuToCpu, kind)?;
             buffer.write(bytes)?;
             return Ok(buffer);
         }
         let usage = usage | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
-        let buffer = Self::create(
-            ctx,
-            name,
-            bytes.len() as u64,
-            usage,
-            MemoryLocation::GpuOnly,
-            kind,
-        )?;
+        let buffer = Self::create(ctx, name, bytes.len() as u64, usage, MemoryLocation::GpuOnly, kind)?;
         buffer.upload(ctx, bytes)?;
         Ok(buffer)
     }
@@ -116,46 +82,20 @@ impl Buffer {
         if bytes.is_empty() {
             return Ok(());
         }
-        let mut staging = Self::create(
-            ctx,
-            "staging upload",
-            bytes.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-            BufferKind::HostStorage,
-        )?;
+        let mut staging = Self::create(ctx, "staging upload", bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu, BufferKind::HostStorage)?;
         staging.write(bytes)?;
-        let region = vk::BufferCopy {
-            src_offset: 0,
-            dst_offset: 0,
-            size: bytes.len() as u64,
-        };
-        let result = ctx.submit_and_wait(|device, cb| unsafe {
-            device.cmd_copy_buffer(cb, staging.buffer, self.buffer, &[region])
-        });
+        let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len() as u64 };
+        let result = ctx.submit_and_wait(|device, cb| unsafe { device.cmd_copy_buffer(cb, staging.buffer, self.buffer, &[region]) });
         staging.destroy(ctx);
         result
     }
 
     /// Copies the first `len` bytes of a device-local buffer back to the host.
     pub fn download(&self, ctx: &GpuContext, len: u64) -> Result<Vec<u8>> {
-        let staging = Self::create(
-            ctx,
-            "staging readback",
-            len,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-            BufferKind::HostStorage,
-        )?;
-        let region = vk::BufferCopy {
-            src_offset: 0,
-            dst_offset: 0,
-            size: len,
-        };
+        let staging = Self::create(ctx, "staging readback", len, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu, BufferKind::HostStorage)?;
+        let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: len };
         let result = ctx
-            .submit_and_wait(|device, cb| unsafe {
-                device.cmd_copy_buffer(cb, self.buffer, staging.buffer, &[region])
-            })
+            .submit_and_wait(|device, cb| unsafe { device.cmd_copy_buffer(cb, self.buffer, staging.buffer, &[region]) })
             .and_then(|_| Ok(staging.read()?[..len as usize].to_vec()));
         staging.destroy(ctx);
         result

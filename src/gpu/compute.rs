@@ -28,12 +28,7 @@ fn descriptor_type(kind: BufferKind) -> vk::DescriptorType {
 }
 
 impl ComputeKernel {
-    pub fn new(
-        ctx: &GpuContext,
-        spirv: &[u32],
-        bindings: &[Binding],
-        push_size: u32,
-    ) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, spirv: &[u32], bindings: &[Binding], push_size: u32) -> Result<Self> {
         let device = &ctx.device;
         let layout_bindings: Vec<_> = bindings
             .iter()
@@ -46,28 +41,18 @@ impl ComputeKernel {
             })
             .collect();
         let set_layout = unsafe {
-            device.create_descriptor_set_layout(
-                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-                None,
-            )
+            device.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings), None)
         }?;
-        let push_ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            .offset(0)
-            .size(push_size)];
+        let push_ranges = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).offset(0).size(push_size)];
         let set_layouts = [set_layout];
         let layout = unsafe {
             device.create_pipeline_layout(
-                &vk::PipelineLayoutCreateInfo::default()
-                    .set_layouts(&set_layouts)
-                    .push_constant_ranges(&push_ranges),
+                &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push_ranges),
                 None,
             )
         }?;
-        let module = unsafe {
-            device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None)
-        }
-        .context("creating the shader module")?;
+        let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None) }
+            .context("creating the shader module")?;
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
@@ -75,56 +60,31 @@ impl ComputeKernel {
         let created = unsafe {
             device.create_compute_pipelines(
                 vk::PipelineCache::null(),
-                &[vk::ComputePipelineCreateInfo::default()
-                    .stage(stage)
-                    .layout(layout)],
+                &[vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)],
                 None,
             )
         };
         unsafe { device.destroy_shader_module(module, None) };
         let pipeline = created.map_err(|(_, e)| anyhow!("creating the compute pipeline: {e}"))?[0];
 
-        let uniform_count = bindings
-            .iter()
-            .filter(|b| b.buffer.kind == BufferKind::Uniform)
-            .count() as u32;
+        let uniform_count = bindings.iter().filter(|b| b.buffer.kind == BufferKind::Uniform).count() as u32;
         let storage_count = bindings.len() as u32 - uniform_count;
         let mut pool_sizes = vec![];
         if uniform_count > 0 {
-            pool_sizes.push(vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::UNIFORM_BUFFER,
-                descriptor_count: uniform_count,
-            });
+            pool_sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: uniform_count });
         }
         if storage_count > 0 {
-            pool_sizes.push(vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_BUFFER,
-                descriptor_count: storage_count,
-            });
+            pool_sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: storage_count });
         }
         let pool = unsafe {
-            device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(1)
-                    .pool_sizes(&pool_sizes),
-                None,
-            )
+            device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes), None)
         }?;
         let set = unsafe {
-            device.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(pool)
-                    .set_layouts(&set_layouts),
-            )
+            device.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&set_layouts))
         }?[0];
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
             .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.buffer.buffer)
-                    .offset(0)
-                    .range(vk::WHOLE_SIZE)]
-            })
+            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer.buffer).offset(0).range(vk::WHOLE_SIZE)])
             .collect();
         let writes: Vec<_> = bindings
             .iter()
@@ -138,49 +98,25 @@ impl ComputeKernel {
             })
             .collect();
         unsafe { device.update_descriptor_sets(&writes, &[]) };
-        Ok(Self {
-            set_layout,
-            layout,
-            pipeline,
-            pool,
-            set,
-            push_size,
-        })
+        Ok(Self { set_layout, layout, pipeline, pool, set, push_size })
     }
 
     /// Runs one dispatch of `groups` workgroups and waits for it.
     pub fn dispatch(&self, ctx: &GpuContext, push: &[u8], groups: [u32; 3]) -> Result<()> {
-        assert_eq!(
-            push.len() as u32,
-            self.push_size,
-            "push-constant block size"
-        );
+        assert_eq!(push.len() as u32, self.push_size, "push-constant block size");
         ctx.submit_and_wait(|device, cb| unsafe {
             device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            device.cmd_bind_descriptor_sets(
-                cb,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[self.set],
-                &[],
-            );
+            device.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
             device.cmd_push_constants(cb, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             device.cmd_dispatch(cb, groups[0], groups[1], groups[2]);
             // Make the kernel's writes visible to later transfers (readback) and host reads.
             let barrier = vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-                .dst_access_mask(
-                    vk::AccessFlags::TRANSFER_READ
-                        | vk::AccessFlags::HOST_READ
-                        | vk::AccessFlags::SHADER_READ,
-                );
+                .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::HOST_READ | vk::AccessFlags::SHADER_READ);
             device.cmd_pipeline_barrier(
                 cb,
                 vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::PipelineStageFlags::TRANSFER
-                    | vk::PipelineStageFlags::HOST
-                    | vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST | vk::PipelineStageFlags::COMPUTE_SHADER,
                 vk::DependencyFlags::empty(),
                 &[barrier],
                 &[],

@@ -91,30 +91,16 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instanc
             .iter()
             .any(|l| l.layer_name_as_c_str().ok() == Some(validation::LAYER_NAME));
     if validation && !layer_available {
-        eprintln!(
-            "caustica: validation requested but {:?} is not installed; running without it",
-            validation::LAYER_NAME
-        );
+        eprintln!("caustica: validation requested but {:?} is not installed; running without it", validation::LAYER_NAME);
     }
-    let layers = if layer_available {
-        vec![validation::LAYER_NAME.as_ptr()]
-    } else {
-        vec![]
-    };
-    let extensions = if layer_available {
-        vec![ash::ext::debug_utils::NAME.as_ptr()]
-    } else {
-        vec![]
-    };
+    let layers = if layer_available { vec![validation::LAYER_NAME.as_ptr()] } else { vec![] };
+    let extensions = if layer_available { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
     let info = vk::InstanceCreateInfo::default()
         .application_info(&app)
         .enabled_layer_names(&layers)
         .enabled_extension_names(&extensions);
-    let instance = unsafe { entry.create_instance(&info, None) }.map_err(|e| {
-        anyhow!(
-            "vkCreateInstance failed: {e} (is a Vulkan driver installed? try mesa-vulkan-drivers)"
-        )
-    })?;
+    let instance = unsafe { entry.create_instance(&info, None) }
+        .map_err(|e| anyhow!("vkCreateInstance failed: {e} (is a Vulkan driver installed? try mesa-vulkan-drivers)"))?;
     Ok((instance, layer_available))
 }
 
@@ -131,34 +117,19 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
     let v = props.api_version;
     DeviceInfo {
         index,
-        name: props
-            .device_name_as_c_str()
-            .map(|c| c.to_string_lossy().into_owned())
-            .unwrap_or_default(),
+        name: props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
         kind: DeviceType::from_vk(props.device_type),
-        api_version: format!(
-            "{}.{}.{}",
-            vk::api_version_major(v),
-            vk::api_version_minor(v),
-            vk::api_version_patch(v)
-        ),
+        api_version: format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v)),
         driver: format!("{:#x}", props.driver_version),
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         device_local_bytes,
-        has_compute_queue: queues
-            .iter()
-            .any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
+        has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
     }
 }
 
 fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {
-    let devices = unsafe { instance.enumerate_physical_devices() }
-        .context("vkEnumeratePhysicalDevices failed")?;
-    Ok(devices
-        .into_iter()
-        .enumerate()
-        .map(|(i, pd)| (pd, describe(instance, pd, i)))
-        .collect())
+    let devices = unsafe { instance.enumerate_physical_devices() }.context("vkEnumeratePhysicalDevices failed")?;
+    Ok(devices.into_iter().enumerate().map(|(i, pd)| (pd, describe(instance, pd, i))).collect())
 }
 
 /// Every Vulkan device the loader sees, in the loader's order.
@@ -171,33 +142,20 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
 }
 
 /// The requested device, or the most preferred kind (discrete GPU first, CPU last).
-fn choose(
-    devices: Vec<(vk::PhysicalDevice, DeviceInfo)>,
-    wanted: Option<&str>,
-) -> Result<(vk::PhysicalDevice, DeviceInfo)> {
-    let names = devices
-        .iter()
-        .map(|(_, d)| format!("{}: {}", d.index, d.name))
-        .collect::<Vec<_>>()
-        .join(", ");
+fn choose(devices: Vec<(vk::PhysicalDevice, DeviceInfo)>, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, DeviceInfo)> {
+    let names = devices.iter().map(|(_, d)| format!("{}: {}", d.index, d.name)).collect::<Vec<_>>().join(", ");
     let usable = devices.into_iter().filter(|(_, d)| d.has_compute_queue);
     match wanted {
         Some(w) => {
             let w_lower = w.to_lowercase();
             usable
-                .filter(|(_, d)| {
-                    d.index.to_string() == w || d.name.to_lowercase().contains(&w_lower)
-                })
+                .filter(|(_, d)| d.index.to_string() == w || d.name.to_lowercase().contains(&w_lower))
                 .min_by_key(|(_, d)| d.index)
-                .ok_or_else(|| {
-                    anyhow!("no Vulkan device matches --device '{w}' (devices: {names})")
-                })
+                .ok_or_else(|| anyhow!("no Vulkan device matches --device '{w}' (devices: {names})"))
         }
         None => usable
             .min_by_key(|(_, d)| (d.kind, d.index))
-            .ok_or_else(|| {
-                anyhow!("no Vulkan device with a compute queue was found (devices: [{names}])")
-            }),
+            .ok_or_else(|| anyhow!("no Vulkan device with a compute queue was found (devices: [{names}])")),
     }
 }
 
@@ -208,13 +166,8 @@ impl GpuContext {
         let validation_log = Box::<ValidationLog>::default();
         let debug = if validating {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let messenger = unsafe {
-                loader.create_debug_utils_messenger(
-                    &validation::messenger_info(&validation_log),
-                    None,
-                )
-            }
-            .context("creating the validation messenger")?;
+            let messenger = unsafe { loader.create_debug_utils_messenger(&validation::messenger_info(&validation_log), None) }
+                .context("creating the validation messenger")?;
             Some((loader, messenger))
         } else {
             None
@@ -224,12 +177,9 @@ impl GpuContext {
         let family = families
             .iter()
             .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            .ok_or_else(|| anyhow!("{} has no compute queue", info.name))?
-            as u32;
+            .ok_or_else(|| anyhow!("{} has no compute queue", info.name))? as u32;
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(family)
-            .queue_priorities(&priorities)];
+        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
         let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
         let device = unsafe { instance.create_device(physical, &device_info, None) }
             .with_context(|| format!("creating a logical device on {}", info.name))?;
@@ -279,11 +229,7 @@ impl GpuContext {
         if messages.is_empty() {
             return Ok(());
         }
-        bail!(
-            "the Vulkan validation layer reported {} message(s); first: {}",
-            messages.len(),
-            messages[0]
-        )
+        bail!("the Vulkan validation layer reported {} message(s); first: {}", messages.len(), messages[0])
     }
 
     pub(super) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
@@ -291,10 +237,7 @@ impl GpuContext {
     }
 
     /// Records commands into a one-off command buffer, submits it and waits for it to finish.
-    pub(super) fn submit_and_wait(
-        &self,
-        record: impl FnOnce(&ash::Device, vk::CommandBuffer),
-    ) -> Result<()> {
+    pub(super) fn submit_and_wait(&self, record: impl FnOnce(&ash::Device, vk::CommandBuffer)) -> Result<()> {
         let device = &self.device;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.command_pool)
@@ -304,21 +247,13 @@ impl GpuContext {
         let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
         let result = (|| -> Result<()> {
             unsafe {
-                device.begin_command_buffer(
-                    cb,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )?;
+                device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT))?;
                 record(device, cb);
                 device.end_command_buffer(cb)?;
                 let cbs = [cb];
                 let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
-                device
-                    .queue_submit(self.queue, &submit, fence)
-                    .map_err(describe_vk_error)?;
-                device
-                    .wait_for_fences(&[fence], true, u64::MAX)
-                    .map_err(describe_vk_error)?;
+                device.queue_submit(self.queue, &submit, fence).map_err(describe_vk_error)?;
+                device.wait_for_fences(&[fence], true, u64::MAX).map_err(describe_vk_error)?;
             }
             Ok(())
         })();

@@ -23,8 +23,7 @@ impl ValidationLog {
 pub fn messenger_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
         .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
         )
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -50,9 +49,6 @@ unsafe extern "system" fn on_message(
     let log = unsafe { &*(user as *const ValidationLog) };
     let line = format!("[{severity:?}] {text}");
     eprintln!("vulkan validation: {line}");
-    log.messages
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .push(line);
+    log.messages.lock().unwrap_or_else(|e| e.into_inner()).push(line);
     vk::FALSE
 }

@@ -142,22 +142,13 @@ pub fn read_image(path: &Path) -> Result<RgbImage, ImageError> {
 /// an existing directory.
 pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     if !matches!(extension(path).as_deref(), Some("pfm" | "exr" | "png")) {
-        return Err(ImageError::UnsupportedExtension {
-            file: file_name(path),
-            expected: ".pfm, .exr or .png",
-        });
+        return Err(ImageError::UnsupportedExtension { file: file_name(path), expected: ".pfm, .exr or .png" });
     }
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if !dir.is_dir() {
         return Err(ImageError::Io {
             file: file_name(path),
-            source: std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("directory {} does not exist", dir.display()),
-            ),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, format!("directory {} does not exist", dir.display())),
         });
     }
     Ok(())

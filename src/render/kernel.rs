@@ -5,43 +5,24 @@ use anyhow::Result;
 use std::sync::OnceLock;
 
 pub const SHADERS: ShaderSources = &[
-    (
-        "pathtrace.comp",
-        include_str!("../../shaders/pathtrace.comp"),
-    ),
+    ("pathtrace.comp", include_str!("../../shaders/pathtrace.comp")),
     ("layout.glsl", include_str!("../../shaders/layout.glsl")),
     ("rng.glsl", include_str!("../../shaders/rng.glsl")),
     ("sampling.glsl", include_str!("../../shaders/sampling.glsl")),
-    (
-        "intersect.glsl",
-        include_str!("../../shaders/intersect.glsl"),
-    ),
+    ("intersect.glsl", include_str!("../../shaders/intersect.glsl")),
     ("bvh.glsl", include_str!("../../shaders/bvh.glsl")),
-    (
-        "materials.glsl",
-        include_str!("../../shaders/materials.glsl"),
-    ),
+    ("materials.glsl", include_str!("../../shaders/materials.glsl")),
     ("lights.glsl", include_str!("../../shaders/lights.glsl")),
-    (
-        "environment.glsl",
-        include_str!("../../shaders/environment.glsl"),
-    ),
+    ("environment.glsl", include_str!("../../shaders/environment.glsl")),
     ("camera.glsl", include_str!("../../shaders/camera.glsl")),
-    (
-        "integrator.glsl",
-        include_str!("../../shaders/integrator.glsl"),
-    ),
+    ("integrator.glsl", include_str!("../../shaders/integrator.glsl")),
 ];
 
 /// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
 pub const WORKGROUP: u32 = 8;
 
 pub fn kernel_source() -> Result<String> {
-    assemble_source(
-        SHADERS,
-        "pathtrace.comp",
-        &[("BVH_MAX_DEPTH", crate::bvh::MAX_DEPTH.to_string())],
-    )
+    assemble_source(SHADERS, "pathtrace.comp", &[("BVH_MAX_DEPTH", crate::bvh::MAX_DEPTH.to_string())])
 }
 
 /// SPIR-V of the kernel; compiled on first use (glslang takes about a second the first time).

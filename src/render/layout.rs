@@ -108,10 +108,7 @@ mod tests {
     #[test]
     fn pass_params_fit_the_push_constant_minimum() {
         assert_eq!(size_of::<PassParams>(), 16);
-        assert!(
-            size_of::<PassParams>() <= 128,
-            "Vulkan guarantees only 128 bytes of push constants"
-        );
+        assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 
     /// The GLSL side declares the same kinds; a renumbering on one side only must fail here.
@@ -126,10 +123,7 @@ mod tests {
             ("ENV_ANGULAR", ENV_ANGULAR),
             ("ENV_LATLONG", ENV_LATLONG),
         ] {
-            assert!(
-                glsl.contains(&format!("const uint {name} = {value}u;")),
-                "{name} = {value} not found in layout.glsl"
-            );
+            assert!(glsl.contains(&format!("const uint {name} = {value}u;")), "{name} = {value} not found in layout.glsl");
         }
     }
 }

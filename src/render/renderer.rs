@@ -51,23 +51,9 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         cam_up: up.extend(0.0).into(),
         env_color: data.env_color.extend(0.0).into(),
         env_rotation: [rot.cos(), rot.sin(), 0.0, 0.0],
-        image: [
-            scene.film.width,
-            scene.film.height,
-            seed,
-            data.lights.len() as u32,
-        ],
+        image: [scene.film.width, scene.film.height, seed, data.lights.len() as u32],
         integrator: [i.rr_start, u32::from(i.nee), data.env_kind, i.max_bounces],
-        env_size: [
-            data.env_size[0],
-            data.env_size[1],
-            data.primitives.len() as u32,
-            if data.primitives.is_empty() {
-                0
-            } else {
-                data.nodes.len() as u32
-            },
-        ],
+        env_size: [data.env_size[0], data.env_size[1], data.primitives.len() as u32, if data.primitives.is_empty() { 0 } else { data.nodes.len() as u32 }],
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
     }
 }
@@ -90,74 +76,20 @@ impl<'a> Renderer<'a> {
         let params = frame_params(scene, &data, seed);
         let mut buffers = Vec::new();
         let mut make = |name: &str, kind: BufferKind, bytes: &[u8]| -> Result<()> {
-            buffers.push(
-                Buffer::with_data(ctx, name, kind, bytes)
-                    .with_context(|| format!("uploading {}", scene.name))?,
-            );
+            buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
             Ok(())
         };
-        make(
-            "frame parameters",
-            BufferKind::Uniform,
-            bytemuck::bytes_of(&params),
-        )?;
-        make(
-            "BVH nodes",
-            BufferKind::Storage,
-            bytemuck::cast_slice(&data.nodes),
-        )?;
-        make(
-            "primitives",
-            BufferKind::Storage,
-            bytemuck::cast_slice(&data.primitives),
-        )?;
-        make(
-            "materials",
-            BufferKind::Storage,
-            bytemuck::cast_slice(&data.materials),
-        )?;
-        make(
-            "lights",
-            BufferKind::Storage,
-            bytemuck::cast_slice(&data.lights),
-        )?;
-        make(
-            "environment map",
-            BufferKind::Storage,
-            bytemuck::cast_slice(&data.env_texels),
-        )?;
-        make(
-            "accumulation image",
-            BufferKind::Storage,
-            &vec![0u8; accum_bytes as usize],
-        )?;
+        make("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params))?;
+        make("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&data.nodes))?;
+        make("primitives", BufferKind::Storage, bytemuck::cast_slice(&data.primitives))?;
+        make("materials", BufferKind::Storage, bytemuck::cast_slice(&data.materials))?;
+        make("lights", BufferKind::Storage, bytemuck::cast_slice(&data.lights))?;
+        make("environment map", BufferKind::Storage, bytemuck::cast_slice(&data.env_texels))?;
+        make("accumulation image", BufferKind::Storage, &vec![0u8; accum_bytes as usize])?;
         make("statistics", BufferKind::HostStorage, &[0u8; 16])?;
-        let bindings: Vec<Binding> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| Binding {
-                binding: i as u32,
-                buffer: b,
-            })
-            .collect();
-        let kernel = ComputeKernel::new(
-            ctx,
-            kernel_spirv()?,
-            &bindings,
-            std::mem::size_of::<PassParams>() as u32,
-        )?;
-        Ok(Self {
-            ctx,
-            kernel: Some(kernel),
-            buffers,
-            width,
-            height,
-            samples_done: 0,
-            rays_traced: 0,
-            seconds: 0.0,
-            bvh_stats: data.bvh_stats,
-            cost_per_row_sample: None,
-        })
+        let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
+        let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
+        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, bvh_stats: data.bvh_stats, cost_per_row_sample: None })
     }
 
     /// Adds `spp` samples per pixel, calling `progress(samples_done)` after each full pass.
@@ -169,12 +101,7 @@ impl<'a> Renderer<'a> {
             let mut row = 0;
             while row < self.height {
                 let rows = band.min(self.height - row);
-                self.dispatch(PassParams {
-                    sample_base: self.samples_done,
-                    sample_count: samples,
-                    row_offset: row,
-                    row_count: rows,
-                })?;
+                self.dispatch(PassParams { sample_base: self.samples_done, sample_count: samples, row_offset: row, row_count: rows })?;
                 row += rows;
             }
             self.samples_done += samples;
@@ -190,14 +117,9 @@ impl<'a> Renderer<'a> {
             return (1, self.height.min(32));
         };
         let budget_row_samples = (DISPATCH_TARGET_S / cost.max(1e-12)).max(1.0);
-        let max_samples = (MAX_PIXEL_SAMPLES_PER_DISPATCH
-            / (self.width as u64 * self.height as u64))
-            .max(1) as f64;
+        let max_samples = (MAX_PIXEL_SAMPLES_PER_DISPATCH / (self.width as u64 * self.height as u64)).max(1) as f64;
         if budget_row_samples >= self.height as f64 {
-            let samples = (budget_row_samples / self.height as f64)
-                .min(max_samples)
-                .min(remaining as f64)
-                .max(1.0);
+            let samples = (budget_row_samples / self.height as f64).min(max_samples).min(remaining as f64).max(1.0);
             (samples as u32, self.height)
         } else {
             (1, budget_row_samples as u32)
@@ -207,20 +129,12 @@ impl<'a> Renderer<'a> {
     fn dispatch(&mut self, pass: PassParams) -> Result<()> {
         let kernel = self.kernel.as_ref().expect("kernel lives until drop");
         self.buffers[STATS].write(&[0u8; 4])?;
-        let groups = [
-            self.width.div_ceil(WORKGROUP),
-            pass.row_count.div_ceil(WORKGROUP),
-            1,
-        ];
+        let groups = [self.width.div_ceil(WORKGROUP), pass.row_count.div_ceil(WORKGROUP), 1];
         let start = Instant::now();
         kernel.dispatch(self.ctx, bytemuck::bytes_of(&pass), groups)?;
         let elapsed = start.elapsed().as_secs_f64();
         self.seconds += elapsed;
-        let rays = u32::from_le_bytes(
-            self.buffers[STATS].read()?[..4]
-                .try_into()
-                .expect("4 bytes"),
-        );
+        let rays = u32::from_le_bytes(self.buffers[STATS].read()?[..4].try_into().expect("4 bytes"));
         self.rays_traced += rays as u64;
         let cost = elapsed / (pass.row_count as f64 * pass.sample_count as f64);
         // Smooth, but follow quickly: scenes differ in cost across the image.
@@ -233,8 +147,7 @@ impl<'a> Renderer<'a> {
 
     /// Raw accumulation: per pixel (sum of radiance, sample count), top row first.
     pub fn accumulation(&self) -> Result<Vec<[f32; 4]>> {
-        let bytes =
-            self.buffers[ACCUM].download(self.ctx, self.width as u64 * self.height as u64 * 16)?;
+        let bytes = self.buffers[ACCUM].download(self.ctx, self.width as u64 * self.height as u64 * 16)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 

@@ -24,13 +24,8 @@ pub struct SceneData {
 
 fn shape_bounds(shape: &Shape) -> Aabb {
     match *shape {
-        Shape::Sphere { center, radius, .. } => Aabb {
-            min: center - Vec3::splat(radius),
-            max: center + Vec3::splat(radius),
-        },
-        Shape::Quad { origin, u, v, .. } => {
-            corners_bounds(&[origin, origin + u, origin + v, origin + u + v])
-        }
+        Shape::Sphere { center, radius, .. } => Aabb { min: center - Vec3::splat(radius), max: center + Vec3::splat(radius) },
+        Shape::Quad { origin, u, v, .. } => corners_bounds(&[origin, origin + u, origin + v, origin + u + v]),
         Shape::Triangle { v, .. } => corners_bounds(&v),
     }
 }
@@ -46,38 +41,17 @@ fn corners_bounds(points: &[Vec3]) -> Aabb {
 fn gpu_primitive(shape: &Shape) -> GpuPrimitive {
     let tag = |kind: u32, material: u32| (f32::from_bits(kind), f32::from_bits(material));
     match *shape {
-        Shape::Sphere {
-            center,
-            radius,
-            material,
-        } => {
+        Shape::Sphere { center, radius, material } => {
             let (k, m) = tag(PRIM_SPHERE, material);
-            GpuPrimitive {
-                a: center.extend(radius).into(),
-                b: [0.0, 0.0, 0.0, k],
-                c: [0.0, 0.0, 0.0, m],
-            }
+            GpuPrimitive { a: center.extend(radius).into(), b: [0.0, 0.0, 0.0, k], c: [0.0, 0.0, 0.0, m] }
         }
-        Shape::Quad {
-            origin,
-            u,
-            v,
-            material,
-        } => {
+        Shape::Quad { origin, u, v, material } => {
             let (k, m) = tag(PRIM_QUAD, material);
-            GpuPrimitive {
-                a: origin.extend(0.0).into(),
-                b: u.extend(k).into(),
-                c: v.extend(m).into(),
-            }
+            GpuPrimitive { a: origin.extend(0.0).into(), b: u.extend(k).into(), c: v.extend(m).into() }
         }
         Shape::Triangle { v, material } => {
             let (k, m) = tag(PRIM_TRIANGLE, material);
-            GpuPrimitive {
-                a: v[0].extend(0.0).into(),
-                b: (v[1] - v[0]).extend(k).into(),
-                c: (v[2] - v[0]).extend(m).into(),
-            }
+            GpuPrimitive { a: v[0].extend(0.0).into(), b: (v[1] - v[0]).extend(k).into(), c: (v[2] - v[0]).extend(m).into() }
         }
     }
 }
@@ -86,18 +60,12 @@ impl SceneData {
     pub fn new(scene: &Scene) -> SceneData {
         let bounds: Vec<Aabb> = scene.shapes.iter().map(shape_bounds).collect();
         let bvh = bvh::build(&bounds);
-        let primitives: Vec<GpuPrimitive> = bvh
-            .prim_order
-            .iter()
-            .map(|&i| gpu_primitive(&scene.shapes[i as usize]))
-            .collect();
+        let primitives: Vec<GpuPrimitive> = bvh.prim_order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
         let lights = bvh
             .prim_order
             .iter()
             .enumerate()
-            .filter(|(_, &i)| {
-                scene.materials[scene.shapes[i as usize].material() as usize].is_emissive()
-            })
+            .filter(|(_, &i)| scene.materials[scene.shapes[i as usize].material() as usize].is_emissive())
             .map(|(leaf_index, _)| leaf_index as u32)
             .collect();
         let materials = scene
@@ -109,15 +77,10 @@ impl SceneData {
                 params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, 0.0, 0.0],
             })
             .collect();
-        let (env_texels, env_kind, env_size, env_color, env_rotation_deg) = match &scene.environment
-        {
+        let (env_texels, env_kind, env_size, env_color, env_rotation_deg) = match &scene.environment {
             Environment::Constant(c) => (vec![[0.0; 4]], ENV_CONSTANT, [1, 1], *c, 0.0),
             Environment::Map(map) => (
-                map.image
-                    .pixels
-                    .iter()
-                    .map(|p| [p[0], p[1], p[2], 0.0])
-                    .collect(),
+                map.image.pixels.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect(),
                 match map.projection {
                     MapProjection::Angular => ENV_ANGULAR,
                     MapProjection::LatLong => ENV_LATLONG,

@@ -32,22 +32,13 @@ pub enum Environment {
 }
 
 pub(super) fn from_file(e: &EnvironmentFile, base: &Path) -> Result<Environment> {
-    let maps = [
-        (e.probe.as_ref(), MapProjection::Angular),
-        (e.latlong.as_ref(), MapProjection::LatLong),
-    ];
-    let given: Vec<_> = maps
-        .iter()
-        .filter_map(|(f, p)| f.map(|f| (f, *p)))
-        .collect();
+    let maps = [(e.probe.as_ref(), MapProjection::Angular), (e.latlong.as_ref(), MapProjection::LatLong)];
+    let given: Vec<_> = maps.iter().filter_map(|(f, p)| f.map(|f| (f, *p))).collect();
     if given.len() + usize::from(e.color.is_some()) > 1 {
         bail!("environment: give only one of color, probe and latlong");
     }
     if !(e.intensity.is_finite() && e.intensity >= 0.0) {
-        bail!(
-            "environment.intensity must be finite and >= 0, got {}",
-            e.intensity
-        );
+        bail!("environment.intensity must be finite and >= 0, got {}", e.intensity);
     }
     if !e.rotation.is_finite() {
         bail!("environment.rotation must be finite, got {}", e.rotation);
@@ -68,20 +59,11 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path) -> Result<Environment>
     }
     if projection == MapProjection::Angular {
         if image.width != image.height {
-            bail!(
-                "{name}: an angular light probe must be square, got {} x {}",
-                image.width,
-                image.height
-            );
+            bail!("{name}: an angular light probe must be square, got {} x {}", image.width, image.height);
         }
         fill_outside_disk(&mut image);
     }
-    Ok(Environment::Map(EnvironmentMap {
-        projection,
-        image,
-        intensity: e.intensity,
-        rotation_deg: e.rotation,
-    }))
+    Ok(Environment::Map(EnvironmentMap { projection, image, intensity: e.intensity, rotation_deg: e.rotation }))
 }
 
 /// Debevec angular map (u, v) in [-1, 1]^2 for a unit direction, u right and v up; the mirror of
@@ -100,12 +82,7 @@ pub fn angular_map_uv(d: Vec3) -> Vec2 {
 /// the credit text printed there) would bleed into directions near straight back.
 fn fill_outside_disk(image: &mut RgbImage) {
     let n = image.width as f32;
-    let texel_uv = |x: u32, y: u32| {
-        Vec2::new(
-            (x as f32 + 0.5) / n * 2.0 - 1.0,
-            1.0 - (y as f32 + 0.5) / n * 2.0,
-        )
-    };
+    let texel_uv = |x: u32, y: u32| Vec2::new((x as f32 + 0.5) / n * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / n * 2.0);
     let source = image.clone();
     let inner_radius = 1.0 - 1.0 / n;
     for y in 0..image.height {

@@ -53,11 +53,7 @@ pub struct FilmFile {
 
 impl Default for FilmFile {
     fn default() -> Self {
-        Self {
-            width: 512,
-            height: 512,
-            spp: 64,
-        }
+        Self { width: 512, height: 512, spp: 64 }
     }
 }
 
@@ -76,12 +72,7 @@ pub struct IntegratorFile {
 
 impl Default for IntegratorFile {
     fn default() -> Self {
-        Self {
-            rr_start: 4,
-            absorption: None,
-            nee: true,
-            max_bounces: 1024,
-        }
+        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024 }
     }
 }
 
@@ -98,14 +89,7 @@ pub struct MaterialFile {
 
 impl Default for MaterialFile {
     fn default() -> Self {
-        Self {
-            albedo: [0.8; 3],
-            reflectivity: 0.0,
-            transparency: 0.0,
-            ior: 1.5,
-            emission: [0.0; 3],
-            two_sided: false,
-        }
+        Self { albedo: [0.8; 3], reflectivity: 0.0, transparency: 0.0, ior: 1.5, emission: [0.0; 3], two_sided: false }
     }
 }
 

@@ -58,18 +58,9 @@ impl Material {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
-    Sphere {
-        center: Vec3,
-        radius: f32,
-        material: u32,
-    },
+    Sphere { center: Vec3, radius: f32, material: u32 },
     /// Parallelogram origin + s u + t v, s and t in [0, 1]; front side faces u x v.
-    Quad {
-        origin: Vec3,
-        u: Vec3,
-        v: Vec3,
-        material: u32,
-    },
+    Quad { origin: Vec3, u: Vec3, v: Vec3, material: u32 },
     /// Front side faces (v1 - v0) x (v2 - v0).
     Triangle { v: [Vec3; 3], material: u32 },
 }
@@ -77,9 +68,7 @@ pub enum Shape {
 impl Shape {
     pub fn material(&self) -> u32 {
         match *self {
-            Shape::Sphere { material, .. }
-            | Shape::Quad { material, .. }
-            | Shape::Triangle { material, .. } => material,
+            Shape::Sphere { material, .. } | Shape::Quad { material, .. } | Shape::Triangle { material, .. } => material,
         }
     }
 }
@@ -99,16 +88,14 @@ pub struct Scene {
 impl Scene {
     /// Reads a scene file; relative paths inside it are relative to the file.
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read scene", path.display()))?;
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read scene", path.display()))?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scene::parse(&text, &path.display().to_string(), &base)
     }
 
     /// The built-in Cornell box.
     pub fn default_scene() -> Scene {
-        Scene::parse(DEFAULT_SCENE_TOML, "built-in cornell.toml", Path::new("."))
-            .expect("the built-in scene is valid")
+        Scene::parse(DEFAULT_SCENE_TOML, "built-in cornell.toml", Path::new(".")).expect("the built-in scene is valid")
     }
 
     /// Parses scene text; `name` appears in messages and `base` resolves relative file paths.
@@ -118,10 +105,7 @@ impl Scene {
     }
 
     pub fn light_count(&self) -> usize {
-        self.shapes
-            .iter()
-            .filter(|s| self.materials[s.material() as usize].is_emissive())
-            .count()
+        self.shapes.iter().filter(|s| self.materials[s.material() as usize].is_emissive()).count()
     }
 }
 
@@ -156,10 +140,7 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
         fov_deg: finite("camera.fov", c.fov)?,
     };
     if !(camera.fov_deg > 0.0 && camera.fov_deg < 180.0) {
-        bail!(
-            "camera.fov must be in (0, 180) degrees, got {}",
-            camera.fov_deg
-        );
+        bail!("camera.fov must be in (0, 180) degrees, got {}", camera.fov_deg);
     }
     let forward = camera.look_at - camera.position;
     if forward.length() == 0.0 {
@@ -168,11 +149,7 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     if forward.cross(camera.up).length() <= 1e-6 * forward.length() * camera.up.length() {
         bail!("camera.up must not be parallel to the viewing direction (or zero)");
     }
-    let film = Film {
-        width: file.film.width,
-        height: file.film.height,
-        spp: file.film.spp,
-    };
+    let film = Film { width: file.film.width, height: file.film.height, spp: file.film.spp };
     check_film(&film)?;
     let i = &file.integrator;
     if let Some(a) = i.absorption {
@@ -183,12 +160,7 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     if i.max_bounces == 0 {
         bail!("integrator.max_bounces must be at least 1");
     }
-    let integrator = Integrator {
-        rr_start: i.rr_start,
-        absorption: i.absorption,
-        nee: i.nee,
-        max_bounces: i.max_bounces,
-    };
+    let integrator = Integrator { rr_start: i.rr_start, absorption: i.absorption, nee: i.nee, max_bounces: i.max_bounces };
 
     let mut materials = Vec::new();
     let mut by_name = HashMap::new();
@@ -204,16 +176,9 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
             two_sided: m.two_sided,
         };
         if material.albedo.max_element() > 1.0 {
-            bail!(
-                "{} must be at most 1 per channel (energy conservation), got {:?}",
-                key("albedo"),
-                material.albedo
-            );
+            bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);
         }
-        if material.reflectivity < 0.0
-            || material.transparency < 0.0
-            || material.reflectivity + material.transparency > 1.0 + 1e-6
-        {
+        if material.reflectivity < 0.0 || material.transparency < 0.0 || material.reflectivity + material.transparency > 1.0 + 1e-6 {
             bail!(
                 "materials.{mname}: reflectivity and transparency must be >= 0 with R + T <= 1, got R = {}, T = {}",
                 material.reflectivity,
@@ -229,10 +194,7 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     let material = |key: String, mname: &str| -> Result<u32> {
         by_name.get(mname).copied().with_context(|| {
             let known: Vec<_> = file.materials.keys().map(String::as_str).collect();
-            format!(
-                "{key}: unknown material '{mname}' (defined: {})",
-                known.join(", ")
-            )
+            format!("{key}: unknown material '{mname}' (defined: {})", known.join(", "))
         })
     };
 
@@ -263,18 +225,11 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     }
     for (k, t) in file.triangles.iter().enumerate() {
         let key = format!("triangles[{k}].vertices");
-        let v = [
-            vec3(&key, t.vertices[0])?,
-            vec3(&key, t.vertices[1])?,
-            vec3(&key, t.vertices[2])?,
-        ];
+        let v = [vec3(&key, t.vertices[0])?, vec3(&key, t.vertices[1])?, vec3(&key, t.vertices[2])?];
         if (v[1] - v[0]).cross(v[2] - v[0]).length() == 0.0 {
             bail!("{key}: the triangle has no area");
         }
-        shapes.push(Shape::Triangle {
-            v,
-            material: material(format!("triangles[{k}].material"), &t.material)?,
-        });
+        shapes.push(Shape::Triangle { v, material: material(format!("triangles[{k}].material"), &t.material)? });
     }
     for (k, m) in file.meshes.iter().enumerate() {
         let key = format!("meshes[{k}]");
@@ -288,56 +243,27 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
             bail!("{key}.scale must not be zero");
         }
         let r = vec3(&format!("{key}.rotate"), m.rotate)?;
-        let rotation = Quat::from_euler(
-            glam::EulerRot::ZYX,
-            r.z.to_radians(),
-            r.y.to_radians(),
-            r.x.to_radians(),
-        );
-        let transform = Mat4::from_scale_rotation_translation(
-            scale,
-            rotation,
-            vec3(&format!("{key}.translate"), m.translate)?,
-        );
+        let rotation = Quat::from_euler(glam::EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
+        let transform = Mat4::from_scale_rotation_translation(scale, rotation, vec3(&format!("{key}.translate"), m.translate)?);
         let path = resolve(base, &m.file);
         let triangles = mesh::load_obj(&path, transform)?;
-        shapes.extend(
-            triangles
-                .into_iter()
-                .map(|v| Shape::Triangle { v, material: mat }),
-        );
+        shapes.extend(triangles.into_iter().map(|v| Shape::Triangle { v, material: mat }));
     }
 
     let environment = match &file.environment {
         None => Environment::Constant(Vec3::ZERO),
         Some(e) => environment::from_file(e, base)?,
     };
-    Ok(Scene {
-        name: name.to_string(),
-        camera,
-        film,
-        integrator,
-        materials,
-        shapes,
-        environment,
-    })
+    Ok(Scene { name: name.to_string(), camera, film, integrator, materials, shapes, environment })
 }
 
 /// Checks a film after command-line overrides too.
 pub fn check_film(film: &Film) -> Result<()> {
     if film.width == 0 || film.height == 0 {
-        bail!(
-            "film.width and film.height must be at least 1, got {} x {}",
-            film.width,
-            film.height
-        );
+        bail!("film.width and film.height must be at least 1, got {} x {}", film.width, film.height);
     }
     if film.width > 16384 || film.height > 16384 {
-        bail!(
-            "film of {} x {} is too large (at most 16384 per side)",
-            film.width,
-            film.height
-        );
+        bail!("film of {} x {} is too large (at most 16384 per side)", film.width, film.height);
     }
     if film.spp == 0 {
         bail!("film.spp must be at least 1");

@@ -14,8 +14,7 @@ pub const LAVAPIPE_ICD: &str = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
 /// Lavapipe's ICD when the caller has not chosen a driver already (VK_DRIVER_FILES unset) and
 /// Mesa's lavapipe is installed.
 pub fn lavapipe_override() -> Option<&'static str> {
-    (std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists())
-        .then_some(LAVAPIPE_ICD)
+    (std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists()).then_some(LAVAPIPE_ICD)
 }
 
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
@@ -29,16 +28,9 @@ pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
             std::env::set_var("VK_DRIVER_FILES", icd);
         }
     });
-    let ctx = GpuContext::new(&ContextOptions {
-        device: None,
-        validation: true,
-    })
-    .expect("a Vulkan device (install mesa-vulkan-drivers)");
+    let ctx = GpuContext::new(&ContextOptions { device: None, validation: true }).expect("a Vulkan device (install mesa-vulkan-drivers)");
     if std::env::var_os("CI").is_some() {
-        assert!(
-            ctx.validating(),
-            "CI must run with the Khronos validation layer (vulkan-validationlayers)"
-        );
+        assert!(ctx.validating(), "CI must run with the Khronos validation layer (vulkan-validationlayers)");
     }
     (guard, ctx)
 }
@@ -65,16 +57,12 @@ pub fn angular_probe(size: u32, texel: impl Fn(f32, f32) -> [f32; 3]) -> RgbImag
 
 /// Angular-map coordinates of the centre of texel (x, y) of a size x size probe.
 pub fn texel_centre_uv(x: u32, y: u32, size: u32) -> (f32, f32) {
-    (
-        (x as f32 + 0.5) / size as f32 * 2.0 - 1.0,
-        1.0 - (y as f32 + 0.5) / size as f32 * 2.0,
-    )
+    ((x as f32 + 0.5) / size as f32 * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / size as f32 * 2.0)
 }
 
 pub fn render(ctx: &GpuContext, scene: &Scene, seed: u32) -> RgbImage {
     let mut r = Renderer::new(ctx, scene, seed).expect("scene uploads");
-    r.render(scene.film.spp, |_| {})
-        .expect("render succeeds without validation messages");
+    r.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
     r.image().expect("readback")
 }
 
@@ -99,12 +87,7 @@ pub fn mean_and_stderr(values: &[f64]) -> (f64, f64) {
 /// different seeds: Var(a - b) = 2 sigma^2, so the estimate needs no knowledge of the true image.
 pub fn pixel_noise_variance(a: &RgbImage, b: &RgbImage) -> f64 {
     let n = a.pixels.len() as f64;
-    a.pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(p, q)| (luminance(*p) - luminance(*q)).powi(2))
-        .sum::<f64>()
-        / (2.0 * n)
+    a.pixels.iter().zip(&b.pixels).map(|(p, q)| (luminance(*p) - luminance(*q)).powi(2)).sum::<f64>() / (2.0 * n)
 }
 
 /// Asserts that two independent renders of what should be the same expected image agree: the
@@ -112,13 +95,7 @@ pub fn pixel_noise_variance(a: &RgbImage, b: &RgbImage) -> f64 {
 /// standard errors of zero, the standard error coming from the differences themselves.
 pub fn assert_same_mean(a: &RgbImage, b: &RgbImage, k: f64, what: &str) {
     let (w, h) = (a.width, a.height);
-    let regions = [
-        (0, 0, w, h),
-        (0, 0, w / 2, h / 2),
-        (w / 2, 0, w, h / 2),
-        (0, h / 2, w / 2, h),
-        (w / 2, h / 2, w, h),
-    ];
+    let regions = [(0, 0, w, h), (0, 0, w / 2, h / 2), (w / 2, 0, w, h / 2), (0, h / 2, w / 2, h), (w / 2, h / 2, w, h)];
     for (x0, y0, x1, y1) in regions {
         let mut diffs = vec![];
         let mut mean_a = 0.0;
