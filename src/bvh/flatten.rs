@@ -1,35 +1,69 @@
-//! Lays the build tree out depth-first in the GPU node format.
+//! Stitches the builder's depth-first node blocks into the final array in the GPU node format.
 
-use super::sah::BuildNode;
+use rayon::join;
+
 use super::BvhNode;
 
 /// Depth-first layout: an interior node's first child follows it, `offset` points at its second child.
-/// `prim_count` only sizes the allocation (a binary tree over n prims has at most 2n - 1 nodes).
-pub(super) fn flatten(root: &BuildNode, prim_count: usize) -> Vec<BvhNode> {
-    let mut nodes = Vec::with_capacity(2 * prim_count);
-    push_subtree(root, &mut nodes);
+pub(super) enum Subtree {
+    /// A complete subtree laid out depth-first; interior offsets count from the block's start.
+    Block(Vec<BvhNode>),
+    /// An interior node (offset not yet set) over two subtrees built in parallel.
+    Split {
+        node: BvhNode,
+        children: Box<(Subtree, Subtree)>,
+        len: usize,
+    },
+}
+
+impl Subtree {
+    pub fn split(node: BvhNode, children: (Subtree, Subtree)) -> Subtree {
+        let len = 1 + children.0.len() + children.1.len();
+        Subtree::Split {
+            node,
+            children: Box::new(children),
+            len,
+        }
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        match self {
+            Subtree::Block(nodes) => nodes.len(),
+            Subtree::Split { len, .. } => *len,
+        }
+    }
+}
+
+pub(super) fn flatten(root: &Subtree) -> Vec<BvhNode> {
+    // Zeroed allocation is lazily zeroed memory: no pass over the array before it is written.
+    let mut nodes = bytemuck::zeroed_vec(root.len());
+    write(root, &mut nodes, 0);
     nodes
 }
 
-fn push_subtree(node: &BuildNode, nodes: &mut Vec<BvhNode>) {
-    match node {
-        BuildNode::Leaf {
-            bounds,
-            first,
-            count,
-        } => nodes.push(BvhNode::leaf(bounds, *first, *count)),
-        BuildNode::Interior {
-            bounds,
-            axis,
-            children,
-        } => {
-            let at = nodes.len();
-            // Placeholder until the second child's index is known.
-            nodes.push(BvhNode::EMPTY_ROOT);
-            push_subtree(&children[0], nodes);
-            let second_child = nodes.len() as u32;
-            push_subtree(&children[1], nodes);
-            nodes[at] = BvhNode::interior(bounds, *axis, second_child);
+/// Writes `subtree` into `out`, which starts at node index `base` of the final array.
+fn write(subtree: &Subtree, out: &mut [BvhNode], base: u32) {
+    match subtree {
+        Subtree::Block(nodes) => {
+            for (o, n) in out.iter_mut().zip(nodes) {
+                *o = *n;
+                if !n.is_leaf() {
+                    o.offset += base;
+                }
+            }
+        }
+        Subtree::Split { node, children, .. } => {
+            let second_child = 1 + children.0.len();
+            out[0] = BvhNode {
+                offset: base + second_child as u32,
+                ..*node
+            };
+            let (left, right) = out[1..].split_at_mut(second_child - 1);
+            join(
+                || write(&children.0, left, base + 1),
+                || write(&children.1, right, base + second_child as u32),
+            );
         }
     }
 }
@@ -40,27 +74,22 @@ mod tests {
     use super::*;
     use glam::Vec3;
 
-    fn leaf(first: u32, count: u32) -> BuildNode {
-        BuildNode::Leaf {
-            bounds: Aabb::new(Vec3::splat(first as f32), Vec3::splat(first as f32 + 1.0)),
-            first,
-            count,
-        }
+    fn leaf(first: u32, count: u32) -> BvhNode {
+        let corner = Vec3::splat(first as f32);
+        BvhNode::leaf(&Aabb::new(corner, corner + 1.0), first, count)
     }
 
-    fn interior(axis: usize, a: BuildNode, b: BuildNode) -> BuildNode {
-        BuildNode::Interior {
-            bounds: Aabb::new(Vec3::ZERO, Vec3::splat(9.0)),
-            axis,
-            children: Box::new([a, b]),
-        }
+    fn interior(axis: usize, second_child: u32) -> BvhNode {
+        BvhNode::interior(&Aabb::new(Vec3::ZERO, Vec3::splat(9.0)), axis, second_child)
     }
 
     #[test]
     fn first_child_follows_parent_and_offset_is_second_child() {
-        // root(axis 1) -> [inner(axis 2) -> [leaf 0..2, leaf 2..3], leaf 3..5]
-        let tree = interior(1, interior(2, leaf(0, 2), leaf(2, 1)), leaf(3, 2));
-        let nodes = flatten(&tree, 5);
+        // root(axis 1) -> [inner(axis 2) -> [leaf 0..2, leaf 2..3], leaf 3..5], the inner subtree
+        // and the last leaf built as separate blocks.
+        let inner = Subtree::Block(vec![interior(2, 2), leaf(0, 2), leaf(2, 1)]);
+        let tree = Subtree::split(interior(1, 0), (inner, Subtree::Block(vec![leaf(3, 2)])));
+        let nodes = flatten(&tree);
         assert_eq!(nodes.len(), 5);
         assert_eq!(
             (nodes[0].is_leaf(), nodes[0].axis(), nodes[0].offset),

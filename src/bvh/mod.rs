@@ -1,20 +1,27 @@
-//! Bounding volume hierarchy over primitive bounds: built on the CPU with binned SAH, flattened into
-//! the 32-byte `BvhNode` layout the GLSL kernel walks, and walkable on the CPU by the same algorithm.
+//! Bounding volume hierarchy over primitive bounds: built on the CPU with binned SAH (in parallel),
+//! laid out in the 32-byte `BvhNode` format the GLSL kernel walks, and walkable on the CPU by the
+//! same algorithm.
 //!
 //! A BVH over zero primitives is the single node `BvhNode::EMPTY_ROOT`: an inverted box that the
 //! sign-ordered slab test of `ray_box` never hits. The kernel's min/max slab test would enter it, so
 //! the host passes a node count of 0 for an empty scene and the kernel then skips traversal.
 
 mod aabb;
+mod binning;
+mod blocks;
+mod box_a;
 mod flatten;
 mod node;
+mod partition;
 mod sah;
 mod stats;
 #[cfg(test)]
 mod test_scenes;
 mod traverse;
 
-use sah::BuildPrim;
+use rayon::prelude::*;
+
+use box_a::BoxA;
 
 pub use aabb::Aabb;
 pub use node::BvhNode;
@@ -48,6 +55,11 @@ impl Bvh {
 ///
 /// Panics when there are more than `u32::MAX` primitives, which the node format cannot index.
 pub fn build(prim_bounds: &[Aabb]) -> Bvh {
+    build_with_depth(prim_bounds, MAX_DEPTH)
+}
+
+/// `build` with leaves no deeper than `max_depth`, which must be at least ceil(log2(prim count)).
+fn build_with_depth(prim_bounds: &[Aabb], max_depth: usize) -> Bvh {
     if prim_bounds.is_empty() {
         return Bvh {
             nodes: vec![BvhNode::EMPTY_ROOT],
@@ -59,17 +71,11 @@ pub fn build(prim_bounds: &[Aabb]) -> Bvh {
         "{} primitives exceed u32 indices",
         prim_bounds.len()
     );
-    let mut prims: Vec<BuildPrim> = prim_bounds
-        .iter()
-        .enumerate()
-        .map(|(index, &bounds)| BuildPrim {
-            bounds,
-            index: index as u32,
-        })
-        .collect();
-    let tree = sah::build_tree(&mut prims, MAX_DEPTH);
+    let mut prims: Vec<BoxA> = prim_bounds.par_iter().map(BoxA::from).collect();
+    let mut prim_order: Vec<u32> = (0..prim_bounds.len() as u32).collect();
+    let tree = sah::build_tree(&mut prims, &mut prim_order, max_depth);
     Bvh {
-        nodes: flatten::flatten(&tree, prims.len()),
-        prim_order: prims.iter().map(|p| p.index).collect(),
+        nodes: flatten::flatten(&tree),
+        prim_order,
     }
 }

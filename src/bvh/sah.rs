@@ -1,284 +1,153 @@
-//! Binned SAH builder: produces a pointer tree that `flatten` lays out for the GPU.
+//! Binned SAH builder: top-down over boxes and caller indices partitioned in place. Subtrees above
+//! `PARALLEL_THRESHOLD` are rayon tasks; smaller ones are built sequentially straight into
+//! depth-first node blocks that `flatten` stitches together.
 
-use glam::Vec3;
-
-use super::{Aabb, MAX_LEAF_SIZE};
-
-/// Most bins per axis. 16 is the usual point where more bins stop paying for the extra sweep.
-const BINS: usize = 16;
+use super::binning::{self, Bins};
+use super::box_a::BoxA;
+use super::flatten::Subtree;
+use super::partition::{self, SetBounds};
+use super::{Aabb, BvhNode, MAX_LEAF_SIZE};
 
 /// Subtrees larger than this are built as two rayon tasks; smaller ones are cheaper to build inline.
-const PARALLEL_THRESHOLD: usize = 4096;
+const PARALLEL_THRESHOLD: usize = 8 * 1024;
 
-/// A primitive while building: its bounds travel with its caller index so partitions walk memory linearly.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct BuildPrim {
-    pub bounds: Aabb,
-    pub index: u32,
-}
-
-pub(super) enum BuildNode {
-    /// Primitives `first..first + count` of the reordered primitive array.
-    Leaf {
-        bounds: Aabb,
-        first: u32,
-        count: u32,
-    },
-    Interior {
-        bounds: Aabb,
-        axis: usize,
-        children: Box<[BuildNode; 2]>,
-    },
-}
-
-/// Builds the tree over `prims` and reorders them into leaf order. No leaf lies deeper than
-/// `max_depth` (root = 0), which must be at least ceil(log2(prims.len())).
-pub(super) fn build_tree(prims: &mut [BuildPrim], max_depth: usize) -> BuildNode {
+/// Builds the tree over `prims` and reorders them (with `indices`) into leaf order. No leaf lies
+/// deeper than `max_depth` (root = 0), which must be at least ceil(log2(prims.len())).
+pub(super) fn build_tree(prims: &mut [BoxA], indices: &mut [u32], max_depth: usize) -> Subtree {
     debug_assert!(ceil_log2(prims.len()) <= max_depth);
-    build_node(prims, SetBounds::of(prims), 0, max_depth)
+    let set = super::blocks::map_merge(prims, SetBounds::of, SetBounds::merge);
+    build_parallel(Range {
+        prims,
+        indices,
+        set,
+        first: 0,
+        levels_left: max_depth,
+    })
 }
 
-/// Bounds of a primitive set and of its centroids, gathered by the pass that forms the set.
-#[derive(Clone, Copy, Debug)]
-struct SetBounds {
-    bounds: Aabb,
-    centroids: Aabb,
-}
-
-impl SetBounds {
-    const EMPTY: SetBounds = SetBounds {
-        bounds: Aabb::EMPTY,
-        centroids: Aabb::EMPTY,
-    };
-
-    fn of(prims: &[BuildPrim]) -> SetBounds {
-        let mut set = SetBounds::EMPTY;
-        prims
-            .iter()
-            .for_each(|p| set.add(&p.bounds, p.bounds.centroid()));
-        set
-    }
-
-    fn add(&mut self, bounds: &Aabb, centroid: Vec3) {
-        self.bounds = self.bounds.union(bounds);
-        self.centroids.grow(centroid);
-    }
-}
-
-/// `set` bounds `prims`, which sit at `first` in the whole array; `levels_left` is how many levels
-/// may still hang below this node.
-fn build_node(
-    prims: &mut [BuildPrim],
+/// A range of the primitive arrays being built: `first` is its position in the whole array and
+/// `levels_left` how many levels may still hang below its node.
+struct Range<'a> {
+    prims: &'a mut [BoxA],
+    indices: &'a mut [u32],
     set: SetBounds,
     first: usize,
     levels_left: usize,
-) -> BuildNode {
-    let SetBounds {
-        bounds,
-        centroids: centroid_bounds,
-    } = set;
-    let count = prims.len();
-    let leaf = BuildNode::Leaf {
-        bounds,
-        first: first as u32,
-        count: count as u32,
+}
+
+/// An interior node's split axis and its two children's ranges.
+type Children<'a> = (usize, [Range<'a>; 2]);
+
+fn build_parallel(range: Range) -> Subtree {
+    if range.prims.len() <= PARALLEL_THRESHOLD {
+        let mut nodes = Vec::with_capacity(2 * range.prims.len() - 1);
+        build_sequential(range, &mut Bins::new(), &mut nodes);
+        return Subtree::Block(nodes);
+    }
+    let bounds = Aabb::from(&range.set.bounds);
+    let (axis, [left, right]) =
+        split(range, &mut Bins::new()).expect("large sets are always split");
+    let children = rayon::join(|| build_parallel(left), || build_parallel(right));
+    Subtree::split(BvhNode::interior(&bounds, axis, 0), children)
+}
+
+/// Appends the subtree depth-first to `nodes`; interior offsets count from the start of `nodes`.
+fn build_sequential(range: Range, bins: &mut Bins, nodes: &mut Vec<BvhNode>) {
+    let bounds = Aabb::from(&range.set.bounds);
+    let (first, count) = (range.first as u32, range.prims.len() as u32);
+    let Some((axis, [left, right])) = split(range, bins) else {
+        nodes.push(BvhNode::leaf(&bounds, first, count));
+        return;
     };
+    let at = nodes.len();
+    // Placeholder until the second child's index is known.
+    nodes.push(BvhNode::EMPTY_ROOT);
+    build_sequential(left, bins, nodes);
+    let second_child = nodes.len() as u32;
+    build_sequential(right, bins, nodes);
+    nodes[at] = BvhNode::interior(&bounds, axis, second_child);
+}
+
+/// Decides between a leaf (None) and a split, and performs the split.
+fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
+    let Range {
+        prims,
+        indices,
+        set,
+        first,
+        levels_left,
+    } = range;
+    let count = prims.len();
     if count <= 1 {
-        return leaf;
+        return None;
     }
 
     // Median splits halve the count, so a subtree of `count` prims needs ceil(log2(count)) more levels.
     // Once the depth budget is down to that, only median splits keep every leaf within it.
     let sah_allowed = ceil_log2(count) < levels_left;
-    let split = if sah_allowed {
-        best_split(prims, &centroid_bounds)
+    let best = if sah_allowed {
+        binning::best_split(prims, &set.centroids, bins)
     } else {
         None
     };
 
-    let (axis, mid, [left_set, right_set]) = match split {
+    let area = set.bounds.surface_area();
+    let (axis, mid, [left_set, right_set]) = match best {
         // Costs in units of area * prims: split = A + S (traversal 1, intersection 1), leaf = A * count.
-        Some(s)
-            if count > MAX_LEAF_SIZE
-                || bounds.surface_area() + s.cost < bounds.surface_area() * count as f32 =>
-        {
-            let (mid, sets) = partition(prims, |c| s.binning.bin(c[s.axis]) <= s.last_left_bin);
+        Some(s) if count > MAX_LEAF_SIZE || area + s.cost < area * count as f32 => {
+            let (mid, [left_centroids, right_centroids]) =
+                partition::partition(prims, indices, |p| {
+                    s.binning.bin(p.centroid2(), s.axis) <= s.last_left_bin
+                });
+            let sets = [
+                SetBounds {
+                    bounds: s.bounds[0],
+                    centroids: left_centroids,
+                },
+                SetBounds {
+                    bounds: s.bounds[1],
+                    centroids: right_centroids,
+                },
+            ];
             (s.axis, mid, sets)
         }
-        _ if count <= MAX_LEAF_SIZE => return leaf,
-        _ => median_split(prims, &centroid_bounds),
+        _ if count <= MAX_LEAF_SIZE => return None,
+        _ => partition::median_split(prims, indices, &set.centroids),
     };
 
-    let (left, right) = prims.split_at_mut(mid);
+    let (left_prims, right_prims) = prims.split_at_mut(mid);
+    let (left_indices, right_indices) = indices.split_at_mut(mid);
     let levels_left = levels_left - 1;
-    let children = if count > PARALLEL_THRESHOLD {
-        rayon::join(
-            || build_node(left, left_set, first, levels_left),
-            || build_node(right, right_set, first + mid, levels_left),
-        )
-    } else {
-        (
-            build_node(left, left_set, first, levels_left),
-            build_node(right, right_set, first + mid, levels_left),
-        )
-    };
-    BuildNode::Interior {
-        bounds,
+    Some((
         axis,
-        children: Box::new([children.0, children.1]),
-    }
+        [
+            Range {
+                prims: left_prims,
+                indices: left_indices,
+                set: left_set,
+                first,
+                levels_left,
+            },
+            Range {
+                prims: right_prims,
+                indices: right_indices,
+                set: right_set,
+                first: first + mid,
+                levels_left,
+            },
+        ],
+    ))
 }
 
 fn ceil_log2(n: usize) -> usize {
     n.next_power_of_two().trailing_zeros() as usize
 }
 
-/// Maps centroid coordinates along one axis to bin indices.
-#[derive(Clone, Copy, Debug)]
-struct Binning {
-    min: f32,
-    scale: f32,
-    bin_count: usize,
-}
-
-impl Binning {
-    fn new(centroid_bounds: &Aabb, axis: usize, bin_count: usize) -> Binning {
-        let extent = centroid_bounds.max[axis] - centroid_bounds.min[axis];
-        // A flat or non-finite extent gets scale 0: everything lands in bin 0 and the axis offers no split.
-        let scale = if extent > 0.0 && extent.is_finite() {
-            bin_count as f32 / extent
-        } else {
-            0.0
-        };
-        Binning {
-            min: centroid_bounds.min[axis],
-            scale,
-            bin_count,
-        }
-    }
-
-    fn bin(&self, c: f32) -> usize {
-        // `as` saturates and sends NaN to 0, so even non-finite centroids land in a valid bin.
-        (((c - self.min) * self.scale) as usize).min(self.bin_count - 1)
-    }
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Bin {
-    bounds: Aabb,
-    count: u32,
-}
-
-impl Bin {
-    const EMPTY: Bin = Bin {
-        bounds: Aabb::EMPTY,
-        count: 0,
-    };
-
-    fn merge(&self, o: &Bin) -> Bin {
-        Bin {
-            bounds: self.bounds.union(&o.bounds),
-            count: self.count + o.count,
-        }
-    }
-
-    fn cost(&self) -> f32 {
-        self.bounds.surface_area() * self.count as f32
-    }
-}
-
-/// Bins `0..=last_left_bin` of `axis` go left. `cost` = area(L) * |L| + area(R) * |R|.
-#[derive(Clone, Copy, Debug)]
-struct Split {
-    axis: usize,
-    binning: Binning,
-    last_left_bin: usize,
-    cost: f32,
-}
-
-/// Cheapest bin boundary over all three axes that leaves both sides non-empty; None when every
-/// centroid falls into one bin or every candidate cost is non-finite.
-fn best_split(prims: &[BuildPrim], centroid_bounds: &Aabb) -> Option<Split> {
-    // Small nodes get one bin per primitive rather than sweeping mostly empty bins.
-    let bin_count = prims.len().min(BINS);
-    let binnings: [Binning; 3] =
-        std::array::from_fn(|axis| Binning::new(centroid_bounds, axis, bin_count));
-    let mut bins = [[Bin::EMPTY; BINS]; 3];
-    for p in prims {
-        let c = p.bounds.centroid();
-        for axis in 0..3 {
-            let bin = &mut bins[axis][binnings[axis].bin(c[axis])];
-            bin.bounds = bin.bounds.union(&p.bounds);
-            bin.count += 1;
-        }
-    }
-
-    let mut best: Option<Split> = None;
-    for (axis, bins) in bins.iter().enumerate() {
-        // right_cost[i]: cost of bins i+1.. (the right side of a split after bin i).
-        let mut right_cost = [0.0; BINS - 1];
-        let mut right = Bin::EMPTY;
-        for i in (1..bin_count).rev() {
-            right = right.merge(&bins[i]);
-            right_cost[i - 1] = right.cost();
-        }
-        let mut left = Bin::EMPTY;
-        for i in 0..bin_count - 1 {
-            left = left.merge(&bins[i]);
-            if left.count == 0 || left.count as usize == prims.len() {
-                continue;
-            }
-            let cost = left.cost() + right_cost[i];
-            if cost < best.map_or(f32::INFINITY, |b| b.cost) {
-                best = Some(Split {
-                    axis,
-                    binning: binnings[axis],
-                    last_left_bin: i,
-                    cost,
-                });
-            }
-        }
-    }
-    best
-}
-
-/// Moves the primitives whose centroid satisfies `goes_left` to the front; returns how many there
-/// are and the bounds of both sides, gathered on the way so the children need no pass of their own.
-fn partition(prims: &mut [BuildPrim], goes_left: impl Fn(Vec3) -> bool) -> (usize, [SetBounds; 2]) {
-    let mut sets = [SetBounds::EMPTY; 2];
-    let mut mid = 0;
-    for i in 0..prims.len() {
-        let (bounds, centroid) = (prims[i].bounds, prims[i].bounds.centroid());
-        if goes_left(centroid) {
-            prims.swap(i, mid);
-            mid += 1;
-            sets[0].add(&bounds, centroid);
-        } else {
-            sets[1].add(&bounds, centroid);
-        }
-    }
-    (mid, sets)
-}
-
-/// Halves the primitives by centroid along the largest centroid axis. Ties are broken by caller index
-/// so the result does not depend on the selection algorithm's handling of equal keys.
-fn median_split(prims: &mut [BuildPrim], centroid_bounds: &Aabb) -> (usize, usize, [SetBounds; 2]) {
-    let axis = centroid_bounds.largest_axis();
-    let mid = prims.len() / 2;
-    prims.select_nth_unstable_by(mid, |a, b| {
-        let (ca, cb) = (a.bounds.centroid()[axis], b.bounds.centroid()[axis]);
-        ca.total_cmp(&cb).then(a.index.cmp(&b.index))
-    });
-    let (left, right) = prims.split_at(mid);
-    (axis, mid, [SetBounds::of(left), SetBounds::of(right)])
-}
-
 #[cfg(test)]
 mod tests {
-    use super::super::flatten::flatten;
     use super::super::test_scenes::{assert_well_formed, Rng};
-    use super::super::{build, Aabb, Bvh, MAX_DEPTH};
-    use super::*;
+    use super::super::{build, build_with_depth, Aabb, MAX_DEPTH};
+    use glam::Vec3;
     use std::time::Instant;
 
     fn random_boxes(rng: &mut Rng, count: usize, size: f32) -> Vec<Aabb> {
@@ -345,19 +214,7 @@ mod tests {
             })
             .collect();
         let depth_with = |max_depth| {
-            let mut prims: Vec<BuildPrim> = boxes
-                .iter()
-                .enumerate()
-                .map(|(i, &bounds)| BuildPrim {
-                    bounds,
-                    index: i as u32,
-                })
-                .collect();
-            let tree = build_tree(&mut prims, max_depth);
-            let bvh = Bvh {
-                nodes: flatten(&tree, prims.len()),
-                prim_order: prims.iter().map(|p| p.index).collect(),
-            };
+            let bvh = build_with_depth(&boxes, max_depth);
             assert_well_formed(&bvh, &boxes);
             bvh.stats().max_depth
         };
