@@ -6,7 +6,7 @@ mod format;
 mod mesh;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
-pub use asset::{downsample_to_fit, AssetError};
+pub use asset::{downsample_to_fit, load_asset, Asset, AssetError};
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 
 use anyhow::{bail, Context as _, Result};
