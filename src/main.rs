@@ -2,7 +2,7 @@
 
 use anyhow::{Context as _, Result};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
-use caustica::image::write_image;
+use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
 use caustica::render::{GeometryReport, Renderer};
 use caustica::scene::{check_film, Scene};
 use clap::{Parser, Subcommand};
@@ -34,13 +34,34 @@ impl DeviceArgs {
     }
 }
 
+/// How the image is written: exposure, tone curve and depth apply to PNG only (PFM and EXR stay linear).
+#[derive(clap::Args, Clone)]
+struct OutputArgs {
+    /// Exposure in stops for PNG output.
+    #[arg(long, default_value_t = 0.0)]
+    exposure: f32,
+    /// Tone curve for PNG output, applied after exposure and before sRGB encoding.
+    #[arg(long, value_enum, default_value_t = Tonemap::Clamp)]
+    tonemap: Tonemap,
+    /// Bits per channel of PNG output.
+    #[arg(long, value_enum, default_value_t = PngDepth::Eight)]
+    png_depth: PngDepth,
+}
+
+impl OutputArgs {
+    fn options(&self) -> OutputOptions {
+        OutputOptions { exposure: self.exposure, tonemap: self.tonemap, png_depth: self.png_depth }
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene (the built-in Cornell box when no scene is given).
     Render {
-        /// Scene file (TOML). Omit for the built-in Cornell box.
+        /// Scene file (TOML), or a mesh file (.gltf, .glb, .obj, .ply) to render on its own under a
+        /// white sky. Omit for the built-in Cornell box.
         scene: Option<PathBuf>,
-        /// Output image: .pfm, .exr (linear) or .png (exposure, then sRGB).
+        /// Output image: .pfm, .exr (linear) or .png (exposure, tone curve, then sRGB).
         #[arg(short, long, default_value = "render.png")]
         output: PathBuf,
         /// Samples per pixel (overrides the scene's film.spp).
@@ -55,9 +76,8 @@ enum Command {
         /// Random seed: the same seed gives the same image.
         #[arg(long, default_value_t = 1)]
         seed: u32,
-        /// Exposure in stops for PNG output.
-        #[arg(long, default_value_t = 0.0)]
-        exposure: f32,
+        #[command(flatten)]
+        output_args: OutputArgs,
         /// No progress bar or summary.
         #[arg(short, long)]
         quiet: bool,
@@ -66,7 +86,8 @@ enum Command {
     },
     /// List the Vulkan devices.
     Devices,
-    /// Render the Cornell box and report samples and rays per second.
+    /// Render a scene (default: the Cornell box) and report geometry, BVH build, memory, and samples
+    /// and rays per second.
     Bench {
         #[arg(long, default_value_t = 256)]
         width: u32,
@@ -108,7 +129,7 @@ fn progress_bar(total: u32, quiet: bool) -> ProgressBar {
     bar
 }
 
-fn render(scene: Scene, output: PathBuf, seed: u32, exposure: f32, quiet: bool, gpu: &DeviceArgs) -> Result<()> {
+fn render(scene: Scene, output: PathBuf, seed: u32, output_args: &OutputArgs, quiet: bool, gpu: &DeviceArgs) -> Result<()> {
     // Fail on a bad output path before spending minutes rendering.
     caustica::image::check_output_path(&output)?;
     let ctx = gpu.context()?;
@@ -118,7 +139,7 @@ fn render(scene: Scene, output: PathBuf, seed: u32, exposure: f32, quiet: bool, 
     renderer.render(scene.film.spp, |done| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     let image = renderer.image()?;
-    write_image(&output, &image, exposure)?;
+    write_image_with(&output, &image, &output_args.options())?;
     if !quiet {
         let pixel_samples = scene.film.width as f64 * scene.film.height as f64 * renderer.samples_done as f64;
         eprintln!(
@@ -182,10 +203,10 @@ fn print_geometry(g: &GeometryReport) {
 
 fn run() -> Result<()> {
     match Cli::parse().command {
-        Command::Render { scene, output, spp, width, height, seed, exposure, quiet, gpu } => {
+        Command::Render { scene, output, spp, width, height, seed, output_args, quiet, gpu } => {
             let mut s = load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
-            render(s, output, seed, exposure, quiet, &gpu)
+            render(s, output, seed, &output_args, quiet, &gpu)
         }
         Command::Devices => {
             let devices = list_devices()?;

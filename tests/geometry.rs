@@ -321,3 +321,21 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
     assert_eq!(image.get(0, 0), [1.0, 1.0, 1.0], "the corner sees the white sky");
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A scene whose buffers cannot fit the device fails before any upload, naming what needs how much.
+#[test]
+fn scene_too_large_for_the_device_fails_before_upload() {
+    let (_lock, ctx) = gpu();
+    let limit = ctx.info.max_storage_buffer_range;
+    // The smallest square image whose accumulation buffer (16 bytes a pixel) passes the limit.
+    let side = ((limit / 16) as f64).sqrt() as u32 + 1;
+    if side > 16384 {
+        eprintln!("SKIPPED: {} allows {limit} bytes per storage buffer, more than the largest film needs", ctx.info.name);
+        return;
+    }
+    let mut scene = Scene::default_scene();
+    scene.film.width = side;
+    scene.film.height = side;
+    let e = format!("{:#}", caustica::render::Renderer::new(&ctx, &scene, 1).err().expect("too large for the device"));
+    assert!(e.contains("accumulation image") && e.contains("MiB") && e.contains(&ctx.info.name), "{e}");
+}

@@ -156,7 +156,13 @@ fn malformed_obj_is_rejected_with_the_file_name() {
     let dir = temp_dir("badobj");
     std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
     std::fs::write(dir.join("nan.obj"), "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-    for file in ["bad.obj", "nan.obj", "missing.obj"] {
+    let ply_header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    std::fs::write(dir.join("bad.ply"), format!("{ply_header}0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")).unwrap();
+    std::fs::write(dir.join("huge.ply"), ply_header.replace("vertex 3", "vertex 1000000000")).unwrap();
+    std::fs::write(dir.join("broken.gltf"), "{ \"asset\": { \"version\": \"2.0\" }, \"nodes\": [").unwrap();
+    std::fs::write(dir.join("cyclic.gltf"), r#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"children": [1]}, {"children": [0]}]}"#).unwrap();
+    std::fs::write(dir.join("shape.stl"), "solid x\nendsolid x\n").unwrap();
+    for file in ["bad.obj", "nan.obj", "missing.obj", "bad.ply", "huge.ply", "broken.gltf", "cyclic.gltf", "shape.stl"] {
         let text = format!("{MINIMAL}[materials.m]\n[[meshes]]\nfile = \"{file}\"\nmaterial = \"m\"\n");
         let e = format!("{:#}", Scene::parse(&text, "mesh.toml", &dir).expect_err("bad mesh rejected"));
         assert!(e.contains(file), "{file}: {e}");

@@ -74,6 +74,26 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     }
 }
 
+/// Fails before any upload when one buffer exceeds the device's storage-buffer range or all of them
+/// its device-local memory, saying how much is needed and how much there is.
+fn check_fits<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (&'n str, u64)> + Clone) -> Result<()> {
+    let mib = |b: u64| b as f64 / 1048576.0;
+    let device = &ctx.info;
+    if let Some((name, bytes)) = sizes.clone().find(|&(_, b)| b > device.max_storage_buffer_range) {
+        anyhow::bail!(
+            "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
+            mib(bytes),
+            device.name,
+            mib(device.max_storage_buffer_range)
+        );
+    }
+    let total: u64 = sizes.map(|(_, b)| b).sum();
+    if device.device_local_bytes > 0 && total > device.device_local_bytes {
+        anyhow::bail!("{scene}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB", mib(total), device.name, mib(device.device_local_bytes));
+    }
+    Ok(())
+}
+
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
         // One texel buffer holds every texture, so it must fit one storage binding too.
@@ -89,38 +109,39 @@ impl<'a> Renderer<'a> {
         }
         let (width, height) = (scene.film.width, scene.film.height);
         let accum_bytes = width as u64 * height as u64 * 16;
-        let needed = data.gpu_bytes() + accum_bytes;
-        if needed > ctx.info.device_local_bytes && ctx.info.device_local_bytes > 0 {
-            anyhow::bail!(
-                "{}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB",
-                scene.name,
-                needed as f64 / 1048576.0,
-                ctx.info.name,
-                ctx.info.device_local_bytes as f64 / 1048576.0
-            );
-        }
         let params = frame_params(scene, &data, seed);
-        let mut buffers = Vec::new();
-        let mut make = |name: &str, kind: BufferKind, bytes: &[u8]| -> Result<()> {
-            buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
-            Ok(())
-        };
-        make("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params))?;
         let a = &data.acceleration;
-        make("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes))?;
-        make("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives))?;
-        make("materials", BufferKind::Storage, bytemuck::cast_slice(&data.materials))?;
-        make("lights", BufferKind::Storage, bytemuck::cast_slice(&data.lights))?;
-        make("environment map", BufferKind::Storage, bytemuck::cast_slice(&data.env_texels))?;
-        make("accumulation image", BufferKind::Storage, &vec![0u8; accum_bytes as usize])?;
-        make("statistics", BufferKind::HostStorage, &[0u8; 16])?;
-        make("instances", BufferKind::Storage, bytemuck::cast_slice(&a.instances))?;
-        make("mesh triangles", BufferKind::Storage, bytemuck::cast_slice(&a.triangles))?;
-        make("vertex positions", BufferKind::Storage, bytemuck::cast_slice(&a.positions))?;
-        make("vertex normals", BufferKind::Storage, bytemuck::cast_slice(&a.normals))?;
-        make("vertex texture coordinates", BufferKind::Storage, bytemuck::cast_slice(&a.uvs))?;
-        make("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures))?;
-        make("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels))?;
+        // In binding order (shaders/layout.glsl); the accumulation image is zeroes, sized here.
+        let contents: [(&str, BufferKind, &[u8]); 15] = [
+            ("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params)),
+            ("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes)),
+            ("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives)),
+            ("materials", BufferKind::Storage, bytemuck::cast_slice(&data.materials)),
+            ("lights", BufferKind::Storage, bytemuck::cast_slice(&data.lights)),
+            ("environment map", BufferKind::Storage, bytemuck::cast_slice(&data.env_texels)),
+            ("accumulation image", BufferKind::Storage, &[]),
+            ("statistics", BufferKind::HostStorage, &[0u8; 16]),
+            ("instances", BufferKind::Storage, bytemuck::cast_slice(&a.instances)),
+            ("mesh triangles", BufferKind::Storage, bytemuck::cast_slice(&a.triangles)),
+            ("vertex positions", BufferKind::Storage, bytemuck::cast_slice(&a.positions)),
+            ("vertex normals", BufferKind::Storage, bytemuck::cast_slice(&a.normals)),
+            ("vertex texture coordinates", BufferKind::Storage, bytemuck::cast_slice(&a.uvs)),
+            ("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures)),
+            ("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels)),
+        ];
+        let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
+        check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;
+        let mut buffers = Vec::new();
+        for (i, &(name, kind, bytes)) in contents.iter().enumerate() {
+            let zeroes;
+            let bytes = if i == ACCUM {
+                zeroes = vec![0u8; accum_bytes as usize];
+                &zeroes[..]
+            } else {
+                bytes
+            };
+            buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
+        }
         let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
         Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, geometry: GeometryReport {

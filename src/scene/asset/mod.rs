@@ -99,10 +99,11 @@ pub struct AssetCamera {
 /// Every way loading can fail; the message always starts with the file's path.
 #[derive(Debug, thiserror::Error)]
 pub enum AssetError {
-    #[error("{}: {source}", path.display())]
+    // Not a `source` field: the message already carries the I/O error, and anyhow would print it twice.
+    #[error("{}: {error}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("{}: {message}", path.display())]
     Invalid { path: PathBuf, message: String },
@@ -118,10 +119,10 @@ impl AssetError {
         }
     }
 
-    fn io(path: &Path, source: std::io::Error) -> Self {
+    fn io(path: &Path, error: std::io::Error) -> Self {
         AssetError::Io {
             path: path.to_owned(),
-            source,
+            error,
         }
     }
 }
