@@ -8,3 +8,5 @@ pub mod gpu;
 pub mod image;
 pub mod render;
 pub mod scene;
+#[cfg(test)]
+mod test_files;
