@@ -86,6 +86,12 @@ enum Command {
     },
     /// List the Vulkan devices.
     Devices,
+    /// Compare an image with a reference (PFM or EXR): relative MSE, mean absolute error and the
+    /// ratio of their means.
+    Compare {
+        image: PathBuf,
+        reference: PathBuf,
+    },
     /// Render a scene (default: the Cornell box) and report geometry, BVH build, memory, and samples
     /// and rays per second.
     Bench {
@@ -207,6 +213,14 @@ fn run() -> Result<()> {
             let mut s = load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
             render(s, output, seed, &output_args, quiet, &gpu)
+        }
+        Command::Compare { image, reference } => {
+            let (a, b) = (caustica::image::read_image(&image)?, caustica::image::read_image(&reference)?);
+            let c = caustica::image::compare(&a, &b, (&image.display().to_string(), &reference.display().to_string()))?;
+            println!("relative MSE:        {:.6e}", c.relative_mse);
+            println!("mean absolute error: {:.6e}", c.mean_absolute_error);
+            println!("ratio of means:      {:.6}", c.mean_ratio);
+            Ok(())
         }
         Command::Devices => {
             let devices = list_devices()?;

@@ -24,7 +24,8 @@ pub struct SceneData {
     /// Multiplier for a map, or the radiance of a constant sky.
     pub env_color: Vec3,
     pub env_rotation_deg: f32,
-    /// The map's sampling distribution (env_sampling.rs); empty for a constant sky or a black map.
+    /// The map's sampling distribution (env_sampling.rs); empty for a constant sky, a black map,
+    /// or when the scene turns map sampling off.
     pub env_cdf: Vec<f32>,
 }
 
@@ -83,8 +84,8 @@ impl SceneData {
             ),
         };
         let env_cdf = match &scene.environment {
-            Environment::Map(map) => EnvDistribution::new(map).cdf,
-            Environment::Constant(_) => Vec::new(),
+            Environment::Map(map) if scene.integrator.sample_environment => EnvDistribution::new(map).cdf,
+            _ => Vec::new(),
         };
         SceneData {
             env_cdf,
