@@ -97,16 +97,17 @@ impl PartialRender {
         Ok(partial)
     }
 
-    /// Fails unless `other` is of the same scene, seed and size, naming the first difference.
+    /// Fails unless `other` is of the same size, seed and scene, naming the first difference (size
+    /// first: the scene hash covers the size too).
     pub fn check_same_render(&self, other: &PartialRender) -> Result<()> {
-        if self.scene_hash != other.scene_hash {
-            bail!("different scene (scene hash {}, not {})", other.scene_hash, self.scene_hash);
+        if (self.width, self.height) != (other.width, other.height) {
+            bail!("different size ({}x{}, not {}x{})", other.width, other.height, self.width, self.height);
         }
         if self.seed != other.seed {
             bail!("different seed ({}, not {})", other.seed, self.seed);
         }
-        if (self.width, self.height) != (other.width, other.height) {
-            bail!("different size ({}x{}, not {}x{})", other.width, other.height, self.width, self.height);
+        if self.scene_hash != other.scene_hash {
+            bail!("different scene (scene hash {}, not {})", other.scene_hash, self.scene_hash);
         }
         Ok(())
     }
