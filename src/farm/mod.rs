@@ -1,6 +1,9 @@
 //! Rendering on farms and under deadlines: time budgets, checkpoints and resuming, partial renders
 //! of separate sample ranges, and merging them into one image (see docs/farm.md).
 
+// Sample ranges are lists of ranges, and one range is the common case: `vec![0..64]` is meant.
+#![allow(clippy::single_range_in_vec_init)]
+
 mod duration;
 mod merge;
 mod partial;
