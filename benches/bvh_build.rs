@@ -1,11 +1,13 @@
 //! BVH build throughput: `cargo bench --bench bvh_build`. Builds each input three times (or
-//! $BVH_BENCH_RUNS, for a noisy machine) and reports the best time, throughput and the tree's shape and SAH cost. Real meshes are read from
-//! $CAUSTICA_DATA (default ../shared/data next to the crate) and skipped when missing.
+//! $BVH_BENCH_RUNS, for a noisy machine) and reports the best time, throughput and the tree's
+//! shape and SAH cost. Real meshes are read with the crate's loader from $CAUSTICA_DATA (default
+//! ../shared/data next to the crate) and skipped when missing.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use caustica::bvh::{self, Aabb};
+use caustica::scene::{load_asset, AssetError};
 use glam::Vec3;
 
 type Triangle = [Vec3; 3];
@@ -24,15 +26,56 @@ fn main() {
         || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
         PathBuf::from,
     );
-    for (name, file) in [
-        ("bunny 69k", "meshes/bunny/bun_zipper.ply"),
-        ("lucy 100k", "meshes/lucy/Lucy100k.ply"),
-    ] {
-        match std::fs::read(data.join(file)) {
-            Ok(bytes) => report(name, &read_ply(&bytes)),
-            Err(e) => println!("{name:<24} SKIPPED ({}: {e})", data.join(file).display()),
+    let bunny = load_mesh(&data.join("meshes/bunny/bun_zipper.ply"));
+    let lucy = load_mesh(&data.join("meshes/lucy/Lucy100k.ply"));
+    for (name, mesh) in [("bunny 69k", &bunny), ("lucy 100k", &lucy)] {
+        match mesh {
+            Ok(tris) => report(name, tris),
+            Err(e) => println!("{name:<24} SKIPPED ({e})"),
         }
     }
+    if let (Ok(bunny), Ok(lucy)) = (&bunny, &lucy) {
+        report("20 bunnies + 5 lucy", &crowd(bunny, lucy));
+    }
+}
+
+/// All triangles of a mesh file's meshes, in the file's object space.
+fn load_mesh(path: &Path) -> Result<Vec<Triangle>, AssetError> {
+    let asset = load_asset(path)?;
+    Ok(asset
+        .meshes
+        .iter()
+        .flat_map(|m| {
+            m.triangles
+                .iter()
+                .map(|t| t.map(|v| m.positions[v as usize]))
+        })
+        .collect())
+}
+
+/// A ~1.9M-triangle scene: a 5 x 4 grid of bunnies and a row of five Lucys scaled to twice a
+/// bunny's height behind it, so instances of dense meshes sit side by side with gaps between them.
+fn crowd(bunny: &[Triangle], lucy: &[Triangle]) -> Vec<Triangle> {
+    let bounds = |tris: &[Triangle]| {
+        tris.iter().flatten().fold(Aabb::EMPTY, |mut b, &v| {
+            b.grow(v);
+            b
+        })
+    };
+    let (bunny_box, lucy_box) = (bounds(bunny), bounds(lucy));
+    let step = bunny_box.extent() * 1.2;
+    let lucy_scale = 2.0 * bunny_box.extent().y / lucy_box.extent().y;
+    let mut tris = Vec::with_capacity(20 * bunny.len() + 5 * lucy.len());
+    for i in 0..20 {
+        let offset = Vec3::new((i % 5) as f32 * step.x, 0.0, (i / 5) as f32 * step.z);
+        tris.extend(bunny.iter().map(|t| t.map(|v| v + offset)));
+    }
+    for i in 0..5 {
+        let offset = Vec3::new(i as f32 * step.x, 0.0, -2.0 * step.z);
+        let place = |v: Vec3| (v - lucy_box.min) * lucy_scale + bunny_box.min + offset;
+        tris.extend(lucy.iter().map(|t| t.map(place)));
+    }
+    tris
 }
 
 fn report(name: &str, tris: &[Triangle]) {
@@ -112,76 +155,4 @@ fn terrain(cells: usize) -> Vec<Triangle> {
         }
     }
     tris
-}
-
-/// Just enough PLY for the scanned meshes: float vertex properties (x, y, z first), polygon faces
-/// as `list uchar int`, ASCII or binary little-endian. Polygons are fanned into triangles.
-fn read_ply(bytes: &[u8]) -> Vec<Triangle> {
-    let header_end = bytes
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .unwrap()
-        + 11;
-    let header = std::str::from_utf8(&bytes[..header_end]).unwrap();
-    let (mut vertices, mut faces, mut vertex_props, mut in_vertex) = (0, 0, 0, false);
-    for line in header.lines() {
-        let words: Vec<&str> = line.split_whitespace().collect();
-        match words.as_slice() {
-            ["element", "vertex", n] => (vertices, in_vertex) = (n.parse().unwrap(), true),
-            ["element", "face", n] => (faces, in_vertex) = (n.parse().unwrap(), false),
-            ["property", "float", _] if in_vertex => vertex_props += 1,
-            _ => {}
-        }
-    }
-    let body = &bytes[header_end..];
-    let (positions, polygons): (Vec<Vec3>, Vec<Vec<usize>>) = if header.contains("ascii") {
-        let mut lines = std::str::from_utf8(body).unwrap().lines();
-        let mut numbers = |n: usize| {
-            lines
-                .next()
-                .unwrap()
-                .split_whitespace()
-                .take(n)
-                .map(|w| w.parse::<f32>().unwrap())
-                .collect::<Vec<_>>()
-        };
-        let positions = (0..vertices)
-            .map(|_| Vec3::from_slice(&numbers(3)))
-            .collect();
-        let polygons = (0..faces)
-            .map(|_| {
-                numbers(usize::MAX)[1..]
-                    .iter()
-                    .map(|&i| i as usize)
-                    .collect()
-            })
-            .collect();
-        (positions, polygons)
-    } else {
-        let word = |at: usize| <[u8; 4]>::try_from(&body[at..at + 4]).unwrap();
-        let positions = (0..vertices)
-            .map(|v| {
-                Vec3::from_array(std::array::from_fn(|k| {
-                    f32::from_le_bytes(word(4 * (v * vertex_props + k)))
-                }))
-            })
-            .collect();
-        let mut at = 4 * vertices * vertex_props;
-        let polygons = (0..faces)
-            .map(|_| {
-                let n = body[at] as usize;
-                at += 1 + 4 * n;
-                (0..n)
-                    .map(|k| i32::from_le_bytes(word(at - 4 * (n - k))) as usize)
-                    .collect()
-            })
-            .collect();
-        (positions, polygons)
-    };
-    polygons
-        .iter()
-        .flat_map(|p| {
-            (1..p.len() - 1).map(|k| [positions[p[0]], positions[p[k]], positions[p[k + 1]]])
-        })
-        .collect()
 }

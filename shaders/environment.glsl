@@ -41,18 +41,105 @@ vec2 latlong_uv(vec3 d) {
     return vec2(0.5 + phi * (0.5 * INV_PI), theta * INV_PI);
 }
 
+// Rotating the map by +angle about +y is looking up the direction rotated by -angle.
+vec3 world_to_map(vec3 d) {
+    float c = frame.env_rotation.x;
+    float s = frame.env_rotation.y;
+    return vec3(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+}
+
+vec3 map_to_world(vec3 r) {
+    float c = frame.env_rotation.x;
+    float s = frame.env_rotation.y;
+    return vec3(c * r.x + s * r.z, r.y, -s * r.x + c * r.z);
+}
+
+// Where a map-space direction falls on the map, in [0, 1]^2 (x right, y down the image).
+vec2 map_position(vec3 r) {
+    if (frame.integrator.z == ENV_ANGULAR) {
+        vec2 uv = angular_map_uv(r);
+        return vec2(0.5 * (uv.x + 1.0), 0.5 * (1.0 - uv.y));
+    }
+    return latlong_uv(r);
+}
+
 vec3 environment_radiance(vec3 d) {
     uint kind = frame.integrator.z;
     if (kind == ENV_CONSTANT) return frame.env_color.rgb;
-    // Rotating the map by +angle about +y is looking up the direction rotated by -angle.
-    float c = frame.env_rotation.x;
-    float s = frame.env_rotation.y;
-    vec3 r = vec3(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
-    vec2 size = vec2(frame.env_size.xy);
-    if (kind == ENV_ANGULAR) {
-        vec2 uv = angular_map_uv(r);
-        vec2 texel = vec2(0.5 * (uv.x + 1.0), 0.5 * (1.0 - uv.y)) * size;
-        return frame.env_color.rgb * env_bilinear(texel, false);
+    vec2 texel = map_position(world_to_map(d)) * vec2(frame.env_size.xy);
+    return frame.env_color.rgb * env_bilinear(texel, kind == ENV_LATLONG);
+}
+
+// Importance sampling of the map (src/render/env_sampling.rs builds the distribution): a cell is
+// picked from the marginal and conditional CDFs, a point uniformly inside it, and the point's
+// density on the map, p(x, y) = p(cell) * width * height, becomes a solid-angle density through
+// the projection's Jacobian: dw = 2 pi^2 sin(theta) dx dy (lat-long), 4 pi sin(pi r) / r dx dy
+// (angular, r the distance from the centre in [-1, 1]^2 units).
+
+bool environment_sampled() {
+    return frame.env_rotation.z > 0.0;
+}
+
+// Index i in [0, count) with cdf[offset + i] <= u < cdf[offset + i + 1].
+uint cdf_search(uint offset, uint count, float u) {
+    uint lo = 0u;
+    uint hi = count;
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) / 2u;
+        if (env_cdf[offset + mid] <= u) lo = mid; else hi = mid;
     }
-    return frame.env_color.rgb * env_bilinear(latlong_uv(r) * size, true);
+    return lo;
+}
+
+// Solid angle per unit map area at map position p (0 where the map has no direction).
+float map_jacobian(vec2 p) {
+    if (frame.integrator.z == ENV_ANGULAR) {
+        float r = length(vec2(2.0 * p.x - 1.0, 1.0 - 2.0 * p.y));
+        if (r > 1.0) return 0.0;
+        return 4.0 * PI * (r < 1e-6 ? PI : sin(PI * r) / r);
+    }
+    return 2.0 * PI * PI * sin(PI * p.y);
+}
+
+// Solid-angle density with which sample_environment picks world direction d.
+float environment_pdf(vec3 d) {
+    uint w = frame.env_size.x;
+    uint h = frame.env_size.y;
+    vec2 p = map_position(world_to_map(d));
+    uint x = min(uint(p.x * float(w)), w - 1u);
+    uint y = min(uint(p.y * float(h)), h - 1u);
+    uint row = h + 1u + y * (w + 1u);
+    float p_cell = (env_cdf[y + 1u] - env_cdf[y]) * (env_cdf[row + x + 1u] - env_cdf[row + x]);
+    float jacobian = map_jacobian(p);
+    return jacobian > 0.0 ? p_cell * float(w * h) / jacobian : 0.0;
+}
+
+bool sample_environment(vec2 u, out vec3 dir, out float pdf) {
+    uint w = frame.env_size.x;
+    uint h = frame.env_size.y;
+    uint y = cdf_search(0u, h, u.y);
+    float p_row = env_cdf[y + 1u] - env_cdf[y];
+    uint row = h + 1u + y * (w + 1u);
+    uint x = cdf_search(row, w, u.x);
+    float p_column = env_cdf[row + x + 1u] - env_cdf[row + x];
+    // Reuse each number's position inside its CDF step as the position inside the cell.
+    vec2 inside = vec2((u.x - env_cdf[row + x]) / p_column, (u.y - env_cdf[y]) / p_row);
+    vec2 p = (vec2(x, y) + clamp(inside, 0.0, 1.0)) / vec2(w, h);
+    float jacobian = map_jacobian(p);
+    if (!(jacobian > 0.0)) return false;
+    vec3 r;
+    if (frame.integrator.z == ENV_ANGULAR) {
+        vec2 ab = vec2(2.0 * p.x - 1.0, 1.0 - 2.0 * p.y);
+        float radius = length(ab);
+        float angle = PI * radius;
+        vec2 xy = radius > 0.0 ? ab / radius * sin(angle) : vec2(0.0);
+        r = vec3(xy, -cos(angle));
+    } else {
+        float phi = (p.x - 0.5) * 2.0 * PI;
+        float theta = p.y * PI;
+        r = vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+    }
+    dir = map_to_world(r);
+    pdf = p_row * p_column * float(w * h) / jacobian;
+    return pdf > 0.0;
 }

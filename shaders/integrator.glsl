@@ -30,7 +30,11 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         Hit hit;
         rays += 1u;
         if (!trace_ray(origin, dir, 1e30, false, hit)) {
-            radiance += throughput * environment_radiance(dir);
+            float weight = 1.0;
+            if (nee && after_diffuse && environment_sampled()) {
+                weight = power_heuristic(bsdf_pdf, frame.env_rotation.z * environment_pdf(dir));
+            }
+            radiance += throughput * environment_radiance(dir) * weight;
             break;
         }
         Surface surface = surface_at(hit, origin, dir);
@@ -63,7 +67,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
             vec3 n_in = front ? surface.ns : -surface.ns;
             if (nee) {
                 LightSample ls;
-                if (sample_light(point, rng, ls)) {
+                if (sample_direct(point, rng, ls)) {
                     float cos_surface = dot(n_in, ls.dir);
                     if (cos_surface > 0.0 && (dot(ls.dir, n) > 0.0) == front) {
                         rays += 1u;

@@ -70,7 +70,8 @@ layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
     vec4 cam_right;     // w = width / height
     vec4 cam_up;        // w unused
     vec4 env_color;     // constant radiance, or the map's intensity multiplier (rgb)
-    vec4 env_rotation;  // x = cos, y = sin of the map's rotation about +y
+    vec4 env_rotation;  // x = cos, y = sin of the map's rotation about +y, z = probability that
+                        // next-event estimation samples the map (0: it is not sampled)
     uvec4 image;        // width, height, seed, light count
     uvec4 integrator;   // rr_start, nee (0/1), env kind, max depth
     uvec4 env_size;     // map width, map height, instance count, node count
@@ -105,6 +106,9 @@ layout(std430, set = 0, binding = 11) readonly buffer NormalBuffer { uint vertex
 layout(std430, set = 0, binding = 12) readonly buffer UvBuffer { vec2 vertex_uvs[]; };
 layout(std430, set = 0, binding = 13) readonly buffer TextureInfoBuffer { TextureInfo texture_infos[]; };
 layout(std430, set = 0, binding = 14) readonly buffer TexelBuffer { uint texels[]; };
+// The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
+// one CDF per row (width + 1 values each); see src/render/env_sampling.rs.
+layout(std430, set = 0, binding = 15) readonly buffer EnvCdfBuffer { float env_cdf[]; };
 
 uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
 uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }

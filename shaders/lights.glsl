@@ -1,16 +1,20 @@
-// Area lights: every emissive primitive and mesh triangle, in world space (the `lights` buffer). One is picked uniformly, then a point (or, for spheres, a
-// direction in the cone they subtend) is sampled on it. Pdfs are per unit solid angle at `ref`.
+// Direct lighting: the environment map (when importance sampled) with probability
+// frame.env_rotation.z, otherwise an area light: every emissive primitive and mesh triangle, in
+// world space (the `lights` buffer). An area light is picked uniformly, then a point (or, for
+// spheres, a direction in the cone they subtend) is sampled on it. Pdfs are per unit solid angle
+// at `ref` and include the probability of the pick.
 
 struct LightSample {
     vec3 dir;
     float dist;
-    float pdf;      // solid angle, including the 1 / light count of the pick
+    float pdf;      // solid angle, including the probability of the pick
     vec3 radiance;
 };
 
 // Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, otherwise by area).
 float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
-    float light_count = float(frame.image.w);
+    // Dividing by this count is multiplying by the pick's probability.
+    float light_count = float(frame.image.w) / (1.0 - frame.env_rotation.z);
     if (prim_kind(p) == PRIM_SPHERE) {
         vec3 to_center = p.a.xyz - ref;
         float d2 = dot(to_center, to_center);
@@ -62,4 +66,19 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     ls.radiance = emitted_radiance(materials[prim_material(p)], front);
     ls.pdf = light_pdf(p, ref, ls.dir, ls.dist);
     return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
+}
+
+// One direct-lighting sample from `ref`. No random number is drawn for the choice when the map is
+// not sampled, so scenes without one keep their sample streams.
+bool sample_direct(vec3 ref, inout Rng rng, out LightSample ls) {
+    float p_env = frame.env_rotation.z;
+    if (p_env > 0.0 && rng_next(rng) < p_env) {
+        float pdf;
+        if (!sample_environment(rng_next2(rng), ls.dir, pdf)) return false;
+        ls.dist = 1e30;
+        ls.pdf = p_env * pdf;
+        ls.radiance = environment_radiance(ls.dir);
+        return max3(ls.radiance) > 0.0;
+    }
+    return sample_light(ref, rng, ls);
 }

@@ -13,8 +13,8 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "textures.glsl"
 #include "surface.glsl"
 #include "materials.glsl"
-#include "lights.glsl"
 #include "environment.glsl"
+#include "lights.glsl"
 #include "camera.glsl"
 #include "integrator.glsl"
 

@@ -10,3 +10,5 @@ pub mod gpu;
 pub mod image;
 pub mod render;
 pub mod scene;
+#[cfg(test)]
+mod test_files;

@@ -146,6 +146,12 @@ enum Command {
     },
     /// List the Vulkan devices.
     Devices,
+    /// Compare an image with a reference (PFM or EXR): relative MSE, mean absolute error and the
+    /// ratio of their means.
+    Compare {
+        image: PathBuf,
+        reference: PathBuf,
+    },
     /// Render a scene (default: the Cornell box) and report geometry, BVH build, memory, and samples
     /// and rays per second.
     Bench {
@@ -375,6 +381,14 @@ fn run() -> Result<()> {
             render(s, RenderRequest { output, seed, spp, quiet, json }, &output_args, &farm, &gpu)
         }
         Command::Merge { inputs, output, output_args, quiet } => merge(&inputs, &output, &output_args, quiet),
+        Command::Compare { image, reference } => {
+            let (a, b) = (caustica::image::read_image(&image)?, caustica::image::read_image(&reference)?);
+            let c = caustica::image::compare(&a, &b, (&image.display().to_string(), &reference.display().to_string()))?;
+            println!("relative MSE:        {:.6e}", c.relative_mse);
+            println!("mean absolute error: {:.6e}", c.mean_absolute_error);
+            println!("ratio of means:      {:.6}", c.mean_ratio);
+            Ok(())
+        }
         Command::Devices => {
             let devices = list_devices()?;
             if devices.is_empty() {

@@ -18,7 +18,7 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
         name: "environment probe".into(),
         camera: Camera { position: Vec3::ZERO, look_at: dir, up, fov_deg: 0.001 },
         film: Film { width: 1, height: 1, spp: 1 },
-        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16 },
+        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16, sample_environment: true },
         materials: vec![],
         shapes: vec![],
         meshes: vec![],

@@ -14,7 +14,8 @@ pub(super) const BINS: usize = 16;
 pub(super) struct Binning {
     min: Vec3A,
     scale: Vec3A,
-    bin_count: usize,
+    /// bin_count - 1 on every axis, for clamping before the float-to-int conversion.
+    last: Vec3A,
 }
 
 impl Binning {
@@ -31,19 +32,25 @@ impl Binning {
         Binning {
             min: centroids.lo,
             scale,
-            bin_count,
+            last: Vec3A::splat((bin_count - 1) as f32),
         }
     }
 
+    /// Clamping in SIMD first leaves the conversions nothing to saturate. `max` comes first and
+    /// returns its operand 0 for a NaN lane, so even non-finite centroids land in a valid bin.
     fn bins(&self, centroid2: Vec3A) -> [usize; 3] {
-        let f = (centroid2 - self.min) * self.scale;
-        // `as` saturates and sends NaN to 0, so even non-finite centroids land in a valid bin.
-        std::array::from_fn(|axis| (f[axis] as usize).min(self.bin_count - 1))
+        let f = ((centroid2 - self.min) * self.scale)
+            .max(Vec3A::ZERO)
+            .min(self.last);
+        std::array::from_fn(|axis| f[axis] as u32 as usize)
     }
 
+    /// `bins(centroid2)[axis]`, bit for bit: the partition must agree with the bins it was planned on.
     pub fn bin(&self, centroid2: Vec3A, axis: usize) -> usize {
-        let f = (centroid2[axis] - self.min[axis]) * self.scale[axis];
-        (f as usize).min(self.bin_count - 1)
+        let f = ((centroid2[axis] - self.min[axis]) * self.scale[axis])
+            .max(0.0)
+            .min(self.last[axis]);
+        f as u32 as usize
     }
 }
 
@@ -123,16 +130,17 @@ pub(super) fn best_split(prims: &[BoxA], centroids: &BoxA, bins: &mut Bins) -> O
         bins.add(&binning, prims);
     }
 
-    let mut best: Option<Split> = None;
+    // Sweep with costs only; the winner's two boxes are unioned again afterwards.
+    let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
         let (boxes, counts) = (&bins.boxes[axis], &bins.counts[axis]);
-        // right[i]: box, count and cost of bins i+1.. (the right side of a split after bin i).
-        let mut right = [(BoxA::EMPTY, 0.0); BINS - 1];
+        // right_cost[i]: area * count of bins i+1.. (the right side of a split after bin i).
+        let mut right_cost = [0.0; BINS - 1];
         let (mut right_box, mut right_count) = (BoxA::EMPTY, 0);
         for i in (1..bin_count).rev() {
             right_box = right_box.union(&boxes[i]);
             right_count += counts[i];
-            right[i - 1] = (right_box, right_box.surface_area() * right_count as f32);
+            right_cost[i - 1] = right_box.surface_area() * right_count as f32;
         }
         let (mut left_box, mut left_count) = (BoxA::EMPTY, 0);
         for i in 0..bin_count - 1 {
@@ -141,17 +149,23 @@ pub(super) fn best_split(prims: &[BoxA], centroids: &BoxA, bins: &mut Bins) -> O
             if left_count == 0 || left_count as usize == prims.len() {
                 continue;
             }
-            let cost = left_box.surface_area() * left_count as f32 + right[i].1;
-            if cost < best.map_or(f32::INFINITY, |b| b.cost) {
-                best = Some(Split {
-                    axis,
-                    binning,
-                    last_left_bin: i,
-                    cost,
-                    bounds: [left_box, right[i].0],
-                });
+            let cost = left_box.surface_area() * left_count as f32 + right_cost[i];
+            if cost < best.map_or(f32::INFINITY, |b| b.0) {
+                best = Some((cost, axis, i));
             }
         }
     }
-    best
+    let (cost, axis, last_left_bin) = best?;
+    let side = |range: &[BoxA]| range.iter().fold(BoxA::EMPTY, |acc, b| acc.union(b));
+    let boxes = &bins.boxes[axis][..bin_count];
+    Some(Split {
+        axis,
+        binning,
+        last_left_bin,
+        cost,
+        bounds: [
+            side(&boxes[..=last_left_bin]),
+            side(&boxes[last_left_bin + 1..]),
+        ],
+    })
 }

@@ -8,6 +8,12 @@ use super::flatten::Subtree;
 use super::partition::{self, SetBounds};
 use super::{Aabb, BvhNode, MAX_LEAF_SIZE};
 
+/// Cost of visiting an interior node in units of one primitive intersection (SAH: split =
+/// TRAVERSAL_COST * A + A_L * N_L + A_R * N_R, leaf = A * N). Above 1 it trades node visits for
+/// triangle tests: leaves grow from ~1.9 to ~2.8 primitives and the tree from ~1.1 to ~0.7 nodes per
+/// primitive, with no measurable render slowdown on lavapipe and a ~3% higher reference SAH cost.
+const TRAVERSAL_COST: f32 = 2.0;
+
 /// Subtrees larger than this are built as two rayon tasks; smaller ones are cheaper to build inline.
 const PARALLEL_THRESHOLD: usize = 8 * 1024;
 
@@ -78,7 +84,8 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
         levels_left,
     } = range;
     let count = prims.len();
-    if count <= 1 {
+    // A split costs at least TRAVERSAL_COST * A, so it cannot beat a leaf of that many primitives.
+    if count <= 1 || (count <= MAX_LEAF_SIZE && count as f32 <= TRAVERSAL_COST) {
         return None;
     }
 
@@ -93,8 +100,9 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
 
     let area = set.bounds.surface_area();
     let (axis, mid, [left_set, right_set]) = match best {
-        // Costs in units of area * prims: split = A + S (traversal 1, intersection 1), leaf = A * count.
-        Some(s) if count > MAX_LEAF_SIZE || area + s.cost < area * count as f32 => {
+        Some(s)
+            if count > MAX_LEAF_SIZE || TRAVERSAL_COST * area + s.cost < area * count as f32 =>
+        {
             let (mid, [left_centroids, right_centroids]) =
                 partition::partition(prims, indices, |p| {
                     s.binning.bin(p.centroid2(), s.axis) <= s.last_left_bin

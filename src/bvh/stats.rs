@@ -55,11 +55,9 @@ mod tests {
     use glam::Vec3;
 
     #[test]
-    fn two_distant_boxes_split_into_two_leaves() {
-        let boxes = [
-            Aabb::new(Vec3::ZERO, Vec3::ONE),
-            Aabb::new(Vec3::new(10.0, 0.0, 0.0), Vec3::new(11.0, 1.0, 1.0)),
-        ];
+    fn distant_pairs_split_into_two_leaves() {
+        let unit_box_at = |x: f32| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
+        let boxes = [0.0, 100.0, 200.0, 300.0].map(unit_box_at);
         let stats = build(&boxes).stats();
         assert_eq!(
             (
@@ -68,11 +66,12 @@ mod tests {
                 stats.max_depth,
                 stats.max_leaf_size
             ),
-            (3, 2, 1, 1)
+            (3, 2, 1, 2)
         );
-        // root 1 + two leaves of area 6 over root area 2 * (11 + 1 + 11) = 46
+        // root 1 + two leaves of 2 prims, each of area 2 * (101 + 1 + 101) = 406, over the root's
+        // area 2 * (301 + 1 + 301) = 1206
         assert!(
-            (stats.sah_cost - (1.0 + 12.0 / 46.0)).abs() < 1e-6,
+            (stats.sah_cost - (1.0 + 2.0 * 2.0 * 406.0 / 1206.0)).abs() < 1e-5,
             "{}",
             stats.sah_cost
         );

@@ -292,27 +292,28 @@ mod tests {
 
     #[test]
     fn nearer_child_first_culls_the_farther_box() {
-        // Two boxes along x; a ray along -x must test the right one first and skip the left one.
-        let boxes = [
-            Aabb::new(Vec3::ZERO, Vec3::ONE),
-            Aabb::new(Vec3::new(4.0, 0.0, 0.0), Vec3::new(5.0, 1.0, 1.0)),
-        ];
+        // Two pairs of boxes far apart along x (one leaf each); a ray along -x must test the right
+        // leaf first and skip the left one.
+        let boxes = [0.0, 1.0, 40.0, 41.0]
+            .map(|x| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0)));
         let bvh = build(&boxes);
-        assert_eq!(bvh.nodes[0].axis(), 0);
+        assert_eq!((bvh.nodes.len(), bvh.nodes[0].axis()), (3, 0));
         let ray = Ray {
-            origin: Vec3::new(9.0, 0.5, 0.5),
+            origin: Vec3::new(50.0, 0.5, 0.5),
             dir: -Vec3::X,
         };
         let mut tested = Vec::new();
-        let hit = closest_hit(&bvh, &ray, 0.0, f32::INFINITY, |prim, ray, _| {
+        let hit = closest_hit(&bvh, &ray, 0.0, f32::INFINITY, |prim, ray, t_max| {
             let original = bvh.prim_order[prim as usize];
             tested.push(original);
-            Some((boxes[original as usize].max.x - ray.origin.x).abs())
+            let t = (boxes[original as usize].max.x - ray.origin.x).abs();
+            (t < t_max).then_some(t)
         });
-        assert_eq!(tested, vec![1]);
+        tested.sort_unstable();
+        assert_eq!(tested, vec![2, 3]);
         assert_eq!(
             hit.map(|(t, prim)| (t, bvh.prim_order[prim as usize])),
-            Some((4.0, 1))
+            Some((8.0, 3))
         );
     }
 }

@@ -72,23 +72,8 @@ fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_files::{file_names, temp_dir};
     use std::io::Write;
-
-    fn temp_dir(tag: &str) -> PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("caustica-atomic-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
-
-    fn entries(dir: &Path) -> Vec<String> {
-        let mut names: Vec<String> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        names
-    }
 
     #[test]
     fn replaces_target_and_leaves_no_temp_file() {
@@ -101,7 +86,7 @@ mod tests {
         })
         .unwrap();
         let contents = std::fs::read(&path).unwrap();
-        let names = entries(&dir);
+        let names = file_names(&dir);
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(contents, b"new");
         assert_eq!(names, ["out.bin"]);
@@ -122,7 +107,7 @@ mod tests {
         })
         .unwrap_err();
         let contents = std::fs::read(&path).unwrap();
-        let names = entries(&dir);
+        let names = file_names(&dir);
         std::fs::remove_dir_all(&dir).unwrap();
         assert!(matches!(err, ImageError::Truncated { .. }), "{err}");
         assert_eq!(contents, b"old");

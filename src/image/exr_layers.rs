@@ -257,15 +257,7 @@ fn rgba_rank(channel: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::PathBuf;
-
-    /// A fresh directory per test, so that leftover files can be listed.
-    fn temp_dir(tag: &str) -> PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("caustica-exrdoc-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
+    use crate::test_files::{file_names, temp_dir};
 
     fn strings(names: &[&str]) -> Vec<String> {
         names.iter().map(|&n| n.to_owned()).collect()
@@ -331,15 +323,6 @@ mod tests {
         assert_eq!((back.width, back.height), (doc.width, doc.height));
         assert_eq!(bits(back), bits(doc));
         assert_eq!(back.attributes, doc.attributes);
-    }
-
-    fn file_names(dir: &Path) -> Vec<String> {
-        let mut names: Vec<String> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        names
     }
 
     #[test]

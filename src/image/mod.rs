@@ -3,6 +3,7 @@
 //! Every writer replaces its target atomically (see `atomic`).
 
 mod atomic;
+pub mod compare;
 pub mod exr;
 pub mod exr_layers;
 pub mod pfm;
@@ -11,6 +12,7 @@ pub mod tonemap;
 
 use std::path::Path;
 
+pub use compare::{compare, Comparison};
 pub use exr_layers::{read_exr_document, write_exr_document, ExrDocument, ExrLayer};
 pub use png::PngDepth;
 pub use tonemap::Tonemap;
@@ -104,6 +106,8 @@ pub enum ImageError {
     },
     #[error("{file}: invalid EXR layers: {reason}")]
     ExrLayout { file: String, reason: String },
+    #[error("{file} {reason}")]
+    Incomparable { file: String, reason: String },
     #[error("{file}: PNG: {source}")]
     Png {
         file: String,

@@ -63,6 +63,7 @@ pub struct FrameParams {
     pub cam_right: [f32; 4],
     pub cam_up: [f32; 4],
     pub env_color: [f32; 4],
+    /// cos and sin of the map's rotation about +y, probability that NEE samples the map, unused
     pub env_rotation: [f32; 4],
     /// width, height, seed, light count
     pub image: [u32; 4],

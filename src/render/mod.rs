@@ -1,6 +1,7 @@
 //! Driving the kernel: GPU struct layouts, scene flattening, the kernel source, progressive passes.
 
 mod acceleration;
+mod env_sampling;
 mod kernel;
 pub mod layout;
 mod renderer;

@@ -72,7 +72,7 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         cam_right: right.extend(aspect).into(),
         cam_up: up.extend(0.0).into(),
         env_color: data.env_color.extend(0.0).into(),
-        env_rotation: [rot.cos(), rot.sin(), 0.0, 0.0],
+        env_rotation: [rot.cos(), rot.sin(), data.env_selection_probability(), 0.0],
         image: [scene.film.width, scene.film.height, seed, data.lights.len() as u32],
         integrator: [i.rr_start, u32::from(i.nee), data.env_kind, i.max_bounces],
         env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
@@ -134,7 +134,7 @@ impl<'a> Renderer<'a> {
         let params = frame_params(scene, &data, seed);
         let a = &data.acceleration;
         // In binding order (shaders/layout.glsl); the accumulation image is zeroes, sized here.
-        let contents: [(&str, BufferKind, &[u8]); 15] = [
+        let contents: [(&str, BufferKind, &[u8]); 16] = [
             ("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params)),
             ("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes)),
             ("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives)),
@@ -150,6 +150,7 @@ impl<'a> Renderer<'a> {
             ("vertex texture coordinates", BufferKind::Storage, bytemuck::cast_slice(&a.uvs)),
             ("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures)),
             ("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels)),
+            ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
         ];
         let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
         check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;

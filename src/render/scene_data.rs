@@ -2,6 +2,7 @@
 //! materials, textures, the emitter list and the environment texels.
 
 use super::acceleration::{gpu_primitive, triangle_primitive, Acceleration};
+use super::env_sampling::EnvDistribution;
 use super::layout::*;
 use crate::scene::{downsample_to_fit, Environment, MapProjection, Scene};
 use glam::Vec3;
@@ -23,6 +24,9 @@ pub struct SceneData {
     /// Multiplier for a map, or the radiance of a constant sky.
     pub env_color: Vec3,
     pub env_rotation_deg: f32,
+    /// The map's sampling distribution (env_sampling.rs); empty for a constant sky, a black map,
+    /// or when the scene turns map sampling off.
+    pub env_cdf: Vec<f32>,
 }
 
 /// Every emissive shape and every emissive triangle of every mesh instance, in world space.
@@ -66,7 +70,8 @@ impl SceneData {
             textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, unused: 0 });
             texels.extend(t.texels.iter().map(|&p| u32::from_le_bytes(p)));
         }
-        let (env_texels, env_kind, env_size, env_color, env_rotation_deg) = match &scene.environment {            Environment::Constant(c) => (vec![[0.0; 4]], ENV_CONSTANT, [1, 1], *c, 0.0),
+        let (env_texels, env_kind, env_size, env_color, env_rotation_deg) = match &scene.environment {
+            Environment::Constant(c) => (vec![[0.0; 4]], ENV_CONSTANT, [1, 1], *c, 0.0),
             Environment::Map(map) => (
                 map.image.pixels.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect(),
                 match map.projection {
@@ -78,7 +83,12 @@ impl SceneData {
                 map.rotation_deg,
             ),
         };
+        let env_cdf = match &scene.environment {
+            Environment::Map(map) if scene.integrator.sample_environment => EnvDistribution::new(map).cdf,
+            _ => Vec::new(),
+        };
         SceneData {
+            env_cdf,
             lights: world_lights(scene),
             acceleration,
             materials,
@@ -99,7 +109,18 @@ impl SceneData {
             + self.texture_bytes()
             + (std::mem::size_of_val(&self.materials[..])
             + std::mem::size_of_val(&self.lights[..])
-            + std::mem::size_of_val(&self.env_texels[..])) as u64
+            + std::mem::size_of_val(&self.env_texels[..])
+            + std::mem::size_of_val(&self.env_cdf[..])) as u64
+    }
+
+    /// Probability that next-event estimation samples the environment map rather than an emitter:
+    /// a map with radiance shares it evenly with the emitters, and is not sampled without one.
+    pub fn env_selection_probability(&self) -> f32 {
+        match (self.env_cdf.is_empty(), self.lights.is_empty()) {
+            (true, _) => 0.0,
+            (false, true) => 1.0,
+            (false, false) => 0.5,
+        }
     }
 
     /// Bytes of texels uploaded (after any downsampling).

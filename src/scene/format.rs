@@ -68,11 +68,14 @@ pub struct IntegratorFile {
     pub nee: bool,
     /// Safety cap on the path length; roulette ends paths long before it.
     pub max_bounces: u32,
+    /// Next-event estimation samples the environment map too (by its radiance); false leaves
+    /// the map to BSDF sampling alone, as before it was importance sampled (for comparisons).
+    pub sample_environment: bool,
 }
 
 impl Default for IntegratorFile {
     fn default() -> Self {
-        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024 }
+        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024, sample_environment: true }
     }
 }
 

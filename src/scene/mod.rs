@@ -40,6 +40,7 @@ pub struct Integrator {
     pub absorption: Option<f32>,
     pub nee: bool,
     pub max_bounces: u32,
+    pub sample_environment: bool,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -300,7 +301,7 @@ fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {
     if i.max_bounces == 0 {
         bail!("integrator.max_bounces must be at least 1");
     }
-    Ok(Integrator { rr_start: i.rr_start, absorption: i.absorption, nee: i.nee, max_bounces: i.max_bounces })
+    Ok(Integrator { rr_start: i.rr_start, absorption: i.absorption, nee: i.nee, max_bounces: i.max_bounces, sample_environment: i.sample_environment })
 }
 
 /// Looks at the scene's world bounds from the front (+z), far enough for a 40 degree view to hold them.

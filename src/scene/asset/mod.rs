@@ -209,15 +209,8 @@ fn unit_normals(normals: &[Vec3]) -> Vec<Vec3> {
     }
 }
 
-/// A fresh, empty directory for one test's files.
 #[cfg(test)]
-fn test_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("caustica-asset-{tag}-{}", std::process::id()));
-    // A leftover from an earlier run with the same pid is harmless to remove.
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("cannot create a temporary test directory");
-    dir
-}
+use crate::test_files::temp_dir as test_dir;
 
 /// A file of the shared real-data set ($CAUSTICA_DATA, default ../shared/data), or `None` with a
 /// SKIPPED note when it is not there (the data is not part of the repository).
