@@ -1,14 +1,17 @@
 //! The `caustica` command line: a thin layer over the library.
 
 use anyhow::{Context as _, Result};
+use caustica::farm::{self, format_ranges, parse_duration, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
 use caustica::render::{GeometryReport, Renderer};
 use caustica::scene::{check_film, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::PathBuf;
-use std::time::Instant;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 #[command(name = "caustica", version, about = "A physically based GPU path tracer (Vulkan compute)")]
@@ -54,6 +57,43 @@ impl OutputArgs {
     }
 }
 
+/// Stopping, checkpoints and sample ranges (docs/farm.md).
+#[derive(clap::Args, Clone)]
+struct FarmArgs {
+    /// Render until this much time is spent (whole passes), e.g. 90s, 10m, 1h30m, 2.5h. Without
+    /// --spp the scene's sample count is no limit; with it, whichever comes first.
+    #[arg(long, value_parser = duration)]
+    time: Option<Duration>,
+    /// Write a checkpoint (the accumulation, resumable) whenever this much time has passed.
+    #[arg(long, value_parser = duration)]
+    checkpoint_every: Option<Duration>,
+    /// Checkpoint file (EXR). Default: the output path with the extension .checkpoint.exr.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Continue from the checkpoint; --spp is then the total the image should hold.
+    #[arg(long)]
+    resume: bool,
+    /// Index of the first sample: renders with disjoint ranges (offset, offset + spp) of one scene and
+    /// seed merge into one image with `caustica merge`.
+    #[arg(long, default_value_t = 0, conflicts_with = "resume")]
+    sample_offset: u32,
+}
+
+impl FarmArgs {
+    fn checkpoint_path(&self, output: &Path) -> PathBuf {
+        self.checkpoint.clone().unwrap_or_else(|| output.with_extension("checkpoint.exr"))
+    }
+
+    /// Checkpoints are written (periodically if asked, and at the end) once any checkpoint option is given.
+    fn checkpointing(&self) -> bool {
+        self.checkpoint_every.is_some() || self.checkpoint.is_some() || self.resume
+    }
+}
+
+fn duration(text: &str) -> Result<Duration, String> {
+    parse_duration(text).map_err(|e| e.to_string())
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene (the built-in Cornell box when no scene is given).
@@ -78,11 +118,31 @@ enum Command {
         seed: u32,
         #[command(flatten)]
         output_args: OutputArgs,
+        #[command(flatten)]
+        farm: FarmArgs,
         /// No progress bar or summary.
         #[arg(short, long)]
         quiet: bool,
+        /// Print a summary as JSON on standard output at the end.
+        #[arg(long)]
+        json: bool,
         #[command(flatten)]
         gpu: DeviceArgs,
+    },
+    /// Add up partial renders (EXR files from `render --sample-offset`, checkpoints, earlier merges)
+    /// of one scene and seed with disjoint sample ranges.
+    Merge {
+        /// Partial renders.
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Merged image: .exr keeps the accumulation (mergeable and resumable again); .pfm, .png.
+        #[arg(short, long)]
+        output: PathBuf,
+        #[command(flatten)]
+        output_args: OutputArgs,
+        /// No summary.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// List the Vulkan devices.
     Devices,
@@ -103,6 +163,9 @@ enum Command {
         spp: u32,
         /// Scene to measure instead of the built-in Cornell box.
         scene: Option<PathBuf>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
         #[command(flatten)]
         gpu: DeviceArgs,
     },
@@ -122,10 +185,16 @@ fn apply_overrides(scene: &mut Scene, width: Option<u32>, height: Option<u32>, s
     check_film(&scene.film).context("command-line film settings")
 }
 
-fn progress_bar(total: u32, quiet: bool) -> ProgressBar {
+/// A bar towards `total` samples, or a counter when only time limits the render.
+fn progress_bar(total: Option<u32>, quiet: bool) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
+    let Some(total) = total else {
+        let counter = ProgressBar::new_spinner();
+        counter.set_style(ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} spp  {per_sec}").expect("valid template"));
+        return counter;
+    };
     let bar = ProgressBar::new(total as u64);
     bar.set_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} spp  {per_sec}  ETA {eta}")
@@ -135,35 +204,111 @@ fn progress_bar(total: u32, quiet: bool) -> ProgressBar {
     bar
 }
 
-fn render(scene: Scene, output: PathBuf, seed: u32, output_args: &OutputArgs, quiet: bool, gpu: &DeviceArgs) -> Result<()> {
+/// Set by SIGINT or SIGTERM: the render stops after the pass in flight.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+struct RenderRequest {
+    output: PathBuf,
+    seed: u32,
+    /// Sample limit; `None` renders until the time budget or a stop.
+    spp: Option<u32>,
+    quiet: bool,
+    json: bool,
+}
+
+fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_args: &FarmArgs, gpu: &DeviceArgs) -> Result<()> {
+    let output = &request.output;
     // Fail on a bad output path before spending minutes rendering.
-    caustica::image::check_output_path(&output)?;
+    caustica::image::check_output_path(output)?;
+    let checkpoint = farm_args.checkpoint_path(output);
+    ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("caustica: finishing the pass in flight (interrupt again to quit at once)");
+    })
+    .context("installing the SIGINT/SIGTERM handler")?;
     let ctx = gpu.context()?;
     let started = Instant::now();
-    let mut renderer = Renderer::new(&ctx, &scene, seed)?;
-    let bar = progress_bar(scene.film.spp, quiet);
-    renderer.render(scene.film.spp, |done| bar.set_position(done as u64))?;
+    let mut renderer = Renderer::new(&ctx, &scene, request.seed)?;
+    renderer.set_sample_offset(farm_args.sample_offset);
+    let resumed = if farm_args.resume { farm::resume(&mut renderer, &checkpoint)?.samples() } else { 0 };
+    let bar = progress_bar(request.spp, request.quiet);
+    bar.set_position(resumed as u64);
+    let job = RenderJob { spp: request.spp, time: farm_args.time, checkpoint: checkpoint.clone(), checkpoint_every: farm_args.checkpoint_every, stop: &STOP };
+    let outcome = farm::run(&mut renderer, &job, |done| bar.set_position(done as u64)).with_context(|| scene.name.clone())?;
     bar.finish_and_clear();
-    let image = renderer.image()?;
-    write_image_with(&output, &image, &output_args.options())?;
-    if !quiet {
-        let pixel_samples = scene.film.width as f64 * scene.film.height as f64 * renderer.samples_done as f64;
+    let partial = farm::snapshot(&renderer)?.context("no samples were rendered")?;
+    write_render(output, &partial, output_args)?;
+    if farm_args.checkpointing() {
+        partial.write(&checkpoint)?;
+    }
+    let rendered = renderer.samples_done - resumed;
+    let pixel_samples = scene.film.width as f64 * scene.film.height as f64 * rendered as f64;
+    let (samples_per_s, rays_per_s) = (pixel_samples / renderer.seconds, renderer.rays_traced as f64 / renderer.seconds);
+    if !request.quiet {
+        let why = match outcome {
+            Outcome::Done => String::new(),
+            Outcome::TimeUp => " (time budget spent)".to_owned(),
+            Outcome::Interrupted => " (interrupted)".to_owned(),
+        };
         eprintln!(
-            "wrote {} ({}x{}, {} spp) in {:.2} s on {}: {:.2} Msamples/s, {:.1} Mrays/s",
+            "wrote {} ({}x{}, {} spp{why}) in {:.2} s on {}: {:.2} Msamples/s, {:.1} Mrays/s",
             output.display(),
             scene.film.width,
             scene.film.height,
             renderer.samples_done,
             started.elapsed().as_secs_f64(),
             ctx.info.name,
-            pixel_samples / renderer.seconds / 1e6,
-            renderer.rays_traced as f64 / renderer.seconds / 1e6,
+            samples_per_s / 1e6,
+            rays_per_s / 1e6,
         );
+    }
+    if request.json {
+        let summary = json!({
+            "scene": scene.name,
+            "scene_hash": renderer.scene_hash,
+            "device": ctx.info.name,
+            "width": scene.film.width,
+            "height": scene.film.height,
+            "seed": request.seed,
+            "samples": renderer.samples_done,
+            "sample_ranges": format_ranges(&partial.ranges),
+            "samples_this_run": rendered,
+            "seconds": started.elapsed().as_secs_f64(),
+            "render_seconds": renderer.seconds,
+            "samples_per_second": samples_per_s,
+            "rays_per_second": rays_per_s,
+            "outcome": outcome,
+            "output": output,
+            "checkpoint": farm_args.checkpointing().then_some(&checkpoint),
+        });
+        println!("{summary}");
     }
     Ok(())
 }
 
-fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, gpu: &DeviceArgs) -> Result<()> {
+/// EXR output is a partial render (mean, accumulation and attributes: mergeable and resumable);
+/// other formats get the mean.
+fn write_render(output: &Path, partial: &PartialRender, output_args: &OutputArgs) -> Result<()> {
+    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        partial.write(output)
+    } else {
+        Ok(write_image_with(output, &partial.image(), &output_args.options())?)
+    }
+}
+
+fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: bool) -> Result<()> {
+    caustica::image::check_output_path(output)?;
+    let merged = farm::merge_files(inputs)?;
+    write_render(output, &merged, output_args)?;
+    if !quiet {
+        eprintln!("wrote {} ({} partial renders, {} spp: samples {})", output.display(), inputs.len(), merged.samples(), format_ranges(&merged.ranges));
+    }
+    Ok(())
+}
+
+fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, json: bool, gpu: &DeviceArgs) -> Result<()> {
     apply_overrides(&mut scene, Some(width), Some(height), Some(spp))?;
     let ctx = gpu.context()?;
     let setup = Instant::now();
@@ -176,6 +321,25 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, gpu: &DeviceArgs) 
     let seconds = renderer.seconds - secs0;
     let samples = (renderer.samples_done - spp0) as f64 * width as f64 * height as f64;
     let rays = (renderer.rays_traced - rays0) as f64;
+    if json {
+        let summary = json!({
+            "scene": scene.name,
+            "device": ctx.info.name,
+            "device_type": ctx.info.kind.label(),
+            "width": width,
+            "height": height,
+            "samples": spp,
+            "setup_seconds": setup_s,
+            "seconds": seconds,
+            "samples_per_second": samples / seconds,
+            "rays_per_second": rays / seconds,
+            "rays_per_sample": rays / samples,
+            "primitives": renderer.geometry.acceleration.primitives,
+            "gpu_bytes": renderer.geometry.gpu_bytes,
+        });
+        println!("{summary}");
+        return Ok(());
+    }
     println!("scene:        {}", scene.name);
     println!("device:       {} ({})", ctx.info.name, ctx.info.kind.label());
     println!("image:        {width}x{height}, {spp} spp");
@@ -209,11 +373,14 @@ fn print_geometry(g: &GeometryReport) {
 
 fn run() -> Result<()> {
     match Cli::parse().command {
-        Command::Render { scene, output, spp, width, height, seed, output_args, quiet, gpu } => {
+        Command::Render { scene, output, spp, width, height, seed, output_args, farm, quiet, json, gpu } => {
             let mut s = load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
-            render(s, output, seed, &output_args, quiet, &gpu)
+            // A time budget alone lifts the scene's sample count.
+            let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
+            render(s, RenderRequest { output, seed, spp, quiet, json }, &output_args, &farm, &gpu)
         }
+        Command::Merge { inputs, output, output_args, quiet } => merge(&inputs, &output, &output_args, quiet),
         Command::Compare { image, reference } => {
             let (a, b) = (caustica::image::read_image(&image)?, caustica::image::read_image(&reference)?);
             let c = caustica::image::compare(&a, &b, (&image.display().to_string(), &reference.display().to_string()))?;
@@ -240,7 +407,7 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, gpu } => bench(load_scene(scene.as_ref())?, width, height, spp, &gpu),
+        Command::Bench { width, height, spp, scene, json, gpu } => bench(load_scene(scene.as_ref())?, width, height, spp, json, &gpu),
     }
 }
 

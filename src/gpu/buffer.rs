@@ -78,7 +78,7 @@ impl Buffer {
     }
 
     /// Replaces the start of a device-local buffer's contents with `bytes`.
-    fn upload(&self, ctx: &GpuContext, bytes: &[u8]) -> Result<()> {
+    pub fn upload(&self, ctx: &GpuContext, bytes: &[u8]) -> Result<()> {
         if bytes.is_empty() {
             return Ok(());
         }

@@ -1,5 +1,6 @@
 //! Vulkan instance, physical-device choice, logical device, queue and memory allocator.
 
+use super::failure::VulkanError;
 use super::validation::{self, ValidationLog};
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
@@ -252,8 +253,8 @@ impl GpuContext {
                 device.end_command_buffer(cb)?;
                 let cbs = [cb];
                 let submit = [vk::SubmitInfo::default().command_buffers(&cbs)];
-                device.queue_submit(self.queue, &submit, fence).map_err(describe_vk_error)?;
-                device.wait_for_fences(&[fence], true, u64::MAX).map_err(describe_vk_error)?;
+                device.queue_submit(self.queue, &submit, fence).map_err(VulkanError)?;
+                device.wait_for_fences(&[fence], true, u64::MAX).map_err(VulkanError)?;
             }
             Ok(())
         })();
@@ -262,15 +263,6 @@ impl GpuContext {
             device.free_command_buffers(self.command_pool, &[cb]);
         }
         result
-    }
-}
-
-fn describe_vk_error(e: vk::Result) -> anyhow::Error {
-    match e {
-        vk::Result::ERROR_DEVICE_LOST => anyhow!("the GPU was lost (VK_ERROR_DEVICE_LOST): the driver reset it, or a dispatch ran too long"),
-        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => anyhow!("the GPU ran out of memory (VK_ERROR_OUT_OF_DEVICE_MEMORY)"),
-        vk::Result::ERROR_OUT_OF_HOST_MEMORY => anyhow!("out of host memory (VK_ERROR_OUT_OF_HOST_MEMORY)"),
-        other => anyhow!("Vulkan error {other}"),
     }
 }
 

@@ -4,10 +4,12 @@
 mod buffer;
 mod compute;
 mod context;
+mod failure;
 mod shader;
 mod validation;
 
 pub use buffer::{Buffer, BufferKind};
 pub use compute::{Binding, ComputeKernel};
 pub use context::{list_devices, ContextOptions, DeviceInfo, DeviceType, GpuContext};
+pub use failure::{DeviceFailure, VulkanError};
 pub use shader::{assemble_source, compile_compute, ShaderSources};

@@ -9,5 +9,5 @@ mod scene_data;
 
 pub use kernel::{kernel_source, kernel_spirv};
 pub use acceleration::{Acceleration, AccelerationStats};
-pub use renderer::{frame_params, GeometryReport, Renderer, TEXTURE_BUDGET_BYTES};
+pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, TEXTURE_BUDGET_BYTES};
 pub use scene_data::SceneData;

@@ -22,8 +22,14 @@ pub struct Renderer<'a> {
     buffers: Vec<Buffer>,
     width: u32,
     height: u32,
+    seed: u32,
     /// Samples per pixel accumulated so far.
     pub samples_done: u32,
+    /// Index of the first sample of this render's stream: sample `sample_offset + i` is the i-th
+    /// accumulated, so renders with disjoint ranges add up to one render of their union.
+    sample_offset: u32,
+    /// BLAKE3 of everything uploaded that decides the image, the seed aside: see [`scene_hash`].
+    pub scene_hash: String,
     pub rays_traced: u64,
     pub seconds: f64,
     pub geometry: GeometryReport,
@@ -72,6 +78,22 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
     }
+}
+
+/// Hex BLAKE3 of the frame parameters (seed zeroed) and every scene buffer, in binding order. It covers
+/// what the scene file references (meshes, textures, probes) and the film size as they reach the
+/// kernel, so partial renders that hash alike rendered the same image.
+fn scene_hash(params_without_seed: &FrameParams, contents: &[(&str, BufferKind, &[u8])]) -> String {
+    let mut hasher = blake3::Hasher::new();
+    hasher.update(bytemuck::bytes_of(params_without_seed));
+    for (i, &(_, _, bytes)) in contents.iter().enumerate().skip(1) {
+        if i != ACCUM && i != STATS {
+            // Length-prefixed so that bytes cannot move between neighbouring buffers unnoticed.
+            hasher.update(&(bytes.len() as u64).to_le_bytes());
+            hasher.update(bytes);
+        }
+    }
+    hasher.finalize().to_hex().to_string()
 }
 
 /// Fails before any upload when one buffer exceeds the device's storage-buffer range or all of them
@@ -132,6 +154,7 @@ impl<'a> Renderer<'a> {
         ];
         let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
         check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;
+        let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
         for (i, &(name, kind, bytes)) in contents.iter().enumerate() {
             let zeroes;
@@ -145,7 +168,7 @@ impl<'a> Renderer<'a> {
         }
         let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, samples_done: 0, rays_traced: 0, seconds: 0.0, geometry: GeometryReport {
+        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, seconds: 0.0, geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -155,20 +178,67 @@ impl<'a> Renderer<'a> {
         }, cost_per_row_sample: None })
     }
 
+    /// Starts this render's sample stream at `first_sample` instead of 0 (farm renders: one range
+    /// per machine). Only before the first sample.
+    pub fn set_sample_offset(&mut self, first_sample: u32) {
+        assert_eq!(self.samples_done, 0, "the sample offset is set before rendering");
+        self.sample_offset = first_sample;
+    }
+
+    pub fn sample_offset(&self) -> u32 {
+        self.sample_offset
+    }
+
+    pub fn seed(&self) -> u32 {
+        self.seed
+    }
+
+    /// Width and height in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Takes over `accumulation` (as from [`Self::accumulation`]) holding the first `samples` samples
+    /// of this render's stream, so that rendering on adds the samples that follow them: the result
+    /// is bit for bit that of an uninterrupted render.
+    pub fn restore(&mut self, accumulation: &[[f32; 4]], samples: u32) -> Result<()> {
+        anyhow::ensure!(
+            accumulation.len() == self.width as usize * self.height as usize,
+            "the accumulation has {} pixels, the image {}x{}",
+            accumulation.len(),
+            self.width,
+            self.height
+        );
+        self.buffers[ACCUM].upload(self.ctx, bytemuck::cast_slice(accumulation))?;
+        self.samples_done = samples;
+        Ok(())
+    }
+
     /// Adds `spp` samples per pixel, calling `progress(samples_done)` after each full pass.
     pub fn render(&mut self, spp: u32, mut progress: impl FnMut(u32)) -> Result<()> {
-        let target = self.samples_done + spp;
+        self.render_while(spp, |done| {
+            progress(done);
+            true
+        })
+    }
+
+    /// Adds up to `spp` samples per pixel, calling `keep_going(samples_done)` after each full pass and
+    /// stopping early when it says no. Sample indices end at `u32::MAX`.
+    pub fn render_while(&mut self, spp: u32, mut keep_going: impl FnMut(u32) -> bool) -> Result<()> {
+        let target = self.samples_done.saturating_add(spp).min(u32::MAX - self.sample_offset);
         while self.samples_done < target {
             let remaining = target - self.samples_done;
             let (samples, band) = self.plan_pass(remaining);
             let mut row = 0;
             while row < self.height {
                 let rows = band.min(self.height - row);
-                self.dispatch(PassParams { sample_base: self.samples_done, sample_count: samples, row_offset: row, row_count: rows })?;
+                self.dispatch(PassParams { sample_base: self.sample_offset + self.samples_done, sample_count: samples, row_offset: row, row_count: rows })?;
                 row += rows;
             }
             self.samples_done += samples;
-            progress(self.samples_done);
+            if !keep_going(self.samples_done) {
+                break;
+            }
         }
         self.ctx.check_validation()
     }
@@ -216,14 +286,18 @@ impl<'a> Renderer<'a> {
 
     /// The mean radiance per pixel so far.
     pub fn image(&self) -> Result<RgbImage> {
-        let accum = self.accumulation()?;
-        let mut image = RgbImage::new(self.width, self.height);
-        for (dst, a) in image.pixels.iter_mut().zip(&accum) {
-            let n = a[3].max(1.0);
-            *dst = [a[0] / n, a[1] / n, a[2] / n];
-        }
-        Ok(image)
+        Ok(mean_image(self.width, self.height, &self.accumulation()?))
     }
+}
+
+/// Mean radiance from an accumulation of (sum, count) pixels; pixels without samples are black.
+pub fn mean_image(width: u32, height: u32, accumulation: &[[f32; 4]]) -> RgbImage {
+    let mut image = RgbImage::new(width, height);
+    for (dst, a) in image.pixels.iter_mut().zip(accumulation) {
+        let n = a[3].max(1.0);
+        *dst = [a[0] / n, a[1] / n, a[2] / n];
+    }
+    image
 }
 
 impl Drop for Renderer<'_> {

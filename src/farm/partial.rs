@@ -1,0 +1,166 @@
+//! The partial-render file: a layered EXR holding an accumulation and what it is an accumulation of.
+//! Checkpoints, farm partials, merged images and EXR render outputs are all this one format, so any
+//! of them can be resumed or merged.
+//!
+//! Layers: the top-level "R", "G", "B" is the mean radiance (what viewers and `read_image` show);
+//! "accumulation.R/G/B" is the raw per-pixel sum of sample radiance and "accumulation.count" the
+//! number of samples in it, exactly as the kernel keeps them, so resuming is bit for bit. Text
+//! attributes ([`SCENE_HASH`] and the rest) say which scene, seed and samples it holds.
+
+use crate::image::{read_exr_document, write_exr_document, ExrDocument, ExrLayer, RgbImage};
+use crate::render::mean_image;
+use anyhow::{anyhow, bail, ensure, Context as _, Result};
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::Path;
+
+/// Hex BLAKE3 of the scene as uploaded (see `Renderer::scene_hash`).
+pub const SCENE_HASH: &str = "caustica.scene_hash";
+/// The seed of the random streams, decimal.
+pub const SEED: &str = "caustica.seed";
+/// The sample indices accumulated, as half-open ranges: "0..64", or "0..16,32..48" after a merge.
+pub const SAMPLE_RANGES: &str = "caustica.sample_ranges";
+/// Samples per pixel accumulated (the total length of the ranges), for people and scripts.
+pub const SAMPLES: &str = "caustica.samples";
+/// Image size, also in the EXR header; kept for scripts reading attributes only.
+pub const WIDTH: &str = "caustica.width";
+pub const HEIGHT: &str = "caustica.height";
+
+const ACCUMULATION: &str = "accumulation";
+
+/// An accumulation of the samples in `ranges` of one scene and seed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartialRender {
+    pub scene_hash: String,
+    pub seed: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Sorted, disjoint, non-empty half-open ranges of sample indices.
+    pub ranges: Vec<Range<u32>>,
+    /// Per pixel, top row first: sum of radiance (RGB) and the number of samples summed.
+    pub accumulation: Vec<[f32; 4]>,
+}
+
+impl PartialRender {
+    /// Samples per pixel.
+    pub fn samples(&self) -> u32 {
+        self.ranges.iter().map(|r| r.end - r.start).sum()
+    }
+
+    /// The mean radiance per pixel.
+    pub fn image(&self) -> RgbImage {
+        mean_image(self.width, self.height, &self.accumulation)
+    }
+
+    /// Writes the file atomically (a temporary file renamed over `path`), so a crash leaves either
+    /// the previous file or this one.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let attributes = BTreeMap::from([
+            (SCENE_HASH.to_owned(), self.scene_hash.clone()),
+            (SEED.to_owned(), self.seed.to_string()),
+            (SAMPLE_RANGES.to_owned(), format_ranges(&self.ranges)),
+            (SAMPLES.to_owned(), self.samples().to_string()),
+            (WIDTH.to_owned(), self.width.to_string()),
+            (HEIGHT.to_owned(), self.height.to_string()),
+        ]);
+        let accumulation = ExrLayer {
+            name: ACCUMULATION.to_owned(),
+            channels: ["R", "G", "B", "count"].map(String::from).to_vec(),
+            data: self.accumulation.iter().flatten().copied().collect(),
+        };
+        let doc = ExrDocument { width: self.width, height: self.height, layers: vec![ExrLayer::rgb("", &self.image()), accumulation], attributes };
+        Ok(write_exr_document(path, &doc)?)
+    }
+
+    /// Reads a file written by [`Self::write`]; names the file and what is wrong otherwise.
+    pub fn read(path: &Path) -> Result<Self> {
+        let doc = read_exr_document(path)?;
+        Self::from_document(doc).with_context(|| format!("{}: not a caustica partial render", path.display()))
+    }
+
+    fn from_document(doc: ExrDocument) -> Result<Self> {
+        let attr = |name: &str| doc.attributes.get(name).ok_or_else(|| anyhow!("attribute {name} is missing"));
+        let layer = doc.layer(ACCUMULATION).ok_or_else(|| anyhow!("layer '{ACCUMULATION}' is missing"))?;
+        let channel = |name: &str| layer.channels.iter().position(|c| c == name).ok_or_else(|| anyhow!("channel {ACCUMULATION}.{name} is missing"));
+        let order = [channel("R")?, channel("G")?, channel("B")?, channel("count")?];
+        let stride = layer.channels.len();
+        let accumulation = layer.data.chunks_exact(stride).map(|px| order.map(|c| px[c])).collect();
+        let partial = Self {
+            scene_hash: attr(SCENE_HASH)?.clone(),
+            seed: attr(SEED)?.parse().map_err(|e| anyhow!("{SEED}: {e}"))?,
+            width: doc.width,
+            height: doc.height,
+            ranges: parse_ranges(attr(SAMPLE_RANGES)?).with_context(|| SAMPLE_RANGES.to_owned())?,
+            accumulation,
+        };
+        ensure!(partial.samples() > 0, "{SAMPLE_RANGES} is empty");
+        Ok(partial)
+    }
+
+    /// Fails unless `other` is of the same size, seed and scene, naming the first difference (size
+    /// first: the scene hash covers the size too).
+    pub fn check_same_render(&self, other: &PartialRender) -> Result<()> {
+        if (self.width, self.height) != (other.width, other.height) {
+            bail!("different size ({}x{}, not {}x{})", other.width, other.height, self.width, self.height);
+        }
+        if self.seed != other.seed {
+            bail!("different seed ({}, not {})", other.seed, self.seed);
+        }
+        if self.scene_hash != other.scene_hash {
+            bail!("different scene (scene hash {}, not {})", other.scene_hash, self.scene_hash);
+        }
+        Ok(())
+    }
+}
+
+pub fn format_ranges(ranges: &[Range<u32>]) -> String {
+    ranges.iter().map(|r| format!("{}..{}", r.start, r.end)).collect::<Vec<_>>().join(",")
+}
+
+/// Parses "a..b,c..d": each range non-empty, sorted and apart from the next.
+pub fn parse_ranges(text: &str) -> Result<Vec<Range<u32>>> {
+    let mut ranges: Vec<Range<u32>> = Vec::new();
+    for part in text.split(',') {
+        let (start, end) = part.trim().split_once("..").ok_or_else(|| anyhow!("'{part}' is not a range like 0..64"))?;
+        let range = start.parse()?..end.parse()?;
+        ensure!(range.start < range.end, "empty range {part}");
+        if let Some(last) = ranges.last() {
+            ensure!(last.end < range.start, "ranges out of order or touching at {part}");
+        }
+        ranges.push(range);
+    }
+    Ok(ranges)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_round_trip_and_reject_overlap() {
+        let ranges = parse_ranges("0..16,32..48").unwrap();
+        assert_eq!(ranges, vec![0..16, 32..48]);
+        assert_eq!(format_ranges(&ranges), "0..16,32..48");
+        for bad in ["", "5..5", "0..8,4..12", "8..16,0..4", "0..8,8..9", "x..3", "3"] {
+            assert!(parse_ranges(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn file_round_trips_bit_exact() {
+        let partial = PartialRender {
+            scene_hash: "ab12".into(),
+            seed: 7,
+            width: 2,
+            height: 1,
+            ranges: vec![4..6],
+            accumulation: vec![[0.1, 1e-30, 3.5e7, 2.0], [f32::MIN_POSITIVE, 0.0, 1.0 / 3.0, 2.0]],
+        };
+        let path = std::env::temp_dir().join(format!("caustica-partial-{}.exr", std::process::id()));
+        partial.write(&path).unwrap();
+        let back = PartialRender::read(&path).unwrap();
+        assert_eq!(back, partial);
+        assert_eq!(crate::image::read_image(&path).unwrap(), partial.image());
+        std::fs::remove_file(path).ok();
+    }
+}

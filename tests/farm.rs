@@ -1,0 +1,252 @@
+//! Farm rendering end to end on lavapipe: resuming a checkpoint and merging partial renders give the
+//! uninterrupted render, mismatched inputs are refused, time budgets and signals stop a render
+//! cleanly, and the JSON summary parses.
+
+mod common;
+
+use caustica::farm::PartialRender;
+use caustica::render::Renderer;
+use caustica::scene::Scene;
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn caustica_command(args: &[&str]) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustica"));
+    if let Some(icd) = lavapipe_override() {
+        cmd.env("VK_DRIVER_FILES", icd);
+    }
+    cmd.args(args);
+    cmd
+}
+
+fn caustica(args: &[&str]) -> Output {
+    caustica_command(args).output().expect("run caustica")
+}
+
+/// Runs a 16x16 render of the built-in scene with `args` added; panics unless it succeeds.
+fn render(out: &Path, args: &[&str]) -> Output {
+    let mut all = vec!["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "-q", "--validation"];
+    all.extend_from_slice(args);
+    let o = caustica(&all);
+    assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+fn merge(inputs: &[&PathBuf], out: &Path) -> Output {
+    let mut args = vec!["merge".to_owned(), "-q".to_owned(), "-o".to_owned(), out.to_str().unwrap().to_owned()];
+    args.extend(inputs.iter().map(|p| p.to_str().unwrap().to_owned()));
+    caustica(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+fn fails_with(o: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "exit status {:?}, stderr {stderr}", o.status);
+    assert!(stderr.contains("caustica: error:") && stderr.contains(needle), "stderr does not say '{needle}': {stderr}");
+}
+
+#[test]
+fn resume_from_a_checkpoint_is_bit_exact() {
+    let dir = temp_dir("farm-resume");
+    let (full, part, resumed, checkpoint) = (dir.join("full.exr"), dir.join("part.png"), dir.join("resumed.exr"), dir.join("ck.exr"));
+    render(&full, &["--spp", "7", "--seed", "5"]);
+    render(&part, &["--spp", "3", "--seed", "5", "--checkpoint", checkpoint.to_str().unwrap()]);
+    assert_eq!(PartialRender::read(&checkpoint).unwrap().samples(), 3);
+    render(&resumed, &["--spp", "7", "--seed", "5", "--resume", "--checkpoint", checkpoint.to_str().unwrap()]);
+    let (a, b) = (PartialRender::read(&full).unwrap(), PartialRender::read(&resumed).unwrap());
+    assert_eq!(b.ranges, vec![0..7]);
+    assert!(a.accumulation == b.accumulation, "3 spp resumed to 7 differs from 7 in one go");
+    assert_eq!(PartialRender::read(&checkpoint).unwrap(), b, "the checkpoint is brought up to date at the end");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn resume_refuses_another_seed_size_or_scene() {
+    let dir = temp_dir("farm-resume-refuse");
+    let (out, checkpoint) = (dir.join("out.png"), dir.join("ck.exr"));
+    let ck = checkpoint.to_str().unwrap();
+    render(&out, &["--spp", "2", "--checkpoint", ck]);
+    let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sky.toml");
+    let o = out.to_str().unwrap();
+    let cases: [(Vec<&str>, &str); 3] = [
+        (vec!["render", "-o", o, "--width", "16", "--height", "16", "--seed", "2"], "different seed (1, not 2)"),
+        (vec!["render", "-o", o, "--width", "16", "--height", "8"], "different size (16x16, not 16x8)"),
+        (vec!["render", sky.to_str().unwrap(), "-o", o, "--width", "16", "--height", "16"], "different scene"),
+    ];
+    for (mut args, needle) in cases {
+        args.extend(["--spp", "4", "--resume", "--checkpoint", ck]);
+        let result = caustica(&args);
+        fails_with(&result, needle);
+        assert!(String::from_utf8_lossy(&result.stderr).contains("ck.exr: cannot resume"));
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn merged_partials_equal_one_render_of_all_samples() {
+    let dir = temp_dir("farm-merge");
+    // Partials of one sample each add up in the kernel's own order: bit for bit.
+    let ones: Vec<PathBuf> = (0..3).map(|k| dir.join(format!("one{k}.exr"))).collect();
+    for (k, path) in ones.iter().enumerate() {
+        render(path, &["--spp", "1", "--sample-offset", &k.to_string()]);
+    }
+    let (whole3, merged3) = (dir.join("whole3.exr"), dir.join("merged3.exr"));
+    render(&whole3, &["--spp", "3"]);
+    let o = merge(&[&ones[2], &ones[0], &ones[1]], &merged3);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (whole, merged) = (PartialRender::read(&whole3).unwrap(), PartialRender::read(&merged3).unwrap());
+    assert!(whole == merged, "3 x 1 spp merged differs from 3 spp");
+
+    // Larger partials: the sums are grouped differently, so equal to float rounding.
+    let twos: Vec<PathBuf> = (0..3).map(|k| dir.join(format!("two{k}.exr"))).collect();
+    for (k, path) in twos.iter().enumerate() {
+        render(path, &["--spp", "2", "--sample-offset", &(2 * k).to_string()]);
+    }
+    let (whole6, merged6, merged_png) = (dir.join("whole6.exr"), dir.join("merged6.exr"), dir.join("merged6.png"));
+    render(&whole6, &["--spp", "6"]);
+    assert!(merge(&[&twos[0], &twos[1], &twos[2]], &merged6).status.success());
+    assert!(merge(&[&twos[0], &twos[1], &twos[2]], &merged_png).status.success());
+    let (whole, merged) = (PartialRender::read(&whole6).unwrap(), PartialRender::read(&merged6).unwrap());
+    assert_eq!(merged.ranges, vec![0..6]);
+    assert_eq!((&merged.scene_hash, merged.seed), (&whole.scene_hash, whole.seed));
+    for (a, b) in whole.accumulation.iter().zip(&merged.accumulation) {
+        assert_eq!(a[3], b[3], "sample counts");
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() <= 1e-5 * a[c].abs().max(b[c].abs()), "{a:?} vs {b:?}");
+        }
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn merge_refuses_other_scenes_sizes_seeds_and_overlaps() {
+    let dir = temp_dir("farm-merge-refuse");
+    let path = |name: &str| dir.join(name);
+    render(&path("a.exr"), &["--spp", "2"]);
+    render(&path("overlap.exr"), &["--spp", "2", "--sample-offset", "1"]);
+    render(&path("seed.exr"), &["--spp", "2", "--sample-offset", "2", "--seed", "9"]);
+    let small = caustica(&["render", "-o", path("small.exr").to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "2", "--sample-offset", "2", "-q"]);
+    assert!(small.status.success());
+    let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sky.toml");
+    let other = caustica(&["render", sky.to_str().unwrap(), "-o", path("sky.exr").to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "2", "--sample-offset", "2", "-q"]);
+    assert!(other.status.success());
+    std::fs::write(path("plain.pfm"), b"PF\n1 1\n-1.0\n\0\0\0\0\0\0\0\0\0\0\0\0").unwrap();
+    let a = path("a.exr");
+    fails_with(&merge(&[&a, &path("overlap.exr")], &path("m.exr")), "overlap.exr: samples 1..3 overlap samples 0..2 of");
+    fails_with(&merge(&[&a, &path("seed.exr")], &path("m.exr")), "seed.exr: cannot merge with");
+    fails_with(&merge(&[&a, &path("small.exr")], &path("m.exr")), "different size (8x8, not 16x16)");
+    fails_with(&merge(&[&a, &path("sky.exr")], &path("m.exr")), "different scene");
+    fails_with(&merge(&[&a, &path("plain.pfm")], &path("m.exr")), "plain.pfm");
+    assert!(!path("m.exr").exists(), "a refused merge wrote its output");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn time_budget_stops_the_render_and_json_summary_parses() {
+    let dir = temp_dir("farm-time");
+    let out = dir.join("timed.png");
+    let started = Instant::now();
+    let o = render(&out, &["--time", "1s", "--json"]);
+    // Generous: a 16x16 pass takes milliseconds; this only checks that the budget ends the render.
+    assert!(started.elapsed() < Duration::from_secs(60), "--time 1s ran for {:?}", started.elapsed());
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints JSON");
+    assert_eq!(summary["outcome"], "time_up");
+    assert!(summary["samples"].as_u64().unwrap() >= 1);
+    assert_eq!((summary["width"].as_u64(), summary["height"].as_u64()), (Some(16), Some(16)));
+    for key in ["scene", "device", "output", "scene_hash"] {
+        assert!(summary[key].is_string(), "{key} in {summary}");
+    }
+    for key in ["seconds", "samples_per_second", "rays_per_second"] {
+        assert!(summary[key].as_f64().is_some_and(|v| v > 0.0), "{key} in {summary}");
+    }
+    assert!(out.exists());
+
+    // With --spp too, whichever comes first: here the sample count.
+    let o = render(&out, &["--time", "10m", "--spp", "2", "--json"]);
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!((summary["outcome"].as_str(), summary["samples"].as_u64()), (Some("done"), Some(2)));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bench_json_parses() {
+    let o = caustica(&["bench", "--width", "16", "--height", "16", "--spp", "2", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("bench --json prints JSON");
+    assert!(summary["rays_per_second"].as_f64().is_some_and(|v| v > 0.0), "{summary}");
+}
+
+#[test]
+fn sigint_and_sigterm_finish_the_pass_and_write_the_image() {
+    let dir = temp_dir("farm-signal");
+    for signal in ["INT", "TERM"] {
+        let (out, checkpoint) = (dir.join(format!("{signal}.exr")), dir.join(format!("{signal}.checkpoint.exr")));
+        // A checkpoint after every pass tells the test that rendering is under way.
+        let mut child = caustica_command(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "10000000", "-q", "--checkpoint-every", "0s"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(120);
+        while !checkpoint.exists() {
+            assert!(Instant::now() < deadline && child.try_wait().unwrap().is_none(), "no checkpoint appeared");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let kill = Command::new("kill").args([format!("-{signal}"), child.id().to_string()]).status().unwrap();
+        assert!(kill.success());
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "SIG{signal}: {}", String::from_utf8_lossy(&o.stderr));
+        let written = PartialRender::read(&out).unwrap();
+        assert!(written.samples() >= 1 && written.samples() < 10_000_000, "SIG{signal}: {} spp", written.samples());
+        assert_eq!(PartialRender::read(&checkpoint).unwrap(), written, "the checkpoint holds the final samples");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn scene_hash_is_stable_and_covers_the_scene_and_size_not_the_seed() {
+    let (_lock, ctx) = gpu();
+    let mut scene = Scene::default_scene();
+    scene.film.width = 16;
+    scene.film.height = 16;
+    let hash = |scene: &Scene, seed| Renderer::new(&ctx, scene, seed).unwrap().scene_hash.clone();
+    let base = hash(&scene, 1);
+    assert_eq!(base, hash(&scene, 1));
+    assert_eq!(base, hash(&scene, 2), "the seed is recorded apart from the scene");
+    scene.film.spp = 99;
+    assert_eq!(base, hash(&scene, 1), "the sample count does not change the image");
+    scene.film.width = 17;
+    assert_ne!(base, hash(&scene, 1));
+    scene.film.width = 16;
+    for material in &mut scene.materials {
+        material.albedo *= 0.5;
+    }
+    assert_ne!(base, hash(&scene, 1), "materials are part of the scene");
+}
+
+#[test]
+fn renderer_restore_continues_the_sample_stream() {
+    let (_lock, ctx) = gpu();
+    let mut scene = Scene::default_scene();
+    scene.film.width = 16;
+    scene.film.height = 16;
+    let mut whole = Renderer::new(&ctx, &scene, 3).unwrap();
+    whole.set_sample_offset(10);
+    whole.render(5, |_| {}).unwrap();
+    let mut first = Renderer::new(&ctx, &scene, 3).unwrap();
+    first.set_sample_offset(10);
+    first.render(2, |_| {}).unwrap();
+    let mut rest = Renderer::new(&ctx, &scene, 3).unwrap();
+    rest.set_sample_offset(10);
+    rest.restore(&first.accumulation().unwrap(), 2).unwrap();
+    rest.render(3, |_| {}).unwrap();
+    assert!(rest.accumulation().unwrap() == whole.accumulation().unwrap());
+    let mut stops = 0;
+    let mut stopped = Renderer::new(&ctx, &scene, 3).unwrap();
+    stopped.render_while(50, |_| {
+        stops += 1;
+        false
+    }).unwrap();
+    assert_eq!((stops, stopped.samples_done), (1, 1), "the first pass is one sample, then it stops");
+}
