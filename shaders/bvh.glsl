@@ -2,13 +2,14 @@
 // the top-level BVH, whose leaves list instances; each instance points at the root of its own
 // bottom-level BVH in the same node array. One explicit stack serves both levels: a top-level leaf
 // pushes its instances as tagged entries, and popping one transforms the ray into the instance's
-// object space until the stack falls back below that entry.
+// object space until the stack falls back below that entry. A scene with one instance skips the
+// top level.
 // BVH_MAX_DEPTH and BVH_MAX_LEAF_SIZE are injected by the host from the builder's bounds.
 
 const uint NO_INDEX = 0xffffffffu;
 const uint INSTANCE_ENTRY = 0x80000000u;
-// Pending far children of the top level, one leaf's instances, then the bottom level's.
-const uint STACK_SIZE = 2u * BVH_MAX_DEPTH + BVH_MAX_LEAF_SIZE + 1u;
+// The first entry, pending far children of the top level, one leaf's instances, then the bottom level's.
+const uint STACK_SIZE = 2u * BVH_MAX_DEPTH + BVH_MAX_LEAF_SIZE + 2u;
 
 struct Hit {
     float t;
@@ -57,19 +58,49 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     if (frame.env_size.w == 0u) return false;  // empty scene: no root node to test
     vec3 ro = o;
     vec3 rd = d;
-    vec3 inv_d = safe_inverse(d);
+    vec3 world_inv_d = safe_inverse(d);
+    vec3 inv_d = world_inv_d;
     uint stack[STACK_SIZE];
     uint sp = 0u;
-    uint node_index = 0u;
     uint instance = NO_INDEX;  // the instance whose bottom level is being walked
     uint instance_kind = INSTANCE_PRIMITIVES;
     uint instance_sp = 0u;     // stack height when it was entered
+    // Start at the top-level root, or with a single instance, in that instance right away.
+    stack[sp++] = frame.env_size.z == 1u ? INSTANCE_ENTRY : 0u;
     while (true) {
-        BvhNode node = nodes[node_index];
-        if (ray_box(node.bmin, node.bmax, ro, inv_d, hit.t)) {
+        // Next entry: leave the instance once its part of the stack is used up.
+        if (instance != NO_INDEX && sp == instance_sp) {
+            if (instance_kind == INSTANCE_MESH) {
+                ro = o;
+                rd = d;
+                inv_d = world_inv_d;
+            }
+            instance = NO_INDEX;
+        }
+        if (sp == 0u) break;
+        uint entry = stack[--sp];
+        uint node_index = entry;
+        if ((entry & INSTANCE_ENTRY) != 0u) {
+            instance = entry & ~INSTANCE_ENTRY;
+            uvec4 info = instances[instance].info;
+            instance_kind = info.x;
+            instance_sp = sp;
+            // The scene's own shapes are placed by the identity: keep the world ray (loads are
+            // what costs, on lavapipe most of all).
+            if (instance_kind == INSTANCE_MESH) {
+                vec4 world_to_object[3] = instances[instance].world_to_object;
+                ro = affine_point(world_to_object, o);
+                rd = affine_vector(world_to_object, d);
+                inv_d = safe_inverse(rd);
+            }
+            node_index = info.y;
+        }
+        // Walk down from this node, nearer child first, until a leaf or a miss.
+        while (true) {
+            BvhNode node = nodes[node_index];
+            if (!ray_box(node.bmin, node.bmax, ro, inv_d, hit.t)) break;
             uint count = node.meta >> 2u;
             if (count == 0u) {
-                // Interior: descend into the child on the ray's near side, keep the other.
                 uint axis = node.meta & 3u;
                 bool second_first = rd[axis] < 0.0;
                 stack[sp++] = second_first ? node_index + 1u : node.offset;
@@ -98,27 +129,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                     }
                 }
             }
-        }
-        // Next entry: leave the instance once its part of the stack is used up.
-        if (instance != NO_INDEX && sp == instance_sp) {
-            instance = NO_INDEX;
-            ro = o;
-            rd = d;
-            inv_d = safe_inverse(d);
-        }
-        if (sp == 0u) break;
-        uint entry = stack[--sp];
-        if ((entry & INSTANCE_ENTRY) != 0u) {
-            instance = entry & ~INSTANCE_ENTRY;
-            Instance inst = instances[instance];
-            instance_kind = inst.info.x;
-            instance_sp = sp;
-            ro = affine_point(inst.world_to_object, o);
-            rd = affine_vector(inst.world_to_object, d);
-            inv_d = safe_inverse(rd);
-            node_index = inst.info.y;
-        } else {
-            node_index = entry;
+            break;
         }
     }
     return hit.prim != NO_INDEX;

@@ -27,8 +27,8 @@ vec3 normal_to_world(vec4 world_to_object[3], vec3 n) {
 Surface surface_at(Hit hit, vec3 o, vec3 d) {
     Surface s;
     s.point = o + hit.t * d;
-    Instance inst = instances[hit.instance];
-    if (inst.info.x == INSTANCE_PRIMITIVES) {
+    uvec4 info = instances[hit.instance].info;
+    if (info.x == INSTANCE_PRIMITIVES) {
         Primitive p = prims[hit.prim];
         s.ng = primitive_normal(p, s.point);
         s.ns = s.ng;
@@ -36,21 +36,22 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
         s.material = prim_material(p);
         return s;
     }
+    vec4 world_to_object[3] = instances[hit.instance].world_to_object;
     uvec4 tri = mesh_triangles[hit.prim];
     vec3 v0 = vertex_position(tri.x);
     vec3 w = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
-    s.ng = normal_to_world(inst.world_to_object, cross(vertex_position(tri.y) - v0, vertex_position(tri.z) - v0));
+    s.ng = normal_to_world(world_to_object, cross(vertex_position(tri.y) - v0, vertex_position(tri.z) - v0));
     s.ns = s.ng;
-    if ((inst.info.z & INSTANCE_HAS_NORMALS) != 0u) {
+    if ((info.z & INSTANCE_HAS_NORMALS) != 0u) {
         vec3 n = w.x * unpack_normal(vertex_normals[tri.x]) + w.y * unpack_normal(vertex_normals[tri.y])
                + w.z * unpack_normal(vertex_normals[tri.z]);
         if (dot(n, n) > 1e-12) {
-            vec3 ns = normal_to_world(inst.world_to_object, n);
+            vec3 ns = normal_to_world(world_to_object, n);
             s.ns = dot(ns, s.ng) < 0.0 ? -ns : ns;
         }
     }
     s.uv = vec2(0.0);
-    if ((inst.info.z & INSTANCE_HAS_UVS) != 0u) {
+    if ((info.z & INSTANCE_HAS_UVS) != 0u) {
         s.uv = w.x * vertex_uvs[tri.x] + w.y * vertex_uvs[tri.y] + w.z * vertex_uvs[tri.z];
     }
     s.material = tri.w;
@@ -59,14 +60,14 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 
 // The hit emitter as a world-space primitive, for its light-sampling pdf.
 Primitive world_primitive(Hit hit) {
-    Instance inst = instances[hit.instance];
-    if (inst.info.x == INSTANCE_PRIMITIVES) return prims[hit.prim];
+    if (instances[hit.instance].info.x == INSTANCE_PRIMITIVES) return prims[hit.prim];
+    vec4 object_to_world[3] = instances[hit.instance].object_to_world;
     uvec4 tri = mesh_triangles[hit.prim];
     vec3 v0 = vertex_position(tri.x);
     Primitive p;
-    p.a = vec4(affine_point(inst.object_to_world, v0), 0.0);
-    p.b = vec4(affine_vector(inst.object_to_world, vertex_position(tri.y) - v0), uintBitsToFloat(PRIM_TRIANGLE));
-    p.c = vec4(affine_vector(inst.object_to_world, vertex_position(tri.z) - v0), uintBitsToFloat(tri.w));
+    p.a = vec4(affine_point(object_to_world, v0), 0.0);
+    p.b = vec4(affine_vector(object_to_world, vertex_position(tri.y) - v0), uintBitsToFloat(PRIM_TRIANGLE));
+    p.c = vec4(affine_vector(object_to_world, vertex_position(tri.z) - v0), uintBitsToFloat(tri.w));
     return p;
 }
 
