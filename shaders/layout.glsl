@@ -64,6 +64,11 @@ const uint ENV_CONSTANT = 0u;
 const uint ENV_ANGULAR = 1u;
 const uint ENV_LATLONG = 2u;
 
+// Pixel reconstruction filters (FILTER_* must match layout.rs).
+const uint FILTER_BOX = 0u;
+const uint FILTER_TENT = 1u;
+const uint FILTER_GAUSSIAN = 2u;
+
 layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
     vec4 cam_origin;    // w unused
     vec4 cam_forward;   // w = tan(vertical fov / 2)
@@ -76,6 +81,8 @@ layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
     uvec4 integrator;   // rr_start, nee (0/1), env kind, max depth
     uvec4 env_size;     // map width, map height, instance count, node count
     vec4 roulette;      // x = fixed absorption (< 0: derive from throughput), y = q min, z = q max
+    vec4 lens;          // x = lens radius (0: pinhole), y = focus distance along the viewing axis,
+                        // z = per-sample radiance clamp (0: off), w = FILTER_* as raw uint bits
 } frame;
 
 layout(push_constant) uniform PassBlock {
@@ -93,8 +100,9 @@ layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { Primitive lig
 layout(std430, set = 0, binding = 5) readonly buffer EnvironmentBuffer { vec4 env_texels[]; };
 // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
 layout(std430, set = 0, binding = 6) buffer AccumBuffer { vec4 accum[]; };
-// x = rays traced (wraps per dispatch; the host reads and clears it each dispatch).
-layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; } stats;
+// Rays traced and non-finite samples dropped (each wraps per dispatch; the host reads and clears
+// both each dispatch).
+layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; uint nonfinite_samples; } stats;
 // Top-level BVH leaves index instances; node 0 is the top-level root.
 layout(std430, set = 0, binding = 8) readonly buffer InstanceBuffer { Instance instances[]; };
 // Mesh triangles in their BVH's leaf order: xyz = global vertex indices, w = material.

@@ -25,14 +25,24 @@ void main() {
     uint index = pixel.y * width + pixel.x;
     vec4 sum = accum[index];
     uint rays = 0u;
+    uint nonfinite = 0u;
+    float clamp_max = frame.lens.z;
     for (uint s = 0u; s < pass.sample_count; ++s) {
         Rng rng = rng_for_sample(frame.image.z, index, pass.sample_base + s);
-        vec3 dir = camera_ray(pixel, rng_next2(rng));
-        vec3 radiance = trace_path(frame.cam_origin.xyz, dir, rng, rays);
-        // A NaN or infinity would poison the pixel for good; drop that sample's radiance.
-        if (any(isnan(radiance)) || any(isinf(radiance))) radiance = vec3(0.0);
+        vec3 origin, dir;
+        camera_ray(pixel, rng, origin, dir);
+        vec3 radiance = trace_path(origin, dir, rng, rays);
+        // A NaN or infinity would poison the pixel for good; drop that sample's radiance, count it.
+        if (any(isnan(radiance)) || any(isinf(radiance))) {
+            radiance = vec3(0.0);
+            nonfinite += 1u;
+        }
+        // Optional firefly clamp (biased): scale down, keeping the sample's colour.
+        float peak = max3(radiance);
+        if (clamp_max > 0.0 && peak > clamp_max) radiance *= clamp_max / peak;
         sum += vec4(radiance, 1.0);
     }
     accum[index] = sum;
     atomicAdd(stats.ray_count, rays);
+    if (nonfinite > 0u) atomicAdd(stats.nonfinite_samples, nonfinite);
 }

@@ -252,8 +252,13 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
             Outcome::TimeUp => " (time budget spent)".to_owned(),
             Outcome::Interrupted => " (interrupted)".to_owned(),
         };
+        // Dropped samples mean a kernel bug or a degenerate scene: say so, but only then.
+        let dropped = match renderer.nonfinite_samples {
+            0 => String::new(),
+            n => format!(", {n} non-finite samples dropped"),
+        };
         eprintln!(
-            "wrote {} ({}x{}, {} spp{why}) in {:.2} s on {}: {:.2} Msamples/s, {:.1} Mrays/s",
+            "wrote {} ({}x{}, {} spp{why}) in {:.2} s on {}: {:.2} Msamples/s, {:.1} Mrays/s{dropped}",
             output.display(),
             scene.film.width,
             scene.film.height,
@@ -279,6 +284,7 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
             "render_seconds": renderer.seconds,
             "samples_per_second": samples_per_s,
             "rays_per_second": rays_per_s,
+            "nonfinite_samples": renderer.nonfinite_samples,
             "outcome": outcome,
             "output": output,
             "checkpoint": farm_args.checkpointing().then_some(&checkpoint),
@@ -334,6 +340,7 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, json: bool, gpu: &
             "samples_per_second": samples / seconds,
             "rays_per_second": rays / seconds,
             "rays_per_sample": rays / samples,
+            "nonfinite_samples": renderer.nonfinite_samples,
             "primitives": renderer.geometry.acceleration.primitives,
             "gpu_bytes": renderer.geometry.gpu_bytes,
         });
@@ -349,6 +356,7 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, json: bool, gpu: &
     println!("samples/s:    {:.3} M", samples / seconds / 1e6);
     println!("rays/s:       {:.3} M", rays / seconds / 1e6);
     println!("rays/sample:  {:.2}", rays / samples);
+    println!("non-finite:   {} samples dropped", renderer.nonfinite_samples);
     Ok(())
 }
 

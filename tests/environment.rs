@@ -5,7 +5,7 @@ mod common;
 
 use caustica::gpu::GpuContext;
 use caustica::image::{self, RgbImage};
-use caustica::scene::{angular_map_uv, Camera, Environment, EnvironmentMap, Film, Integrator, MapProjection, Scene};
+use caustica::scene::{angular_map_uv, Camera, Environment, EnvironmentMap, Film, Filter, Integrator, MapProjection, Scene};
 use common::*;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -16,9 +16,9 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
     let up = if dir.normalize().y.abs() > 0.9 { Vec3::Z } else { Vec3::Y };
     let scene = Scene {
         name: "environment probe".into(),
-        camera: Camera { position: Vec3::ZERO, look_at: dir, up, fov_deg: 0.001 },
-        film: Film { width: 1, height: 1, spp: 1 },
-        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16, sample_environment: true },
+        camera: Camera::pinhole(Vec3::ZERO, dir, up, 0.001),
+        film: Film { width: 1, height: 1, spp: 1, filter: Filter::Box },
+        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16, sample_environment: true, clamp: None },
         materials: vec![],
         shapes: vec![],
         meshes: vec![],

@@ -2,7 +2,7 @@
 
 mod common;
 
-use caustica::scene::{Environment, Scene, Shape};
+use caustica::scene::{Environment, Filter, Scene, Shape};
 use common::temp_dir;
 use std::path::Path;
 
@@ -79,6 +79,12 @@ fn out_of_range_values_are_errors_naming_the_key() {
         (format!("{MINIMAL}[film]\nwidth = 0\n"), "film.width"),
         (format!("{MINIMAL}[film]\nspp = 0\n"), "film.spp"),
         (format!("{MINIMAL}[integrator]\nabsorption = 1.5\n"), "integrator.absorption"),
+        (format!("{MINIMAL}aperture = -0.1\n"), "camera.aperture"),
+        (format!("{MINIMAL}aperture = inf\n"), "camera.aperture"),
+        (format!("{MINIMAL}focus_distance = 0.0\n"), "camera.focus_distance"),
+        (format!("{MINIMAL}focus_distance = nan\n"), "camera.focus_distance"),
+        (format!("{MINIMAL}[integrator]\nclamp = 0.0\n"), "integrator.clamp"),
+        (format!("{MINIMAL}[integrator]\nclamp = inf\n"), "integrator.clamp"),
         (format!("{MINIMAL}[environment]\ncolor = [1.0, 1.0, 1.0]\nprobe = \"p.pfm\"\n"), "only one of"),
         (format!("{MINIMAL}[environment]\nintensity = inf\n"), "environment.intensity"),
     ];
@@ -86,6 +92,23 @@ fn out_of_range_values_are_errors_naming_the_key() {
         let e = error_of(&text);
         assert!(e.contains(key), "expected an error naming '{key}', got: {e}");
     }
+}
+
+#[test]
+fn lens_filter_and_clamp_default_to_a_pinhole_box_filter_and_no_clamp() {
+    let scene = parse_result(MINIMAL).unwrap();
+    assert_eq!((scene.camera.aperture, scene.camera.focus_distance), (0.0, 3.0), "focused on look_at");
+    assert_eq!(scene.film.filter, Filter::Box);
+    assert_eq!(scene.integrator.clamp, None);
+    let scene = parse_result(&format!("{MINIMAL}aperture = 0.05\nfocus_distance = 2.5\n[film]\nfilter = \"gaussian\"\n[integrator]\nclamp = 10.0\n")).unwrap();
+    assert_eq!((scene.camera.aperture, scene.camera.focus_distance), (0.05, 2.5));
+    assert_eq!((scene.film.filter, scene.integrator.clamp), (Filter::Gaussian, Some(10.0)));
+}
+
+#[test]
+fn unknown_filter_is_named_with_the_choices() {
+    let e = error_of(&format!("{MINIMAL}[film]\nfilter = \"lanczos\"\n"));
+    assert!(e.contains("filter") && e.contains("lanczos") && e.contains("tent") && e.contains("line 5"), "{e}");
 }
 
 #[test]

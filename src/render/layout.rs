@@ -17,6 +17,10 @@ pub const ENV_CONSTANT: u32 = 0;
 pub const ENV_ANGULAR: u32 = 1;
 pub const ENV_LATLONG: u32 = 2;
 
+pub const FILTER_BOX: u32 = 0;
+pub const FILTER_TENT: u32 = 1;
+pub const FILTER_GAUSSIAN: u32 = 2;
+
 /// `struct Primitive`: see layout.glsl for what a, b and c hold per kind.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -73,6 +77,17 @@ pub struct FrameParams {
     pub env_size: [u32; 4],
     /// fixed absorption (< 0: derive from throughput), q min, q max, unused
     pub roulette: [f32; 4],
+    /// lens radius (0: pinhole), focus distance along the viewing axis, radiance clamp (0: off),
+    /// FILTER_* as raw u32 bits
+    pub lens: [f32; 4],
+}
+
+/// `buffer StatsBuffer`: per-dispatch counters, cleared and read by the host.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuStats {
+    pub ray_count: u32,
+    pub nonfinite_samples: u32,
 }
 
 /// `push_constant PassBlock`.
@@ -129,7 +144,7 @@ mod tests {
 
     #[test]
     fn frame_params_match_glsl_std140() {
-        assert_eq!(size_of::<FrameParams>(), 160);
+        assert_eq!(size_of::<FrameParams>(), 176);
         let offsets = [
             offset_of!(FrameParams, cam_origin),
             offset_of!(FrameParams, cam_forward),
@@ -141,8 +156,17 @@ mod tests {
             offset_of!(FrameParams, integrator),
             offset_of!(FrameParams, env_size),
             offset_of!(FrameParams, roulette),
+            offset_of!(FrameParams, lens),
         ];
-        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144]);
+        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160]);
+    }
+
+    #[test]
+    fn stats_match_glsl_std430() {
+        assert_eq!(size_of::<GpuStats>(), 8);
+        assert_eq!(offset_of!(GpuStats, nonfinite_samples), 4);
+        let glsl = include_str!("../../shaders/layout.glsl");
+        assert!(glsl.contains("buffer StatsBuffer { uint ray_count; uint nonfinite_samples; } stats;"), "StatsBuffer members differ from GpuStats");
     }
 
     #[test]
@@ -167,6 +191,9 @@ mod tests {
             ("ENV_CONSTANT", ENV_CONSTANT),
             ("ENV_ANGULAR", ENV_ANGULAR),
             ("ENV_LATLONG", ENV_LATLONG),
+            ("FILTER_BOX", FILTER_BOX),
+            ("FILTER_TENT", FILTER_TENT),
+            ("FILTER_GAUSSIAN", FILTER_GAUSSIAN),
         ] {
             let literal = if value == u32::MAX { "0xffffffffu".to_string() } else { format!("{value}u") };
             assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl");

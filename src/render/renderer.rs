@@ -2,18 +2,18 @@
 //! `DISPATCH_TARGET_S` each, so a desktop GPU's watchdog never fires and progress stays smooth.
 
 use super::kernel::{kernel_spirv, WORKGROUP};
-use super::layout::{FrameParams, PassParams};
+use super::layout::{FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT};
 use super::acceleration::AccelerationStats;
 use super::scene_data::SceneData;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
-use crate::scene::Scene;
+use crate::scene::{Filter, Scene};
 use anyhow::{Context as _, Result};
 use std::time::Instant;
 
 /// Wall time one dispatch aims for. Windows' GPU watchdog fires at 2 s.
 const DISPATCH_TARGET_S: f64 = 0.2;
-/// Upper bound on pixel-samples in one dispatch, so the 32-bit ray counter cannot wrap in practice.
+/// Upper bound on pixel-samples in one dispatch, so the 32-bit counters cannot wrap in practice.
 const MAX_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 24;
 
 pub struct Renderer<'a> {
@@ -31,6 +31,8 @@ pub struct Renderer<'a> {
     /// BLAKE3 of everything uploaded that decides the image, the seed aside: see [`scene_hash`].
     pub scene_hash: String,
     pub rays_traced: u64,
+    /// Samples whose radiance was NaN or infinite, dropped by the kernel (counted as black).
+    pub nonfinite_samples: u64,
     pub seconds: f64,
     pub geometry: GeometryReport,
     /// Estimated seconds per pixel-row-sample, refined after every dispatch.
@@ -56,6 +58,8 @@ pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 // Binding indices of shaders/layout.glsl.
 const ACCUM: usize = 6;
 const STATS: usize = 7;
+/// The statistics buffer's contents at the start of every dispatch.
+const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0 };
 
 pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     let cam = &scene.camera;
@@ -66,6 +70,11 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
     let rot = data.env_rotation_deg.to_radians();
     let i = &scene.integrator;
+    let filter = match scene.film.filter {
+        Filter::Box => FILTER_BOX,
+        Filter::Tent => FILTER_TENT,
+        Filter::Gaussian => FILTER_GAUSSIAN,
+    };
     FrameParams {
         cam_origin: cam.position.extend(0.0).into(),
         cam_forward: forward.extend(tan_half).into(),
@@ -77,6 +86,7 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         integrator: [i.rr_start, u32::from(i.nee), data.env_kind, i.max_bounces],
         env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
+        lens: [cam.aperture, cam.focus_distance, i.clamp.unwrap_or(0.0), f32::from_bits(filter)],
     }
 }
 
@@ -142,7 +152,7 @@ impl<'a> Renderer<'a> {
             ("lights", BufferKind::Storage, bytemuck::cast_slice(&data.lights)),
             ("environment map", BufferKind::Storage, bytemuck::cast_slice(&data.env_texels)),
             ("accumulation image", BufferKind::Storage, &[]),
-            ("statistics", BufferKind::HostStorage, &[0u8; 16]),
+            ("statistics", BufferKind::HostStorage, bytemuck::bytes_of(&CLEARED_STATS)),
             ("instances", BufferKind::Storage, bytemuck::cast_slice(&a.instances)),
             ("mesh triangles", BufferKind::Storage, bytemuck::cast_slice(&a.triangles)),
             ("vertex positions", BufferKind::Storage, bytemuck::cast_slice(&a.positions)),
@@ -168,7 +178,7 @@ impl<'a> Renderer<'a> {
         }
         let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, seconds: 0.0, geometry: GeometryReport {
+        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -261,14 +271,15 @@ impl<'a> Renderer<'a> {
 
     fn dispatch(&mut self, pass: PassParams) -> Result<()> {
         let kernel = self.kernel.as_ref().expect("kernel lives until drop");
-        self.buffers[STATS].write(&[0u8; 4])?;
+        self.buffers[STATS].write(bytemuck::bytes_of(&CLEARED_STATS))?;
         let groups = [self.width.div_ceil(WORKGROUP), pass.row_count.div_ceil(WORKGROUP), 1];
         let start = Instant::now();
         kernel.dispatch(self.ctx, bytemuck::bytes_of(&pass), groups)?;
         let elapsed = start.elapsed().as_secs_f64();
         self.seconds += elapsed;
-        let rays = u32::from_le_bytes(self.buffers[STATS].read()?[..4].try_into().expect("4 bytes"));
-        self.rays_traced += rays as u64;
+        let stats: GpuStats = bytemuck::pod_read_unaligned(&self.buffers[STATS].read()?[..std::mem::size_of::<GpuStats>()]);
+        self.rays_traced += stats.ray_count as u64;
+        self.nonfinite_samples += stats.nonfinite_samples as u64;
         let cost = elapsed / (pass.row_count as f64 * pass.sample_count as f64);
         // Smooth, but follow quickly: scenes differ in cost across the image.
         self.cost_per_row_sample = Some(match self.cost_per_row_sample {

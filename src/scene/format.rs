@@ -34,6 +34,11 @@ pub struct CameraFile {
     /// Vertical field of view in degrees.
     #[serde(default = "default_fov")]
     pub fov: f32,
+    /// Thin-lens radius in scene units; 0 is a pinhole.
+    #[serde(default)]
+    pub aperture: f32,
+    /// Distance of the plane in focus along the viewing axis; absent: the distance to look_at.
+    pub focus_distance: Option<f32>,
 }
 
 fn default_up() -> [f32; 3] {
@@ -49,12 +54,25 @@ pub struct FilmFile {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    pub filter: Filter,
 }
 
 impl Default for FilmFile {
     fn default() -> Self {
-        Self { width: 512, height: 512, spp: 64 }
+        Self { width: 512, height: 512, spp: 64, filter: Filter::Box }
     }
+}
+
+/// Pixel reconstruction filter, importance sampled: each sample's film position is drawn from it.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Filter {
+    /// Uniform over the pixel.
+    Box,
+    /// Triangle of radius 1 pixel per axis.
+    Tent,
+    /// Gaussian of standard deviation 0.5 pixel.
+    Gaussian,
 }
 
 #[derive(Deserialize, Debug)]
@@ -71,11 +89,13 @@ pub struct IntegratorFile {
     /// Next-event estimation samples the environment map too (by its radiance); false leaves
     /// the map to BSDF sampling alone, as before it was importance sampled (for comparisons).
     pub sample_environment: bool,
+    /// Largest radiance component a sample may carry (biased; for previews); absent: no clamp.
+    pub clamp: Option<f32>,
 }
 
 impl Default for IntegratorFile {
     fn default() -> Self {
-        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024, sample_environment: true }
+        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024, sample_environment: true, clamp: None }
     }
 }
 

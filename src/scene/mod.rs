@@ -7,6 +7,7 @@ mod mesh;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, Asset, AssetError};
+pub use format::Filter;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 
 use anyhow::{bail, Context as _, Result};
@@ -25,6 +26,17 @@ pub struct Camera {
     pub up: Vec3,
     /// Vertical field of view, degrees.
     pub fov_deg: f32,
+    /// Thin-lens radius; 0 is a pinhole.
+    pub aperture: f32,
+    /// Distance of the plane in focus along the viewing axis.
+    pub focus_distance: f32,
+}
+
+impl Camera {
+    /// A pinhole camera (focused on look_at, which only matters once an aperture is set).
+    pub fn pinhole(position: Vec3, look_at: Vec3, up: Vec3, fov_deg: f32) -> Camera {
+        Camera { position, look_at, up, fov_deg, aperture: 0.0, focus_distance: (look_at - position).length() }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -32,6 +44,7 @@ pub struct Film {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    pub filter: Filter,
 }
 
 #[derive(Clone, Debug)]
@@ -41,6 +54,8 @@ pub struct Integrator {
     pub nee: bool,
     pub max_bounces: u32,
     pub sample_environment: bool,
+    /// Per-sample cap on the largest radiance component (biased); None: off.
+    pub clamp: Option<f32>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -115,8 +130,8 @@ impl Scene {
         let film = FilmFile::default();
         let mut scene = Scene {
             name: name.clone(),
-            camera: Camera { position: Vec3::Z, look_at: Vec3::ZERO, up: Vec3::Y, fov_deg: 40.0 },
-            film: Film { width: film.width, height: film.height, spp: film.spp },
+            camera: Camera::pinhole(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0),
+            film: Film { width: film.width, height: film.height, spp: film.spp, filter: film.filter },
             integrator: integrator_from(&IntegratorFile::default())?,
             materials: vec![],
             shapes: vec![],
@@ -127,7 +142,7 @@ impl Scene {
         };
         match MeshImporter::default().place(&mut scene, path, None, Mat4::IDENTITY)? {
             Some(c) => {
-                scene.camera = Camera { position: c.position, look_at: c.look_at, up: c.up, fov_deg: c.yfov_degrees };
+                scene.camera = Camera::pinhole(c.position, c.look_at, c.up, c.yfov_degrees);
                 if let Some(aspect) = c.aspect.filter(|a| a.is_finite() && *a > 0.0) {
                     scene.film.height = ((scene.film.width as f32 / aspect).round() as u32).clamp(1, 16384);
                 }
@@ -180,12 +195,12 @@ fn non_negative3(key: &str, v: [f32; 3]) -> Result<Vec3> {
 
 fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     let c = &file.camera;
-    let camera = Camera {
-        position: vec3("camera.position", c.position)?,
-        look_at: vec3("camera.look_at", c.look_at)?,
-        up: vec3("camera.up", c.up)?,
-        fov_deg: finite("camera.fov", c.fov)?,
-    };
+    let mut camera = Camera::pinhole(
+        vec3("camera.position", c.position)?,
+        vec3("camera.look_at", c.look_at)?,
+        vec3("camera.up", c.up)?,
+        finite("camera.fov", c.fov)?,
+    );
     if !(camera.fov_deg > 0.0 && camera.fov_deg < 180.0) {
         bail!("camera.fov must be in (0, 180) degrees, got {}", camera.fov_deg);
     }
@@ -196,7 +211,17 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     if forward.cross(camera.up).length() <= 1e-6 * forward.length() * camera.up.length() {
         bail!("camera.up must not be parallel to the viewing direction (or zero)");
     }
-    let film = Film { width: file.film.width, height: file.film.height, spp: file.film.spp };
+    camera.aperture = finite("camera.aperture", c.aperture)?;
+    if camera.aperture < 0.0 {
+        bail!("camera.aperture must be >= 0, got {}", camera.aperture);
+    }
+    if let Some(f) = c.focus_distance {
+        camera.focus_distance = finite("camera.focus_distance", f)?;
+        if camera.focus_distance <= 0.0 {
+            bail!("camera.focus_distance must be > 0, got {f}");
+        }
+    }
+    let film = Film { width: file.film.width, height: file.film.height, spp: file.film.spp, filter: file.film.filter };
     check_film(&film)?;
     let i = &file.integrator;
     let integrator = integrator_from(i)?;
@@ -301,7 +326,19 @@ fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {
     if i.max_bounces == 0 {
         bail!("integrator.max_bounces must be at least 1");
     }
-    Ok(Integrator { rr_start: i.rr_start, absorption: i.absorption, nee: i.nee, max_bounces: i.max_bounces, sample_environment: i.sample_environment })
+    if let Some(c) = i.clamp {
+        if !(c.is_finite() && c > 0.0) {
+            bail!("integrator.clamp must be finite and > 0, got {c}");
+        }
+    }
+    Ok(Integrator {
+        rr_start: i.rr_start,
+        absorption: i.absorption,
+        nee: i.nee,
+        max_bounces: i.max_bounces,
+        sample_environment: i.sample_environment,
+        clamp: i.clamp,
+    })
 }
 
 /// Looks at the scene's world bounds from the front (+z), far enough for a 40 degree view to hold them.
@@ -318,7 +355,7 @@ fn framing_camera(scene: &Scene) -> Camera {
     let radius = (0.5 * (hi - lo).length()).max(1e-3);
     let fov_deg: f32 = 40.0;
     let distance = radius / (0.5 * fov_deg).to_radians().sin() * 1.05;
-    Camera { position: center + Vec3::Z * distance, look_at: center, up: Vec3::Y, fov_deg }
+    Camera::pinhole(center + Vec3::Z * distance, center, Vec3::Y, fov_deg)
 }
 
 /// Object-to-world transform: scale, then rotate about x, y and z (degrees), then translate.
