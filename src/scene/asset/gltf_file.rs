@@ -35,7 +35,40 @@ const MAX_NODE_DEPTH: usize = 1000;
 /// Loads a `.gltf` or `.glb` file: its default scene (else scene 0, else every root node).
 pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
     let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes)
+    // gltf 1.4 computes `length - 12` from a GLB header without checking it, which overflows
+    // (a panic with overflow checks on) for a length field below 12 (found by fuzzing).
+    if bytes.starts_with(b"glTF") && bytes.len() >= 12 {
+        let length = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        if length < 12 {
+            return Err(AssetError::invalid(
+                path,
+                format!("cannot parse glTF: GLB header length {length} is shorter than the 12-byte header"),
+            ));
+        }
+    }
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
+    // gltf-json 1.4's validation indexes `accessors` with a primitive's POSITION accessor before
+    // checking that it exists, and panics on an out-of-range one (found by fuzzing), so check
+    // that first and validate afterwards.
+    let json = document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for (semantic, accessor) in &primitive.attributes {
+                if accessor.value() >= json.accessors.len() {
+                    return Err(AssetError::invalid(
+                        path,
+                        format!(
+                            "cannot parse glTF: meshes[{m}].primitives[{p}].attributes[{semantic:?}]: accessor {} does not exist ({} accessors)",
+                            accessor.value(),
+                            json.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json)
         .map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
     let directory = path.parent().unwrap_or(Path::new("."));
     let buffers =
