@@ -1,6 +1,7 @@
-// Unidirectional path tracing with next-event estimation and MIS (power heuristic) at diffuse
-// vertices, Russian roulette after `rr_start` bounces. integrator.max_bounces is only a safety cap far beyond
-// where roulette ends any path that carries energy.
+// Unidirectional path tracing with next-event estimation and MIS (power heuristic) at every
+// vertex whose lobe is not a delta, Russian roulette after `rr_start` bounces.
+// integrator.max_bounces is only a safety cap far beyond where roulette ends any path that
+// carries energy.
 
 // Offsets a ray origin off the surface to the side `dir` leaves towards.
 vec3 offset_origin(vec3 p, vec3 n, vec3 dir) {
@@ -15,13 +16,30 @@ float survival_probability(vec3 throughput) {
     return clamp(max3(throughput), frame.roulette.y, frame.roulette.z);
 }
 
+// Next-event estimation at a vertex with a non-delta lobe: one light sample, MIS-weighted
+// against the lobe's own pdf for that direction.
+vec3 direct_light(Lobe lobe, vec3 d, Surface surface, inout Rng rng, inout uint rays) {
+    LightSample ls;
+    if (!sample_direct(surface.point, rng, ls)) return vec3(0.0);
+    // As for sampled directions: the shading and geometric normals must agree on the side.
+    if (dot(ls.dir, surface.ns) * dot(ls.dir, surface.ng) <= 0.0) return vec3(0.0);
+    float lobe_pdf;
+    vec3 f_cos = eval_lobe(lobe, d, ls.dir, lobe_pdf);
+    if (max3(f_cos) <= 0.0) return vec3(0.0);
+    rays += 1u;
+    vec3 shadow_origin = offset_origin(surface.point, surface.ng, ls.dir);
+    // Stop short of the light so its own surface does not count as a blocker.
+    if (occluded(shadow_origin, ls.dir, ls.dist * (1.0 - 1e-4))) return vec3(0.0);
+    return f_cos * ls.radiance * (power_heuristic(ls.pdf, lobe_pdf) / ls.pdf);
+}
+
 vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     bool nee = frame.integrator.y != 0u;
     uint rr_start = frame.integrator.x;
-    // Where the previous bounce came from, for the MIS weight of emitters hit by BSDF sampling.
-    bool after_diffuse = false;
+    // The previous bounce, for the MIS weight of emitters hit by BSDF sampling: the pdf of its
+    // direction, 0 after the camera or a delta lobe (which light sampling cannot reproduce).
     float bsdf_pdf = 0.0;
     vec3 prev_point = origin;
 
@@ -31,7 +49,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         rays += 1u;
         if (!trace_ray(origin, dir, 1e30, false, hit)) {
             float weight = 1.0;
-            if (nee && after_diffuse && environment_sampled()) {
+            if (nee && bsdf_pdf > 0.0 && environment_sampled()) {
                 weight = power_heuristic(bsdf_pdf, frame.env_rotation.z * environment_pdf(dir));
             }
             radiance += throughput * environment_radiance(dir) * weight;
@@ -46,7 +64,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         vec3 le = emitted_radiance(m, front);
         if (max3(le) > 0.0) {
             float weight = 1.0;
-            if (nee && after_diffuse) {
+            if (nee && bsdf_pdf > 0.0) {
                 weight = power_heuristic(bsdf_pdf, light_pdf(world_primitive(hit), prev_point, dir, hit.t));
             }
             radiance += throughput * le * weight;
@@ -58,32 +76,15 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
             throughput /= q;
         }
 
-        Scatter s = scatter(m, dir, surface.ns, front, rng);
+        Lobe lobe = pick_lobe(m, dir, surface.ns, front, rng);
+        BsdfSample s;
+        if (!sample_lobe(lobe, dir, rng, s)) break;
         // Shading normals can send a ray through the geometric surface; such paths end here.
         if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) break;
+        if (nee && !s.delta) radiance += throughput * direct_light(lobe, dir, surface, rng, rays);
         throughput *= s.weight;
-        after_diffuse = s.event == EVENT_DIFFUSE;
-        if (after_diffuse) {
-            vec3 n_in = front ? surface.ns : -surface.ns;
-            if (nee) {
-                LightSample ls;
-                if (sample_direct(point, rng, ls)) {
-                    float cos_surface = dot(n_in, ls.dir);
-                    if (cos_surface > 0.0 && (dot(ls.dir, n) > 0.0) == front) {
-                        rays += 1u;
-                        vec3 shadow_origin = offset_origin(point, n, ls.dir);
-                        // Stop short of the light so its own surface does not count as a blocker.
-                        if (!occluded(shadow_origin, ls.dir, ls.dist * (1.0 - 1e-4))) {
-                            float brdf_pdf = cos_surface * INV_PI;
-                            float weight = power_heuristic(ls.pdf, brdf_pdf);
-                            radiance += throughput * ls.radiance * (cos_surface * INV_PI * weight / ls.pdf);
-                        }
-                    }
-                }
-            }
-            bsdf_pdf = max(0.0, dot(n_in, s.dir)) * INV_PI;
-            prev_point = point;
-        }
+        bsdf_pdf = s.delta ? 0.0 : s.pdf;
+        prev_point = point;
         if (max3(throughput) <= 0.0) break;
         origin = offset_origin(point, n, s.dir);
         dir = s.dir;

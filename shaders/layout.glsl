@@ -16,13 +16,24 @@ struct Primitive {
     vec4 c;
 };
 
+// Fresnel of the reflector (R) lobe (CONDUCTOR_* must match layout.rs): none (a perfect
+// reflector), a complex IOR eta + ik, or Schlick's form with the albedo as F0 (glTF's metals).
+const uint CONDUCTOR_MIRROR = 0u;
+const uint CONDUCTOR_COMPLEX = 1u;
+const uint CONDUCTOR_ALBEDO = 2u;
+
 // albedo_r.w = reflectivity R, emission_t.w = transparency T, params.x = ior,
 // params.y = 1 when the emitter radiates from both sides, params.z = albedo texture index (uint
-// bits; NO_TEXTURE for none).
+// bits; NO_TEXTURE for none), params.w = GGX alpha of the R and T lobes and the coat.
+// conductor_eta.rgb = eta and conductor_k.rgb = k of CONDUCTOR_COMPLEX, conductor_eta.w = the
+// CONDUCTOR_* kind (uint bits), conductor_k.w = 1 / (1 - the coat's average Fresnel) for a
+// plastic (a coated base), 0 for a plain diffuse base.
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;
     vec4 params;
+    vec4 conductor_eta;
+    vec4 conductor_k;
 };
 
 // Flattened BVH node (src/bvh): first child is the next node, `offset` is the second child for an

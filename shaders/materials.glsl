@@ -1,54 +1,217 @@
-// The R/T material model: mirror with probability R, dielectric with probability T, diffuse otherwise.
+// The R/T material model. Each vertex picks one lobe: with probability R a reflector (a mirror, or
+// a conductor with Fresnel), with probability T a dielectric, otherwise the base (diffuse, or a
+// plastic: diffuse under a dielectric coat). A lobe's weight equals the probability of picking it,
+// so the two cancel; the path then samples, evaluates and MIS-weights that lobe alone, which keeps
+// delta lobes (roughness ~0) and rough lobes in one scheme. Rough lobes are GGX (microfacet.glsl).
 
-const uint EVENT_DIFFUSE = 0u;
-const uint EVENT_SPECULAR = 1u;
+#include "fresnel.glsl"
+#include "microfacet.glsl"
 
-// Unpolarised Fresnel reflectance for a ray from a medium of index 1 into one of relative index
-// eta_t/eta_i = 1/eta, with cos_i > 0. eta = eta_i / eta_t. Returns 1 on total internal reflection.
-float fresnel_dielectric(float cos_i, float eta) {
-    float sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
-    if (sin2_t >= 1.0) return 1.0;
-    float cos_t = sqrt(1.0 - sin2_t);
-    float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5 * (rs * rs + rp * rp);
-}
+const uint LOBE_DIFFUSE = 0u;         // albedo / pi
+const uint LOBE_REFLECT = 1u;         // GGX or mirror reflection with Fresnel `fresnel`
+const uint LOBE_DIELECTRIC = 2u;      // GGX or smooth reflection + refraction (Walter et al. 2007)
+const uint LOBE_COATED_DIFFUSE = 3u;  // the diffuse base of a plastic, seen through its coat
 
-struct Scatter {
-    vec3 dir;
-    vec3 weight;   // throughput factor of this event (already divided by the event's probability)
-    uint event;
+// Fresnel of the coat's reflection, next to the CONDUCTOR_* kinds of layout.glsl.
+const uint FRESNEL_COAT = 3u;
+
+struct Lobe {
+    uint kind;
+    uint fresnel;     // LOBE_REFLECT: CONDUCTOR_* or FRESNEL_COAT
+    float alpha;      // GGX alpha; below ALPHA_DELTA the lobe is smooth (a delta lobe)
+    float eta;        // eta_i / eta_t across the interface (dielectric and coat)
+    vec3 color;       // diffuse albedo, F0 (CONDUCTOR_ALBEDO) or eta (CONDUCTOR_COMPLEX)
+    vec3 k;           // CONDUCTOR_COMPLEX: extinction coefficient
+    float scale;      // the lobe's weight over the probability of picking it
+    float coat_norm;  // coated diffuse: 1 / (1 - the coat's cosine-weighted average Fresnel)
+    vec3 t;           // shading frame; n faces the side the ray came from
+    vec3 b;
+    vec3 n;
 };
 
-// Picks and samples one event for a ray arriving along `d` at a surface with unit normal `n`
-// (the front-side normal) at which the ray is `entering` (coming from the front side).
-Scatter scatter(Material m, vec3 d, vec3 n, bool entering, inout Rng rng) {
-    Scatter s;
+struct BsdfSample {
+    vec3 dir;
+    vec3 weight;  // f cos / pdf, times the lobe's scale
+    float pdf;    // solid angle; meaningless for a delta lobe
+    bool delta;
+};
+
+vec3 to_local(Lobe l, vec3 w) {
+    return vec3(dot(w, l.t), dot(w, l.b), dot(w, l.n));
+}
+
+vec3 from_local(Lobe l, vec3 w) {
+    return w.x * l.t + w.y * l.b + w.z * l.n;
+}
+
+bool lobe_is_delta(Lobe l) {
+    return (l.kind == LOBE_REFLECT || l.kind == LOBE_DIELECTRIC) && l.alpha < ALPHA_DELTA;
+}
+
+vec3 lobe_fresnel(Lobe l, float cos_i) {
+    float c = clamp(cos_i, 0.0, 1.0);
+    if (l.fresnel == CONDUCTOR_COMPLEX) return fresnel_conductor(c, l.color, l.k);
+    if (l.fresnel == CONDUCTOR_ALBEDO) return fresnel_schlick(c, l.color);
+    if (l.fresnel == FRESNEL_COAT) return vec3(fresnel_dielectric(c, l.eta));
+    return vec3(1.0);
+}
+
+// Picks the lobe for a ray arriving along `d` at a surface with unit shading normal `ns` (on the
+// front side), at which the ray is `entering` (coming from the front side).
+Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
+    Lobe l;
+    l.n = entering ? ns : -ns;
+    onb(l.n, l.t, l.b);
+    l.alpha = m.params.w;
+    l.eta = 1.0;
+    l.color = m.albedo_r.rgb;
+    l.k = vec3(0.0);
+    l.fresnel = CONDUCTOR_MIRROR;
+    l.scale = 1.0;
+    l.coat_norm = 0.0;
     float r = m.albedo_r.w;
     float t = m.emission_t.w;
-    vec3 n_in = entering ? n : -n;  // faces the side the ray came from
     float xi = rng_next(rng);
     if (xi < r) {
-        s.dir = reflect(d, n_in);
-        s.weight = vec3(1.0);
-        s.event = EVENT_SPECULAR;
+        l.kind = LOBE_REFLECT;
+        l.fresnel = floatBitsToUint(m.conductor_eta.w);
+        if (l.fresnel == CONDUCTOR_COMPLEX) {
+            l.color = m.conductor_eta.rgb;
+            l.k = m.conductor_k.rgb;
+        }
     } else if (xi < r + t) {
-        float ior = m.params.x;
-        float eta = entering ? 1.0 / ior : ior;
-        float cos_i = -dot(d, n_in);
-        float f = fresnel_dielectric(cos_i, eta);
-        vec3 refracted = refract(d, n_in, eta);
+        l.kind = LOBE_DIELECTRIC;
+        l.eta = entering ? 1.0 / m.params.x : m.params.x;
+    } else if (m.conductor_k.w > 0.0) {
+        // A plastic is coated on both sides. Its coat reflects F(wo) and passes the rest to the
+        // base; pick by the share each carries, so that a dark base is rarely sampled.
+        l.eta = 1.0 / m.params.x;
+        l.coat_norm = m.conductor_k.w;
+        float f = fresnel_dielectric(clamp(-dot(d, l.n), 0.0, 1.0), l.eta);
+        float share = f + (1.0 - f) * max3(l.color);
+        float p_coat = share > 0.0 ? f / share : 1.0;
+        if (rng_next(rng) < p_coat) {
+            l.kind = LOBE_REFLECT;
+            l.fresnel = FRESNEL_COAT;
+            l.scale = 1.0 / p_coat;
+        } else {
+            l.kind = LOBE_COATED_DIFFUSE;
+            l.scale = 1.0 / (1.0 - p_coat);
+        }
+    } else {
+        l.kind = LOBE_DIFFUSE;
+    }
+    return l;
+}
+
+// The coated base: light refracts into the coat (1 - F(wi)), scatters diffusely and leaves
+// through it (1 - F(wo)). Dividing by 1 - the average of F over the cosine-weighted hemisphere
+// makes the exit factor integrate to 1, so a white base under a smooth coat reflects exactly
+// 1 - F(wo) beside the coat's F(wo): no energy is created. The coat's internal reflections and
+// the eta^2 spreading are not modelled; under a rough coat the sum stays at or below 1 (it is
+// E_spec(wo) + 1 - F(wo), and GGX reflects E_spec <= F up to ~1e-3 at low roughness).
+vec3 coated_diffuse(Lobe l, float cos_o, float cos_i) {
+    float through = (1.0 - fresnel_dielectric(cos_o, l.eta)) * (1.0 - fresnel_dielectric(cos_i, l.eta));
+    return l.color * (INV_PI * through * l.coat_norm);
+}
+
+// Samples the lobe for a ray arriving along `d`. False when it yields no direction (the path ends).
+bool sample_lobe(Lobe l, vec3 d, inout Rng rng, out BsdfSample s) {
+    s.delta = lobe_is_delta(l);
+    s.pdf = 0.0;
+    if (l.kind == LOBE_DIFFUSE || l.kind == LOBE_COATED_DIFFUSE) {
+        s.dir = sample_cosine_hemisphere(rng_next2(rng), l.n);
+        float cos_i = max(0.0, dot(s.dir, l.n));
+        s.pdf = cos_i * INV_PI;
+        s.weight = l.kind == LOBE_DIFFUSE ? l.color : coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i) * PI;
+        s.weight *= l.scale;
+        return s.pdf > 0.0;
+    }
+    float cos_o = -dot(d, l.n);
+    if (s.delta) {
+        if (l.kind == LOBE_REFLECT) {
+            s.dir = reflect(d, l.n);
+            s.weight = lobe_fresnel(l, cos_o) * l.scale;
+            return true;
+        }
+        float f = fresnel_dielectric(cos_o, l.eta);
+        vec3 refracted = refract(d, l.n, l.eta);
         // refract() returns 0 at total internal reflection; rounding can put that just below f = 1.
         bool reflects = rng_next(rng) < f || dot(refracted, refracted) == 0.0;
-        s.dir = reflects ? reflect(d, n_in) : refracted;
-        s.weight = vec3(1.0);
-        s.event = EVENT_SPECULAR;
-    } else {
-        s.dir = sample_cosine_hemisphere(rng_next2(rng), n_in);
-        s.weight = m.albedo_r.rgb;
-        s.event = EVENT_DIFFUSE;
+        s.dir = reflects ? reflect(d, l.n) : refracted;
+        s.weight = vec3(l.scale);
+        return true;
     }
-    return s;
+    vec3 wo = to_local(l, -d);
+    if (wo.z <= 0.0) return false;
+    vec3 m = sample_vndf(wo, l.alpha, rng_next2(rng));
+    float cos_m = dot(wo, m);
+    // G2 / G1(wo): what remains of f cos / pdf once D and the Jacobians cancel.
+    vec3 wi;
+    if (l.kind == LOBE_REFLECT) {
+        wi = reflect(-wo, m);
+        if (wi.z <= 0.0) return false;
+        s.pdf = reflection_pdf(wo, m, l.alpha);
+        s.weight = lobe_fresnel(l, cos_m) * (ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha));
+    } else {
+        float f = fresnel_dielectric(cos_m, l.eta);
+        vec3 refracted = refract(-wo, m, l.eta);
+        if (rng_next(rng) < f || dot(refracted, refracted) == 0.0) {
+            wi = reflect(-wo, m);
+            if (wi.z <= 0.0) return false;
+            s.pdf = f * reflection_pdf(wo, m, l.alpha);
+        } else {
+            wi = refracted;
+            if (wi.z >= 0.0) return false;
+            s.pdf = (1.0 - f) * refraction_pdf(wo, wi, m, l.alpha, l.eta);
+        }
+        s.weight = vec3(ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha));
+    }
+    s.dir = from_local(l, wi);
+    s.weight *= l.scale;
+    return s.pdf > 0.0;
+}
+
+// f cos for light arriving from `wi` (world) and leaving along -d, times the lobe's scale, and the
+// solid-angle pdf with which sample_lobe picks wi. Delta lobes have neither (both 0).
+vec3 eval_lobe(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
+    pdf = 0.0;
+    if (lobe_is_delta(l)) return vec3(0.0);
+    float cos_i = dot(wi_world, l.n);
+    if (l.kind == LOBE_DIFFUSE || l.kind == LOBE_COATED_DIFFUSE) {
+        if (cos_i <= 0.0) return vec3(0.0);
+        pdf = cos_i * INV_PI;
+        vec3 f = l.kind == LOBE_DIFFUSE ? l.color * INV_PI : coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i);
+        return f * (cos_i * l.scale);
+    }
+    vec3 wo = to_local(l, -d);
+    vec3 wi = to_local(l, wi_world);
+    if (wo.z <= 0.0 || wi.z == 0.0) return vec3(0.0);
+    if (wi.z > 0.0) {
+        vec3 h = normalize(wo + wi);
+        float cos_h = dot(wo, h);
+        if (cos_h <= 0.0) return vec3(0.0);
+        vec3 f = l.kind == LOBE_REFLECT ? lobe_fresnel(l, cos_h) : vec3(fresnel_dielectric(cos_h, l.eta));
+        pdf = reflection_pdf(wo, h, l.alpha);
+        if (l.kind == LOBE_DIELECTRIC) pdf *= f.x;
+        return f * (ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) / (4.0 * wo.z) * l.scale);
+    }
+    if (l.kind != LOBE_DIELECTRIC) return vec3(0.0);
+    // Refraction: the generalised half vector, turned to the +z side.
+    vec3 h = -(l.eta * wo + wi);
+    if (dot(h, h) <= 0.0) return vec3(0.0);
+    h = normalize(h);
+    if (h.z < 0.0) h = -h;
+    float cos_o = dot(wo, h);
+    float cos_t = dot(wi, h);
+    if (cos_o <= 0.0 || cos_t >= 0.0) return vec3(0.0);
+    float f = fresnel_dielectric(cos_o, l.eta);
+    float denom = l.eta * cos_o + cos_t;
+    pdf = (1.0 - f) * refraction_pdf(wo, wi, h, l.alpha, l.eta);
+    // Walter et al.'s BTDF times |wi.z|, without the 1/eta^2 radiance scaling (as the smooth
+    // dielectric above: the factors cancel for a camera outside a closed object).
+    float fcos = (1.0 - f) * ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) * cos_o * abs(cos_t) / (wo.z * denom * denom);
+    return vec3(fcos * l.scale);
 }
 
 // Radiance emitted towards a viewer on the front side (or either side when two-sided).

@@ -13,6 +13,8 @@ pub const SHADERS: ShaderSources = &[
     ("bvh.glsl", include_str!("../../shaders/bvh.glsl")),
     ("textures.glsl", include_str!("../../shaders/textures.glsl")),
     ("surface.glsl", include_str!("../../shaders/surface.glsl")),
+    ("fresnel.glsl", include_str!("../../shaders/fresnel.glsl")),
+    ("microfacet.glsl", include_str!("../../shaders/microfacet.glsl")),
     ("materials.glsl", include_str!("../../shaders/materials.glsl")),
     ("lights.glsl", include_str!("../../shaders/lights.glsl")),
     ("environment.glsl", include_str!("../../shaders/environment.glsl")),

@@ -13,6 +13,10 @@ pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
 pub const NO_TEXTURE: u32 = u32::MAX;
 
+pub const CONDUCTOR_MIRROR: u32 = 0;
+pub const CONDUCTOR_COMPLEX: u32 = 1;
+pub const CONDUCTOR_ALBEDO: u32 = 2;
+
 pub const ENV_CONSTANT: u32 = 0;
 pub const ENV_ANGULAR: u32 = 1;
 pub const ENV_LATLONG: u32 = 2;
@@ -30,13 +34,18 @@ pub struct GpuPrimitive {
     pub c: [f32; 4],
 }
 
-/// `struct Material`.
+/// `struct Material`: see layout.glsl for what each member holds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuMaterial {
     pub albedo_r: [f32; 4],
     pub emission_t: [f32; 4],
+    /// ior, two-sided (0/1), albedo texture (u32 bits), GGX alpha
     pub params: [f32; 4],
+    /// conductor eta, CONDUCTOR_* (u32 bits)
+    pub conductor_eta: [f32; 4],
+    /// conductor k, 1 / (1 - average coat Fresnel) for a plastic (0: plain diffuse base)
+    pub conductor_k: [f32; 4],
 }
 
 /// `struct Instance`: rows of the two 3x4 affine maps, then kind, BVH root node and flags.
@@ -115,9 +124,14 @@ mod tests {
 
     #[test]
     fn material_matches_glsl_std430() {
-        assert_eq!(size_of::<GpuMaterial>(), 48);
+        assert_eq!(size_of::<GpuMaterial>(), 80);
         assert_eq!(offset_of!(GpuMaterial, emission_t), 16);
         assert_eq!(offset_of!(GpuMaterial, params), 32);
+        assert_eq!(offset_of!(GpuMaterial, conductor_eta), 48);
+        assert_eq!(offset_of!(GpuMaterial, conductor_k), 64);
+        let glsl = include_str!("../../shaders/layout.glsl");
+        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n};";
+        assert!(glsl.contains(members), "struct Material members differ from GpuMaterial");
     }
 
     #[test]
@@ -188,6 +202,9 @@ mod tests {
             ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
             ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
             ("NO_TEXTURE", NO_TEXTURE),
+            ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
+            ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
+            ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),
             ("ENV_CONSTANT", ENV_CONSTANT),
             ("ENV_ANGULAR", ENV_ANGULAR),
             ("ENV_LATLONG", ENV_LATLONG),

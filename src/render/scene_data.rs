@@ -4,7 +4,7 @@
 use super::acceleration::{gpu_primitive, triangle_primitive, Acceleration};
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
-use crate::scene::{downsample_to_fit, Environment, MapProjection, Scene};
+use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, MapProjection, Material, Scene};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -48,6 +48,22 @@ fn world_lights(scene: &Scene) -> Vec<GpuPrimitive> {
     lights
 }
 
+fn gpu_material(m: &Material) -> GpuMaterial {
+    let (kind, eta, k) = match m.conductor {
+        Conductor::Mirror => (CONDUCTOR_MIRROR, Vec3::ZERO, Vec3::ZERO),
+        Conductor::Complex { eta, k } => (CONDUCTOR_COMPLEX, eta, k),
+        Conductor::Albedo => (CONDUCTOR_ALBEDO, Vec3::ZERO, Vec3::ZERO),
+    };
+    let coat_norm = if m.coat { 1.0 / (1.0 - average_fresnel(m.ior)) } else { 0.0 };
+    GpuMaterial {
+        albedo_r: m.albedo.extend(m.reflectivity).into(),
+        emission_t: m.emission.extend(m.transparency).into(),
+        params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)), m.roughness * m.roughness],
+        conductor_eta: eta.extend(f32::from_bits(kind)).into(),
+        conductor_k: k.extend(coat_norm).into(),
+    }
+}
+
 impl SceneData {
     /// `texture_budget`: most bytes of texels to upload; larger texture sets are downsampled.
     pub fn new(scene: &Scene, texture_budget: u64) -> SceneData {
@@ -55,11 +71,7 @@ impl SceneData {
         let materials = scene
             .materials
             .iter()
-            .map(|m| GpuMaterial {
-                albedo_r: m.albedo.extend(m.reflectivity).into(),
-                emission_t: m.emission.extend(m.transparency).into(),
-                params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)), 0.0],
-            })
+            .map(gpu_material)
             .collect();
         let texture_bytes_requested = scene.textures.iter().map(|t| t.width as u64 * t.height as u64 * 4).sum();
         let mut textures = Vec::new();

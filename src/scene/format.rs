@@ -103,16 +103,39 @@ impl Default for IntegratorFile {
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialFile {
     pub albedo: [f32; 3],
-    pub reflectivity: f32,
+    /// R; absent: 0, or 1 when `metal` or `eta`/`k` make the material a conductor.
+    pub reflectivity: Option<f32>,
     pub transparency: f32,
     pub ior: f32,
     pub emission: [f32; 3],
     pub two_sided: bool,
+    /// Perceptual GGX roughness of the R and T lobes and the coat, in [0, 1].
+    pub roughness: f32,
+    /// A named conductor for the R lobe (see `optics::METALS`), or "albedo" for Schlick's form
+    /// with the albedo as F0.
+    pub metal: Option<String>,
+    /// Complex IOR eta + i k of the R lobe (both or neither; not with `metal`).
+    pub eta: Option<[f32; 3]>,
+    pub k: Option<[f32; 3]>,
+    /// The base is a plastic: the albedo under a dielectric coat of index `ior`.
+    pub coat: bool,
 }
 
 impl Default for MaterialFile {
     fn default() -> Self {
-        Self { albedo: [0.8; 3], reflectivity: 0.0, transparency: 0.0, ior: 1.5, emission: [0.0; 3], two_sided: false }
+        Self {
+            albedo: [0.8; 3],
+            reflectivity: None,
+            transparency: 0.0,
+            ior: 1.5,
+            emission: [0.0; 3],
+            two_sided: false,
+            roughness: 0.0,
+            metal: None,
+            eta: None,
+            k: None,
+            coat: false,
+        }
     }
 }
 

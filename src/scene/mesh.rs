@@ -104,7 +104,7 @@ fn add_asset(scene: &mut Scene, path: &Path, asset: Asset, material: Option<u32>
 /// no surface creates energy.
 fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base: u32) -> Result<Material> {
     let values = [m.albedo.to_array(), m.emission.to_array()].concat();
-    if values.iter().chain([m.reflectivity, m.transparency, m.ior].iter()).any(|v| !v.is_finite()) || m.albedo.min_element() < 0.0 || m.emission.min_element() < 0.0 {
+    if values.iter().chain([m.reflectivity, m.transparency, m.ior, m.roughness].iter()).any(|v| !v.is_finite()) || m.albedo.min_element() < 0.0 || m.emission.min_element() < 0.0 {
         bail!("{}: material '{}' has a negative or non-finite value", path.display(), m.name);
     }
     Ok(Material {
@@ -116,5 +116,8 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         emission: m.emission,
         two_sided: false,
         albedo_texture: m.albedo_texture.map(|t| texture_base + t as u32),
+        roughness: m.roughness.clamp(0.0, 1.0),
+        conductor: m.conductor,
+        coat: m.coat,
     })
 }

@@ -4,14 +4,16 @@ mod asset;
 mod environment;
 mod format;
 mod mesh;
+mod optics;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, Asset, AssetError};
 pub use format::Filter;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
+pub use optics::{average_fresnel, metal, METALS};
 
 use anyhow::{bail, Context as _, Result};
-use format::{FilmFile, IntegratorFile, Placement, Scale, SceneFile};
+use format::{FilmFile, IntegratorFile, MaterialFile, Placement, Scale, SceneFile};
 use glam::{Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -69,6 +71,25 @@ pub struct Material {
     pub two_sided: bool,
     /// Index into `Scene::textures`; multiplies `albedo`.
     pub albedo_texture: Option<u32>,
+    /// Perceptual GGX roughness in [0, 1] of the R and T lobes and of the coat (alpha is its
+    /// square); 0 is a perfect mirror and smooth glass.
+    pub roughness: f32,
+    /// Fresnel of the R lobe.
+    pub conductor: Conductor,
+    /// The base (1 - R - T) is a plastic: the albedo under a dielectric coat of index `ior` and
+    /// roughness `roughness`; false: plain diffuse.
+    pub coat: bool,
+}
+
+/// How much the reflector (R) lobe reflects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Conductor {
+    /// Everything: a perfect reflector (the original mirror).
+    Mirror,
+    /// A conductor of complex index eta + i k per RGB channel.
+    Complex { eta: Vec3, k: Vec3 },
+    /// Schlick's approximation with the albedo as the reflectance at normal incidence (glTF).
+    Albedo,
 }
 
 impl Material {
@@ -230,16 +251,24 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     let mut by_name = HashMap::new();
     for (mname, m) in &file.materials {
         let key = |field: &str| format!("materials.{mname}.{field}");
+        let conductor = conductor_from(m, &key)?;
+        let default_r = if conductor == Conductor::Mirror { 0.0 } else { 1.0 };
         let material = Material {
             name: mname.clone(),
             albedo: non_negative3(&key("albedo"), m.albedo)?,
-            reflectivity: finite(&key("reflectivity"), m.reflectivity)?,
+            reflectivity: finite(&key("reflectivity"), m.reflectivity.unwrap_or(default_r))?,
             transparency: finite(&key("transparency"), m.transparency)?,
             ior: finite(&key("ior"), m.ior)?,
             emission: non_negative3(&key("emission"), m.emission)?,
             two_sided: m.two_sided,
             albedo_texture: None,
+            roughness: finite(&key("roughness"), m.roughness)?,
+            conductor,
+            coat: m.coat,
         };
+        if !(0.0..=1.0).contains(&material.roughness) {
+            bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);
+        }
         if material.albedo.max_element() > 1.0 {
             bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);
         }
@@ -315,6 +344,31 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
         }
     }
     Ok(scene)
+}
+
+/// The R lobe's Fresnel from `metal` or `eta` + `k` (absent: a perfect mirror).
+fn conductor_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Conductor> {
+    match (&m.metal, m.eta, m.k) {
+        (None, None, None) => Ok(Conductor::Mirror),
+        (Some(_), Some(_), _) | (Some(_), _, Some(_)) => bail!("{} and eta/k both set the conductor's IOR: give one", key("metal")),
+        (Some(name), None, None) if name == "albedo" => Ok(Conductor::Albedo),
+        (Some(name), None, None) => {
+            let (eta, k) = metal(name).with_context(|| {
+                let known: Vec<_> = METALS.iter().map(|(n, _, _)| *n).collect();
+                format!("{}: unknown metal '{name}' (known: {}, albedo)", key("metal"), known.join(", "))
+            })?;
+            Ok(Conductor::Complex { eta, k })
+        }
+        (None, Some(_), None) => bail!("{} needs {} as well", key("eta"), key("k")),
+        (None, None, Some(_)) => bail!("{} needs {} as well", key("k"), key("eta")),
+        (None, Some(eta), Some(k)) => {
+            let eta = vec3(&key("eta"), eta)?;
+            if eta.min_element() <= 0.0 {
+                bail!("{} must be > 0 per channel, got {eta:?}", key("eta"));
+            }
+            Ok(Conductor::Complex { eta, k: non_negative3(&key("k"), k)? })
+        }
+    }
 }
 
 fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {

@@ -9,10 +9,12 @@
 //!   emissive texture. With one, the material does not emit (with a note on stderr): the renderer
 //!   has no textured emission, and the factor alone would make the whole surface glow (as it
 //!   would DamagedHelmet, whose factor is 1 and whose texture lights only small details).
-//! - reflectivity = metallic × (1 − roughness): a rough stand-in, since the renderer has no
-//!   glossy lobe; a polished metal becomes a mirror, a rough one stays diffuse.
-//! - `KHR_materials_transmission` factor → transparency (R is lowered so that R + T <= 1);
-//!   `KHR_materials_ior` → ior (1.5 by default).
+//! - `metallicFactor` → reflectivity R, a conductor with the base colour as F0 (Schlick);
+//!   `roughnessFactor` → roughness (both perceptual) of every lobe. The metallic-roughness
+//!   texture is not read: the factors apply to the whole surface.
+//! - `KHR_materials_transmission` factor → transparency T = (1 − metallic) × transmission, a
+//!   rough dielectric; `KHR_materials_ior` → ior (1.5 by default).
+//! - The rest (1 − R − T) is a plastic: the base colour under a dielectric coat of that ior.
 //! - Primitives without a material get [`AssetMaterial::default_grey`].
 //!
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
@@ -27,7 +29,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Accessor, Document, Semantic};
 
-use super::{texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, MeshData};
+use super::{texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, MeshData};
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
 const MAX_NODE_DEPTH: usize = 1000;
@@ -255,12 +257,17 @@ fn convert_material(
     if !emission.is_finite() {
         return Err(format!("material {index}: emission overflows"));
     }
-    let transparency = material
+    // glTF's mix: the metal covers `metallic`, the dielectric the rest, of which `transmission`
+    // is transmitted and the remainder the coated base.
+    let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+    let transmission = material
         .transmission()
         .map_or(0.0, |t| t.transmission_factor())
         .clamp(0.0, 1.0);
-    let reflectivity =
-        (pbr.metallic_factor() * (1.0 - pbr.roughness_factor())).clamp(0.0, 1.0 - transparency);
+    let roughness = pbr.roughness_factor();
+    if !roughness.is_finite() {
+        return Err(format!("material {index}: roughnessFactor is not finite"));
+    }
     Ok(AssetMaterial {
         name: material
             .name()
@@ -268,9 +275,12 @@ fn convert_material(
         albedo: Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE),
         albedo_texture,
         emission: emission.max(Vec3::ZERO),
-        reflectivity,
-        transparency,
+        reflectivity: metallic,
+        transparency: (1.0 - metallic) * transmission,
         ior: material.ior().filter(|&n| n > 0.0).unwrap_or(1.5),
+        roughness: roughness.clamp(0.0, 1.0),
+        conductor: Conductor::Albedo,
+        coat: true,
     })
 }
 

@@ -9,6 +9,7 @@ mod texture;
 
 pub use texture::downsample_to_fit;
 
+use super::Conductor;
 use glam::{Mat4, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
@@ -43,8 +44,9 @@ pub struct MeshData {
     pub triangle_materials: Vec<u32>,
 }
 
-/// The renderer's material model: a diffuse base that is, per bounce, replaced with probability
-/// `reflectivity` by a perfect mirror and with probability `transparency` by a Fresnel dielectric.
+/// The renderer's material model: a base (diffuse, or a plastic when `coat`) that is, per bounce,
+/// replaced with probability `reflectivity` by a reflector (mirror or conductor) and with
+/// probability `transparency` by a Fresnel dielectric, both GGX-rough by `roughness`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AssetMaterial {
     pub name: String,
@@ -59,6 +61,12 @@ pub struct AssetMaterial {
     /// T: probability of a Fresnel dielectric event; R + T <= 1.
     pub transparency: f32,
     pub ior: f32,
+    /// Perceptual GGX roughness in [0, 1] of the R and T lobes and the coat.
+    pub roughness: f32,
+    /// Fresnel of the R lobe.
+    pub conductor: Conductor,
+    /// The base is the albedo under a dielectric coat of index `ior` (a plastic).
+    pub coat: bool,
 }
 
 impl AssetMaterial {
@@ -72,6 +80,9 @@ impl AssetMaterial {
             reflectivity: 0.0,
             transparency: 0.0,
             ior: 1.5,
+            roughness: 0.0,
+            conductor: Conductor::Mirror,
+            coat: false,
         }
     }
 }

@@ -226,6 +226,7 @@ fn convert_material(
         reflectivity: reflectivity.clamp(0.0, 1.0 - transparency),
         transparency,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(1.5),
+        ..AssetMaterial::default_grey()
     })
 }
 
