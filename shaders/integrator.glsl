@@ -28,8 +28,18 @@ vec3 direct_light(Lobe lobe, vec3 d, Surface surface, inout Rng rng, inout uint 
     if (max3(f_cos) <= 0.0) return vec3(0.0);
     rays += 1u;
     vec3 shadow_origin = offset_origin(surface.point, surface.ng, ls.dir);
+    vec3 shadow_dir = ls.dir;
+    float shadow_dist = ls.dist;
+    // Aim from the offset origin at the sampled point: from the surface point, a ray that leaves
+    // at a grazing angle reaches the light's plane up to offset / cos short of ls.dist, and the
+    // light would shadow itself.
+    if (ls.dist < 1e30) {
+        vec3 to_light = surface.point + ls.dist * ls.dir - shadow_origin;
+        shadow_dist = length(to_light);
+        shadow_dir = to_light / shadow_dist;
+    }
     // Stop short of the light so its own surface does not count as a blocker.
-    if (occluded(shadow_origin, ls.dir, ls.dist * (1.0 - 1e-4))) return vec3(0.0);
+    if (occluded(shadow_origin, shadow_dir, shadow_dist * (1.0 - 1e-4))) return vec3(0.0);
     return f_cos * ls.radiance * (power_heuristic(ls.pdf, lobe_pdf) / ls.pdf);
 }
 
@@ -77,11 +87,13 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         }
 
         Lobe lobe = pick_lobe(m, dir, surface.ns, front, rng);
+        // Before sampling: a rough lobe's sample can fail (below the surface) and end the path,
+        // which must not drop the direct light.
+        if (nee && !lobe_is_delta(lobe)) radiance += throughput * direct_light(lobe, dir, surface, rng, rays);
         BsdfSample s;
         if (!sample_lobe(lobe, dir, rng, s)) break;
         // Shading normals can send a ray through the geometric surface; such paths end here.
         if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) break;
-        if (nee && !s.delta) radiance += throughput * direct_light(lobe, dir, surface, rng, rays);
         throughput *= s.weight;
         bsdf_pdf = s.delta ? 0.0 : s.pdf;
         prev_point = point;

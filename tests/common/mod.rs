@@ -2,6 +2,8 @@
 //! statistics that turn sample counts into tolerances.
 #![allow(dead_code)]
 
+pub mod furnace;
+
 use caustica::gpu::{ContextOptions, GpuContext};
 use caustica::image::RgbImage;
 use caustica::render::Renderer;
