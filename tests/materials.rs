@@ -235,6 +235,37 @@ fn nee_through_rough_glass_agrees_with_bsdf_sampling() {
 }
 
 #[test]
+fn nee_through_a_rough_interface_agrees_with_bsdf_sampling() {
+    // A single rough glass sheet above an area light: what the camera sees is mostly light
+    // refracted once, which NEE evaluates through the refraction lobe.
+    let scene = r#"
+        [camera]
+        position = [0.0, 2.0, 2.0]
+        look_at = [0.0, 0.0, 0.0]
+        [film]
+        width = 32
+        height = 32
+        [materials.glass]
+        albedo = [0.0, 0.0, 0.0]
+        transparency = 1.0
+        roughness = 0.7
+        [materials.light]
+        emission = [4.0, 4.0, 4.0]
+        [[quads]]
+        origin = [-3.0, 0.0, 3.0]
+        edge_u = [6.0, 0.0, 0.0]
+        edge_v = [0.0, 0.0, -6.0]
+        material = "glass"
+        [[quads]]
+        origin = [-1.0, -1.0, 1.0]
+        edge_u = [2.0, 0.0, 0.0]
+        edge_v = [0.0, 0.0, -2.0]
+        material = "light"
+    "#;
+    assert_nee_agrees(scene, "light under a rough glass sheet");
+}
+
+#[test]
 fn nee_on_mixed_rough_materials_agrees_with_bsdf_sampling() {
     assert_nee_agrees(ROUGH_SCENE, "rough copper, glass and plastics");
 }

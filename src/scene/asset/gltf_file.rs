@@ -674,10 +674,11 @@ mod tests {
         assert_eq!(glass.albedo, Vec3::new(0.5, 0.6, 0.7));
         assert_eq!(glass.emission, Vec3::new(4.0, 2.0, 1.0));
         assert_eq!(
-            (glass.transparency, glass.reflectivity, glass.ior),
-            (0.5, 0.5, 1.4),
-            "metallic 1 x (1 - 0.2) lowered to 1 - T"
+            (glass.transparency, glass.reflectivity, glass.ior, glass.roughness),
+            (0.0, 1.0, 1.4, 0.2),
+            "metallic 1 covers the surface: its transmission 0.5 weighs (1 - metallic) x 0.5 = 0"
         );
+        assert_eq!((glass.conductor, glass.coat), (Conductor::Albedo, true));
         assert_eq!(asset.materials[1], AssetMaterial::default_grey());
         assert_eq!(glass.albedo_texture, Some(0));
         assert_eq!(asset.textures.len(), 1, "only albedo images are decoded");
