@@ -240,7 +240,7 @@ fn nee_through_a_rough_interface_agrees_with_bsdf_sampling() {
     // refracted once, which NEE evaluates through the refraction lobe.
     let scene = r#"
         [camera]
-        position = [0.0, 2.0, 2.0]
+        position = [0.0, 1.2, 2.5]
         look_at = [0.0, 0.0, 0.0]
         [film]
         width = 32
@@ -248,7 +248,7 @@ fn nee_through_a_rough_interface_agrees_with_bsdf_sampling() {
         [materials.glass]
         albedo = [0.0, 0.0, 0.0]
         transparency = 1.0
-        roughness = 0.7
+        roughness = 1.0
         [materials.light]
         emission = [4.0, 4.0, 4.0]
         [[quads]]
