@@ -15,7 +15,20 @@ float survival_probability(vec3 throughput) {
     return clamp(max3(throughput), frame.roulette.y, frame.roulette.z);
 }
 
-vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
+// Denoiser features of one path (AOVs): albedo and camera-facing shading normal of the first vertex
+// that is not a perfectly specular bounce (mirror and glass are followed, as Open Image Denoise
+// recommends), and the distance to the first hit. An escaping ray counts as a vertex with the
+// environment's radiance, clamped to [0, 1], as albedo and a zero normal. `open` while the
+// vertex is still ahead; pathtrace.comp starts it closed when AOVs are off.
+struct FirstHit {
+    vec3 albedo;
+    vec3 normal;
+    float depth;
+    bool hit;
+    bool open;
+};
+
+vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout FirstHit first) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     bool nee = frame.integrator.y != 0u;
@@ -34,7 +47,12 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
             if (nee && after_diffuse && environment_sampled()) {
                 weight = power_heuristic(bsdf_pdf, frame.env_rotation.z * environment_pdf(dir));
             }
-            radiance += throughput * environment_radiance(dir) * weight;
+            vec3 env = environment_radiance(dir);
+            radiance += throughput * env * weight;
+            if (AOVS == 1 && first.open) {
+                first.albedo = clamp(env, 0.0, 1.0);
+                first.normal = vec3(0.0);
+            }
             break;
         }
         Surface surface = surface_at(hit, origin, dir);
@@ -42,6 +60,16 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         vec3 point = surface.point;
         vec3 n = surface.ng;
         bool front = dot(n, dir) < 0.0;
+        if (AOVS == 1 && first.open) {
+            // Written at every vertex while open, so a path that ends on a specular chain keeps
+            // its last surface.
+            if (depth == 0u) {
+                first.depth = hit.t;
+                first.hit = true;
+            }
+            first.albedo = m.albedo_r.rgb;
+            first.normal = front ? surface.ns : -surface.ns;
+        }
 
         vec3 le = emitted_radiance(m, front);
         if (max3(le) > 0.0) {
@@ -59,6 +87,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         }
 
         Scatter s = scatter(m, dir, surface.ns, front, rng);
+        if (s.event != EVENT_SPECULAR) first.open = false;
         // Shading normals can send a ray through the geometric surface; such paths end here.
         if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) break;
         throughput *= s.weight;

@@ -118,5 +118,14 @@ layout(std430, set = 0, binding = 14) readonly buffer TexelBuffer { uint texels[
 // one CDF per row (width + 1 values each); see src/render/env_sampling.rs.
 layout(std430, set = 0, binding = 15) readonly buffer EnvCdfBuffer { float env_cdf[]; };
 
+#if AOVS
+// Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
+// xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
+// first hit summed over the samples that hit something, w = how many those were.
+// Declared only in the kernel variant built with AOVS 1, so renders without AOVs never touch them.
+layout(std430, set = 0, binding = 20) buffer AovAlbedoDepthBuffer { vec4 aov_albedo_depth[]; };
+layout(std430, set = 0, binding = 21) buffer AovNormalHitsBuffer { vec4 aov_normal_hits[]; };
+#endif
+
 uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
 uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }

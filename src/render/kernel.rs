@@ -23,28 +23,34 @@ pub const SHADERS: ShaderSources = &[
 /// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
 pub const WORKGROUP: u32 = 8;
 
-pub fn kernel_source() -> Result<String> {
+/// The kernel's GLSL; `aovs` selects the variant that also accumulates the denoiser features
+/// (bindings 20 and 21), so renders without them pay nothing for them.
+pub fn kernel_source(aovs: bool) -> Result<String> {
     assemble_source(SHADERS, "pathtrace.comp", &[
             ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
             ("BVH_MAX_LEAF_SIZE", format!("{}u", crate::bvh::MAX_LEAF_SIZE)),
+            ("AOVS", u32::from(aovs).to_string()),
         ],)
 }
 
-/// SPIR-V of the kernel; compiled on first use (glslang takes about a second the first time).
-pub fn kernel_spirv() -> Result<&'static [u32]> {
-    static SPIRV: OnceLock<Vec<u32>> = OnceLock::new();
-    if let Some(s) = SPIRV.get() {
+/// SPIR-V of the kernel variant; each compiled on first use (glslang takes about a second).
+pub fn kernel_spirv(aovs: bool) -> Result<&'static [u32]> {
+    static SPIRV: [OnceLock<Vec<u32>>; 2] = [OnceLock::new(), OnceLock::new()];
+    let cell = &SPIRV[usize::from(aovs)];
+    if let Some(s) = cell.get() {
         return Ok(s);
     }
-    let spirv = compile_compute(&kernel_source()?)?;
-    Ok(SPIRV.get_or_init(|| spirv))
+    let spirv = compile_compute(&kernel_source(aovs)?)?;
+    Ok(cell.get_or_init(|| spirv))
 }
 
 #[cfg(test)]
 mod tests {
     #[test]
     fn kernel_compiles_to_spirv() {
-        let spirv = super::kernel_spirv().expect("pathtrace.comp compiles");
-        assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
+        for aovs in [false, true] {
+            let spirv = super::kernel_spirv(aovs).expect("pathtrace.comp compiles");
+            assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
+        }
     }
 }

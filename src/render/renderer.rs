@@ -4,6 +4,7 @@
 use super::kernel::{kernel_spirv, WORKGROUP};
 use super::layout::{FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT};
 use super::acceleration::AccelerationStats;
+use super::aov::{AovSet, AovSums};
 use super::scene_data::SceneData;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
@@ -20,6 +21,9 @@ pub struct Renderer<'a> {
     ctx: &'a GpuContext,
     kernel: Option<ComputeKernel>,
     buffers: Vec<Buffer>,
+    /// Bindings 20 and 21 (albedo + depth, normal + hits) when the render has kernel AOVs; else none.
+    aov_buffers: Vec<Buffer>,
+    aovs: AovSet,
     width: u32,
     height: u32,
     seed: u32,
@@ -58,6 +62,7 @@ pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 // Binding indices of shaders/layout.glsl.
 const ACCUM: usize = 6;
 const STATS: usize = 7;
+const AOV_BINDINGS: [u32; 2] = [20, 21];
 /// The statistics buffer's contents at the start of every dispatch.
 const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0 };
 
@@ -127,7 +132,14 @@ fn check_fits<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (&'
 }
 
 impl<'a> Renderer<'a> {
+    /// A renderer of the beauty alone.
     pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
+        Self::with_aovs(ctx, scene, seed, AovSet::default())
+    }
+
+    /// A renderer that also produces `aovs`. The beauty is the same bit for bit: the features
+    /// draw no random numbers.
+    pub fn with_aovs(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet) -> Result<Self> {
         // One texel buffer holds every texture, so it must fit one storage binding too.
         let texture_budget = TEXTURE_BUDGET_BYTES.min(ctx.info.max_storage_buffer_range);
         let data = SceneData::new(scene, texture_budget);
@@ -163,7 +175,9 @@ impl<'a> Renderer<'a> {
             ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
         ];
         let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
-        check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;
+        let aov_names: &[&str] = if aovs.needs_kernel() { &["albedo and depth sums", "normal sums"] } else { &[] };
+        let aov_sizes = aov_names.iter().map(|&name| (name, accum_bytes));
+        check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))).chain(aov_sizes))?;
         let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
         for (i, &(name, kind, bytes)) in contents.iter().enumerate() {
@@ -176,9 +190,18 @@ impl<'a> Renderer<'a> {
             };
             buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
         }
-        let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
-        let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
+        let mut aov_buffers = Vec::new();
+        for name in aov_names {
+            aov_buffers.push(Buffer::with_data(ctx, name, BufferKind::Storage, &vec![0u8; accum_bytes as usize])?);
+        }
+        let bindings: Vec<Binding> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| Binding { binding: i as u32, buffer: b })
+            .chain(AOV_BINDINGS.iter().zip(&aov_buffers).map(|(&binding, buffer)| Binding { binding, buffer }))
+            .collect();
+        let kernel = ComputeKernel::new(ctx, kernel_spirv(aovs.needs_kernel())?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
+        Ok(Self { ctx, kernel: Some(kernel), buffers, aov_buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -203,6 +226,11 @@ impl<'a> Renderer<'a> {
         self.seed
     }
 
+    /// The AOVs this render produces.
+    pub fn aovs(&self) -> AovSet {
+        self.aovs
+    }
+
     /// Width and height in pixels.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
@@ -221,6 +249,16 @@ impl<'a> Renderer<'a> {
         );
         self.buffers[ACCUM].upload(self.ctx, bytemuck::cast_slice(accumulation))?;
         self.samples_done = samples;
+        Ok(())
+    }
+
+    /// Takes over AOV sums (as from [`Self::aov_sums`]) of the samples given to [`Self::restore`].
+    pub fn restore_aovs(&mut self, sums: &AovSums) -> Result<()> {
+        anyhow::ensure!(!self.aov_buffers.is_empty(), "this render has no albedo, normal or depth AOVs to restore");
+        let pixels = self.width as usize * self.height as usize;
+        anyhow::ensure!(sums.pixels() == pixels, "the AOV sums have {} pixels, the image {}x{}", sums.pixels(), self.width, self.height);
+        self.aov_buffers[0].upload(self.ctx, bytemuck::cast_slice(&sums.albedo_depth))?;
+        self.aov_buffers[1].upload(self.ctx, bytemuck::cast_slice(&sums.normal_hits))?;
         Ok(())
     }
 
@@ -295,6 +333,14 @@ impl<'a> Renderer<'a> {
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 
+    /// Raw AOV sums (`None` without albedo, normal or depth AOVs), top row first.
+    pub fn aov_sums(&self) -> Result<Option<AovSums>> {
+        let [albedo_depth, normal_hits] = &self.aov_buffers[..] else { return Ok(None) };
+        let bytes = self.width as u64 * self.height as u64 * 16;
+        let read = |b: &Buffer| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&b.download(self.ctx, bytes)?)) };
+        Ok(Some(AovSums { albedo_depth: read(albedo_depth)?, normal_hits: read(normal_hits)? }))
+    }
+
     /// The mean radiance per pixel so far.
     pub fn image(&self) -> Result<RgbImage> {
         Ok(mean_image(self.width, self.height, &self.accumulation()?))
@@ -316,7 +362,7 @@ impl Drop for Renderer<'_> {
         if let Some(k) = self.kernel.take() {
             k.destroy(self.ctx);
         }
-        for b in self.buffers.drain(..) {
+        for b in self.buffers.drain(..).chain(self.aov_buffers.drain(..)) {
             b.destroy(self.ctx);
         }
     }
