@@ -237,4 +237,32 @@ mod tests {
         assert_eq!(crate::image::read_image(&path).unwrap(), partial.image());
         std::fs::remove_file(path).ok();
     }
+
+    #[test]
+    fn aov_sums_round_trip_bit_exact_and_means_are_written() {
+        let sums = AovSums { albedo_depth: vec![[0.5, 0.25, 1e-30, 7.0], [0.0, 1.0, 2.0, 0.0]], normal_hits: vec![[-1.0, 0.5, 1.0 / 3.0, 2.0], [0.0; 4]] };
+        let partial = PartialRender {
+            scene_hash: "ab12".into(),
+            seed: 7,
+            width: 2,
+            height: 1,
+            ranges: vec![0..2],
+            accumulation: vec![[1.0, 1.0, 1.0, 2.0], [0.0, 0.0, 0.0, 2.0]],
+            aovs: AovSet { albedo: true, depth: true, ..AovSet::default() },
+            aov_sums: Some(sums),
+        };
+        let path = std::env::temp_dir().join(format!("caustica-partial-aov-{}.exr", std::process::id()));
+        partial.write(&path).unwrap();
+        let back = PartialRender::read(&path);
+        let doc = read_exr_document(&path);
+        std::fs::remove_file(path).ok();
+        assert_eq!(back.unwrap(), partial);
+        let doc = doc.unwrap();
+        assert_eq!(doc.attributes[AOVS], "albedo,depth");
+        assert_eq!(doc.layer("albedo").unwrap().data, [0.25, 0.125, 0.5e-30, 0.0, 0.5, 1.0]);
+        let top = doc.layer("").unwrap();
+        assert_eq!(top.channels, ["R", "G", "B", "Z"]);
+        assert_eq!([top.data[3], top.data[7]], [3.5, f32::INFINITY], "depth: mean over hits, infinite without");
+        assert!(doc.layer("normal").is_none() && doc.layer("samples").is_none(), "only the AOVs asked for");
+    }
 }

@@ -21,6 +21,10 @@ pub const FILTER_BOX: u32 = 0;
 pub const FILTER_TENT: u32 = 1;
 pub const FILTER_GAUSSIAN: u32 = 2;
 
+/// Bindings of the AOV sums (`AovAlbedoDepthBuffer`, `AovNormalHitsBuffer`): one `vec4` a pixel
+/// each, like the accumulation, so `[f32; 4]` on the host.
+pub const AOV_BINDINGS: [u32; 2] = [20, 21];
+
 /// `struct Primitive`: see layout.glsl for what a, b and c hold per kind.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -167,6 +171,15 @@ mod tests {
         assert_eq!(offset_of!(GpuStats, nonfinite_samples), 4);
         let glsl = include_str!("../../shaders/layout.glsl");
         assert!(glsl.contains("buffer StatsBuffer { uint ray_count; uint nonfinite_samples; } stats;"), "StatsBuffer members differ from GpuStats");
+    }
+
+    #[test]
+    fn aov_buffers_match_glsl() {
+        let glsl = include_str!("../../shaders/layout.glsl");
+        for (binding, declaration) in AOV_BINDINGS.iter().zip(["AovAlbedoDepthBuffer { vec4 aov_albedo_depth[]; }", "AovNormalHitsBuffer { vec4 aov_normal_hits[]; }"]) {
+            let line = format!("layout(std430, set = 0, binding = {binding}) buffer {declaration};");
+            assert!(glsl.contains(&line), "layout.glsl lacks {line}");
+        }
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! `DISPATCH_TARGET_S` each, so a desktop GPU's watchdog never fires and progress stays smooth.
 
 use super::kernel::{kernel_spirv, WORKGROUP};
-use super::layout::{FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT};
+use super::layout::{FrameParams, GpuStats, PassParams, AOV_BINDINGS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::scene_data::SceneData;
@@ -62,7 +62,6 @@ pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 // Binding indices of shaders/layout.glsl.
 const ACCUM: usize = 6;
 const STATS: usize = 7;
-const AOV_BINDINGS: [u32; 2] = [20, 21];
 /// The statistics buffer's contents at the start of every dispatch.
 const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0 };
 
