@@ -7,6 +7,7 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "layout.glsl"
+#include "chunked_buffers.glsl"
 #include "rng.glsl"
 #include "sampling.glsl"
 #include "intersect.glsl"
@@ -24,13 +25,13 @@ void main() {
     uint width = frame.image.x;
     if (pixel.x >= width || gl_GlobalInvocationID.y >= pass.row_count || pixel.y >= frame.image.y) return;
     uint index = pixel.y * width + pixel.x;
-    vec4 sum = accum[index];
+    vec4 sum = load_accum(index);
     uint rays = 0u;
     uint nonfinite = 0u;
     float clamp_max = frame.lens.z;
 #if AOVS
-    vec4 albedo_depth = aov_albedo_depth[index];
-    vec4 normal_hits = aov_normal_hits[index];
+    vec4 albedo_depth = load_aov_albedo_depth(index);
+    vec4 normal_hits = load_aov_normal_hits(index);
 #endif
     for (uint s = 0u; s < pass.sample_count; ++s) {
         Rng rng = rng_for_sample(frame.image.z, index, pass.sample_base + s);
@@ -52,10 +53,10 @@ void main() {
         normal_hits += vec4(first.normal, first.hit ? 1.0 : 0.0);
 #endif
     }
-    accum[index] = sum;
+    store_accum(index, sum);
 #if AOVS
-    aov_albedo_depth[index] = albedo_depth;
-    aov_normal_hits[index] = normal_hits;
+    store_aov_albedo_depth(index, albedo_depth);
+    store_aov_normal_hits(index, normal_hits);
 #endif
     atomicAdd(stats.ray_count, rays);
     if (nonfinite > 0u) atomicAdd(stats.nonfinite_samples, nonfinite);

@@ -224,6 +224,25 @@ fn aovs_leave_the_beauty_unchanged_bit_for_bit() {
     assert!(beauty(AovSet::default()) == beauty(AovSet::ALL), "the AOV kernel changed the beauty");
 }
 
+/// With storage bindings of 4 KiB, a 32x32 image's AOV sums span several bindings each, like the
+/// accumulation, and come out the same bit for bit.
+#[test]
+fn aov_sums_split_across_bindings_are_the_same() {
+    let mut scene = Scene::default_scene();
+    scene.film.width = 32;
+    scene.film.height = 32;
+    let render = |limit| {
+        let (_lock, ctx) = gpu_with_storage_limit(limit);
+        let mut r = Renderer::with_aovs(&ctx, &scene, 2, AovSet::ALL).unwrap();
+        r.render(2, |_| {}).unwrap();
+        let split: Vec<_> = r.geometry.split_arrays.iter().filter(|(name, _)| name.ends_with("sums")).map(|&(_, windows)| windows).collect();
+        (split, r.accumulation().unwrap(), r.aov_sums().unwrap().unwrap())
+    };
+    let (whole, split) = (render(None), render(Some(4096)));
+    assert!(whole.0.is_empty() && split.0.len() == 2 && split.0.iter().all(|&w| w > 1), "windows: {:?} and {:?}", whole.0, split.0);
+    assert!(whole.1 == split.1 && whole.2 == split.2, "the split render differs");
+}
+
 #[test]
 fn exr_output_carries_the_documented_layers() {
     let dir = temp_dir("aov-layers");

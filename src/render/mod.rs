@@ -3,13 +3,14 @@
 
 mod acceleration;
 mod aov;
+mod chunks;
 mod env_sampling;
 mod kernel;
 pub mod layout;
 mod renderer;
 mod scene_data;
 
-pub use kernel::{kernel_source, kernel_spirv};
+pub use kernel::{kernel_source, kernel_spirv, UNSPLIT};
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
 pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, TEXTURE_BUDGET_BYTES};
