@@ -28,7 +28,8 @@ void main() {
     uint nonfinite = 0u;
     float clamp_max = frame.lens.z;
     for (uint s = 0u; s < pass.sample_count; ++s) {
-        Rng rng = rng_for_sample(frame.image.z, index, pass.sample_base + s);
+        Rng rng = rng_for_sample(frame.image.z, index, pass.sample_base + s, frame.sampling.x);
+        rng_set_dimensions(rng, 0u, DIMS_CAMERA);
         vec3 origin, dir;
         camera_ray(pixel, rng, origin, dir);
         vec3 radiance = trace_path(origin, dir, rng, rays);
