@@ -172,18 +172,28 @@ fn sobol_agrees_in_the_mean_with_independent_numbers() {
     assert_same_mean(&sobol, &independent, 5.0, "Cornell box, Sobol against independent numbers");
 }
 
+/// The Cornell box with its mirror and glass spheres made diffuse: caustics, which no sampler helps
+/// at these counts, would otherwise dominate the error.
+fn diffuse_cornell(size: u32, spp: u32, sampler: Sampler) -> Scene {
+    let mut scene = cornell(size, spp, sampler);
+    for m in scene.materials.iter_mut().filter(|m| m.reflectivity > 0.0 || m.transparency > 0.0) {
+        (m.albedo, m.reflectivity, m.transparency) = (glam::Vec3::splat(0.5), 0.0, 0.0);
+    }
+    scene
+}
+
 /// Relative MSE against an independent 1024 spp reference, the mean over three seeds. Measured on
-/// lavapipe: Sobol's error is about XX of independent numbers'.
+/// lavapipe: Sobol's is about half of independent numbers' (0.45 at 16x16, 32 spp).
 #[test]
 fn sobol_lowers_the_error_at_equal_samples() {
     let (_lock, ctx) = gpu();
-    let reference = render(&ctx, &cornell(16, 1024, Sampler::Independent), 99);
+    let reference = render(&ctx, &diffuse_cornell(16, 1024, Sampler::Independent), 99);
     let error = |sampler: Sampler| {
-        (1..=3).map(|seed| compare(&render(&ctx, &cornell(16, 32, sampler), seed), &reference, ("render", "reference")).unwrap().relative_mse).sum::<f64>() / 3.0
+        (1..=3).map(|seed| compare(&render(&ctx, &diffuse_cornell(16, 32, sampler), seed), &reference, ("render", "reference")).unwrap().relative_mse).sum::<f64>() / 3.0
     };
     let (sobol, independent) = (error(Sampler::Sobol), error(Sampler::Independent));
     eprintln!("relative MSE at 32 spp: Sobol {sobol:.4e}, independent {independent:.4e}, ratio {:.3}", sobol / independent);
-    assert!(sobol < 0.8 * independent, "relative MSE at 32 spp: Sobol {sobol:.4e}, independent {independent:.4e}");
+    assert!(sobol < 0.7 * independent, "relative MSE at 32 spp: Sobol {sobol:.4e}, independent {independent:.4e}");
 }
 
 #[test]
