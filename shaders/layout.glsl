@@ -93,28 +93,31 @@ layout(push_constant) uniform PassBlock {
     uint row_count;     // rows in the band
 } pass;
 
-layout(std430, set = 0, binding = 1) readonly buffer NodeBuffer { BvhNode nodes[]; };
+// Arrays that can outgrow one storage binding (marked "binding N: type name[]") are declared in
+// chunked_buffers.glsl, which src/render/chunks.rs generates for each scene and device; the kernel
+// reads them with load_<name>(i) (and writes accum with store_accum).
+// binding 1: BvhNode nodes[]
 layout(std430, set = 0, binding = 2) readonly buffer PrimitiveBuffer { Primitive prims[]; };
 layout(std430, set = 0, binding = 3) readonly buffer MaterialBuffer { Material materials[]; };
 // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
 layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { Primitive lights[]; };
-layout(std430, set = 0, binding = 5) readonly buffer EnvironmentBuffer { vec4 env_texels[]; };
+// binding 5: vec4 env_texels[]
 // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
-layout(std430, set = 0, binding = 6) buffer AccumBuffer { vec4 accum[]; };
+// binding 6: vec4 accum[]
 // Rays traced and non-finite samples dropped (each wraps per dispatch; the host reads and clears
 // both each dispatch).
 layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; uint nonfinite_samples; } stats;
 // Top-level BVH leaves index instances; node 0 is the top-level root.
 layout(std430, set = 0, binding = 8) readonly buffer InstanceBuffer { Instance instances[]; };
 // Mesh triangles in their BVH's leaf order: xyz = global vertex indices, w = material.
-layout(std430, set = 0, binding = 9) readonly buffer TriangleBuffer { uvec4 mesh_triangles[]; };
+// binding 9: uvec4 mesh_triangles[]
 // Vertex attributes of every mesh, indexed by global vertex index. Positions are packed floats
 // (12 bytes a vertex), normals octahedral snorm16x2.
-layout(std430, set = 0, binding = 10) readonly buffer PositionBuffer { float vertex_positions[]; };
-layout(std430, set = 0, binding = 11) readonly buffer NormalBuffer { uint vertex_normals[]; };
-layout(std430, set = 0, binding = 12) readonly buffer UvBuffer { vec2 vertex_uvs[]; };
+// binding 10: float vertex_positions[]
+// binding 11: uint vertex_normals[]
+// binding 12: vec2 vertex_uvs[]
 layout(std430, set = 0, binding = 13) readonly buffer TextureInfoBuffer { TextureInfo texture_infos[]; };
-layout(std430, set = 0, binding = 14) readonly buffer TexelBuffer { uint texels[]; };
+// binding 14: uint texels[]
 // The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
 // one CDF per row (width + 1 values each); see src/render/env_sampling.rs.
 layout(std430, set = 0, binding = 15) readonly buffer EnvCdfBuffer { float env_cdf[]; };

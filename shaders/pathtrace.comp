@@ -6,6 +6,7 @@
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "layout.glsl"
+#include "chunked_buffers.glsl"
 #include "rng.glsl"
 #include "sampling.glsl"
 #include "intersect.glsl"
@@ -23,7 +24,7 @@ void main() {
     uint width = frame.image.x;
     if (pixel.x >= width || gl_GlobalInvocationID.y >= pass.row_count || pixel.y >= frame.image.y) return;
     uint index = pixel.y * width + pixel.x;
-    vec4 sum = accum[index];
+    vec4 sum = load_accum(index);
     uint rays = 0u;
     uint nonfinite = 0u;
     float clamp_max = frame.lens.z;
@@ -43,7 +44,7 @@ void main() {
         if (clamp_max > 0.0 && peak > clamp_max) radiance *= clamp_max / peak;
         sum += vec4(radiance, 1.0);
     }
-    accum[index] = sum;
+    store_accum(index, sum);
     atomicAdd(stats.ray_count, rays);
     if (nonfinite > 0u) atomicAdd(stats.nonfinite_samples, nonfinite);
 }

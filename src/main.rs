@@ -33,7 +33,7 @@ struct DeviceArgs {
 
 impl DeviceArgs {
     fn context(&self) -> Result<GpuContext> {
-        GpuContext::new(&ContextOptions { device: self.device.clone(), validation: self.validation })
+        GpuContext::new(&ContextOptions { device: self.device.clone(), validation: self.validation, storage_binding_limit: None })
     }
 }
 
@@ -377,6 +377,10 @@ fn print_geometry(g: &GeometryReport) {
     }
     let per_triangle = if a.mesh_triangles > 0 { format!(", {:.1} B/triangle", a.bytes_per_triangle(g.geometry_bytes)) } else { String::new() };
     println!("GPU memory:   {:.1} MiB geometry + BVH{per_triangle}, {:.1} MiB textures, {:.1} MiB in all", mib(g.geometry_bytes), mib(g.texture_bytes), mib(g.gpu_bytes));
+    if !g.split_arrays.is_empty() {
+        let split: Vec<String> = g.split_arrays.iter().map(|(name, windows)| format!("{name} x{windows}")).collect();
+        println!("split:        {} (larger than one storage binding of this device)", split.join(", "));
+    }
 }
 
 fn run() -> Result<()> {

@@ -50,7 +50,7 @@ fn draws(ctx: &GpuContext, kind: u32, pixels: u32, samples: u32, sample_base: u3
     let spirv = compile_compute(&assemble_source(sources, "test.comp", &[]).unwrap()).expect("test kernel compiles");
     let count = (pixels * samples) as usize;
     let out = Buffer::with_data(ctx, "draws", BufferKind::HostStorage, &vec![0u8; count * VALUES * 4]).unwrap();
-    let kernel = ComputeKernel::new(ctx, &spirv, &[Binding { binding: 0, buffer: &out }], 16).unwrap();
+    let kernel = ComputeKernel::new(ctx, &spirv, &[Binding::whole(0, &out)], 16).unwrap();
     let push: Vec<u8> = [pixels, samples, sample_base, kind].iter().flat_map(|v| v.to_le_bytes()).collect();
     kernel.dispatch(ctx, &push, [(count as u32).div_ceil(64), 1, 1]).unwrap();
     let values: Vec<f32> = bytemuck::cast_slice(&out.read().unwrap()[..count * VALUES * 4]).to_vec();

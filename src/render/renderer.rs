@@ -1,7 +1,8 @@
 //! Progressive rendering: uploads a scene, then adds samples in dispatches sized to take about
 //! `DISPATCH_TARGET_S` each, so a desktop GPU's watchdog never fires and progress stays smooth.
 
-use super::kernel::{kernel_spirv, WORKGROUP};
+use super::chunks::{self, chunked_array_at, ChunkPlan, CHUNKED_ARRAYS};
+use super::kernel::{kernel_spirv, UNSPLIT, WORKGROUP};
 use super::layout::{FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::scene_data::SceneData;
@@ -50,6 +51,8 @@ pub struct GeometryReport {
     pub lights: usize,
     /// Everything the scene occupies on the device, the image excluded.
     pub gpu_bytes: u64,
+    /// Arrays too large for one storage binding of this device, with the bindings each spans.
+    pub split_arrays: Vec<(&'static str, u32)>,
 }
 
 /// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so).
@@ -58,6 +61,7 @@ pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 // Binding indices of shaders/layout.glsl.
 const ACCUM: usize = 6;
 const STATS: usize = 7;
+const TEXELS: u32 = 14;
 /// The statistics buffer's contents at the start of every dispatch.
 const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0 };
 
@@ -111,30 +115,53 @@ fn scene_hash(params_without_seed: &FrameParams, contents: &[(&str, BufferKind, 
     hasher.finalize().to_hex().to_string()
 }
 
-/// Fails before any upload when one buffer exceeds the device's storage-buffer range or all of them
-/// its device-local memory, saying how much is needed and how much there is.
-fn check_fits<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (&'n str, u64)> + Clone) -> Result<()> {
+/// How each large array is split across bindings (see chunks.rs), or why the scene cannot fit the
+/// device: an array larger than its bindings can see, more storage bindings than the kernel may
+/// have, or more bytes than the device's memory. Checked before any upload; the message says how
+/// much is needed and how much there is.
+fn plan_bindings<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (&'n str, u64)> + Clone) -> Result<[ChunkPlan; CHUNKED_ARRAYS.len()]> {
     let mib = |b: u64| b as f64 / 1048576.0;
     let device = &ctx.info;
-    if let Some((name, bytes)) = sizes.clone().find(|&(_, b)| b > device.max_storage_buffer_range) {
+    let range = device.max_storage_buffer_range;
+    let mut plans = UNSPLIT;
+    let mut storage_bindings = 0;
+    for (binding, (name, bytes)) in sizes.clone().enumerate() {
+        match chunked_array_at(binding as u32) {
+            Some((k, array)) => {
+                plans[k] = chunks::plan(array, bytes, range, device.min_storage_buffer_offset_alignment).map_err(|e| {
+                    anyhow::anyhow!("{scene}: the {name} need {:.1} MiB but {} allows {e}", mib(bytes), device.name)
+                })?;
+                storage_bindings += plans[k].chunks;
+            }
+            None if binding == 0 => {} // the uniform block
+            None if bytes > range => anyhow::bail!(
+                "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
+                mib(bytes),
+                device.name,
+                mib(range)
+            ),
+            None => storage_bindings += 1,
+        }
+    }
+    if storage_bindings > device.max_storage_buffers_per_stage {
         anyhow::bail!(
-            "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
-            mib(bytes),
+            "{scene}: the scene needs {storage_bindings} storage buffer bindings but {} allows {} (its arrays are too large to split further)",
             device.name,
-            mib(device.max_storage_buffer_range)
+            device.max_storage_buffers_per_stage
         );
     }
     let total: u64 = sizes.map(|(_, b)| b).sum();
     if device.device_local_bytes > 0 && total > device.device_local_bytes {
         anyhow::bail!("{scene}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB", mib(total), device.name, mib(device.device_local_bytes));
     }
-    Ok(())
+    Ok(plans)
 }
 
 impl<'a> Renderer<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
-        // One texel buffer holds every texture, so it must fit one storage binding too.
-        let texture_budget = TEXTURE_BUDGET_BYTES.min(ctx.info.max_storage_buffer_range);
+        // One texel buffer holds every texture: it must fit the bindings it can be split across.
+        let texels = chunked_array_at(TEXELS).expect("texels are chunked").1;
+        let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texels, ctx.info.max_storage_buffer_range));
         let data = SceneData::new(scene, texture_budget);
         if data.texture_bytes() < data.texture_bytes_requested {
             eprintln!(
@@ -168,7 +195,7 @@ impl<'a> Renderer<'a> {
             ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
         ];
         let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
-        check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;
+        let plans = plan_bindings(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;
         let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
         for (i, &(name, kind, bytes)) in contents.iter().enumerate() {
@@ -181,8 +208,23 @@ impl<'a> Renderer<'a> {
             };
             buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
         }
-        let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
-        let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
+        let mut bindings = Vec::new();
+        for (i, buffer) in buffers.iter().enumerate() {
+            match chunked_array_at(i as u32) {
+                Some((k, array)) if plans[k].chunks > 1 => {
+                    for (c, (offset, range)) in plans[k].windows(array.element_bytes, size(i)).into_iter().enumerate() {
+                        bindings.push(Binding { binding: chunks::window_binding(k, c as u32), buffer, offset, range });
+                    }
+                }
+                // Unsplit arrays keep their own binding: window 0's is the array's.
+                _ => bindings.push(Binding::whole(i as u32, buffer)),
+            }
+        }
+        let split_arrays = (0..contents.len())
+            .filter_map(|i| chunked_array_at(i as u32).map(|(k, _)| (contents[i].0, plans[k].chunks)))
+            .filter(|&(_, windows)| windows > 1)
+            .collect();
+        let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans)?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
         Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
@@ -190,6 +232,7 @@ impl<'a> Renderer<'a> {
             texture_bytes_requested: data.texture_bytes_requested,
             lights: data.lights.len(),
             gpu_bytes: data.gpu_bytes(),
+            split_arrays,
         }, cost_per_row_sample: None })
     }
 
