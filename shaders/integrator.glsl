@@ -2,6 +2,21 @@
 // vertices, Russian roulette after `rr_start` bounces. integrator.max_bounces is only a safety cap far beyond
 // where roulette ends any path that carries energy.
 
+// Sobol dimensions (rng.glsl): the camera's film and lens pair first, then per bounce one window
+// for Russian roulette and the BSDF and one for next-event estimation. Fixed windows keep a decision
+// on the same dimension in every sample whatever was drawn before it; draws beyond a window, and
+// bounces from SOBOL_BOUNCES on (rare after roulette, where stratification has worn off), are
+// independent numbers.
+const uint DIMS_CAMERA = 4u;
+const uint DIMS_SCATTER = 8u;
+const uint DIMS_DIRECT = 8u;
+const uint SOBOL_BOUNCES = 8u;
+
+void bounce_dimensions(inout Rng rng, uint depth, uint offset, uint count) {
+    uint first = DIMS_CAMERA + depth * (DIMS_SCATTER + DIMS_DIRECT) + offset;
+    rng_set_dimensions(rng, first, depth < SOBOL_BOUNCES ? count : 0u);
+}
+
 // Offsets a ray origin off the surface to the side `dir` leaves towards.
 vec3 offset_origin(vec3 p, vec3 n, vec3 dir) {
     float scale = 1e-4 * max(1.0, max3(abs(p)));
@@ -40,6 +55,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout Fir
 
     uint max_bounces = frame.integrator.w;
     for (uint depth = 0u; depth < max_bounces; ++depth) {
+        bounce_dimensions(rng, depth, 0u, DIMS_SCATTER);
         Hit hit;
         rays += 1u;
         if (!trace_ray(origin, dir, 1e30, false, hit)) {
@@ -95,6 +111,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout Fir
         if (after_diffuse) {
             vec3 n_in = front ? surface.ns : -surface.ns;
             if (nee) {
+                bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
                 LightSample ls;
                 if (sample_direct(point, rng, ls)) {
                     float cos_surface = dot(n_in, ls.dir);

@@ -83,6 +83,7 @@ layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
     vec4 roulette;      // x = fixed absorption (< 0: derive from throughput), y = q min, z = q max
     vec4 lens;          // x = lens radius (0: pinhole), y = focus distance along the viewing axis,
                         // z = per-sample radiance clamp (0: off), w = FILTER_* as raw uint bits
+    uvec4 sampling;     // x = SAMPLER_* (rng.glsl), yzw unused
 } frame;
 
 layout(push_constant) uniform PassBlock {

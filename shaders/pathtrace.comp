@@ -34,7 +34,8 @@ void main() {
     vec4 normal_hits = load_aov_normal_hits(index);
 #endif
     for (uint s = 0u; s < pass.sample_count; ++s) {
-        Rng rng = rng_for_sample(frame.image.z, index, pass.sample_base + s);
+        Rng rng = rng_for_sample(frame.image.z, index, pass.sample_base + s, frame.sampling.x);
+        rng_set_dimensions(rng, 0u, DIMS_CAMERA);
         vec3 origin, dir;
         camera_ray(pixel, rng, origin, dir);
         FirstHit first = FirstHit(vec3(0.0), vec3(0.0), 0.0, false, AOVS == 1);

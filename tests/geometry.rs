@@ -307,15 +307,18 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
     let path = dir.join("square.gltf");
     write_square_gltf(&path);
     let mut scene = Scene::load(&path).expect("the glTF loads as a scene");
-    scene.film.width = 48;
-    scene.film.height = 48;
+    // The square spans [-1, 1]^2 at distance 4; the view's half-height there is 4 tan(0.25) = 1.02:
+    // at 128 pixels the sky border is 1.3 pixels wide, so the corner pixel sees only sky.
+    let size = 128;
+    scene.film.width = size;
+    scene.film.height = size;
     scene.film.spp = 2;
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &scene, 1);
-    // The square spans [-1, 1]^2 at distance 4; the view's half-height there is 4 tan(0.25) = 1.02.
     let half_view = 4.0 * 0.25f32.tan();
-    let inside = (0.5 * 48.0 * (1.0 - 0.9 / half_view)) as u32;
-    for (x, y) in [(24, 24), (inside, inside), (47 - inside, 24), (24, 47 - inside)] {
+    let inside = (0.5 * size as f32 * (1.0 - 0.9 / half_view)) as u32;
+    let (middle, last) = (size / 2, size - 1);
+    for (x, y) in [(middle, middle), (inside, inside), (last - inside, middle), (middle, last - inside)] {
         assert_eq!(image.get(x, y), [2.0, 1.0, 0.5], "pixel ({x}, {y}) sees the emissive square");
     }
     assert_eq!(image.get(0, 0), [1.0, 1.0, 1.0], "the corner sees the white sky");

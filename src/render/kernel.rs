@@ -11,6 +11,7 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("pathtrace.comp", include_str!("../../shaders/pathtrace.comp")),
     ("layout.glsl", include_str!("../../shaders/layout.glsl")),
     ("rng.glsl", include_str!("../../shaders/rng.glsl")),
+    ("sobol.glsl", include_str!("../../shaders/sobol.glsl")),
     ("sampling.glsl", include_str!("../../shaders/sampling.glsl")),
     ("intersect.glsl", include_str!("../../shaders/intersect.glsl")),
     ("bvh.glsl", include_str!("../../shaders/bvh.glsl")),

@@ -25,6 +25,9 @@ pub const FILTER_GAUSSIAN: u32 = 2;
 /// by chunks.rs): one `vec4` a pixel each, so `[f32; 4]` on the host.
 pub const AOV_BINDINGS: [u32; 2] = [20, 21];
 
+pub const SAMPLER_INDEPENDENT: u32 = 0;
+pub const SAMPLER_SOBOL: u32 = 1;
+
 /// `struct Primitive`: see layout.glsl for what a, b and c hold per kind.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -84,6 +87,8 @@ pub struct FrameParams {
     /// lens radius (0: pinhole), focus distance along the viewing axis, radiance clamp (0: off),
     /// FILTER_* as raw u32 bits
     pub lens: [f32; 4],
+    /// SAMPLER_* (shaders/rng.glsl), unused, unused, unused
+    pub sampling: [u32; 4],
 }
 
 /// `buffer StatsBuffer`: per-dispatch counters, cleared and read by the host.
@@ -148,7 +153,7 @@ mod tests {
 
     #[test]
     fn frame_params_match_glsl_std140() {
-        assert_eq!(size_of::<FrameParams>(), 176);
+        assert_eq!(size_of::<FrameParams>(), 192);
         let offsets = [
             offset_of!(FrameParams, cam_origin),
             offset_of!(FrameParams, cam_forward),
@@ -161,8 +166,9 @@ mod tests {
             offset_of!(FrameParams, env_size),
             offset_of!(FrameParams, roulette),
             offset_of!(FrameParams, lens),
+            offset_of!(FrameParams, sampling),
         ];
-        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160]);
+        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176]);
     }
 
     #[test]
@@ -191,7 +197,7 @@ mod tests {
     /// The GLSL side declares the same kinds; a renumbering on one side only must fail here.
     #[test]
     fn kind_constants_match_glsl() {
-        let glsl = include_str!("../../shaders/layout.glsl");
+        let glsl = concat!(include_str!("../../shaders/layout.glsl"), include_str!("../../shaders/rng.glsl"));
         for (name, value) in [
             ("PRIM_SPHERE", PRIM_SPHERE),
             ("PRIM_QUAD", PRIM_QUAD),
@@ -207,9 +213,11 @@ mod tests {
             ("FILTER_BOX", FILTER_BOX),
             ("FILTER_TENT", FILTER_TENT),
             ("FILTER_GAUSSIAN", FILTER_GAUSSIAN),
+            ("SAMPLER_INDEPENDENT", SAMPLER_INDEPENDENT),
+            ("SAMPLER_SOBOL", SAMPLER_SOBOL),
         ] {
             let literal = if value == u32::MAX { "0xffffffffu".to_string() } else { format!("{value}u") };
-            assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl");
+            assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl or rng.glsl");
         }
     }
 }

@@ -3,13 +3,13 @@
 
 use super::chunks::{self, chunked_array_at, ChunkPlan, CHUNKED_ARRAYS};
 use super::kernel::{kernel_spirv, UNSPLIT, WORKGROUP};
-use super::layout::{FrameParams, GpuStats, PassParams, AOV_BINDINGS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT};
+use super::layout::{FrameParams, GpuStats, PassParams, AOV_BINDINGS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::scene_data::SceneData;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
-use crate::scene::{Filter, Scene};
+use crate::scene::{Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
 use std::time::Instant;
 
@@ -83,6 +83,10 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         Filter::Tent => FILTER_TENT,
         Filter::Gaussian => FILTER_GAUSSIAN,
     };
+    let sampler = match i.sampler {
+        Sampler::Independent => SAMPLER_INDEPENDENT,
+        Sampler::Sobol => SAMPLER_SOBOL,
+    };
     FrameParams {
         cam_origin: cam.position.extend(0.0).into(),
         cam_forward: forward.extend(tan_half).into(),
@@ -95,6 +99,7 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
         lens: [cam.aperture, cam.focus_distance, i.clamp.unwrap_or(0.0), f32::from_bits(filter)],
+        sampling: [sampler, 0, 0, 0],
     }
 }
 
