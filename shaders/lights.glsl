@@ -1,8 +1,15 @@
 // Direct lighting: the environment map (when importance sampled) with probability
 // frame.env_rotation.z, otherwise an area light: every emissive primitive and mesh triangle, in
-// world space (the `lights` buffer). An area light is picked uniformly, then a point (or, for
-// spheres, a direction in the cone they subtend) is sampled on it. Pdfs are per unit solid angle
-// at `ref` and include the probability of the pick.
+// world space (the `lights` buffer). An area light is picked in proportion to its power through
+// an alias table (or uniformly: integrator.light_selection), then a point (or, for spheres, a
+// direction in the cone they subtend) is sampled on it. Pdfs are per unit solid angle at `ref`
+// and include the probability of the pick.
+//
+// The pick probability is a function of the light alone (light_pick_probability): its power by
+// the host's formula (src/render/light_selection.rs) over the host's total. Next-event estimation
+// and the MIS weight of an emitter hit by BSDF sampling both evaluate it, so the two weights of a
+// path come from the same pdfs and sum to 1, with no light index needed at a hit; the alias table,
+// built from the same powers in double precision, picks with that probability up to f32 rounding.
 
 struct LightSample {
     vec3 dir;
@@ -11,31 +18,53 @@ struct LightSample {
     vec3 radiance;
 };
 
+// Flux of an emitter: area x pi x luminance of its radiance, twice for a two-sided quad or
+// triangle (light_power in light_selection.rs).
+float light_power(Primitive p) {
+    Material m = materials[prim_material(p)];
+    float sides = prim_kind(p) != PRIM_SPHERE && m.params.y > 0.5 ? 2.0 : 1.0;
+    return primitive_area(p) * PI * dot(m.emission_t.rgb, vec3(0.2126, 0.7152, 0.0722)) * sides;
+}
+
+// Probability that next-event estimation picks area light `p` (the map's share taken out).
+float light_pick_probability(Primitive p) {
+    float share = 1.0 - frame.env_rotation.z;
+    float total_power = frame.lights.x;
+    return total_power > 0.0 ? share * light_power(p) / total_power : share / float(frame.image.w);
+}
+
 // Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, otherwise by area).
 float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
-    // Dividing by this count is multiplying by the pick's probability.
-    float light_count = float(frame.image.w) / (1.0 - frame.env_rotation.z);
+    float pick = light_pick_probability(p);
     if (prim_kind(p) == PRIM_SPHERE) {
         vec3 to_center = p.a.xyz - ref;
         float d2 = dot(to_center, to_center);
         float r2 = p.a.w * p.a.w;
         if (d2 > r2) {
             float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-            return 1.0 / (2.0 * PI * (1.0 - cos_max) * light_count);
+            return pick / (2.0 * PI * (1.0 - cos_max));
         }
     }
     vec3 point = ref + dist * dir;
     float cos_light = abs(dot(primitive_normal(p, point), dir));
     if (cos_light <= 0.0) return 0.0;
-    return dist * dist / (cos_light * primitive_area(p) * light_count);
+    return pick * dist * dist / (cos_light * primitive_area(p));
+}
+
+// Index of the area light to sample: a uniform entry of the alias table, kept or swapped for its
+// alias; or a uniform index. Two numbers rather than one split into entry and remainder: with
+// thousands of lights the remainder keeps too few bits for the thresholds of dim lights.
+uint pick_light(uint count, inout Rng rng) {
+    uint index = min(uint(rng_next(rng) * float(count)), count - 1u);
+    if (frame.lights.x > 0.0 && rng_next(rng) >= light_alias[index].threshold) index = light_alias[index].alias;
+    return index;
 }
 
 bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     uint count = frame.image.w;
     ls.pdf = 0.0;
     if (count == 0u) return false;
-    uint index = min(uint(rng_next(rng) * float(count)), count - 1u);
-    Primitive p = lights[index];
+    Primitive p = lights[pick_light(count, rng)];
     vec2 u = rng_next2(rng);
     vec3 point;
     uint kind = prim_kind(p);

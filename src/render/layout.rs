@@ -58,6 +58,16 @@ pub struct GpuTexture {
     pub unused: u32,
 }
 
+/// `struct LightAlias`: one entry of the alias table that picks area lights by power
+/// (light_selection.rs).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuAliasEntry {
+    /// Probability of keeping this entry's own light rather than taking `alias`.
+    pub threshold: f32,
+    pub alias: u32,
+}
+
 /// `uniform FrameParamsBlock` (std140; only 16-byte members, so it equals std430).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -80,6 +90,8 @@ pub struct FrameParams {
     /// lens radius (0: pinhole), focus distance along the viewing axis, radiance clamp (0: off),
     /// FILTER_* as raw u32 bits
     pub lens: [f32; 4],
+    /// total power of the area lights when they are picked by power (0: picked uniformly), unused x3
+    pub lights: [f32; 4],
 }
 
 /// `buffer StatsBuffer`: per-dispatch counters, cleared and read by the host.
@@ -135,6 +147,12 @@ mod tests {
     }
 
     #[test]
+    fn alias_entry_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuAliasEntry>(), 8);
+        assert_eq!(offset_of!(GpuAliasEntry, alias), 4);
+    }
+
+    #[test]
     fn bvh_node_matches_glsl_std430() {
         assert_eq!(size_of::<BvhNode>(), 32);
         assert_eq!(offset_of!(BvhNode, offset), 12);
@@ -144,7 +162,7 @@ mod tests {
 
     #[test]
     fn frame_params_match_glsl_std140() {
-        assert_eq!(size_of::<FrameParams>(), 176);
+        assert_eq!(size_of::<FrameParams>(), 192);
         let offsets = [
             offset_of!(FrameParams, cam_origin),
             offset_of!(FrameParams, cam_forward),
@@ -157,8 +175,9 @@ mod tests {
             offset_of!(FrameParams, env_size),
             offset_of!(FrameParams, roulette),
             offset_of!(FrameParams, lens),
+            offset_of!(FrameParams, lights),
         ];
-        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160]);
+        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176]);
     }
 
     #[test]

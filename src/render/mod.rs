@@ -4,6 +4,7 @@ mod acceleration;
 mod env_sampling;
 mod kernel;
 pub mod layout;
+mod light_selection;
 mod renderer;
 mod scene_data;
 

@@ -87,6 +87,7 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
         lens: [cam.aperture, cam.focus_distance, i.clamp.unwrap_or(0.0), f32::from_bits(filter)],
+        lights: [data.light_distribution.total_power, 0.0, 0.0, 0.0],
     }
 }
 
@@ -144,7 +145,7 @@ impl<'a> Renderer<'a> {
         let params = frame_params(scene, &data, seed);
         let a = &data.acceleration;
         // In binding order (shaders/layout.glsl); the accumulation image is zeroes, sized here.
-        let contents: [(&str, BufferKind, &[u8]); 16] = [
+        let contents: [(&str, BufferKind, &[u8]); 17] = [
             ("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params)),
             ("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes)),
             ("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives)),
@@ -161,6 +162,7 @@ impl<'a> Renderer<'a> {
             ("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures)),
             ("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels)),
             ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
+            ("light alias table", BufferKind::Storage, bytemuck::cast_slice(&data.light_distribution.table)),
         ];
         let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
         check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;

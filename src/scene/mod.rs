@@ -7,7 +7,7 @@ mod mesh;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, Asset, AssetError};
-pub use format::Filter;
+pub use format::{Filter, LightSelection};
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 
 use anyhow::{bail, Context as _, Result};
@@ -56,6 +56,7 @@ pub struct Integrator {
     pub sample_environment: bool,
     /// Per-sample cap on the largest radiance component (biased); None: off.
     pub clamp: Option<f32>,
+    pub light_selection: LightSelection,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -338,6 +339,7 @@ fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {
         max_bounces: i.max_bounces,
         sample_environment: i.sample_environment,
         clamp: i.clamp,
+        light_selection: i.light_selection,
     })
 }
 
