@@ -14,8 +14,9 @@ use glam::{Mat4, Vec3};
 const GRID: (u32, u32) = (64, 32);
 
 /// A diffuse floor under a ceiling of 4096 dim emissive triangles (a mesh placed by a scale and a
-/// translation, emitting downwards) and one small bright sphere that emits four fifths of the
-/// power: uniform selection spends all but one shadow ray in 4097 on the dim grid.
+/// translation, emitting downwards), one small bright sphere that emits half the power
+/// and a two-sided panel standing on the floor: uniform selection spends all but two shadow rays
+/// in 4098 on the dim grid.
 fn many_lights(spp: u32, nee: bool, selection: LightSelection) -> Scene {
     let mut scene = parse(&format!(
         r#"
@@ -30,6 +31,10 @@ fn many_lights(spp: u32, nee: bool, selection: LightSelection) -> Scene {
         [materials.lamp]
         albedo = [0, 0, 0]
         emission = [60, 50, 40]
+        [materials.panel]
+        albedo = [0, 0, 0]
+        emission = [6, 6, 8]
+        two_sided = true
         [[quads]]
         origin = [-2, 0, 2]
         edge_u = [4, 0, 0]
@@ -39,6 +44,11 @@ fn many_lights(spp: u32, nee: bool, selection: LightSelection) -> Scene {
         center = [0.4, 0.45, 0]
         radius = 0.1
         material = "lamp"
+        [[quads]]
+        origin = [-1.2, 0.1, -0.4]
+        edge_u = [0, 0, 0.8]
+        edge_v = [0, 0.5, 0]
+        material = "panel"
         "#
     ));
     scene.integrator.light_selection = selection;
@@ -60,7 +70,7 @@ fn thousands_of_emissive_triangles_are_lights() {
     let (_lock, ctx) = gpu();
     let scene = many_lights(1, true, LightSelection::Power);
     let renderer = Renderer::new(&ctx, &scene, 1).expect("scene uploads");
-    assert_eq!(renderer.geometry.lights, (2 * GRID.0 * GRID.1 + 1) as usize);
+    assert_eq!(renderer.geometry.lights, (2 * GRID.0 * GRID.1 + 2) as usize);
     assert_eq!(scene.light_count(), renderer.geometry.lights);
 }
 
@@ -98,7 +108,7 @@ fn power_selection_lowers_the_error_among_many_lights() {
 fn sphere_light_gives_the_analytic_direct_light() {
     let (_lock, ctx) = gpu();
     let mut scene = many_lights(256, true, LightSelection::Power);
-    scene.materials.iter_mut().filter(|m| m.name == "grid").for_each(|m| m.emission = Vec3::ZERO);
+    scene.materials.iter_mut().filter(|m| m.name == "grid" || m.name == "panel").for_each(|m| m.emission = Vec3::ZERO);
     scene.meshes.clear();
     scene.instances.clear();
     let params = frame_params(&scene, &SceneData::new(&scene, 0), 0);
