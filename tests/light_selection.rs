@@ -141,3 +141,12 @@ fn sphere_light_gives_the_analytic_direct_light() {
     eprintln!("floor under a sphere light: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
     assert!((got - want).abs() <= 5.0 * stderr + 0.005 * want, "floor under a sphere light: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
 }
+
+#[test]
+fn light_selection_defaults_to_power_and_rejects_unknown_choices() {
+    let camera = "camera = { position = [0, 0, 3], look_at = [0, 0, 0] }\n";
+    assert_eq!(parse(camera).integrator.light_selection, LightSelection::Power);
+    assert_eq!(parse(&format!("{camera}[integrator]\nlight_selection = \"uniform\"\n")).integrator.light_selection, LightSelection::Uniform);
+    let e = format!("{:#}", Scene::parse(&format!("{camera}[integrator]\nlight_selection = \"random\"\n"), "s.toml", std::path::Path::new(".")).expect_err("rejected"));
+    assert!(e.contains("light_selection") && e.contains("random") && e.contains("power") && e.contains("uniform"), "{e}");
+}
