@@ -100,46 +100,94 @@ fn power_selection_lowers_the_error_among_many_lights() {
     assert!(power < 0.5 * uniform, "relative MSE with power selection {power:.5}, uniform {uniform:.5}");
 }
 
-/// Direct light from the bright sphere alone on the floor (the grid dark, no mesh): radiance
-/// 0.7 L (r / d)^2 cos(theta) at a floor point a distance d from its centre, averaged over each
-/// pixel's footprint. Shadow rays used to graze the sphere and count it as its own blocker, which
-/// took 12 % of this light away far from the sphere and more near it.
-#[test]
-fn sphere_light_gives_the_analytic_direct_light() {
+/// Asserts that the floor (y = 0, albedo 0.7, filling rows 14 and below) shows `radiance(ray)`,
+/// averaged over 8 x 8 rays per pixel, within 5 standard errors of the render's mean (its noise
+/// from two seeds' difference) plus 0.5 % for that quadrature. `radiance` gets the eye and a ray
+/// direction.
+fn assert_floor_is_analytic(scene: &Scene, radiance: impl Fn(Vec3, Vec3) -> f64, what: &str) {
     let (_lock, ctx) = gpu();
-    let mut scene = many_lights(256, true, LightSelection::Power);
-    scene.materials.iter_mut().filter(|m| m.name == "grid" || m.name == "panel").for_each(|m| m.emission = Vec3::ZERO);
-    scene.meshes.clear();
-    scene.instances.clear();
-    let params = frame_params(&scene, &SceneData::new(&scene, 0), 0);
+    let params = frame_params(scene, &SceneData::new(scene, 0), 0);
     let v = |a: &[f32; 4]| Vec3::from_slice(&a[..3]);
     let (eye, forward, right, up, tan_half) = (v(&params.cam_origin), v(&params.cam_forward), v(&params.cam_right), v(&params.cam_up), params.cam_forward[3]);
-    let (center, radius) = (Vec3::new(0.4, 0.45, 0.0), 0.1f32);
-    let radiance = luminance([60.0, 50.0, 40.0]);
     let size = scene.film.width as f32;
-    // The floor fills the lower half of the view; an 8 x 8 grid of rays per pixel.
     let expected = |x: u32, y: u32| {
-        let mut sum = 0.0;
-        for (sx, sy) in (0..8).flat_map(|i| (0..8).map(move |j| (i, j))) {
-            let f = |p: u32, s: u32| (p as f32 + (s as f32 + 0.5) / 8.0) / size * 2.0 - 1.0;
-            let d = (forward + f(x, sx) * tan_half * right - f(y, sy) * tan_half * up).normalize();
-            let to_center = center - (eye - eye.y / d.y * d);
-            let d2 = to_center.length_squared() as f64;
-            sum += 0.7 * radiance * (radius * radius) as f64 / d2 * to_center.y as f64 / d2.sqrt();
-        }
-        sum / 64.0
+        let f = |p: u32, s: u32| (p as f32 + (s as f32 + 0.5) / 8.0) / size * 2.0 - 1.0;
+        (0..64).map(|k| radiance(eye, (forward + f(x, k % 8) * tan_half * right - f(y, k / 8) * tan_half * up).normalize())).sum::<f64>() / 64.0
     };
-    let (a, b) = (render(&ctx, &scene, 1), render(&ctx, &scene, 2));
-    // Noise of the two renders' average, from their difference.
+    let (a, b) = (render(&ctx, scene, 1), render(&ctx, scene, 2));
     let pixels: Vec<(u32, u32)> = (14..24).flat_map(|y| (0..24).map(move |x| (x, y))).collect();
     let n = pixels.len() as f64;
     let variance = pixels.iter().map(|&(x, y)| (luminance(a.get(x, y)) - luminance(b.get(x, y))).powi(2)).sum::<f64>() / (2.0 * n);
     let stderr = (variance / 2.0 / n).sqrt();
     let got = pixels.iter().map(|&(x, y)| 0.5 * (luminance(a.get(x, y)) + luminance(b.get(x, y)))).sum::<f64>() / n;
     let want = pixels.iter().map(|&(x, y)| expected(x, y)).sum::<f64>() / n;
-    // Plus 0.5 % for the 64-ray quadrature of each pixel's footprint.
-    eprintln!("floor under a sphere light: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
-    assert!((got - want).abs() <= 5.0 * stderr + 0.005 * want, "floor under a sphere light: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
+    eprintln!("{what}: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
+    assert!((got - want).abs() <= 5.0 * stderr + 0.005 * want, "{what}: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
+}
+
+/// Where a ray from `eye` meets the floor.
+fn floor_point(eye: Vec3, d: Vec3) -> Vec3 {
+    eye - eye.y / d.y * d
+}
+
+/// Direct light from the bright sphere alone on the floor (the grid dark, no mesh): radiance
+/// 0.7 L (r / d)^2 cos(theta) at a floor point a distance d from its centre. Shadow rays used to
+/// graze the sphere and count it as its own blocker, which took 12 % of this light away far from
+/// the sphere and more near it.
+#[test]
+fn sphere_light_gives_the_analytic_direct_light() {
+    let mut scene = many_lights(256, true, LightSelection::Power);
+    scene.materials.iter_mut().filter(|m| m.name == "grid" || m.name == "panel").for_each(|m| m.emission = Vec3::ZERO);
+    scene.meshes.clear();
+    scene.instances.clear();
+    let (center, radius) = (Vec3::new(0.4, 0.45, 0.0), 0.1f64);
+    let emitted = luminance([60.0, 50.0, 40.0]);
+    let radiance = |eye: Vec3, d: Vec3| {
+        let to_center = (center - floor_point(eye, d)).as_dvec3();
+        0.7 * emitted * radius * radius / to_center.length_squared() * to_center.y / to_center.length()
+    };
+    assert_floor_is_analytic(&scene, radiance, "floor under a sphere light");
+}
+
+/// A large triangle light just above the floor, where it subtends up to a hemisphere and is
+/// sampled by solid angle: the floor's radiance is 0.7 / pi times Lambert's polygon irradiance,
+/// L / 2 |sum over edges of the angle they subtend times n . (unit normal of their plane)|.
+/// Rays that meet the triangle's dark back first see black.
+#[test]
+fn large_triangle_light_gives_the_analytic_direct_light() {
+    let scene = parse(
+        r#"
+        camera = { position = [0, 0.6, 3], look_at = [0, 0.2, 0], fov = 45 }
+        film = { width = 24, height = 24, spp = 64 }
+        [materials.floor]
+        albedo = [0.7, 0.7, 0.7]
+        [materials.light]
+        albedo = [0, 0, 0]
+        emission = [4, 3, 2]
+        [[quads]]
+        origin = [-2, 0, 2]
+        edge_u = [4, 0, 0]
+        edge_v = [0, 0, -4]
+        material = "floor"
+        [[triangles]]
+        vertices = [[-1.5, 0.3, -1], [1.5, 0.3, -1], [0, 0.3, 1]]
+        material = "light"
+        "#,
+    );
+    let v = [Vec3::new(-1.5, 0.3, -1.0), Vec3::new(1.5, 0.3, -1.0), Vec3::new(0.0, 0.3, 1.0)].map(|p| p.as_dvec3());
+    let emitted = luminance([4.0, 3.0, 2.0]);
+    let inside = |p: glam::DVec3| (0..3).all(|i| (v[(i + 1) % 3] - v[i]).cross(p - v[i]).y <= 0.0);
+    let radiance = |eye: Vec3, d: Vec3| {
+        let (eye, d) = (eye.as_dvec3(), d.as_dvec3());
+        if inside(eye + (0.3 - eye.y) / d.y * d) {
+            return 0.0;
+        }
+        let p = floor_point(eye.as_vec3(), d.as_vec3()).as_dvec3();
+        let q = v.map(|c| (c - p).normalize());
+        let sum: f64 = (0..3).map(|i| q[i].angle_between(q[(i + 1) % 3]) * q[i].cross(q[(i + 1) % 3]).normalize().y).sum();
+        0.7 / std::f64::consts::PI * emitted / 2.0 * sum.abs()
+    };
+    assert_floor_is_analytic(&scene, radiance, "floor under a large triangle light");
 }
 
 #[test]
