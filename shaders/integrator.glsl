@@ -118,8 +118,18 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout Fir
                     if (cos_surface > 0.0 && (dot(ls.dir, n) > 0.0) == front) {
                         rays += 1u;
                         vec3 shadow_origin = offset_origin(point, n, ls.dir);
-                        // Stop short of the light so its own surface does not count as a blocker.
-                        if (!occluded(shadow_origin, ls.dir, ls.dist * (1.0 - 1e-4))) {
+                        // Aim from the offset origin at the sampled point itself, stopping short so
+                        // the light's own surface is not a blocker: a ray along ls.dir from there
+                        // meets a nearby or curved light before ls.dist (grazing a sphere, it shadowed
+                        // a tenth of a small sphere light's direct light).
+                        vec3 shadow_dir = ls.dir;
+                        float shadow_dist = ls.dist;
+                        if (ls.dist < 1e30) {
+                            vec3 to_light = point + ls.dist * ls.dir - shadow_origin;
+                            shadow_dist = length(to_light);
+                            shadow_dir = to_light / shadow_dist;
+                        }
+                        if (!occluded(shadow_origin, shadow_dir, shadow_dist * (1.0 - 1e-4))) {
                             float brdf_pdf = cos_surface * INV_PI;
                             float weight = power_heuristic(ls.pdf, brdf_pdf);
                             radiance += throughput * ls.radiance * (cos_surface * INV_PI * weight / ls.pdf);

@@ -25,6 +25,13 @@ struct Material {
     vec4 params;
 };
 
+// One entry of the alias table that picks area lights by power (src/render/light_selection.rs):
+// keep this entry's light with probability `threshold`, otherwise take `alias`.
+struct LightAlias {
+    float threshold;
+    uint alias;
+};
+
 // Flattened BVH node (src/bvh): first child is the next node, `offset` is the second child for an
 // interior node or the first primitive for a leaf; meta = prim_count << 2 | split_axis.
 struct BvhNode {
@@ -84,6 +91,7 @@ layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
     vec4 lens;          // x = lens radius (0: pinhole), y = focus distance along the viewing axis,
                         // z = per-sample radiance clamp (0: off), w = FILTER_* as raw uint bits
     uvec4 sampling;     // x = SAMPLER_* (rng.glsl), yzw unused
+    vec4 lights;        // x = total power of the area lights when picked by power (0: uniformly)
 } frame;
 
 layout(push_constant) uniform PassBlock {
@@ -121,6 +129,8 @@ layout(std430, set = 0, binding = 13) readonly buffer TextureInfoBuffer { Textur
 // The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
 // one CDF per row (width + 1 values each); see src/render/env_sampling.rs.
 layout(std430, set = 0, binding = 15) readonly buffer EnvCdfBuffer { float env_cdf[]; };
+// Alias table over `lights` for picking them by power; empty when they are picked uniformly.
+layout(std430, set = 0, binding = 16) readonly buffer LightAliasBuffer { LightAlias light_alias[]; };
 
 // Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
 // xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the

@@ -65,6 +65,16 @@ pub struct GpuTexture {
     pub unused: u32,
 }
 
+/// `struct LightAlias`: one entry of the alias table that picks area lights by power
+/// (light_selection.rs).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuAliasEntry {
+    /// Probability of keeping this entry's own light rather than taking `alias`.
+    pub threshold: f32,
+    pub alias: u32,
+}
+
 /// `uniform FrameParamsBlock` (std140; only 16-byte members, so it equals std430).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -89,6 +99,8 @@ pub struct FrameParams {
     pub lens: [f32; 4],
     /// SAMPLER_* (shaders/rng.glsl), unused, unused, unused
     pub sampling: [u32; 4],
+    /// total power of the area lights when they are picked by power (0: picked uniformly), unused x3
+    pub lights: [f32; 4],
 }
 
 /// `buffer StatsBuffer`: per-dispatch counters, cleared and read by the host.
@@ -144,6 +156,12 @@ mod tests {
     }
 
     #[test]
+    fn alias_entry_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuAliasEntry>(), 8);
+        assert_eq!(offset_of!(GpuAliasEntry, alias), 4);
+    }
+
+    #[test]
     fn bvh_node_matches_glsl_std430() {
         assert_eq!(size_of::<BvhNode>(), 32);
         assert_eq!(offset_of!(BvhNode, offset), 12);
@@ -153,7 +171,7 @@ mod tests {
 
     #[test]
     fn frame_params_match_glsl_std140() {
-        assert_eq!(size_of::<FrameParams>(), 192);
+        assert_eq!(size_of::<FrameParams>(), 208);
         let offsets = [
             offset_of!(FrameParams, cam_origin),
             offset_of!(FrameParams, cam_forward),
@@ -167,8 +185,9 @@ mod tests {
             offset_of!(FrameParams, roulette),
             offset_of!(FrameParams, lens),
             offset_of!(FrameParams, sampling),
+            offset_of!(FrameParams, lights),
         ];
-        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176]);
+        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192]);
     }
 
     #[test]

@@ -7,6 +7,7 @@ mod chunks;
 mod env_sampling;
 mod kernel;
 pub mod layout;
+mod light_selection;
 mod renderer;
 mod scene_data;
 

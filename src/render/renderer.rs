@@ -100,6 +100,7 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
         lens: [cam.aperture, cam.focus_distance, i.clamp.unwrap_or(0.0), f32::from_bits(filter)],
         sampling: [sampler, 0, 0, 0],
+        lights: [data.light_distribution.total_power, 0.0, 0.0, 0.0],
     }
 }
 
@@ -187,7 +188,7 @@ impl<'a> Renderer<'a> {
         let params = frame_params(scene, &data, seed);
         let a = &data.acceleration;
         // In binding order (shaders/layout.glsl); the accumulation image is zeroes, sized here.
-        let contents: [(&str, BufferKind, &[u8]); 16] = [
+        let contents: [(&str, BufferKind, &[u8]); 17] = [
             ("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params)),
             ("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes)),
             ("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives)),
@@ -204,6 +205,7 @@ impl<'a> Renderer<'a> {
             ("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures)),
             ("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels)),
             ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
+            ("light alias table", BufferKind::Storage, bytemuck::cast_slice(&data.light_distribution.table)),
         ];
         let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
         let aov_names: &[&str] = if aovs.needs_kernel() { &["albedo and depth sums", "normal sums"] } else { &[] };

@@ -7,7 +7,7 @@ mod mesh;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, Asset, AssetError};
-pub use format::{Filter, Sampler};
+pub use format::{Filter, LightSelection, Sampler};
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 
 use anyhow::{bail, Context as _, Result};
@@ -57,6 +57,7 @@ pub struct Integrator {
     /// Per-sample cap on the largest radiance component (biased); None: off.
     pub clamp: Option<f32>,
     pub sampler: Sampler,
+    pub light_selection: LightSelection,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -340,6 +341,7 @@ fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {
         sample_environment: i.sample_environment,
         clamp: i.clamp,
         sampler: i.sampler,
+        light_selection: i.light_selection,
     })
 }
 
