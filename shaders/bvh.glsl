@@ -45,7 +45,7 @@ vec3 affine_vector(vec4 rows[3], vec3 v) {
 }
 
 vec3 vertex_position(uint v) {
-    return vec3(vertex_positions[3u * v], vertex_positions[3u * v + 1u], vertex_positions[3u * v + 2u]);
+    return vec3(load_vertex_positions(3u * v), load_vertex_positions(3u * v + 1u), load_vertex_positions(3u * v + 2u));
 }
 
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found (shadow rays).
@@ -97,7 +97,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
         }
         // Walk down from this node, nearer child first, until a leaf or a miss.
         while (true) {
-            BvhNode node = nodes[node_index];
+            BvhNode node = load_nodes(node_index);
             if (!ray_box(node.bmin, node.bmax, ro, inv_d, hit.t)) break;
             uint count = node.meta >> 2u;
             if (count == 0u) {
@@ -111,7 +111,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 for (uint i = 0u; i < count; ++i) stack[sp++] = INSTANCE_ENTRY | (node.offset + i);
             } else if (instance_kind == INSTANCE_MESH) {
                 for (uint i = node.offset; i < node.offset + count; ++i) {
-                    uvec4 tri = mesh_triangles[i];
+                    uvec4 tri = load_mesh_triangles(i);
                     vec3 v0 = vertex_position(tri.x);
                     vec2 bary;
                     float t = intersect_triangle(v0, vertex_position(tri.y) - v0, vertex_position(tri.z) - v0, ro, rd, hit.t, bary);

@@ -17,7 +17,7 @@ vec3 env_bilinear(vec2 texel, bool wrap_x) {
             int y = clamp(i0.y + dy, 0, h - 1);
             float wx = dx == 0 ? 1.0 - frac_part.x : frac_part.x;
             float wy = dy == 0 ? 1.0 - frac_part.y : frac_part.y;
-            sum += wx * wy * env_texels[y * w + x].rgb;
+            sum += wx * wy * load_env_texels(y * w + x).rgb;
         }
     }
     return sum;

@@ -3,6 +3,21 @@
 // integrator.max_bounces is only a safety cap far beyond where roulette ends any path that
 // carries energy.
 
+// Sobol dimensions (rng.glsl): the camera's film and lens pair first, then per bounce one window
+// for Russian roulette and the BSDF and one for next-event estimation. Fixed windows keep a decision
+// on the same dimension in every sample whatever was drawn before it; draws beyond a window, and
+// bounces from SOBOL_BOUNCES on (rare after roulette, where stratification has worn off), are
+// independent numbers.
+const uint DIMS_CAMERA = 4u;
+const uint DIMS_SCATTER = 8u;
+const uint DIMS_DIRECT = 8u;
+const uint SOBOL_BOUNCES = 8u;
+
+void bounce_dimensions(inout Rng rng, uint depth, uint offset, uint count) {
+    uint first = DIMS_CAMERA + depth * (DIMS_SCATTER + DIMS_DIRECT) + offset;
+    rng_set_dimensions(rng, first, depth < SOBOL_BOUNCES ? count : 0u);
+}
+
 // Offsets a ray origin off the surface to the side `dir` leaves towards.
 vec3 offset_origin(vec3 p, vec3 n, vec3 dir) {
     float scale = 1e-4 * max(1.0, max3(abs(p)));
@@ -43,7 +58,20 @@ vec3 direct_light(Lobe lobe, vec3 d, Surface surface, inout Rng rng, inout uint 
     return f_cos * ls.radiance * (power_heuristic(ls.pdf, lobe_pdf) / ls.pdf);
 }
 
-vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
+// Denoiser features of one path (AOVs): albedo and camera-facing shading normal of the first vertex
+// that is not a perfectly specular bounce (mirror and glass are followed, as Open Image Denoise
+// recommends), and the distance to the first hit. An escaping ray counts as a vertex with the
+// environment's radiance, clamped to [0, 1], as albedo and a zero normal. `open` while the
+// vertex is still ahead; pathtrace.comp starts it closed when AOVs are off.
+struct FirstHit {
+    vec3 albedo;
+    vec3 normal;
+    float depth;
+    bool hit;
+    bool open;
+};
+
+vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout FirstHit first) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
     bool nee = frame.integrator.y != 0u;
@@ -55,6 +83,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
 
     uint max_bounces = frame.integrator.w;
     for (uint depth = 0u; depth < max_bounces; ++depth) {
+        bounce_dimensions(rng, depth, 0u, DIMS_SCATTER);
         Hit hit;
         rays += 1u;
         if (!trace_ray(origin, dir, 1e30, false, hit)) {
@@ -62,7 +91,12 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
             if (nee && bsdf_pdf > 0.0 && environment_sampled()) {
                 weight = power_heuristic(bsdf_pdf, frame.env_rotation.z * environment_pdf(dir));
             }
-            radiance += throughput * environment_radiance(dir) * weight;
+            vec3 env = environment_radiance(dir);
+            radiance += throughput * env * weight;
+            if (AOVS == 1 && first.open) {
+                first.albedo = clamp(env, 0.0, 1.0);
+                first.normal = vec3(0.0);
+            }
             break;
         }
         Surface surface = surface_at(hit, origin, dir);
@@ -70,6 +104,16 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         vec3 point = surface.point;
         vec3 n = surface.ng;
         bool front = dot(n, dir) < 0.0;
+        if (AOVS == 1 && first.open) {
+            // Written at every vertex while open, so a path that ends on a specular chain keeps
+            // its last surface.
+            if (depth == 0u) {
+                first.depth = hit.t;
+                first.hit = true;
+            }
+            first.albedo = m.albedo_r.rgb;
+            first.normal = front ? surface.ns : -surface.ns;
+        }
 
         vec3 le = emitted_radiance(m, front);
         if (max3(le) > 0.0) {
@@ -87,11 +131,16 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays) {
         }
 
         Lobe lobe = pick_lobe(m, dir, surface.ns, front, rng);
-        // Before sampling: a rough lobe's sample can fail (below the surface) and end the path,
-        // which must not drop the direct light.
-        if (nee && !lobe_is_delta(lobe)) radiance += throughput * direct_light(lobe, dir, surface, rng, rays);
+        if (!lobe_is_delta(lobe)) first.open = false;
         BsdfSample s;
-        if (!sample_lobe(lobe, dir, rng, s)) break;
+        bool sampled = sample_lobe(lobe, dir, rng, s);
+        // Even when the sample fails (a rough lobe's can point below the surface): the direct
+        // light must not be dropped with it.
+        if (nee && !lobe_is_delta(lobe)) {
+            bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
+            radiance += throughput * direct_light(lobe, dir, surface, rng, rays);
+        }
+        if (!sampled) break;
         // Shading normals can send a ray through the geometric surface; such paths end here.
         if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) break;
         throughput *= s.weight;

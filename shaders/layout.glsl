@@ -36,6 +36,13 @@ struct Material {
     vec4 conductor_k;
 };
 
+// One entry of the alias table that picks area lights by power (src/render/light_selection.rs):
+// keep this entry's light with probability `threshold`, otherwise take `alias`.
+struct LightAlias {
+    float threshold;
+    uint alias;
+};
+
 // Flattened BVH node (src/bvh): first child is the next node, `offset` is the second child for an
 // interior node or the first primitive for a leaf; meta = prim_count << 2 | split_axis.
 struct BvhNode {
@@ -94,6 +101,8 @@ layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
     vec4 roulette;      // x = fixed absorption (< 0: derive from throughput), y = q min, z = q max
     vec4 lens;          // x = lens radius (0: pinhole), y = focus distance along the viewing axis,
                         // z = per-sample radiance clamp (0: off), w = FILTER_* as raw uint bits
+    uvec4 sampling;     // x = SAMPLER_* (rng.glsl), yzw unused
+    vec4 lights;        // x = total power of the area lights when picked by power (0: uniformly)
 } frame;
 
 layout(push_constant) uniform PassBlock {
@@ -103,31 +112,43 @@ layout(push_constant) uniform PassBlock {
     uint row_count;     // rows in the band
 } pass;
 
-layout(std430, set = 0, binding = 1) readonly buffer NodeBuffer { BvhNode nodes[]; };
+// Arrays that can outgrow one storage binding (marked "binding N: type name[]") are declared in
+// chunked_buffers.glsl, which src/render/chunks.rs generates for each scene and device; the kernel
+// reads them with load_<name>(i) (and writes accum with store_accum).
+// binding 1: BvhNode nodes[]
 layout(std430, set = 0, binding = 2) readonly buffer PrimitiveBuffer { Primitive prims[]; };
 layout(std430, set = 0, binding = 3) readonly buffer MaterialBuffer { Material materials[]; };
 // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
 layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { Primitive lights[]; };
-layout(std430, set = 0, binding = 5) readonly buffer EnvironmentBuffer { vec4 env_texels[]; };
+// binding 5: vec4 env_texels[]
 // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
-layout(std430, set = 0, binding = 6) buffer AccumBuffer { vec4 accum[]; };
+// binding 6: vec4 accum[]
 // Rays traced and non-finite samples dropped (each wraps per dispatch; the host reads and clears
 // both each dispatch).
 layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; uint nonfinite_samples; } stats;
 // Top-level BVH leaves index instances; node 0 is the top-level root.
 layout(std430, set = 0, binding = 8) readonly buffer InstanceBuffer { Instance instances[]; };
 // Mesh triangles in their BVH's leaf order: xyz = global vertex indices, w = material.
-layout(std430, set = 0, binding = 9) readonly buffer TriangleBuffer { uvec4 mesh_triangles[]; };
+// binding 9: uvec4 mesh_triangles[]
 // Vertex attributes of every mesh, indexed by global vertex index. Positions are packed floats
 // (12 bytes a vertex), normals octahedral snorm16x2.
-layout(std430, set = 0, binding = 10) readonly buffer PositionBuffer { float vertex_positions[]; };
-layout(std430, set = 0, binding = 11) readonly buffer NormalBuffer { uint vertex_normals[]; };
-layout(std430, set = 0, binding = 12) readonly buffer UvBuffer { vec2 vertex_uvs[]; };
+// binding 10: float vertex_positions[]
+// binding 11: uint vertex_normals[]
+// binding 12: vec2 vertex_uvs[]
 layout(std430, set = 0, binding = 13) readonly buffer TextureInfoBuffer { TextureInfo texture_infos[]; };
-layout(std430, set = 0, binding = 14) readonly buffer TexelBuffer { uint texels[]; };
+// binding 14: uint texels[]
 // The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
 // one CDF per row (width + 1 values each); see src/render/env_sampling.rs.
 layout(std430, set = 0, binding = 15) readonly buffer EnvCdfBuffer { float env_cdf[]; };
+// Alias table over `lights` for picking them by power; empty when they are picked uniformly.
+layout(std430, set = 0, binding = 16) readonly buffer LightAliasBuffer { LightAlias light_alias[]; };
+
+// Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
+// xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
+// first hit summed over the samples that hit something, w = how many those were. Only the kernel
+// variant built with AOVS 1 touches them, and only then are they bound.
+// binding 20: vec4 aov_albedo_depth[]
+// binding 21: vec4 aov_normal_hits[]
 
 uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
 uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }

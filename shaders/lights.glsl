@@ -1,8 +1,15 @@
 // Direct lighting: the environment map (when importance sampled) with probability
 // frame.env_rotation.z, otherwise an area light: every emissive primitive and mesh triangle, in
-// world space (the `lights` buffer). An area light is picked uniformly, then a point (or, for
-// spheres, a direction in the cone they subtend) is sampled on it. Pdfs are per unit solid angle
-// at `ref` and include the probability of the pick.
+// world space (the `lights` buffer). An area light is picked in proportion to its power through
+// an alias table (or uniformly: integrator.light_selection), then a point (or, for spheres, a
+// direction in the cone they subtend; for triangles, in their spherical triangle) is sampled on it. Pdfs are per unit solid angle at `ref`
+// and include the probability of the pick.
+//
+// The pick probability is a function of the light alone (light_pick_probability): its power by
+// the host's formula (src/render/light_selection.rs) over the host's total. Next-event estimation
+// and the MIS weight of an emitter hit by BSDF sampling both evaluate it, so the two weights of a
+// path come from the same pdfs and sum to 1, with no light index needed at a hit; the alias table,
+// built from the same powers in double precision, picks with that probability up to f32 rounding.
 
 struct LightSample {
     vec3 dir;
@@ -11,31 +18,114 @@ struct LightSample {
     vec3 radiance;
 };
 
-// Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, otherwise by area).
+// Flux of an emitter: area x pi x luminance of its radiance, twice for a two-sided quad or
+// triangle (light_power in light_selection.rs).
+float light_power(Primitive p) {
+    Material m = materials[prim_material(p)];
+    float sides = prim_kind(p) != PRIM_SPHERE && m.params.y > 0.5 ? 2.0 : 1.0;
+    return primitive_area(p) * PI * dot(m.emission_t.rgb, vec3(0.2126, 0.7152, 0.0722)) * sides;
+}
+
+// Probability that next-event estimation picks area light `p` (the map's share taken out).
+float light_pick_probability(Primitive p) {
+    float share = 1.0 - frame.env_rotation.z;
+    float total_power = frame.lights.x;
+    return total_power > 0.0 ? share * light_power(p) / total_power : share / float(frame.image.w);
+}
+
+// Spherical triangles (Arvo 1995): a triangle light that subtends a solid angle large enough for
+// f32 to resolve is sampled uniformly in that solid angle, which takes the 1/r^2 and cosine at the
+// light out of the estimator; smaller (or huge) ones are sampled by area. light_pdf makes the same
+// choice from the same numbers.
+const float MIN_SPHERICAL_AREA = 3e-4;
+const float MAX_SPHERICAL_AREA = 6.22;
+
+// Angle between unit vectors, accurate near 0 and pi (unlike acos of the dot product).
+float angle_between(vec3 u, vec3 v) {
+    return dot(u, v) < 0.0 ? PI - 2.0 * asin(min(1.0, 0.5 * length(u + v))) : 2.0 * asin(min(1.0, 0.5 * length(v - u)));
+}
+
+// The triangle `p` projected onto the unit sphere around `ref`: unit vertices, the angle at a,
+// and the solid angle. False where it is too small or large to sample by solid angle.
+struct SphericalTriangle {
+    vec3 a, b, c;
+    float alpha;
+    float area;
+};
+
+bool spherical_triangle(Primitive p, vec3 ref, out SphericalTriangle s) {
+    s.a = normalize(p.a.xyz - ref);
+    s.b = normalize(p.a.xyz + p.b.xyz - ref);
+    s.c = normalize(p.a.xyz + p.c.xyz - ref);
+    vec3 n_ab = cross(s.a, s.b), n_bc = cross(s.b, s.c), n_ca = cross(s.c, s.a);
+    if (dot(n_ab, n_ab) == 0.0 || dot(n_bc, n_bc) == 0.0 || dot(n_ca, n_ca) == 0.0) return false;
+    n_ab = normalize(n_ab);
+    n_bc = normalize(n_bc);
+    n_ca = normalize(n_ca);
+    s.alpha = angle_between(n_ab, -n_ca);
+    s.area = s.alpha + angle_between(n_bc, -n_ab) + angle_between(n_ca, -n_bc) - PI;
+    return s.area >= MIN_SPHERICAL_AREA && s.area <= MAX_SPHERICAL_AREA;
+}
+
+// Component of unit `v` orthogonal to unit `w`, normalised.
+vec3 orthonormal_to(vec3 v, vec3 w) {
+    return normalize(v - dot(v, w) * w);
+}
+
+// A direction uniform in the spherical triangle (Arvo 1995; as in pbrt-v4's
+// SampleSphericalTriangle): pick the sub-triangle of area u.x * area, then a point on its edge arc.
+vec3 sample_spherical_triangle(SphericalTriangle s, vec2 u) {
+    float area_pi = s.area + PI;
+    float ap_pi = mix(PI, area_pi, u.x);
+    float cos_alpha = cos(s.alpha), sin_alpha = sin(s.alpha);
+    float sin_phi = sin(ap_pi) * cos_alpha - cos(ap_pi) * sin_alpha;
+    float cos_phi = cos(ap_pi) * cos_alpha + sin(ap_pi) * sin_alpha;
+    float k1 = cos_phi + cos_alpha;
+    float k2 = sin_phi - sin_alpha * dot(s.a, s.b);
+    float cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha) / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+    cos_bp = clamp(cos_bp, -1.0, 1.0);
+    float sin_bp = sqrt(max(0.0, 1.0 - cos_bp * cos_bp));
+    vec3 cp = cos_bp * s.a + sin_bp * orthonormal_to(s.c, s.a);
+    float cos_theta = 1.0 - u.y * (1.0 - dot(cp, s.b));
+    float sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    return cos_theta * s.b + sin_theta * orthonormal_to(cp, s.b);
+}
+
+// Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, triangle by solid
+// angle where it can, otherwise by area).
 float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
-    // Dividing by this count is multiplying by the pick's probability.
-    float light_count = float(frame.image.w) / (1.0 - frame.env_rotation.z);
+    float pick = light_pick_probability(p);
+    SphericalTriangle s;
+    if (prim_kind(p) == PRIM_TRIANGLE && spherical_triangle(p, ref, s)) return pick / s.area;
     if (prim_kind(p) == PRIM_SPHERE) {
         vec3 to_center = p.a.xyz - ref;
         float d2 = dot(to_center, to_center);
         float r2 = p.a.w * p.a.w;
         if (d2 > r2) {
             float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-            return 1.0 / (2.0 * PI * (1.0 - cos_max) * light_count);
+            return pick / (2.0 * PI * (1.0 - cos_max));
         }
     }
     vec3 point = ref + dist * dir;
     float cos_light = abs(dot(primitive_normal(p, point), dir));
     if (cos_light <= 0.0) return 0.0;
-    return dist * dist / (cos_light * primitive_area(p) * light_count);
+    return pick * dist * dist / (cos_light * primitive_area(p));
+}
+
+// Index of the area light to sample: a uniform entry of the alias table, kept or swapped for its
+// alias; or a uniform index. Two numbers rather than one split into entry and remainder: with
+// thousands of lights the remainder keeps too few bits for the thresholds of dim lights.
+uint pick_light(uint count, inout Rng rng) {
+    uint index = min(uint(rng_next(rng) * float(count)), count - 1u);
+    if (frame.lights.x > 0.0 && rng_next(rng) >= light_alias[index].threshold) index = light_alias[index].alias;
+    return index;
 }
 
 bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     uint count = frame.image.w;
     ls.pdf = 0.0;
     if (count == 0u) return false;
-    uint index = min(uint(rng_next(rng) * float(count)), count - 1u);
-    Primitive p = lights[index];
+    Primitive p = lights[pick_light(count, rng)];
     vec2 u = rng_next2(rng);
     vec3 point;
     uint kind = prim_kind(p);
@@ -55,8 +145,17 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     } else if (kind == PRIM_QUAD) {
         point = p.a.xyz + u.x * p.b.xyz + u.y * p.c.xyz;
     } else {
-        vec2 b = sample_triangle(u);
-        point = p.a.xyz + b.x * p.b.xyz + b.y * p.c.xyz;
+        SphericalTriangle s;
+        if (spherical_triangle(p, ref, s)) {
+            vec3 dir = sample_spherical_triangle(s, u);
+            vec3 n = cross(p.b.xyz, p.c.xyz);
+            float t = dot(p.a.xyz - ref, n) / dot(dir, n);
+            if (!(t > 0.0) || isinf(t)) return false;
+            point = ref + t * dir;
+        } else {
+            vec2 b = sample_triangle(u);
+            point = p.a.xyz + b.x * p.b.xyz + b.y * p.c.xyz;
+        }
     }
     vec3 to_point = point - ref;
     ls.dist = length(to_point);

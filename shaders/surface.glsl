@@ -37,14 +37,14 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
         return s;
     }
     vec4 world_to_object[3] = instances[hit.instance].world_to_object;
-    uvec4 tri = mesh_triangles[hit.prim];
+    uvec4 tri = load_mesh_triangles(hit.prim);
     vec3 v0 = vertex_position(tri.x);
     vec3 w = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
     s.ng = normal_to_world(world_to_object, cross(vertex_position(tri.y) - v0, vertex_position(tri.z) - v0));
     s.ns = s.ng;
     if ((info.z & INSTANCE_HAS_NORMALS) != 0u) {
-        vec3 n = w.x * unpack_normal(vertex_normals[tri.x]) + w.y * unpack_normal(vertex_normals[tri.y])
-               + w.z * unpack_normal(vertex_normals[tri.z]);
+        vec3 n = w.x * unpack_normal(load_vertex_normals(tri.x)) + w.y * unpack_normal(load_vertex_normals(tri.y))
+               + w.z * unpack_normal(load_vertex_normals(tri.z));
         if (dot(n, n) > 1e-12) {
             vec3 ns = normal_to_world(world_to_object, n);
             s.ns = dot(ns, s.ng) < 0.0 ? -ns : ns;
@@ -52,7 +52,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     }
     s.uv = vec2(0.0);
     if ((info.z & INSTANCE_HAS_UVS) != 0u) {
-        s.uv = w.x * vertex_uvs[tri.x] + w.y * vertex_uvs[tri.y] + w.z * vertex_uvs[tri.z];
+        s.uv = w.x * load_vertex_uvs(tri.x) + w.y * load_vertex_uvs(tri.y) + w.z * load_vertex_uvs(tri.z);
     }
     s.material = tri.w;
     return s;
@@ -62,7 +62,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 Primitive world_primitive(Hit hit) {
     if (instances[hit.instance].info.x == INSTANCE_PRIMITIVES) return prims[hit.prim];
     vec4 object_to_world[3] = instances[hit.instance].object_to_world;
-    uvec4 tri = mesh_triangles[hit.prim];
+    uvec4 tri = load_mesh_triangles(hit.prim);
     vec3 v0 = vertex_position(tri.x);
     Primitive p;
     p.a = vec4(affine_point(object_to_world, v0), 0.0);

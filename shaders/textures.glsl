@@ -6,7 +6,7 @@ vec3 srgb_to_linear(vec3 c) {
 }
 
 vec3 texel_rgb(TextureInfo t, uint x, uint y) {
-    return srgb_to_linear(unpackUnorm4x8(texels[t.offset + y * t.width + x]).rgb);
+    return srgb_to_linear(unpackUnorm4x8(load_texels(t.offset + y * t.width + x)).rgb);
 }
 
 vec3 texture_rgb(uint index, vec2 uv) {

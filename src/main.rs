@@ -4,7 +4,7 @@ use anyhow::{Context as _, Result};
 use caustica::farm::{self, format_ranges, parse_duration, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
-use caustica::render::{GeometryReport, Renderer};
+use caustica::render::{AovSet, GeometryReport, Renderer};
 use caustica::scene::{check_film, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -33,7 +33,7 @@ struct DeviceArgs {
 
 impl DeviceArgs {
     fn context(&self) -> Result<GpuContext> {
-        GpuContext::new(&ContextOptions { device: self.device.clone(), validation: self.validation })
+        GpuContext::new(&ContextOptions { device: self.device.clone(), validation: self.validation, storage_binding_limit: None })
     }
 }
 
@@ -94,6 +94,14 @@ fn duration(text: &str) -> Result<Duration, String> {
     parse_duration(text).map_err(|e| e.to_string())
 }
 
+fn aov_set(text: &str) -> Result<AovSet, String> {
+    AovSet::parse(text).map_err(|e| e.to_string())
+}
+
+fn is_exr(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene (the built-in Cornell box when no scene is given).
@@ -116,6 +124,10 @@ enum Command {
         /// Random seed: the same seed gives the same image.
         #[arg(long, default_value_t = 1)]
         seed: u32,
+        /// Extra EXR layers, comma-separated: albedo, normal (the features denoisers such as Open
+        /// Image Denoise take), depth, samples; or all. Needs .exr output.
+        #[arg(long, value_parser = aov_set)]
+        aov: Option<AovSet>,
         #[command(flatten)]
         output_args: OutputArgs,
         #[command(flatten)]
@@ -163,6 +175,9 @@ enum Command {
         spp: u32,
         /// Scene to measure instead of the built-in Cornell box.
         scene: Option<PathBuf>,
+        /// Accumulate these AOVs too (as `render --aov`), to measure what they cost.
+        #[arg(long, value_parser = aov_set)]
+        aov: Option<AovSet>,
         /// Print the results as JSON.
         #[arg(long)]
         json: bool,
@@ -210,6 +225,7 @@ static STOP: AtomicBool = AtomicBool::new(false);
 struct RenderRequest {
     output: PathBuf,
     seed: u32,
+    aovs: AovSet,
     /// Sample limit; `None` renders until the time budget or a stop.
     spp: Option<u32>,
     quiet: bool,
@@ -220,6 +236,9 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
     let output = &request.output;
     // Fail on a bad output path before spending minutes rendering.
     caustica::image::check_output_path(output)?;
+    if !request.aovs.is_empty() && !is_exr(output) {
+        anyhow::bail!("--aov {}: AOVs are layers of an EXR file, so the output must be .exr, not {}", request.aovs, output.display());
+    }
     let checkpoint = farm_args.checkpoint_path(output);
     ctrlc::set_handler(|| {
         if STOP.swap(true, Ordering::SeqCst) {
@@ -230,7 +249,7 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
     .context("installing the SIGINT/SIGTERM handler")?;
     let ctx = gpu.context()?;
     let started = Instant::now();
-    let mut renderer = Renderer::new(&ctx, &scene, request.seed)?;
+    let mut renderer = Renderer::with_aovs(&ctx, &scene, request.seed, request.aovs)?;
     renderer.set_sample_offset(farm_args.sample_offset);
     let resumed = if farm_args.resume { farm::resume(&mut renderer, &checkpoint)?.samples() } else { 0 };
     let bar = progress_bar(request.spp, request.quiet);
@@ -279,6 +298,7 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
             "seed": request.seed,
             "samples": renderer.samples_done,
             "sample_ranges": format_ranges(&partial.ranges),
+            "aovs": request.aovs.to_string(),
             "samples_this_run": rendered,
             "seconds": started.elapsed().as_secs_f64(),
             "render_seconds": renderer.seconds,
@@ -297,7 +317,7 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
 /// EXR output is a partial render (mean, accumulation and attributes: mergeable and resumable);
 /// other formats get the mean.
 fn write_render(output: &Path, partial: &PartialRender, output_args: &OutputArgs) -> Result<()> {
-    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+    if is_exr(output) {
         partial.write(output)
     } else {
         Ok(write_image_with(output, &partial.image(), &output_args.options())?)
@@ -308,17 +328,20 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
     caustica::image::check_output_path(output)?;
     let merged = farm::merge_files(inputs)?;
     write_render(output, &merged, output_args)?;
+    if !quiet && !merged.aovs.is_empty() && !is_exr(output) {
+        eprintln!("caustica: note: the AOV layers ({}) are kept only by .exr output", merged.aovs);
+    }
     if !quiet {
         eprintln!("wrote {} ({} partial renders, {} spp: samples {})", output.display(), inputs.len(), merged.samples(), format_ranges(&merged.ranges));
     }
     Ok(())
 }
 
-fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, json: bool, gpu: &DeviceArgs) -> Result<()> {
+fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json: bool, gpu: &DeviceArgs) -> Result<()> {
     apply_overrides(&mut scene, Some(width), Some(height), Some(spp))?;
     let ctx = gpu.context()?;
     let setup = Instant::now();
-    let mut renderer = Renderer::new(&ctx, &scene, 1)?;
+    let mut renderer = Renderer::with_aovs(&ctx, &scene, 1, aovs)?;
     let setup_s = setup.elapsed().as_secs_f64();
     // Warm-up pass: first-dispatch costs (pipeline caches, page faults) are not throughput.
     renderer.render(1, |_| {})?;
@@ -335,6 +358,7 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, json: bool, gpu: &
             "width": width,
             "height": height,
             "samples": spp,
+            "aovs": aovs.to_string(),
             "setup_seconds": setup_s,
             "seconds": seconds,
             "samples_per_second": samples / seconds,
@@ -349,7 +373,7 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, json: bool, gpu: &
     }
     println!("scene:        {}", scene.name);
     println!("device:       {} ({})", ctx.info.name, ctx.info.kind.label());
-    println!("image:        {width}x{height}, {spp} spp");
+    println!("image:        {width}x{height}, {spp} spp, AOVs: {aovs}");
     print_geometry(&renderer.geometry);
     println!("setup:        {setup_s:.3} s (load excluded: BVH, upload, kernel compile)");
     println!("render:       {seconds:.3} s");
@@ -377,16 +401,20 @@ fn print_geometry(g: &GeometryReport) {
     }
     let per_triangle = if a.mesh_triangles > 0 { format!(", {:.1} B/triangle", a.bytes_per_triangle(g.geometry_bytes)) } else { String::new() };
     println!("GPU memory:   {:.1} MiB geometry + BVH{per_triangle}, {:.1} MiB textures, {:.1} MiB in all", mib(g.geometry_bytes), mib(g.texture_bytes), mib(g.gpu_bytes));
+    if !g.split_arrays.is_empty() {
+        let split: Vec<String> = g.split_arrays.iter().map(|(name, windows)| format!("{name} x{windows}")).collect();
+        println!("split:        {} (larger than one storage binding of this device)", split.join(", "));
+    }
 }
 
 fn run() -> Result<()> {
     match Cli::parse().command {
-        Command::Render { scene, output, spp, width, height, seed, output_args, farm, quiet, json, gpu } => {
+        Command::Render { scene, output, spp, width, height, seed, aov, output_args, farm, quiet, json, gpu } => {
             let mut s = load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
-            render(s, RenderRequest { output, seed, spp, quiet, json }, &output_args, &farm, &gpu)
+            render(s, RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json }, &output_args, &farm, &gpu)
         }
         Command::Merge { inputs, output, output_args, quiet } => merge(&inputs, &output, &output_args, quiet),
         Command::Compare { image, reference } => {
@@ -415,7 +443,7 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, json, gpu } => bench(load_scene(scene.as_ref())?, width, height, spp, json, &gpu),
+        Command::Bench { width, height, spp, scene, aov, json, gpu } => bench(load_scene(scene.as_ref())?, width, height, spp, aov.unwrap_or_default(), json, &gpu),
     }
 }
 

@@ -5,7 +5,7 @@ mod common;
 
 use caustica::gpu::GpuContext;
 use caustica::image::{self, RgbImage};
-use caustica::scene::{angular_map_uv, Camera, Environment, EnvironmentMap, Film, Filter, Integrator, MapProjection, Scene};
+use caustica::scene::{angular_map_uv, Camera, Environment, EnvironmentMap, Film, Filter, Integrator, LightSelection, MapProjection, Sampler, Scene};
 use common::*;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -18,7 +18,7 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
         name: "environment probe".into(),
         camera: Camera::pinhole(Vec3::ZERO, dir, up, 0.001),
         film: Film { width: 1, height: 1, spp: 1, filter: Filter::Box },
-        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16, sample_environment: true, clamp: None },
+        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16, sample_environment: true, clamp: None, sampler: Sampler::Sobol, light_selection: LightSelection::Power },
         materials: vec![],
         shapes: vec![],
         meshes: vec![],

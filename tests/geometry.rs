@@ -5,7 +5,7 @@ mod common;
 
 use caustica::render::frame_params;
 use caustica::render::SceneData;
-use caustica::scene::{Instance, Mesh, Scene, Texture};
+use caustica::scene::{Environment, EnvironmentMap, Instance, MapProjection, Mesh, Scene, Texture};
 use common::{gpu, parse, render};
 use glam::{Mat4, Quat, Vec2, Vec3};
 
@@ -307,15 +307,18 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
     let path = dir.join("square.gltf");
     write_square_gltf(&path);
     let mut scene = Scene::load(&path).expect("the glTF loads as a scene");
-    scene.film.width = 48;
-    scene.film.height = 48;
+    // The square spans [-1, 1]^2 at distance 4; the view's half-height there is 4 tan(0.25) = 1.02:
+    // at 128 pixels the sky border is 1.3 pixels wide, so the corner pixel sees only sky.
+    let size = 128;
+    scene.film.width = size;
+    scene.film.height = size;
     scene.film.spp = 2;
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &scene, 1);
-    // The square spans [-1, 1]^2 at distance 4; the view's half-height there is 4 tan(0.25) = 1.02.
     let half_view = 4.0 * 0.25f32.tan();
-    let inside = (0.5 * 48.0 * (1.0 - 0.9 / half_view)) as u32;
-    for (x, y) in [(24, 24), (inside, inside), (47 - inside, 24), (24, 47 - inside)] {
+    let inside = (0.5 * size as f32 * (1.0 - 0.9 / half_view)) as u32;
+    let (middle, last) = (size / 2, size - 1);
+    for (x, y) in [(middle, middle), (inside, inside), (last - inside, middle), (middle, last - inside)] {
         // Its emission, plus what its (black-based, rough) dielectric coat reflects of the sky:
         // a little, the same in every channel.
         let p = image.get(x, y);
@@ -327,20 +330,85 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A textured, normal-mapped sphere mesh (uv sphere) placed twice, under a lat-long sky with a
+/// sun: every kind of array the renderer may split across bindings is non-trivial in size.
+fn sphere_scene() -> Scene {
+    let mut scene = parse(
+        r#"
+        camera = { position = [0, 0.4, 4], look_at = [0, 0, 0], fov = 40 }
+        film = { width = 32, height = 32, spp = 3 }
+        [materials.textured]
+        albedo = [1, 1, 1]
+        "#,
+    );
+    let (rings, segments) = (16u32, 24u32);
+    let mut mesh = Mesh { name: "uv sphere".into(), positions: vec![], normals: vec![], uvs: vec![], triangles: vec![], triangle_materials: vec![] };
+    for r in 0..=rings {
+        for s in 0..=segments {
+            let (theta, phi) = (std::f32::consts::PI * r as f32 / rings as f32, std::f32::consts::TAU * s as f32 / segments as f32);
+            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            mesh.positions.push(n);
+            mesh.normals.push(n);
+            mesh.uvs.push(Vec2::new(s as f32 / segments as f32 * 2.0, r as f32 / rings as f32));
+        }
+    }
+    let vertex = |r: u32, s: u32| r * (segments + 1) + s;
+    for r in 0..rings {
+        for s in 0..segments {
+            mesh.triangles.push([vertex(r, s), vertex(r + 1, s), vertex(r + 1, s + 1)]);
+            mesh.triangles.push([vertex(r, s), vertex(r + 1, s + 1), vertex(r, s + 1)]);
+        }
+    }
+    mesh.triangle_materials = vec![0; mesh.triangles.len()];
+    scene.meshes = vec![mesh];
+    scene.instances = vec![
+        Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(-0.9, 0.0, 0.0)) },
+        Instance { mesh: 0, transform: Mat4::from_scale_rotation_translation(Vec3::splat(0.7), Quat::from_rotation_z(0.5), Vec3::new(1.0, 0.2, -0.5)) },
+    ];
+    let texels: Vec<[u8; 4]> = (0..64 * 32u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i % 256) as u8, 255]).collect();
+    scene.textures = vec![Texture { name: "noise".into(), width: 64, height: 32, texels }];
+    scene.materials[0].albedo_texture = Some(0);
+    let mut sky = caustica::image::RgbImage::new(32, 16);
+    for y in 0..16 {
+        for x in 0..32 {
+            let sun = if (x, y) == (9, 4) { 400.0 } else { 0.0 };
+            sky.set(x, y, [0.3 + sun, 0.4 + 0.02 * y as f32, 0.6]);
+        }
+    }
+    scene.environment = Environment::Map(EnvironmentMap { projection: MapProjection::LatLong, image: sky, intensity: 1.0, rotation_deg: 0.0 });
+    scene
+}
+
+/// On a device whose storage bindings see only 4 KiB, the BVH nodes, mesh triangles, vertex
+/// attributes, texels, environment map and accumulation image are each split across several
+/// bindings, and the image is the same, bit for bit, as with every array in one binding.
+#[test]
+fn arrays_split_across_bindings_render_the_same_image() {
+    let scene = sphere_scene();
+    let accumulate = |limit: Option<u64>| {
+        let (_lock, ctx) = common::gpu_with_storage_limit(limit);
+        let mut r = caustica::render::Renderer::new(&ctx, &scene, 3).expect("scene uploads");
+        r.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
+        (r.accumulation().expect("readback"), r.geometry.split_arrays.clone())
+    };
+    let (whole, unsplit) = accumulate(None);
+    let (split, windows) = accumulate(Some(4096));
+    assert!(unsplit.is_empty(), "nothing is split on the real device: {unsplit:?}");
+    for name in ["BVH nodes", "mesh triangles", "vertex positions", "textures", "environment map", "accumulation image"] {
+        assert!(windows.iter().any(|&(n, w)| n == name && w > 1), "{name} split: {windows:?}");
+    }
+    assert!(whole.iter().any(|p| p[0] > 0.0), "the render sees something");
+    assert!(whole == split, "split arrays give another image");
+}
+
 /// A scene whose buffers cannot fit the device fails before any upload, naming what needs how much.
 #[test]
 fn scene_too_large_for_the_device_fails_before_upload() {
-    let (_lock, ctx) = gpu();
-    let limit = ctx.info.max_storage_buffer_range;
-    // The smallest square image whose accumulation buffer (16 bytes a pixel) passes the limit.
-    let side = ((limit / 16) as f64).sqrt() as u32 + 1;
-    if side > 16384 {
-        eprintln!("SKIPPED: {} allows {limit} bytes per storage buffer, more than the largest film needs", ctx.info.name);
-        return;
-    }
+    // Bindings of 64 KiB hold at most 8 windows, 512 KiB, of accumulation: 32768 pixels.
+    let (_lock, ctx) = common::gpu_with_storage_limit(Some(64 << 10));
     let mut scene = Scene::default_scene();
-    scene.film.width = side;
-    scene.film.height = side;
+    scene.film.width = 256;
+    scene.film.height = 256;
     let e = format!("{:#}", caustica::render::Renderer::new(&ctx, &scene, 1).err().expect("too large for the device"));
-    assert!(e.contains("accumulation image") && e.contains("MiB") && e.contains(&ctx.info.name), "{e}");
+    assert!(e.contains("accumulation image") && e.contains("1.0 MiB") && e.contains(&ctx.info.name) && e.contains("8 bindings of 0.1 MiB"), "{e}");
 }

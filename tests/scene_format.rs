@@ -2,7 +2,7 @@
 
 mod common;
 
-use caustica::scene::{Environment, Filter, Scene, Shape};
+use caustica::scene::{Environment, Filter, Sampler, Scene, Shape};
 use common::temp_dir;
 use std::path::Path;
 
@@ -109,6 +109,15 @@ fn lens_filter_and_clamp_default_to_a_pinhole_box_filter_and_no_clamp() {
 fn unknown_filter_is_named_with_the_choices() {
     let e = error_of(&format!("{MINIMAL}[film]\nfilter = \"lanczos\"\n"));
     assert!(e.contains("filter") && e.contains("lanczos") && e.contains("tent") && e.contains("line 5"), "{e}");
+}
+
+#[test]
+fn sampler_defaults_to_sobol_and_unknown_samplers_are_named() {
+    assert_eq!(parse_result(MINIMAL).unwrap().integrator.sampler, Sampler::Sobol);
+    let scene = parse_result(&format!("{MINIMAL}[integrator]\nsampler = \"independent\"\n")).unwrap();
+    assert_eq!(scene.integrator.sampler, Sampler::Independent);
+    let e = error_of(&format!("{MINIMAL}[integrator]\nsampler = \"halton\"\n"));
+    assert!(e.contains("sampler") && e.contains("halton") && e.contains("sobol") && e.contains("independent"), "{e}");
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! Combining partial renders of one image, each holding its own range of samples.
 
 use super::partial::{format_ranges, PartialRender};
+use crate::render::AovSums;
 use anyhow::{bail, Context as _, Result};
 use std::path::{Path, PathBuf};
 
@@ -14,8 +15,8 @@ pub fn merge_files(inputs: &[PathBuf]) -> Result<PartialRender> {
     merge(partials)
 }
 
-/// Adds accumulations in the order of their first sample, starting from zero: partials of one sample
-/// each sum exactly as the kernel would have, others to float rounding.
+/// Adds accumulations (AOV sums too) in the order of their first sample, starting from zero: partials
+/// of one sample each sum exactly as the kernel would have, others to float rounding.
 pub fn merge(mut partials: Vec<(&Path, PartialRender)>) -> Result<PartialRender> {
     let Some(((first_path, first), rest)) = partials.split_first() else { bail!("nothing to merge") };
     for (path, partial) in rest {
@@ -37,12 +38,22 @@ pub fn merge(mut partials: Vec<(&Path, PartialRender)>) -> Result<PartialRender>
             );
         }
     }
-    let mut merged = PartialRender { ranges: union(ranges.into_iter().map(|(_, r)| r)), accumulation: vec![[0.0; 4]; first.accumulation.len()], ..first.clone() };
+    let pixels = first.accumulation.len();
+    let mut merged = PartialRender {
+        ranges: union(ranges.into_iter().map(|(_, r)| r)),
+        accumulation: vec![[0.0; 4]; pixels],
+        aov_sums: first.aov_sums.as_ref().map(|_| AovSums::zeroed(pixels)),
+        ..first.clone()
+    };
     for (_, partial) in &partials {
         for (sum, add) in merged.accumulation.iter_mut().zip(&partial.accumulation) {
             for c in 0..4 {
                 sum[c] += add[c];
             }
+        }
+        // check_same_render made the AOV sets equal, so both have sums or neither has.
+        if let (Some(sum), Some(add)) = (&mut merged.aov_sums, &partial.aov_sums) {
+            sum.add(add);
         }
     }
     Ok(merged)
@@ -66,7 +77,7 @@ mod tests {
 
     fn partial(ranges: Vec<std::ops::Range<u32>>, value: f32) -> PartialRender {
         let n: u32 = ranges.iter().map(|r| r.end - r.start).sum();
-        PartialRender { scene_hash: "h".into(), seed: 1, width: 1, height: 1, ranges, accumulation: vec![[value, 0.0, 0.0, n as f32]] }
+        PartialRender { scene_hash: "h".into(), seed: 1, width: 1, height: 1, ranges, accumulation: vec![[value, 0.0, 0.0, n as f32]], aovs: Default::default(), aov_sums: None }
     }
 
     #[test]

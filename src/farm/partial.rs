@@ -6,9 +6,14 @@
 //! "accumulation.R/G/B" is the raw per-pixel sum of sample radiance and "accumulation.count" the
 //! number of samples in it, exactly as the kernel keeps them, so resuming is bit for bit. Text
 //! attributes ([`SCENE_HASH`] and the rest) say which scene, seed and samples it holds.
+//!
+//! AOVs ([`AOVS`] lists them) add, as means: "albedo.R/G/B", "normal.X/Y/Z", the depth as the
+//! top-level "Z" (OpenEXR's name for depth) and the sample count as "samples.Y"; and, as the
+//! kernel's raw sums, "accumulation.albedo.R/G/B", "accumulation.normal.X/Y/Z" and
+//! "accumulation.depth.Z/hits", so AOVs resume and merge exactly like the beauty.
 
 use crate::image::{read_exr_document, write_exr_document, ExrDocument, ExrLayer, RgbImage};
-use crate::render::mean_image;
+use crate::render::{mean_image, AovSet, AovSums};
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -25,8 +30,28 @@ pub const SAMPLES: &str = "caustica.samples";
 /// Image size, also in the EXR header; kept for scripts reading attributes only.
 pub const WIDTH: &str = "caustica.width";
 pub const HEIGHT: &str = "caustica.height";
+/// The AOVs the file carries, as `--aov` takes them ("albedo,normal,depth,samples"); absent: none.
+pub const AOVS: &str = "caustica.aovs";
 
 const ACCUMULATION: &str = "accumulation";
+const ACCUMULATION_ALBEDO: &str = "accumulation.albedo";
+const ACCUMULATION_NORMAL: &str = "accumulation.normal";
+const ACCUMULATION_DEPTH: &str = "accumulation.depth";
+
+/// A layer of per-pixel values, one array element a channel.
+fn layer<const N: usize>(name: &str, channels: &[&str; N], pixels: impl IntoIterator<Item = [f32; N]>) -> ExrLayer {
+    ExrLayer { name: name.to_owned(), channels: channels.map(String::from).to_vec(), data: pixels.into_iter().flatten().collect() }
+}
+
+/// Per pixel, the values of `channels` of `layer` in that order.
+fn read_channels<const N: usize>(doc: &ExrDocument, layer: &str, channels: [&str; N]) -> Result<Vec<[f32; N]>> {
+    let found = doc.layer(layer).ok_or_else(|| anyhow!("layer '{layer}' is missing"))?;
+    let mut order = [0; N];
+    for (slot, name) in order.iter_mut().zip(channels) {
+        *slot = found.channels.iter().position(|c| c == name).ok_or_else(|| anyhow!("channel {layer}.{name} is missing"))?;
+    }
+    Ok(found.data.chunks_exact(found.channels.len()).map(|px| order.map(|c| px[c])).collect())
+}
 
 /// An accumulation of the samples in `ranges` of one scene and seed.
 #[derive(Clone, Debug, PartialEq)]
@@ -39,6 +64,10 @@ pub struct PartialRender {
     pub ranges: Vec<Range<u32>>,
     /// Per pixel, top row first: sum of radiance (RGB) and the number of samples summed.
     pub accumulation: Vec<[f32; 4]>,
+    /// AOV layers the file carries.
+    pub aovs: AovSet,
+    /// Their raw sums: present exactly when `aovs` needs the kernel's features.
+    pub aov_sums: Option<AovSums>,
 }
 
 impl PartialRender {
@@ -55,7 +84,7 @@ impl PartialRender {
     /// Writes the file atomically (a temporary file renamed over `path`), so a crash leaves either
     /// the previous file or this one.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let attributes = BTreeMap::from([
+        let mut attributes = BTreeMap::from([
             (SCENE_HASH.to_owned(), self.scene_hash.clone()),
             (SEED.to_owned(), self.seed.to_string()),
             (SAMPLE_RANGES.to_owned(), format_ranges(&self.ranges)),
@@ -63,13 +92,41 @@ impl PartialRender {
             (WIDTH.to_owned(), self.width.to_string()),
             (HEIGHT.to_owned(), self.height.to_string()),
         ]);
+        if !self.aovs.is_empty() {
+            attributes.insert(AOVS.to_owned(), self.aovs.to_string());
+        }
         let accumulation = ExrLayer {
             name: ACCUMULATION.to_owned(),
             channels: ["R", "G", "B", "count"].map(String::from).to_vec(),
             data: self.accumulation.iter().flatten().copied().collect(),
         };
-        let doc = ExrDocument { width: self.width, height: self.height, layers: vec![ExrLayer::rgb("", &self.image()), accumulation], attributes };
+        let mut layers = vec![ExrLayer::rgb("", &self.image()), accumulation];
+        layers.extend(self.aov_layers());
+        let doc = ExrDocument { width: self.width, height: self.height, layers, attributes };
         Ok(write_exr_document(path, &doc)?)
+    }
+
+    /// The AOV layers: means for people and denoisers, raw sums for resuming and merging.
+    fn aov_layers(&self) -> Vec<ExrLayer> {
+        let counts: Vec<f32> = self.accumulation.iter().map(|a| a[3]).collect();
+        let mut layers = vec![];
+        if self.aovs.samples {
+            layers.push(layer("samples", &["Y"], counts.iter().map(|&n| [n])));
+        }
+        let Some(sums) = &self.aov_sums else { return layers };
+        if self.aovs.albedo {
+            layers.push(layer("albedo", &["R", "G", "B"], sums.albedo(&counts)));
+        }
+        if self.aovs.normal {
+            layers.push(layer("normal", &["X", "Y", "Z"], sums.normal(&counts)));
+        }
+        if self.aovs.depth {
+            layers.push(layer("", &["Z"], sums.depth().into_iter().map(|z| [z])));
+        }
+        layers.push(layer(ACCUMULATION_ALBEDO, &["R", "G", "B"], sums.albedo_depth.iter().map(|a| [a[0], a[1], a[2]])));
+        layers.push(layer(ACCUMULATION_NORMAL, &["X", "Y", "Z"], sums.normal_hits.iter().map(|a| [a[0], a[1], a[2]])));
+        layers.push(layer(ACCUMULATION_DEPTH, &["Z", "hits"], sums.albedo_depth.iter().zip(&sums.normal_hits).map(|(a, n)| [a[3], n[3]])));
+        layers
     }
 
     /// Reads a file written by [`Self::write`]; names the file and what is wrong otherwise.
@@ -80,11 +137,21 @@ impl PartialRender {
 
     fn from_document(doc: ExrDocument) -> Result<Self> {
         let attr = |name: &str| doc.attributes.get(name).ok_or_else(|| anyhow!("attribute {name} is missing"));
-        let layer = doc.layer(ACCUMULATION).ok_or_else(|| anyhow!("layer '{ACCUMULATION}' is missing"))?;
-        let channel = |name: &str| layer.channels.iter().position(|c| c == name).ok_or_else(|| anyhow!("channel {ACCUMULATION}.{name} is missing"));
-        let order = [channel("R")?, channel("G")?, channel("B")?, channel("count")?];
-        let stride = layer.channels.len();
-        let accumulation = layer.data.chunks_exact(stride).map(|px| order.map(|c| px[c])).collect();
+        let accumulation = read_channels(&doc, ACCUMULATION, ["R", "G", "B", "count"])?;
+        let aovs = match doc.attributes.get(AOVS) {
+            Some(text) => AovSet::parse(text).with_context(|| AOVS.to_owned())?,
+            None => AovSet::default(),
+        };
+        let aov_sums = if aovs.needs_kernel() {
+            let albedo = read_channels(&doc, ACCUMULATION_ALBEDO, ["R", "G", "B"])?;
+            let normal = read_channels(&doc, ACCUMULATION_NORMAL, ["X", "Y", "Z"])?;
+            let depth = read_channels(&doc, ACCUMULATION_DEPTH, ["Z", "hits"])?;
+            let albedo_depth = albedo.iter().zip(&depth).map(|(a, d)| [a[0], a[1], a[2], d[0]]).collect();
+            let normal_hits = normal.iter().zip(&depth).map(|(n, d)| [n[0], n[1], n[2], d[1]]).collect();
+            Some(AovSums { albedo_depth, normal_hits })
+        } else {
+            None
+        };
         let partial = Self {
             scene_hash: attr(SCENE_HASH)?.clone(),
             seed: attr(SEED)?.parse().map_err(|e| anyhow!("{SEED}: {e}"))?,
@@ -92,6 +159,8 @@ impl PartialRender {
             height: doc.height,
             ranges: parse_ranges(attr(SAMPLE_RANGES)?).with_context(|| SAMPLE_RANGES.to_owned())?,
             accumulation,
+            aovs,
+            aov_sums,
         };
         ensure!(partial.samples() > 0, "{SAMPLE_RANGES} is empty");
         Ok(partial)
@@ -108,6 +177,9 @@ impl PartialRender {
         }
         if self.scene_hash != other.scene_hash {
             bail!("different scene (scene hash {}, not {})", other.scene_hash, self.scene_hash);
+        }
+        if self.aovs != other.aovs {
+            bail!("different AOVs ({}, not {})", other.aovs, self.aovs);
         }
         Ok(())
     }
@@ -155,6 +227,8 @@ mod tests {
             height: 1,
             ranges: vec![4..6],
             accumulation: vec![[0.1, 1e-30, 3.5e7, 2.0], [f32::MIN_POSITIVE, 0.0, 1.0 / 3.0, 2.0]],
+            aovs: AovSet::default(),
+            aov_sums: None,
         };
         let path = std::env::temp_dir().join(format!("caustica-partial-{}.exr", std::process::id()));
         partial.write(&path).unwrap();
@@ -162,5 +236,33 @@ mod tests {
         assert_eq!(back, partial);
         assert_eq!(crate::image::read_image(&path).unwrap(), partial.image());
         std::fs::remove_file(path).ok();
+    }
+
+    #[test]
+    fn aov_sums_round_trip_bit_exact_and_means_are_written() {
+        let sums = AovSums { albedo_depth: vec![[0.5, 0.25, 1e-30, 7.0], [0.0, 1.0, 2.0, 0.0]], normal_hits: vec![[-1.0, 0.5, 1.0 / 3.0, 2.0], [0.0; 4]] };
+        let partial = PartialRender {
+            scene_hash: "ab12".into(),
+            seed: 7,
+            width: 2,
+            height: 1,
+            ranges: vec![0..2],
+            accumulation: vec![[1.0, 1.0, 1.0, 2.0], [0.0, 0.0, 0.0, 2.0]],
+            aovs: AovSet { albedo: true, depth: true, ..AovSet::default() },
+            aov_sums: Some(sums),
+        };
+        let path = std::env::temp_dir().join(format!("caustica-partial-aov-{}.exr", std::process::id()));
+        partial.write(&path).unwrap();
+        let back = PartialRender::read(&path);
+        let doc = read_exr_document(&path);
+        std::fs::remove_file(path).ok();
+        assert_eq!(back.unwrap(), partial);
+        let doc = doc.unwrap();
+        assert_eq!(doc.attributes[AOVS], "albedo,depth");
+        assert_eq!(doc.layer("albedo").unwrap().data, [0.25, 0.125, 0.5e-30, 0.0, 0.5, 1.0]);
+        let top = doc.layer("").unwrap();
+        assert_eq!(top.channels, ["R", "G", "B", "Z"]);
+        assert_eq!([top.data[3], top.data[7]], [3.5, f32::INFINITY], "depth: mean over hits, infinite without");
+        assert!(doc.layer("normal").is_none() && doc.layer("samples").is_none(), "only the AOVs asked for");
     }
 }

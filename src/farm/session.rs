@@ -49,21 +49,26 @@ pub fn snapshot(renderer: &Renderer) -> Result<Option<PartialRender>> {
         height,
         ranges: vec![start..start + renderer.samples_done],
         accumulation: renderer.accumulation()?,
+        aovs: renderer.aovs(),
+        aov_sums: renderer.aov_sums()?,
     }))
 }
 
 /// Loads the checkpoint at `path` into a fresh renderer, which then continues its sample stream.
-/// Refuses a checkpoint of another scene, seed or size, or a merge of separate ranges.
+/// Refuses a checkpoint of another scene, seed, size or AOV set, or a merge of separate ranges.
 pub fn resume(renderer: &mut Renderer, path: &Path) -> Result<PartialRender> {
     let checkpoint = PartialRender::read(path)?;
     let (width, height) = renderer.size();
-    let this = PartialRender { scene_hash: renderer.scene_hash.clone(), seed: renderer.seed(), width, height, ranges: vec![], accumulation: vec![] };
+    let this = PartialRender { scene_hash: renderer.scene_hash.clone(), seed: renderer.seed(), width, height, ranges: vec![], accumulation: vec![], aovs: renderer.aovs(), aov_sums: None };
     this.check_same_render(&checkpoint).with_context(|| format!("{}: cannot resume", path.display()))?;
     let [range] = &checkpoint.ranges[..] else {
         bail!("{}: cannot resume: it holds separate sample ranges (a merge); render more as another partial", path.display());
     };
     renderer.set_sample_offset(range.start);
     renderer.restore(&checkpoint.accumulation, range.end - range.start)?;
+    if let Some(sums) = &checkpoint.aov_sums {
+        renderer.restore_aovs(sums)?;
+    }
     Ok(checkpoint)
 }
 

@@ -29,15 +29,6 @@ const MIN_SIZE: u64 = 16;
 impl Buffer {
     fn create(ctx: &GpuContext, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation, kind: BufferKind) -> Result<Self> {
         let size = size.max(MIN_SIZE);
-        let limit = ctx.info.max_storage_buffer_range;
-        if usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && size > limit {
-            return Err(anyhow!(
-                "{name} needs {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
-                size as f64 / 1048576.0,
-                ctx.info.name,
-                limit as f64 / 1048576.0
-            ));
-        }
         let device = &ctx.device;
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         let buffer = unsafe { device.create_buffer(&info, None) }.with_context(|| format!("creating buffer {name}"))?;

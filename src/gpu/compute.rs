@@ -5,10 +5,19 @@ use super::context::GpuContext;
 use anyhow::{anyhow, Context as _, Result};
 use ash::vk;
 
-/// A buffer bound at `binding` of descriptor set 0.
+/// A buffer, or the window `offset..offset + range` of one, bound at `binding` of descriptor set 0.
 pub struct Binding<'a> {
     pub binding: u32,
     pub buffer: &'a Buffer,
+    pub offset: u64,
+    pub range: u64,
+}
+
+impl<'a> Binding<'a> {
+    /// The whole buffer.
+    pub fn whole(binding: u32, buffer: &'a Buffer) -> Self {
+        Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE }
+    }
 }
 
 pub struct ComputeKernel {
@@ -84,7 +93,7 @@ impl ComputeKernel {
         }?[0];
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
             .iter()
-            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer.buffer).offset(0).range(vk::WHOLE_SIZE)])
+            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer.buffer).offset(b.offset).range(b.range)])
             .collect();
         let writes: Vec<_> = bindings
             .iter()

@@ -47,7 +47,10 @@ pub struct DeviceInfo {
     pub kind: DeviceType,
     pub api_version: String,
     pub driver: String,
+    /// Bytes one storage-buffer binding can see (lowered by `ContextOptions::storage_binding_limit`).
     pub max_storage_buffer_range: u64,
+    pub min_storage_buffer_offset_alignment: u64,
+    pub max_storage_buffers_per_stage: u32,
     pub device_local_bytes: u64,
     has_compute_queue: bool,
 }
@@ -58,6 +61,9 @@ pub struct ContextOptions {
     pub device: Option<String>,
     /// Enable the Khronos validation layer (when installed) and record its messages.
     pub validation: bool,
+    /// Act as if one storage binding could see at most this many bytes (tests of the splitting of
+    /// large arrays, and of the refusal of scenes too large, on any device).
+    pub storage_binding_limit: Option<u64>,
 }
 
 pub struct GpuContext {
@@ -123,6 +129,8 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         api_version: format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v)),
         driver: format!("{:#x}", props.driver_version),
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
+        min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
+        max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
         device_local_bytes,
         has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
     }
@@ -173,7 +181,10 @@ impl GpuContext {
         } else {
             None
         };
-        let (physical, info) = choose(enumerate(&instance)?, options.device.as_deref())?;
+        let (physical, mut info) = choose(enumerate(&instance)?, options.device.as_deref())?;
+        if let Some(limit) = options.storage_binding_limit {
+            info.max_storage_buffer_range = info.max_storage_buffer_range.min(limit);
+        }
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let family = families
             .iter()

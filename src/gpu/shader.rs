@@ -5,12 +5,12 @@ use anyhow::{anyhow, Result};
 use glslang::{Compiler, CompilerOptions, ShaderInput, ShaderSource, ShaderStage, SourceLanguage, SpirvVersion, Target, VulkanVersion};
 
 /// (file name, contents) of every shader file the kernel may include.
-pub type ShaderSources = &'static [(&'static str, &'static str)];
+pub type ShaderSources<'a> = &'a [(&'a str, &'a str)];
 
 /// Inlines `#include "name"` lines (depth-first, each file once) and inserts `defines` right after
 /// the `#version` line.
-pub fn assemble_source(sources: ShaderSources, main: &str, defines: &[(&str, String)]) -> Result<String> {
-    fn inline(sources: ShaderSources, name: &str, seen: &mut Vec<String>, out: &mut String) -> Result<()> {
+pub fn assemble_source(sources: ShaderSources<'_>, main: &str, defines: &[(&str, String)]) -> Result<String> {
+    fn inline(sources: ShaderSources<'_>, name: &str, seen: &mut Vec<String>, out: &mut String) -> Result<()> {
         if seen.iter().any(|s| s == name) {
             return Ok(());
         }

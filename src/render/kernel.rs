@@ -1,13 +1,17 @@
-//! The path tracing kernel's sources (embedded) and its compiled SPIR-V, built once per process.
+//! The path tracing kernel's sources (embedded) and its compiled SPIR-V, built once per process
+//! for each way of splitting the large arrays (see chunks.rs).
 
+use super::chunks::{self, ChunkPlan, CHUNKED_ARRAYS};
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
 use anyhow::Result;
-use std::sync::OnceLock;
+use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock};
 
-pub const SHADERS: ShaderSources = &[
+pub const SHADERS: ShaderSources<'static> = &[
     ("pathtrace.comp", include_str!("../../shaders/pathtrace.comp")),
     ("layout.glsl", include_str!("../../shaders/layout.glsl")),
     ("rng.glsl", include_str!("../../shaders/rng.glsl")),
+    ("sobol.glsl", include_str!("../../shaders/sobol.glsl")),
     ("sampling.glsl", include_str!("../../shaders/sampling.glsl")),
     ("intersect.glsl", include_str!("../../shaders/intersect.glsl")),
     ("bvh.glsl", include_str!("../../shaders/bvh.glsl")),
@@ -25,28 +29,53 @@ pub const SHADERS: ShaderSources = &[
 /// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
 pub const WORKGROUP: u32 = 8;
 
-pub fn kernel_source() -> Result<String> {
-    assemble_source(SHADERS, "pathtrace.comp", &[
+/// Every large array in one binding: the layout of any scene that fits the device's limits unsplit.
+pub const UNSPLIT: [ChunkPlan; CHUNKED_ARRAYS.len()] = [ChunkPlan { shift: 31, chunks: 1 }; CHUNKED_ARRAYS.len()];
+
+/// The kernel's GLSL for this split of the arrays; `aovs` selects the variant that also accumulates
+/// the denoiser features (bindings 20 and 21), so renders without them pay nothing for them.
+pub fn kernel_source(plans: &[ChunkPlan; CHUNKED_ARRAYS.len()], aovs: bool) -> Result<String> {
+    let generated = chunks::glsl(plans);
+    let mut sources = SHADERS.to_vec();
+    sources.push(("chunked_buffers.glsl", &generated));
+    assemble_source(&sources, "pathtrace.comp", &[
             ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
             ("BVH_MAX_LEAF_SIZE", format!("{}u", crate::bvh::MAX_LEAF_SIZE)),
+            ("AOVS", u32::from(aovs).to_string()),
         ],)
 }
 
-/// SPIR-V of the kernel; compiled on first use (glslang takes about a second the first time).
-pub fn kernel_spirv() -> Result<&'static [u32]> {
-    static SPIRV: OnceLock<Vec<u32>> = OnceLock::new();
-    if let Some(s) = SPIRV.get() {
-        return Ok(s);
+/// SPIR-V of the kernel for this split of the arrays and AOV variant; compiled on first use
+/// (glslang takes about a second the first time, 20 ms later) and kept for the process.
+pub fn kernel_spirv(plans: &[ChunkPlan; CHUNKED_ARRAYS.len()], aovs: bool) -> Result<&'static [u32]> {
+    type Key = ([ChunkPlan; CHUNKED_ARRAYS.len()], bool);
+    static CACHE: OnceLock<Mutex<HashMap<Key, &'static [u32]>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(spirv) = cache.lock().unwrap().get(&(*plans, aovs)) {
+        return Ok(spirv);
     }
-    let spirv = compile_compute(&kernel_source()?)?;
-    Ok(SPIRV.get_or_init(|| spirv))
+    // Leaked on purpose: one per split layout and variant a process meets, which is one or two.
+    let spirv: &'static [u32] = Vec::leak(compile_compute(&kernel_source(plans, aovs)?)?);
+    cache.lock().unwrap().insert((*plans, aovs), spirv);
+    Ok(spirv)
 }
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn kernel_compiles_to_spirv() {
-        let spirv = super::kernel_spirv().expect("pathtrace.comp compiles");
+        for aovs in [false, true] {
+            let spirv = kernel_spirv(&UNSPLIT, aovs).expect("pathtrace.comp compiles");
+            assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
+        }
+    }
+
+    #[test]
+    fn kernel_compiles_with_every_array_split() {
+        let split = [ChunkPlan { shift: 10, chunks: chunks::MAX_CHUNKS }; CHUNKED_ARRAYS.len()];
+        let spirv = kernel_spirv(&split, true).expect("pathtrace.comp compiles split");
         assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
     }
 }

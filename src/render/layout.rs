@@ -25,6 +25,13 @@ pub const FILTER_BOX: u32 = 0;
 pub const FILTER_TENT: u32 = 1;
 pub const FILTER_GAUSSIAN: u32 = 2;
 
+/// Bindings of the AOV sums (`aov_albedo_depth`, `aov_normal_hits`, split like the accumulation
+/// by chunks.rs): one `vec4` a pixel each, so `[f32; 4]` on the host.
+pub const AOV_BINDINGS: [u32; 2] = [20, 21];
+
+pub const SAMPLER_INDEPENDENT: u32 = 0;
+pub const SAMPLER_SOBOL: u32 = 1;
+
 /// `struct Primitive`: see layout.glsl for what a, b and c hold per kind.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -67,6 +74,16 @@ pub struct GpuTexture {
     pub unused: u32,
 }
 
+/// `struct LightAlias`: one entry of the alias table that picks area lights by power
+/// (light_selection.rs).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuAliasEntry {
+    /// Probability of keeping this entry's own light rather than taking `alias`.
+    pub threshold: f32,
+    pub alias: u32,
+}
+
 /// `uniform FrameParamsBlock` (std140; only 16-byte members, so it equals std430).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -89,6 +106,10 @@ pub struct FrameParams {
     /// lens radius (0: pinhole), focus distance along the viewing axis, radiance clamp (0: off),
     /// FILTER_* as raw u32 bits
     pub lens: [f32; 4],
+    /// SAMPLER_* (shaders/rng.glsl), unused, unused, unused
+    pub sampling: [u32; 4],
+    /// total power of the area lights when they are picked by power (0: picked uniformly), unused x3
+    pub lights: [f32; 4],
 }
 
 /// `buffer StatsBuffer`: per-dispatch counters, cleared and read by the host.
@@ -149,6 +170,12 @@ mod tests {
     }
 
     #[test]
+    fn alias_entry_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuAliasEntry>(), 8);
+        assert_eq!(offset_of!(GpuAliasEntry, alias), 4);
+    }
+
+    #[test]
     fn bvh_node_matches_glsl_std430() {
         assert_eq!(size_of::<BvhNode>(), 32);
         assert_eq!(offset_of!(BvhNode, offset), 12);
@@ -158,7 +185,7 @@ mod tests {
 
     #[test]
     fn frame_params_match_glsl_std140() {
-        assert_eq!(size_of::<FrameParams>(), 176);
+        assert_eq!(size_of::<FrameParams>(), 208);
         let offsets = [
             offset_of!(FrameParams, cam_origin),
             offset_of!(FrameParams, cam_forward),
@@ -171,8 +198,10 @@ mod tests {
             offset_of!(FrameParams, env_size),
             offset_of!(FrameParams, roulette),
             offset_of!(FrameParams, lens),
+            offset_of!(FrameParams, sampling),
+            offset_of!(FrameParams, lights),
         ];
-        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160]);
+        assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192]);
     }
 
     #[test]
@@ -184,6 +213,15 @@ mod tests {
     }
 
     #[test]
+    fn aov_buffers_match_glsl() {
+        let glsl = include_str!("../../shaders/layout.glsl");
+        for (binding, name) in AOV_BINDINGS.iter().zip(["aov_albedo_depth", "aov_normal_hits"]) {
+            let line = format!("// binding {binding}: vec4 {name}[]");
+            assert!(glsl.contains(&line), "layout.glsl lacks {line}");
+        }
+    }
+
+    #[test]
     fn pass_params_fit_the_push_constant_minimum() {
         assert_eq!(size_of::<PassParams>(), 16);
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
@@ -192,7 +230,7 @@ mod tests {
     /// The GLSL side declares the same kinds; a renumbering on one side only must fail here.
     #[test]
     fn kind_constants_match_glsl() {
-        let glsl = include_str!("../../shaders/layout.glsl");
+        let glsl = concat!(include_str!("../../shaders/layout.glsl"), include_str!("../../shaders/rng.glsl"));
         for (name, value) in [
             ("PRIM_SPHERE", PRIM_SPHERE),
             ("PRIM_QUAD", PRIM_QUAD),
@@ -211,9 +249,11 @@ mod tests {
             ("FILTER_BOX", FILTER_BOX),
             ("FILTER_TENT", FILTER_TENT),
             ("FILTER_GAUSSIAN", FILTER_GAUSSIAN),
+            ("SAMPLER_INDEPENDENT", SAMPLER_INDEPENDENT),
+            ("SAMPLER_SOBOL", SAMPLER_SOBOL),
         ] {
             let literal = if value == u32::MAX { "0xffffffffu".to_string() } else { format!("{value}u") };
-            assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl");
+            assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl or rng.glsl");
         }
     }
 }

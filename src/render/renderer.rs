@@ -1,13 +1,15 @@
 //! Progressive rendering: uploads a scene, then adds samples in dispatches sized to take about
 //! `DISPATCH_TARGET_S` each, so a desktop GPU's watchdog never fires and progress stays smooth.
 
-use super::kernel::{kernel_spirv, WORKGROUP};
-use super::layout::{FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT};
+use super::chunks::{self, chunked_array_at, ChunkPlan, CHUNKED_ARRAYS};
+use super::kernel::{kernel_spirv, UNSPLIT, WORKGROUP};
+use super::layout::{FrameParams, GpuStats, PassParams, AOV_BINDINGS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
+use super::aov::{AovSet, AovSums};
 use super::scene_data::SceneData;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
-use crate::scene::{Filter, Scene};
+use crate::scene::{Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
 use std::time::Instant;
 
@@ -20,6 +22,9 @@ pub struct Renderer<'a> {
     ctx: &'a GpuContext,
     kernel: Option<ComputeKernel>,
     buffers: Vec<Buffer>,
+    /// Bindings 20 and 21 (albedo + depth, normal + hits) when the render has kernel AOVs; else none.
+    aov_buffers: Vec<Buffer>,
+    aovs: AovSet,
     width: u32,
     height: u32,
     seed: u32,
@@ -50,6 +55,8 @@ pub struct GeometryReport {
     pub lights: usize,
     /// Everything the scene occupies on the device, the image excluded.
     pub gpu_bytes: u64,
+    /// Arrays too large for one storage binding of this device, with the bindings each spans.
+    pub split_arrays: Vec<(&'static str, u32)>,
 }
 
 /// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so).
@@ -58,6 +65,7 @@ pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 // Binding indices of shaders/layout.glsl.
 const ACCUM: usize = 6;
 const STATS: usize = 7;
+const TEXELS: u32 = 14;
 /// The statistics buffer's contents at the start of every dispatch.
 const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0 };
 
@@ -75,6 +83,10 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         Filter::Tent => FILTER_TENT,
         Filter::Gaussian => FILTER_GAUSSIAN,
     };
+    let sampler = match i.sampler {
+        Sampler::Independent => SAMPLER_INDEPENDENT,
+        Sampler::Sobol => SAMPLER_SOBOL,
+    };
     FrameParams {
         cam_origin: cam.position.extend(0.0).into(),
         cam_forward: forward.extend(tan_half).into(),
@@ -87,6 +99,8 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
         roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
         lens: [cam.aperture, cam.focus_distance, i.clamp.unwrap_or(0.0), f32::from_bits(filter)],
+        sampling: [sampler, 0, 0, 0],
+        lights: [data.light_distribution.total_power, 0.0, 0.0, 0.0],
     }
 }
 
@@ -106,30 +120,60 @@ fn scene_hash(params_without_seed: &FrameParams, contents: &[(&str, BufferKind, 
     hasher.finalize().to_hex().to_string()
 }
 
-/// Fails before any upload when one buffer exceeds the device's storage-buffer range or all of them
-/// its device-local memory, saying how much is needed and how much there is.
-fn check_fits<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (&'n str, u64)> + Clone) -> Result<()> {
+/// How each large array is split across bindings (see chunks.rs), or why the scene cannot fit the
+/// device: an array larger than its bindings can see, more storage bindings than the kernel may
+/// have, or more bytes than the device's memory. Checked before any upload; the message says how
+/// much is needed and how much there is.
+fn plan_bindings<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (u32, &'n str, u64)> + Clone) -> Result<[ChunkPlan; CHUNKED_ARRAYS.len()]> {
     let mib = |b: u64| b as f64 / 1048576.0;
     let device = &ctx.info;
-    if let Some((name, bytes)) = sizes.clone().find(|&(_, b)| b > device.max_storage_buffer_range) {
+    let range = device.max_storage_buffer_range;
+    let mut plans = UNSPLIT;
+    let mut storage_bindings = 0;
+    for (binding, name, bytes) in sizes.clone() {
+        match chunked_array_at(binding) {
+            Some((k, array)) => {
+                plans[k] = chunks::plan(array, bytes, range, device.min_storage_buffer_offset_alignment).map_err(|e| {
+                    anyhow::anyhow!("{scene}: the {name} need {:.1} MiB but {} allows {e}", mib(bytes), device.name)
+                })?;
+                storage_bindings += plans[k].chunks;
+            }
+            None if binding == 0 => {} // the uniform block
+            None if bytes > range => anyhow::bail!(
+                "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
+                mib(bytes),
+                device.name,
+                mib(range)
+            ),
+            None => storage_bindings += 1,
+        }
+    }
+    if storage_bindings > device.max_storage_buffers_per_stage {
         anyhow::bail!(
-            "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
-            mib(bytes),
+            "{scene}: the scene needs {storage_bindings} storage buffer bindings but {} allows {} (its arrays are too large to split further)",
             device.name,
-            mib(device.max_storage_buffer_range)
+            device.max_storage_buffers_per_stage
         );
     }
-    let total: u64 = sizes.map(|(_, b)| b).sum();
+    let total: u64 = sizes.map(|(_, _, b)| b).sum();
     if device.device_local_bytes > 0 && total > device.device_local_bytes {
         anyhow::bail!("{scene}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB", mib(total), device.name, mib(device.device_local_bytes));
     }
-    Ok(())
+    Ok(plans)
 }
 
 impl<'a> Renderer<'a> {
+    /// A renderer of the beauty alone.
     pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
-        // One texel buffer holds every texture, so it must fit one storage binding too.
-        let texture_budget = TEXTURE_BUDGET_BYTES.min(ctx.info.max_storage_buffer_range);
+        Self::with_aovs(ctx, scene, seed, AovSet::default())
+    }
+
+    /// A renderer that also produces `aovs`. The beauty is the same bit for bit: the features
+    /// draw no random numbers.
+    pub fn with_aovs(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet) -> Result<Self> {
+        // One texel buffer holds every texture: it must fit the bindings it can be split across.
+        let texels = chunked_array_at(TEXELS).expect("texels are chunked").1;
+        let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texels, ctx.info.max_storage_buffer_range));
         let data = SceneData::new(scene, texture_budget);
         if data.texture_bytes() < data.texture_bytes_requested {
             eprintln!(
@@ -144,7 +188,7 @@ impl<'a> Renderer<'a> {
         let params = frame_params(scene, &data, seed);
         let a = &data.acceleration;
         // In binding order (shaders/layout.glsl); the accumulation image is zeroes, sized here.
-        let contents: [(&str, BufferKind, &[u8]); 16] = [
+        let contents: [(&str, BufferKind, &[u8]); 17] = [
             ("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params)),
             ("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes)),
             ("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives)),
@@ -161,9 +205,12 @@ impl<'a> Renderer<'a> {
             ("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures)),
             ("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels)),
             ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
+            ("light alias table", BufferKind::Storage, bytemuck::cast_slice(&data.light_distribution.table)),
         ];
         let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
-        check_fits(ctx, &scene.name, (0..contents.len()).map(|i| (contents[i].0, size(i))))?;
+        let aov_names: &[&str] = if aovs.needs_kernel() { &["albedo and depth sums", "normal sums"] } else { &[] };
+        let aov_sizes = AOV_BINDINGS.iter().zip(aov_names).map(|(&binding, &name)| (binding, name, accum_bytes));
+        let plans = plan_bindings(ctx, &scene.name, (0..contents.len()).map(|i| (i as u32, contents[i].0, size(i))).chain(aov_sizes))?;
         let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
         for (i, &(name, kind, bytes)) in contents.iter().enumerate() {
@@ -176,15 +223,38 @@ impl<'a> Renderer<'a> {
             };
             buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
         }
-        let bindings: Vec<Binding> = buffers.iter().enumerate().map(|(i, b)| Binding { binding: i as u32, buffer: b }).collect();
-        let kernel = ComputeKernel::new(ctx, kernel_spirv()?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
+        let mut aov_buffers = Vec::new();
+        for name in aov_names {
+            aov_buffers.push(Buffer::with_data(ctx, name, BufferKind::Storage, &vec![0u8; accum_bytes as usize])?);
+        }
+        let mut bindings = Vec::new();
+        let numbered = buffers.iter().enumerate().map(|(i, b)| (i as u32, b, size(i))).chain(AOV_BINDINGS.iter().zip(&aov_buffers).map(|(&i, b)| (i, b, accum_bytes)));
+        for (binding, buffer, bytes) in numbered {
+            match chunked_array_at(binding) {
+                Some((k, array)) if plans[k].chunks > 1 => {
+                    for (c, (offset, range)) in plans[k].windows(array.element_bytes, bytes).into_iter().enumerate() {
+                        bindings.push(Binding { binding: chunks::window_binding(k, c as u32), buffer, offset, range });
+                    }
+                }
+                // Unsplit arrays keep their own binding: window 0's is the array's.
+                _ => bindings.push(Binding::whole(binding, buffer)),
+            }
+        }
+        let split_arrays = (0..contents.len())
+            .map(|i| (i as u32, contents[i].0))
+            .chain(AOV_BINDINGS.iter().copied().zip(aov_names.iter().copied()))
+            .filter_map(|(binding, name)| chunked_array_at(binding).map(|(k, _)| (name, plans[k].chunks)))
+            .filter(|&(_, windows)| windows > 1)
+            .collect();
+        let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, aovs.needs_kernel())?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
+        Ok(Self { ctx, kernel: Some(kernel), buffers, aov_buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
             texture_bytes_requested: data.texture_bytes_requested,
             lights: data.lights.len(),
             gpu_bytes: data.gpu_bytes(),
+            split_arrays,
         }, cost_per_row_sample: None })
     }
 
@@ -201,6 +271,11 @@ impl<'a> Renderer<'a> {
 
     pub fn seed(&self) -> u32 {
         self.seed
+    }
+
+    /// The AOVs this render produces.
+    pub fn aovs(&self) -> AovSet {
+        self.aovs
     }
 
     /// Width and height in pixels.
@@ -221,6 +296,16 @@ impl<'a> Renderer<'a> {
         );
         self.buffers[ACCUM].upload(self.ctx, bytemuck::cast_slice(accumulation))?;
         self.samples_done = samples;
+        Ok(())
+    }
+
+    /// Takes over AOV sums (as from [`Self::aov_sums`]) of the samples given to [`Self::restore`].
+    pub fn restore_aovs(&mut self, sums: &AovSums) -> Result<()> {
+        anyhow::ensure!(!self.aov_buffers.is_empty(), "this render has no albedo, normal or depth AOVs to restore");
+        let pixels = self.width as usize * self.height as usize;
+        anyhow::ensure!(sums.pixels() == pixels, "the AOV sums have {} pixels, the image {}x{}", sums.pixels(), self.width, self.height);
+        self.aov_buffers[0].upload(self.ctx, bytemuck::cast_slice(&sums.albedo_depth))?;
+        self.aov_buffers[1].upload(self.ctx, bytemuck::cast_slice(&sums.normal_hits))?;
         Ok(())
     }
 
@@ -295,6 +380,14 @@ impl<'a> Renderer<'a> {
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 
+    /// Raw AOV sums (`None` without albedo, normal or depth AOVs), top row first.
+    pub fn aov_sums(&self) -> Result<Option<AovSums>> {
+        let [albedo_depth, normal_hits] = &self.aov_buffers[..] else { return Ok(None) };
+        let bytes = self.width as u64 * self.height as u64 * 16;
+        let read = |b: &Buffer| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&b.download(self.ctx, bytes)?)) };
+        Ok(Some(AovSums { albedo_depth: read(albedo_depth)?, normal_hits: read(normal_hits)? }))
+    }
+
     /// The mean radiance per pixel so far.
     pub fn image(&self) -> Result<RgbImage> {
         Ok(mean_image(self.width, self.height, &self.accumulation()?))
@@ -316,7 +409,7 @@ impl Drop for Renderer<'_> {
         if let Some(k) = self.kernel.take() {
             k.destroy(self.ctx);
         }
-        for b in self.buffers.drain(..) {
+        for b in self.buffers.drain(..).chain(self.aov_buffers.drain(..)) {
             b.destroy(self.ctx);
         }
     }

@@ -4,7 +4,8 @@
 use super::acceleration::{gpu_primitive, triangle_primitive, Acceleration};
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
-use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, MapProjection, Material, Scene};
+use super::light_selection::LightDistribution;
+use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, LightSelection, MapProjection, Material, Scene};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -12,6 +13,8 @@ pub struct SceneData {
     pub materials: Vec<GpuMaterial>,
     /// Every emitter in world space.
     pub lights: Vec<GpuPrimitive>,
+    /// How next-event estimation picks among `lights` (light_selection.rs).
+    pub light_distribution: LightDistribution,
     pub textures: Vec<GpuTexture>,
     /// RGBA8 texels of every texture, packed little-endian (red in the low byte).
     pub texels: Vec<u32>,
@@ -68,7 +71,7 @@ impl SceneData {
     /// `texture_budget`: most bytes of texels to upload; larger texture sets are downsampled.
     pub fn new(scene: &Scene, texture_budget: u64) -> SceneData {
         let acceleration = Acceleration::build(scene);
-        let materials = scene
+        let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
             .map(gpu_material)
@@ -99,9 +102,12 @@ impl SceneData {
             Environment::Map(map) if scene.integrator.sample_environment => EnvDistribution::new(map).cdf,
             _ => Vec::new(),
         };
+        let lights = world_lights(scene);
+        let light_distribution = LightDistribution::new(&lights, &materials, scene.integrator.light_selection == LightSelection::Power);
         SceneData {
             env_cdf,
-            lights: world_lights(scene),
+            lights,
+            light_distribution,
             acceleration,
             materials,
             textures,
@@ -121,6 +127,7 @@ impl SceneData {
             + self.texture_bytes()
             + (std::mem::size_of_val(&self.materials[..])
             + std::mem::size_of_val(&self.lights[..])
+            + std::mem::size_of_val(&self.light_distribution.table[..])
             + std::mem::size_of_val(&self.env_texels[..])
             + std::mem::size_of_val(&self.env_cdf[..])) as u64
     }

@@ -63,6 +63,16 @@ impl Default for FilmFile {
     }
 }
 
+/// How next-event estimation picks which area light to sample.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum LightSelection {
+    /// In proportion to each light's power (an alias table).
+    Power,
+    /// Every light equally likely (for comparisons).
+    Uniform,
+}
+
 /// Pixel reconstruction filter, importance sampled: each sample's film position is drawn from it.
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -91,12 +101,26 @@ pub struct IntegratorFile {
     pub sample_environment: bool,
     /// Largest radiance component a sample may carry (biased; for previews); absent: no clamp.
     pub clamp: Option<f32>,
+    /// Where the random numbers of a sample come from.
+    pub sampler: Sampler,
+    /// How next-event estimation picks an area light.
+    pub light_selection: LightSelection,
 }
 
 impl Default for IntegratorFile {
     fn default() -> Self {
-        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024, sample_environment: true, clamp: None }
+        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024, sample_environment: true, clamp: None, sampler: Sampler::Sobol, light_selection: LightSelection::Power }
     }
+}
+
+/// The random numbers behind each sample's decisions (shaders/rng.glsl).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampler {
+    /// Padded Owen-scrambled Sobol: each decision stratified across a pixel's samples.
+    Sobol,
+    /// An independent pseudo-random stream per sample.
+    Independent,
 }
 
 #[derive(Deserialize, Debug)]

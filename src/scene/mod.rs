@@ -8,7 +8,7 @@ mod optics;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, Asset, AssetError};
-pub use format::Filter;
+pub use format::{Filter, LightSelection, Sampler};
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 pub use optics::{average_fresnel, metal, METALS};
 
@@ -58,6 +58,8 @@ pub struct Integrator {
     pub sample_environment: bool,
     /// Per-sample cap on the largest radiance component (biased); None: off.
     pub clamp: Option<f32>,
+    pub sampler: Sampler,
+    pub light_selection: LightSelection,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -392,6 +394,8 @@ fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {
         max_bounces: i.max_bounces,
         sample_environment: i.sample_environment,
         clamp: i.clamp,
+        sampler: i.sampler,
+        light_selection: i.light_selection,
     })
 }
 

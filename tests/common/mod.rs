@@ -22,6 +22,11 @@ pub fn lavapipe_override() -> Option<&'static str> {
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
 /// lavapipe already uses every core for one dispatch.
 pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
+    gpu_with_storage_limit(None)
+}
+
+/// As [`gpu`], with the device's storage-binding range lowered to `limit` bytes when given.
+pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, GpuContext) {
     static LOCK: Mutex<()> = Mutex::new(());
     static FORCE: Once = Once::new();
     let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
@@ -30,7 +35,7 @@ pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
             std::env::set_var("VK_DRIVER_FILES", icd);
         }
     });
-    let ctx = GpuContext::new(&ContextOptions { device: None, validation: true }).expect("a Vulkan device (install mesa-vulkan-drivers)");
+    let ctx = GpuContext::new(&ContextOptions { device: None, validation: true, storage_binding_limit: limit }).expect("a Vulkan device (install mesa-vulkan-drivers)");
     if std::env::var_os("CI").is_some() {
         assert!(ctx.validating(), "CI must run with the Khronos validation layer (vulkan-validationlayers)");
     }

@@ -1,0 +1,181 @@
+//! Which area light next-event estimation samples: each in proportion to its power (the flux it
+//! emits), through a Walker/Vose alias table, so that a scene with thousands of dim emissive
+//! triangles and one bright lamp spends its shadow rays on the lamp. The kernel picks a table
+//! entry and keeps it or takes its alias in lights.glsl, and recomputes the same power formula
+//! there (`light_power`) for the pick probability of an emitter hit by BSDF sampling.
+
+use super::layout::{GpuAliasEntry, GpuMaterial, GpuPrimitive, PRIM_QUAD, PRIM_SPHERE};
+use glam::Vec3;
+use std::f64::consts::PI;
+
+/// What the kernel gets: the table (empty for uniform selection) and the total power it divides
+/// by (0 for uniform selection, which the kernel reads as "pick uniformly").
+pub struct LightDistribution {
+    pub table: Vec<GpuAliasEntry>,
+    pub total_power: f32,
+}
+
+fn luminance(c: [f32; 4]) -> f64 {
+    0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64
+}
+
+/// Flux of a world-space emitter: area x pi x luminance of its radiance (a Lambertian emitter),
+/// twice for a two-sided quad or triangle. The kernel's `light_power` is the same formula.
+pub fn light_power(light: &GpuPrimitive, materials: &[GpuMaterial]) -> f64 {
+    let kind = light.b[3].to_bits();
+    let material = &materials[light.c[3].to_bits() as usize];
+    let area = if kind == PRIM_SPHERE {
+        4.0 * PI * (light.a[3] as f64).powi(2)
+    } else {
+        let (b, c) = (Vec3::from_slice(&light.b[..3]).as_dvec3(), Vec3::from_slice(&light.c[..3]).as_dvec3());
+        let parallelogram = b.cross(c).length();
+        if kind == PRIM_QUAD { parallelogram } else { 0.5 * parallelogram }
+    };
+    let sides = if kind != PRIM_SPHERE && material.params[1] > 0.5 { 2.0 } else { 1.0 };
+    area * PI * luminance(material.emission_t) * sides
+}
+
+impl LightDistribution {
+    /// Power selection over `lights`; uniform when `by_power` is false or no light has power.
+    pub fn new(lights: &[GpuPrimitive], materials: &[GpuMaterial], by_power: bool) -> LightDistribution {
+        let uniform = LightDistribution { table: Vec::new(), total_power: 0.0 };
+        if !by_power {
+            return uniform;
+        }
+        let powers: Vec<f64> = lights.iter().map(|l| light_power(l, materials)).collect();
+        let total: f64 = powers.iter().sum();
+        // Non-finite or all-zero powers leave nothing to be proportional to.
+        if !(total > 0.0 && total.is_finite() && (total as f32).is_normal()) {
+            return uniform;
+        }
+        LightDistribution { table: alias_table(&powers), total_power: total as f32 }
+    }
+}
+
+/// Vose's alias table for `weights` (non-negative, positive sum): entry i keeps i with probability
+/// `threshold` and otherwise gives `alias`, so picking an entry uniformly and then one of its two
+/// yields i with probability weights[i] / sum. A zero weight is never kept nor anyone's alias.
+pub fn alias_table(weights: &[f64]) -> Vec<GpuAliasEntry> {
+    let n = weights.len();
+    let total: f64 = weights.iter().sum();
+    // Each entry's share scaled so that the average is 1.
+    let mut scaled: Vec<f64> = weights.iter().map(|w| w * n as f64 / total).collect();
+    let mut table: Vec<GpuAliasEntry> = (0..n as u32).map(|i| GpuAliasEntry { threshold: 1.0, alias: i }).collect();
+    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
+    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+        small.pop();
+        table[s] = GpuAliasEntry { threshold: scaled[s] as f32, alias: l as u32 };
+        scaled[l] -= 1.0 - scaled[s];
+        if scaled[l] < 1.0 {
+            large.pop();
+            small.push(l);
+        }
+    }
+    // What is left holds a share of 1 up to rounding, and keeps itself (threshold 1) — except a
+    // zero weight, which rounding must not make pickable: it hands its entry to the heaviest.
+    let heaviest = (0..n).max_by(|&a, &b| weights[a].total_cmp(&weights[b])).unwrap_or(0);
+    for i in small.into_iter().chain(large) {
+        table[i] = if weights[i] > 0.0 { GpuAliasEntry { threshold: 1.0, alias: i as u32 } } else { GpuAliasEntry { threshold: 0.0, alias: heaviest as u32 } };
+    }
+    table
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::layout::PRIM_TRIANGLE;
+
+    /// The probability of each index that the table gives: (its kept share + the shares others
+    /// hand it) / n.
+    fn table_pmf(table: &[GpuAliasEntry]) -> Vec<f64> {
+        let n = table.len() as f64;
+        let mut pmf = vec![0.0; table.len()];
+        for (i, e) in table.iter().enumerate() {
+            pmf[i] += e.threshold as f64 / n;
+            pmf[e.alias as usize] += (1.0 - e.threshold as f64) / n;
+        }
+        pmf
+    }
+
+    fn assert_reproduces(weights: &[f64]) {
+        let table = alias_table(weights);
+        let total: f64 = weights.iter().sum();
+        for (i, (p, w)) in table_pmf(&table).iter().zip(weights).enumerate() {
+            // f32 thresholds: each entry's share is exact to 2^-24 of 1/n.
+            let expected = w / total;
+            assert!((p - expected).abs() <= 1e-7 * (1.0 + expected * weights.len() as f64), "index {i}: table gives {p:e}, weights {expected:e}");
+            if *w == 0.0 {
+                assert_eq!(*p, 0.0, "index {i} has no weight but can be picked");
+            }
+        }
+    }
+
+    #[test]
+    fn one_light_is_always_picked() {
+        assert_eq!(alias_table(&[3.5]), vec![GpuAliasEntry { threshold: 1.0, alias: 0 }]);
+    }
+
+    #[test]
+    fn the_table_reproduces_the_pmf() {
+        assert_reproduces(&[1.0, 2.0, 3.0, 4.0]);
+        assert_reproduces(&[1.0, 1.0, 1.0]);
+        assert_reproduces(&[1e-9, 1.0, 1e9]);
+    }
+
+    #[test]
+    fn zero_power_lights_are_never_picked() {
+        assert_reproduces(&[0.0, 1.0, 0.0, 0.0, 5.0, 0.0]);
+        assert_reproduces(&[0.0, 0.0, 0.0, 1e-30]);
+    }
+
+    #[test]
+    fn many_lights_of_widely_different_power() {
+        // Thousands of dim emitters, a few bright ones, some dark (a deterministic LCG spread).
+        let mut state = 12345u64;
+        let weights: Vec<f64> = (0..20_000)
+            .map(|i| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+                match i % 1000 {
+                    0 => 1e4 * u,
+                    7 => 0.0,
+                    _ => 1e-3 + u,
+                }
+            })
+            .collect();
+        assert_reproduces(&weights);
+    }
+
+    fn material(emission: [f32; 3], two_sided: bool) -> GpuMaterial {
+        GpuMaterial { albedo_r: [0.0; 4], emission_t: [emission[0], emission[1], emission[2], 0.0], params: [1.5, if two_sided { 1.0 } else { 0.0 }, 0.0, 0.0] }
+    }
+
+    fn tagged(a: [f32; 4], b: [f32; 3], c: [f32; 3], kind: u32, material: u32) -> GpuPrimitive {
+        GpuPrimitive { a, b: [b[0], b[1], b[2], f32::from_bits(kind)], c: [c[0], c[1], c[2], f32::from_bits(material)] }
+    }
+
+    #[test]
+    fn power_is_area_times_pi_times_luminance() {
+        let materials = [material([1.0, 1.0, 1.0], false), material([0.0, 2.0, 0.0], true)];
+        let sphere = tagged([0.0, 0.0, 0.0, 0.5], [0.0; 3], [0.0; 3], PRIM_SPHERE, 0);
+        let quad = tagged([0.0; 4], [2.0, 0.0, 0.0], [0.0, 0.0, 3.0], PRIM_QUAD, 0);
+        let triangle = tagged([0.0; 4], [2.0, 0.0, 0.0], [0.0, 0.0, 3.0], PRIM_TRIANGLE, 1);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b;
+        assert!(close(light_power(&sphere, &materials), PI * PI));
+        assert!(close(light_power(&quad, &materials), 6.0 * PI));
+        // Half the quad's area, two sides, luminance 2 x 0.7152.
+        assert!(close(light_power(&triangle, &materials), 3.0 * PI * 2.0 * 2.0 * 0.7152));
+    }
+
+    #[test]
+    fn uniform_selection_and_powerless_scenes_upload_no_table() {
+        let materials = [material([1.0, 1.0, 1.0], false)];
+        let quad = tagged([0.0; 4], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], PRIM_QUAD, 0);
+        let by_power = LightDistribution::new(&[quad, quad], &materials, true);
+        assert_eq!((by_power.table.len(), by_power.total_power), (2, 2.0 * std::f32::consts::PI));
+        assert!(LightDistribution::new(&[quad, quad], &materials, false).table.is_empty());
+        let flat = tagged([0.0; 4], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], PRIM_QUAD, 0);
+        let none = LightDistribution::new(&[flat], &materials, true);
+        assert!(none.table.is_empty() && none.total_power == 0.0);
+    }
+}
