@@ -84,6 +84,7 @@ pub fn alias_table(weights: &[f64]) -> Vec<GpuAliasEntry> {
 mod tests {
     use super::*;
     use crate::render::layout::PRIM_TRIANGLE;
+    use bytemuck::Zeroable;
 
     /// The probability of each index that the table gives: (its kept share + the shares others
     /// hand it) / n.
@@ -147,7 +148,7 @@ mod tests {
     }
 
     fn material(emission: [f32; 3], two_sided: bool) -> GpuMaterial {
-        GpuMaterial { albedo_r: [0.0; 4], emission_t: [emission[0], emission[1], emission[2], 0.0], params: [1.5, if two_sided { 1.0 } else { 0.0 }, 0.0, 0.0] }
+        GpuMaterial { albedo_r: [0.0; 4], emission_t: [emission[0], emission[1], emission[2], 0.0], params: [1.5, if two_sided { 1.0 } else { 0.0 }, 0.0, 0.0], ..GpuMaterial::zeroed() }
     }
 
     fn tagged(a: [f32; 4], b: [f32; 3], c: [f32; 3], kind: u32, material: u32) -> GpuPrimitive {
