@@ -168,15 +168,6 @@ fn escaping_rays_give_the_clamped_sky_no_normal_and_infinite_depth() {
     assert!(l.depth.iter().all(|&z| z == f32::INFINITY), "{:?}", l.depth);
 }
 
-fn srgb_to_linear(c: u8) -> f32 {
-    let c = c as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 #[test]
 fn textured_mesh_gives_material_albedo_times_texture() {
     let mut scene = parse(

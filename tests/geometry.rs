@@ -6,7 +6,7 @@ mod common;
 use caustica::render::frame_params;
 use caustica::render::SceneData;
 use caustica::scene::{Environment, EnvironmentMap, Instance, MapProjection, Mesh, Scene, Texture};
-use common::{gpu, parse, render};
+use common::{gpu, parse, render, srgb_to_linear};
 use glam::{Mat4, Quat, Vec2, Vec3};
 
 /// Primary rays through image-plane points (pixel units, y down), as camera.glsl builds them.
@@ -176,15 +176,6 @@ fn instanced_meshes_and_shapes_match_brute_force_ray_casting() {
     let pixels = (scene.film.width * scene.film.height) as usize;
     assert!(checked > pixels * 3 / 5, "only {checked} of {pixels} pixels were unambiguous");
     assert!(colored > pixels / 8, "only {colored} pixels see geometry: the test scene is too sparse");
-}
-
-fn srgb_to_linear(c: u8) -> f32 {
-    let c = c as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// Bilinear with wrapping, texel centres at half-integers, as textures.glsl does.

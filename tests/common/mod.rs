@@ -124,3 +124,13 @@ pub fn assert_same_mean(a: &RgbImage, b: &RgbImage, k: f64, what: &str) {
         );
     }
 }
+
+/// An 8-bit sRGB-encoded value as linear, the reference for what textures.glsl decodes.
+pub fn srgb_to_linear(c: u8) -> f32 {
+    let c = c as f32 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
