@@ -640,7 +640,7 @@ mod tests {
   ]}}],
   "materials": [{{
     "name": "glowing glass",
-    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2}},
+    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
     "emissiveFactor": [1, 0.5, 0.25],
     "extensions": {{
       "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
@@ -710,8 +710,25 @@ mod tests {
         assert_eq!((glass.conductor, glass.coat), (Conductor::Albedo, true));
         assert_eq!(asset.materials[1], AssetMaterial::default_grey());
         assert_eq!(glass.albedo_texture, Some(0));
-        assert_eq!(asset.textures.len(), 1, "only albedo images are decoded");
-        assert_eq!(asset.textures[0].texels, vec![[10, 20, 30, 255]]);
+        assert_eq!(
+            glass.metallic_roughness,
+            Some(MetallicRoughness {
+                texture: 1,
+                metallic: 1.0,
+                roughness: 0.2,
+                transmission: 0.5
+            }),
+            "the texture scales the factors; the kernel weighs transmission by 1 - metallic per texel"
+        );
+        assert_eq!(
+            asset.textures.len(),
+            2,
+            "image 0 is decoded once as colour and once as data; the emissive image never"
+        );
+        for (texture, srgb) in asset.textures.iter().zip([true, false]) {
+            assert_eq!(texture.texels, vec![[10, 20, 30, 255]]);
+            assert_eq!(texture.srgb, srgb, "base colour is sRGB, metallic-roughness linear");
+        }
 
         let camera = asset.camera.unwrap();
         assert_eq!(
@@ -840,13 +857,14 @@ mod tests {
         );
         assert_eq!(
             asset.textures.len(),
-            1,
-            "only the albedo texture is decoded"
+            2,
+            "only the base colour and metallic-roughness textures are decoded"
         );
-        assert_eq!(
-            (asset.textures[0].width, asset.textures[0].height),
-            (2048, 2048)
-        );
+        for texture in &asset.textures {
+            assert_eq!((texture.width, texture.height), (2048, 2048));
+        }
+        let metallic_roughness = asset.materials[0].metallic_roughness.unwrap();
+        assert!(!asset.textures[metallic_roughness.texture as usize].srgb);
         assert_eq!(asset.instances.len(), 1);
         assert_eq!(
             asset.meshes[0].normals.len(),
