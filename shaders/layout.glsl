@@ -27,13 +27,16 @@ const uint CONDUCTOR_ALBEDO = 2u;
 // bits; NO_TEXTURE for none), params.w = GGX alpha of the R and T lobes and the coat.
 // conductor_eta.rgb = eta and conductor_k.rgb = k of CONDUCTOR_COMPLEX, conductor_eta.w = the
 // CONDUCTOR_* kind (uint bits), conductor_k.w = 1 / (1 - the coat's average Fresnel) for a
-// plastic (a coated base), 0 for a plain diffuse base.
+// plastic (a coated base), 0 for a plain diffuse base. metallic_roughness.x = glTF
+// metallic-roughness texture index (uint bits; NO_TEXTURE for none), .y/.z/.w = the metallic,
+// roughness and transmission factors that surface_material() turns into R, T and alpha per texel.
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;
     vec4 params;
     vec4 conductor_eta;
     vec4 conductor_k;
+    vec4 metallic_roughness;
 };
 
 // One entry of the alias table that picks area lights by power (src/render/light_selection.rs):
@@ -60,6 +63,8 @@ const uint INSTANCE_MESH = 1u;
 const uint INSTANCE_HAS_NORMALS = 1u;
 const uint INSTANCE_HAS_UVS = 2u;
 const uint NO_TEXTURE = 0xffffffffu;
+// Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored).
+const uint TEXTURE_SRGB = 1u;
 
 // One placement of a bottom-level BVH. Rows of the 3x4 affine maps; info.x = kind, info.y = root
 // node of its BVH, info.z = flags.
@@ -69,12 +74,13 @@ struct Instance {
     uvec4 info;
 };
 
-// Texture descriptor: texels offset..offset + width * height (RGBA8, sRGB-encoded, top row first).
+// Texture descriptor: texels offset..offset + width * height (RGBA8, top row first); flags =
+// TEXTURE_* bits.
 struct TextureInfo {
     uint offset;
     uint width;
     uint height;
-    uint unused;
+    uint flags;
 };
 
 // Environment kinds (ENV_* must match layout.rs).

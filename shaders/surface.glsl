@@ -71,10 +71,20 @@ Primitive world_primitive(Hit hit) {
     return p;
 }
 
-// Material at the surface, with the albedo texture applied.
+// Material at the surface, with the albedo texture applied, and the glTF metallic-roughness
+// texture (G = roughness, B = metallic) turned into R, T and alpha as the loader does factors.
 Material surface_material(Surface s) {
     Material m = materials[s.material];
     uint texture_index = floatBitsToUint(m.params.z);
     if (texture_index != NO_TEXTURE) m.albedo_r.rgb *= texture_rgb(texture_index, s.uv);
+    uint mr_index = floatBitsToUint(m.metallic_roughness.x);
+    if (mr_index != NO_TEXTURE) {
+        vec3 mr = texture_rgb(mr_index, s.uv);
+        float metallic = m.metallic_roughness.y * mr.b;
+        float roughness = m.metallic_roughness.z * mr.g;
+        m.albedo_r.w = metallic;
+        m.emission_t.w = (1.0 - metallic) * m.metallic_roughness.w;
+        m.params.w = roughness * roughness;
+    }
     return m;
 }

@@ -1,12 +1,14 @@
-// Base-colour textures: RGBA8 texels stored as written (sRGB-encoded), decoded to linear here,
-// filtered bilinearly with wrapping (repeat) coordinates. uv (0, 0) is the image's top-left corner.
+// Textures: RGBA8 texels stored as written; colour (TEXTURE_SRGB) is decoded to linear here, data
+// (glTF metallic-roughness) read as stored. Filtered bilinearly with wrapping (repeat)
+// coordinates, after decoding. uv (0, 0) is the image's top-left corner.
 
 vec3 srgb_to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
 }
 
 vec3 texel_rgb(TextureInfo t, uint x, uint y) {
-    return srgb_to_linear(unpackUnorm4x8(load_texels(t.offset + y * t.width + x)).rgb);
+    vec3 stored = unpackUnorm4x8(load_texels(t.offset + y * t.width + x)).rgb;
+    return (t.flags & TEXTURE_SRGB) != 0u ? srgb_to_linear(stored) : stored;
 }
 
 vec3 texture_rgb(uint index, vec2 uv) {

@@ -208,7 +208,7 @@ fn textured_albedo_is_sampled_bilinearly_with_wrapping() {
         "#,
     );
     let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels }];
+    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true }];
     scene.materials[0].albedo_texture = Some(0);
     let corners = [Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0)];
     let uv_of = |p: Vec3| Vec2::new(p.x + 0.5, 0.5 - p.y);
@@ -321,6 +321,131 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A glTF square facing the camera like `write_square_gltf`'s, with texture coordinates running
+/// left to right and top to bottom across it: base colour `base`, the given metallic and
+/// roughness factors and, if given, a metallic-roughness texture (width x 1 texels of (G, B)).
+fn write_metal_square_gltf(path: &std::path::Path, base: [f32; 3], metallic: f32, roughness: f32, texture: Option<&[(u8, u8)]>) {
+    use base64::Engine as _;
+    let encode = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
+    let positions: [[f32; 3]; 4] = [[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut bytes: Vec<u8> = positions.iter().flatten().chain(uvs.iter().flatten()).flat_map(|f| f.to_le_bytes()).collect();
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let (texture_json, textures) = match texture {
+        Some(texels) => {
+            let mut png = Vec::new();
+            let mut encoder = png::Encoder::new(&mut png, texels.len() as u32, 1);
+            encoder.set_color(png::ColorType::Rgb);
+            let data: Vec<u8> = texels.iter().flat_map(|&(g, b)| [0, g, b]).collect();
+            encoder.write_header().unwrap().write_image_data(&data).unwrap();
+            (
+                r#", "metallicRoughnessTexture": {"index": 0}"#.to_owned(),
+                format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{}"}}],"#, encode(&png)),
+            )
+        }
+        None => (String::new(), String::new()),
+    };
+    let json = format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "scene": 0,
+  "scenes": [{{"nodes": [0, 1]}}],
+  "nodes": [
+    {{"mesh": 0, "translation": [0, 0, -1], "scale": [2, 2, 2]}},
+    {{"camera": 0, "translation": [0, 0, 3]}}
+  ],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.5, "aspectRatio": 1.0, "znear": 0.1}}}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "indices": 2, "material": 0}}]}}],
+  "materials": [{{
+    "pbrMetallicRoughness": {{"baseColorFactor": [{r}, {g}, {b}, 1], "metallicFactor": {metallic}, "roughnessFactor": {roughness}{texture_json}}}
+  }}],
+  {textures}
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 48}},
+    {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
+    {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.5, -0.5, 0], "max": [0.5, 0.5, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}
+  ]
+}}"#,
+        r = base[0],
+        g = base[1],
+        b = base[2],
+        len = bytes.len(),
+        data = encode(&bytes),
+    );
+    std::fs::write(path, json).unwrap();
+}
+
+/// The metallic-roughness texture (linear; G = roughness, B = metallic, scaling factors 1 and 1)
+/// sets R, T and roughness per texel: each of three bands of the texture renders as the same
+/// square with its values given as factors, under a white sky. The smooth metal band reflects
+/// exactly its F0, the base colour (Schlick's (1 - cos)^5 term is below 1e-7 at these angles);
+/// the rough metal loses energy to GGX's single scattering, and the rough plastic's blue comes
+/// from its coat alone, so swapping G and B, or ignoring the texture, fails.
+#[test]
+fn gltf_metallic_roughness_texture_matches_the_same_values_as_factors() {
+    let dir = common::temp_dir("gltf-metallic-roughness");
+    let base = [0.8, 0.4, 0.0];
+    // (metallic, roughness) per band, left to right; each band is four texels wide.
+    let bands = [(0.0, 1.0), (1.0, 0.0), (1.0, 1.0)];
+    let texels: Vec<(u8, u8)> = bands.iter().flat_map(|&(m, r)| [((r * 255.0) as u8, (m * 255.0) as u8); 4]).collect();
+    let size = 64;
+    let load = |name: &str, metallic: f32, roughness: f32, texture: Option<&[(u8, u8)]>| {
+        let path = dir.join(name);
+        write_metal_square_gltf(&path, base, metallic, roughness, texture);
+        let mut scene = Scene::load(&path).expect("the glTF loads as a scene");
+        (scene.film.width, scene.film.height, scene.film.spp) = (size, size, 32);
+        scene
+    };
+    let textured = load("textured.gltf", 1.0, 1.0, Some(&texels));
+    assert!(textured.materials[0].metallic_roughness.is_some());
+    let (_lock, ctx) = gpu();
+    let image = render(&ctx, &textured, 1);
+    let rays = PinholeRays::new(&textured);
+    for (band, &(metallic, roughness)) in bands.iter().enumerate() {
+        let factors = load(&format!("band{band}.gltf"), metallic, roughness, None);
+        let reference = render(&ctx, &factors, 2);
+        // Pixels whose footprint lies inside the band's unfiltered middle (the bilinear filter
+        // blends half a texel at each side, and a pixel spans 1/47 of the square).
+        let (u0, u1) = ((4 * band) as f32 / 12.0 + 0.1, (4 * band + 4) as f32 / 12.0 - 0.1);
+        let mut diffs = [vec![], vec![], vec![]];
+        let mut mean = [0.0f64; 3];
+        for y in 0..size {
+            for x in 0..size {
+                let d = rays.dir(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+                let p = rays.eye + (-1.0 - rays.eye.z) / d.z * d;
+                let uv = Vec2::new(p.x + 1.0, 1.0 - p.y) / 2.0;
+                if !(u0..u1).contains(&uv.x) || !(0.1..0.9).contains(&uv.y) {
+                    continue;
+                }
+                let (got, want) = (image.get(x, y), reference.get(x, y));
+                for c in 0..3 {
+                    diffs[c].push(f64::from(got[c] - want[c]));
+                    mean[c] += f64::from(got[c]);
+                }
+                if (metallic, roughness) == (1.0, 0.0) {
+                    assert!((0..3).all(|c| (got[c] - base[c]).abs() < 1e-3), "band {band}, pixel ({x}, {y}): smooth metal {got:?}, expected its F0 {base:?}");
+                }
+            }
+        }
+        let n = diffs[0].len() as f64;
+        assert!(n > 300.0, "band {band}: only {n} pixels checked");
+        for c in 0..3 {
+            // Two independent renders: each difference has mean zero, so its second moment is its variance.
+            let d = diffs[c].iter().sum::<f64>() / n;
+            let stderr = (diffs[c].iter().map(|d| d * d).sum::<f64>() / n / n).sqrt();
+            assert!(d.abs() <= 5.0 * stderr + 1e-4, "band {band} (metallic {metallic}, roughness {roughness}), channel {c}: textured mean {:.4} differs from the factors' by {d:.5} ({stderr:.5} standard error)", mean[c] / n);
+        }
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
 /// A textured, normal-mapped sphere mesh (uv sphere) placed twice, under a lat-long sky with a
 /// sun: every kind of array the renderer may split across bindings is non-trivial in size.
 fn sphere_scene() -> Scene {
@@ -357,7 +482,7 @@ fn sphere_scene() -> Scene {
         Instance { mesh: 0, transform: Mat4::from_scale_rotation_translation(Vec3::splat(0.7), Quat::from_rotation_z(0.5), Vec3::new(1.0, 0.2, -0.5)) },
     ];
     let texels: Vec<[u8; 4]> = (0..64 * 32u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i % 256) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "noise".into(), width: 64, height: 32, texels }];
+    scene.textures = vec![Texture { name: "noise".into(), width: 64, height: 32, texels, srgb: true }];
     scene.materials[0].albedo_texture = Some(0);
     let mut sky = caustica::image::RgbImage::new(32, 16);
     for y in 0..16 {

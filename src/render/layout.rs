@@ -12,6 +12,7 @@ pub const INSTANCE_MESH: u32 = 1;
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
 pub const NO_TEXTURE: u32 = u32::MAX;
+pub const TEXTURE_SRGB: u32 = 1;
 
 pub const CONDUCTOR_MIRROR: u32 = 0;
 pub const CONDUCTOR_COMPLEX: u32 = 1;
@@ -53,6 +54,8 @@ pub struct GpuMaterial {
     pub conductor_eta: [f32; 4],
     /// conductor k, 1 / (1 - average coat Fresnel) for a plastic (0: plain diffuse base)
     pub conductor_k: [f32; 4],
+    /// metallic-roughness texture (u32 bits), metallic, roughness and transmission factors
+    pub metallic_roughness: [f32; 4],
 }
 
 /// `struct Instance`: rows of the two 3x4 affine maps, then kind, BVH root node and flags.
@@ -71,7 +74,8 @@ pub struct GpuTexture {
     pub offset: u32,
     pub width: u32,
     pub height: u32,
-    pub unused: u32,
+    /// TEXTURE_* bits
+    pub flags: u32,
 }
 
 /// `struct LightAlias`: one entry of the alias table that picks area lights by power
@@ -145,13 +149,14 @@ mod tests {
 
     #[test]
     fn material_matches_glsl_std430() {
-        assert_eq!(size_of::<GpuMaterial>(), 80);
+        assert_eq!(size_of::<GpuMaterial>(), 96);
         assert_eq!(offset_of!(GpuMaterial, emission_t), 16);
         assert_eq!(offset_of!(GpuMaterial, params), 32);
         assert_eq!(offset_of!(GpuMaterial, conductor_eta), 48);
         assert_eq!(offset_of!(GpuMaterial, conductor_k), 64);
+        assert_eq!(offset_of!(GpuMaterial, metallic_roughness), 80);
         let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n};";
+        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n};";
         assert!(glsl.contains(members), "struct Material members differ from GpuMaterial");
     }
 
@@ -167,6 +172,10 @@ mod tests {
         assert_eq!(size_of::<GpuTexture>(), 16);
         assert_eq!(offset_of!(GpuTexture, width), 4);
         assert_eq!(offset_of!(GpuTexture, height), 8);
+        assert_eq!(offset_of!(GpuTexture, flags), 12);
+        let glsl = include_str!("../../shaders/layout.glsl");
+        let members = "struct TextureInfo {\n    uint offset;\n    uint width;\n    uint height;\n    uint flags;\n};";
+        assert!(glsl.contains(members), "struct TextureInfo members differ from GpuTexture");
     }
 
     #[test]
@@ -240,6 +249,7 @@ mod tests {
             ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
             ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
             ("NO_TEXTURE", NO_TEXTURE),
+            ("TEXTURE_SRGB", TEXTURE_SRGB),
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
             ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
             ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),

@@ -58,12 +58,17 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         Conductor::Albedo => (CONDUCTOR_ALBEDO, Vec3::ZERO, Vec3::ZERO),
     };
     let coat_norm = if m.coat { 1.0 / (1.0 - average_fresnel(m.ior)) } else { 0.0 };
+    let metallic_roughness = match m.metallic_roughness {
+        Some(mr) => [f32::from_bits(mr.texture), mr.metallic, mr.roughness, mr.transmission],
+        None => [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
+    };
     GpuMaterial {
         albedo_r: m.albedo.extend(m.reflectivity).into(),
         emission_t: m.emission.extend(m.transparency).into(),
         params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)), m.roughness * m.roughness],
         conductor_eta: eta.extend(f32::from_bits(kind)).into(),
         conductor_k: k.extend(coat_norm).into(),
+        metallic_roughness,
     }
 }
 
@@ -82,7 +87,8 @@ impl SceneData {
         let mut fitted = scene.textures.clone();
         downsample_to_fit(&mut fitted, texture_budget);
         for t in fitted {
-            textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, unused: 0 });
+            let flags = if t.srgb { TEXTURE_SRGB } else { 0 };
+            textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, flags });
             texels.extend(t.texels.iter().map(|&p| u32::from_le_bytes(p)));
         }
         let (env_texels, env_kind, env_size, env_color, env_rotation_deg) = match &scene.environment {

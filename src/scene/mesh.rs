@@ -2,7 +2,7 @@
 //! mesh files (OBJ + MTL, PLY, glTF) into the scene's materials, meshes and textures.
 
 use super::asset::{self, Asset, AssetMaterial};
-use super::{Material, Scene};
+use super::{Material, MetallicRoughness, Scene};
 use anyhow::{bail, Result};
 use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
@@ -119,5 +119,6 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         roughness: m.roughness.clamp(0.0, 1.0),
         conductor: m.conductor,
         coat: m.coat,
+        metallic_roughness: m.metallic_roughness.map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
     })
 }

@@ -81,6 +81,20 @@ pub struct Material {
     /// The base (1 - R - T) is a plastic: the albedo under a dielectric coat of index `ior` and
     /// roughness `roughness`; false: plain diffuse.
     pub coat: bool,
+    /// glTF: `reflectivity`, `transparency` and `roughness` come per texel from a texture.
+    pub metallic_roughness: Option<MetallicRoughness>,
+}
+
+/// A glTF metallic-roughness texture (linear; G = roughness, B = metallic) and the factors it
+/// scales. The kernel recomputes the R/T mix per texel as the glTF loader does from factors
+/// alone: R = metallic, T = (1 - metallic) x transmission, roughness for every lobe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MetallicRoughness {
+    /// Index into the scene's (or, in an asset, the asset's) textures.
+    pub texture: u32,
+    pub metallic: f32,
+    pub roughness: f32,
+    pub transmission: f32,
 }
 
 /// How much the reflector (R) lobe reflects.
@@ -267,6 +281,7 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
             roughness: finite(&key("roughness"), m.roughness)?,
             conductor,
             coat: m.coat,
+            metallic_roughness: None,
         };
         if !(0.0..=1.0).contains(&material.roughness) {
             bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);

@@ -1,6 +1,6 @@
 //! glTF 2.0 (`.gltf` with external or data-URI buffers and images, and binary `.glb`), via the
 //! gltf crate for parsing and accessors. Buffers and images are loaded here rather than with
-//! `gltf::import`, so that only albedo textures are decoded, under our size limit.
+//! `gltf::import`, so that only the textures we read are decoded, under our size limit.
 //!
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
 //! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
@@ -10,10 +10,11 @@
 //!   has no textured emission, and the factor alone would make the whole surface glow (as it
 //!   would DamagedHelmet, whose factor is 1 and whose texture lights only small details).
 //! - `metallicFactor` → reflectivity R, a conductor with the base colour as F0 (Schlick);
-//!   `roughnessFactor` → roughness (both perceptual) of every lobe. The metallic-roughness
-//!   texture is not read: the factors apply to the whole surface.
+//!   `roughnessFactor` → roughness (both perceptual) of every lobe.
 //! - `KHR_materials_transmission` factor → transparency T = (1 − metallic) × transmission, a
 //!   rough dielectric; `KHR_materials_ior` → ior (1.5 by default).
+//! - `metallicRoughnessTexture` (texCoord 0; linear, B = metallic, G = roughness) scales the two
+//!   factors per texel: the kernel recomputes R, T and roughness there as above.
 //! - The rest (1 − R − T) is a plastic: the base colour under a dielectric coat of that ior.
 //! - Primitives without a material get [`AssetMaterial::default_grey`].
 //!
@@ -29,7 +30,10 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Accessor, Document, Semantic};
 
-use super::{texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, MeshData};
+use super::{
+    texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, MeshData,
+    MetallicRoughness,
+};
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
 const MAX_NODE_DEPTH: usize = 1000;
@@ -77,7 +81,7 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
         load_buffers(&document, blob, directory).map_err(|m| AssetError::invalid(path, m))?;
 
     let mut asset = Asset::default();
-    let mut decoded_images = HashMap::new();
+    let mut decoded_images = DecodedImages::new();
     for material in document.materials() {
         let converted = convert_material(
             &material,
@@ -172,15 +176,21 @@ fn read_uri(uri: &str, directory: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))
 }
 
-/// Decodes each image the first time a material uses it as albedo, into `asset.textures`.
-fn albedo_texture(
+/// Textures decoded so far: (image index, sRGB) → index into `asset.textures`. An image used as
+/// both colour and data is stored twice, as its texels are decoded differently.
+type DecodedImages = HashMap<(usize, bool), usize>;
+
+/// Decodes each image the first time a material uses it in a colour space (sRGB for base colour,
+/// linear for metallic-roughness), into `asset.textures`.
+fn image_texture(
     image: gltf::Image,
+    srgb: bool,
     buffers: &[Vec<u8>],
     directory: &Path,
-    decoded_images: &mut HashMap<usize, usize>,
+    decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<usize, String> {
-    if let Some(&index) = decoded_images.get(&image.index()) {
+    if let Some(&index) = decoded_images.get(&(image.index(), srgb)) {
         return Ok(index);
     }
     let (bytes, name) = match image.source() {
@@ -215,8 +225,8 @@ fn albedo_texture(
             )
         }
     };
-    asset.textures.push(texture::decode_texture(&bytes, name)?);
-    decoded_images.insert(image.index(), asset.textures.len() - 1);
+    asset.textures.push(texture::decode_texture(&bytes, name, srgb)?);
+    decoded_images.insert((image.index(), srgb), asset.textures.len() - 1);
     Ok(asset.textures.len() - 1)
 }
 
@@ -229,15 +239,16 @@ fn convert_material(
     material: &gltf::Material,
     buffers: &[Vec<u8>],
     directory: &Path,
-    decoded_images: &mut HashMap<usize, usize>,
+    decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<AssetMaterial, String> {
     let index = material.index().unwrap_or(0);
     let pbr = material.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let albedo_texture = match pbr.base_color_texture() {
-        Some(info) if info.tex_coord() == 0 => Some(albedo_texture(
+        Some(info) if info.tex_coord() == 0 => Some(image_texture(
             info.texture().source(),
+            true,
             buffers,
             directory,
             decoded_images,
@@ -268,6 +279,23 @@ fn convert_material(
     if !roughness.is_finite() {
         return Err(format!("material {index}: roughnessFactor is not finite"));
     }
+    let roughness = roughness.clamp(0.0, 1.0);
+    let metallic_roughness = match pbr.metallic_roughness_texture() {
+        Some(info) if info.tex_coord() == 0 => Some(MetallicRoughness {
+            texture: image_texture(
+                info.texture().source(),
+                false,
+                buffers,
+                directory,
+                decoded_images,
+                asset,
+            )? as u32,
+            metallic,
+            roughness,
+            transmission,
+        }),
+        _ => None,
+    };
     Ok(AssetMaterial {
         name: material
             .name()
@@ -278,9 +306,10 @@ fn convert_material(
         reflectivity: metallic,
         transparency: (1.0 - metallic) * transmission,
         ior: material.ior().filter(|&n| n > 0.0).unwrap_or(1.5),
-        roughness: roughness.clamp(0.0, 1.0),
+        roughness,
         conductor: Conductor::Albedo,
         coat: true,
+        metallic_roughness,
     })
 }
 
@@ -611,7 +640,7 @@ mod tests {
   ]}}],
   "materials": [{{
     "name": "glowing glass",
-    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2}},
+    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
     "emissiveFactor": [1, 0.5, 0.25],
     "extensions": {{
       "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
@@ -681,8 +710,25 @@ mod tests {
         assert_eq!((glass.conductor, glass.coat), (Conductor::Albedo, true));
         assert_eq!(asset.materials[1], AssetMaterial::default_grey());
         assert_eq!(glass.albedo_texture, Some(0));
-        assert_eq!(asset.textures.len(), 1, "only albedo images are decoded");
-        assert_eq!(asset.textures[0].texels, vec![[10, 20, 30, 255]]);
+        assert_eq!(
+            glass.metallic_roughness,
+            Some(MetallicRoughness {
+                texture: 1,
+                metallic: 1.0,
+                roughness: 0.2,
+                transmission: 0.5
+            }),
+            "the texture scales the factors; the kernel weighs transmission by 1 - metallic per texel"
+        );
+        assert_eq!(
+            asset.textures.len(),
+            2,
+            "image 0 is decoded once as colour and once as data; the emissive image never"
+        );
+        for (texture, srgb) in asset.textures.iter().zip([true, false]) {
+            assert_eq!(texture.texels, vec![[10, 20, 30, 255]]);
+            assert_eq!(texture.srgb, srgb, "base colour is sRGB, metallic-roughness linear");
+        }
 
         let camera = asset.camera.unwrap();
         assert_eq!(
@@ -811,13 +857,14 @@ mod tests {
         );
         assert_eq!(
             asset.textures.len(),
-            1,
-            "only the albedo texture is decoded"
+            2,
+            "only the base colour and metallic-roughness textures are decoded"
         );
-        assert_eq!(
-            (asset.textures[0].width, asset.textures[0].height),
-            (2048, 2048)
-        );
+        for texture in &asset.textures {
+            assert_eq!((texture.width, texture.height), (2048, 2048));
+        }
+        let metallic_roughness = asset.materials[0].metallic_roughness.unwrap();
+        assert!(!asset.textures[metallic_roughness.texture as usize].srgb);
         assert_eq!(asset.instances.len(), 1);
         assert_eq!(
             asset.meshes[0].normals.len(),

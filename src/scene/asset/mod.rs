@@ -9,7 +9,7 @@ mod texture;
 
 pub use texture::downsample_to_fit;
 
-use super::Conductor;
+use super::{Conductor, MetallicRoughness};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
@@ -67,6 +67,8 @@ pub struct AssetMaterial {
     pub conductor: Conductor,
     /// The base is the albedo under a dielectric coat of index `ior` (a plastic).
     pub coat: bool,
+    /// glTF: R, T and roughness per texel from a texture (its index into [`Asset::textures`]).
+    pub metallic_roughness: Option<MetallicRoughness>,
 }
 
 impl AssetMaterial {
@@ -83,17 +85,20 @@ impl AssetMaterial {
             roughness: 0.0,
             conductor: Conductor::Mirror,
             coat: false,
+            metallic_roughness: None,
         }
     }
 }
 
-/// An 8-bit RGBA texture as stored in the file (sRGB-encoded colour), top row first.
+/// An 8-bit RGBA texture as stored in the file, top row first.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TextureImage {
     pub name: String,
     pub width: u32,
     pub height: u32,
     pub texels: Vec<[u8; 4]>,
+    /// RGB is sRGB-encoded colour (albedo); false: linear data (glTF metallic-roughness).
+    pub srgb: bool,
 }
 
 /// A perspective camera in world space.

@@ -11,19 +11,20 @@ use super::{AssetError, TextureImage};
 /// before any pixel is decoded so a hostile header cannot demand gigabytes.
 const MAX_TEXTURE_SIDE: u32 = 16384;
 
-/// Reads a PNG or JPEG file (format guessed from its bytes) as RGBA8.
+/// Reads a PNG or JPEG colour image (format guessed from its bytes) as sRGB-encoded RGBA8.
 pub fn load_texture(path: &Path) -> Result<TextureImage, AssetError> {
     let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
     let name = path.file_name().map_or_else(
         || path.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
-    decode_texture(&bytes, name).map_err(|message| AssetError::invalid(path, message))
+    decode_texture(&bytes, name, true).map_err(|message| AssetError::invalid(path, message))
 }
 
-/// Decodes an in-memory PNG or JPEG (grey, RGB, 16-bit, ... all become RGBA8). The error is the
-/// reason only, naming the image; the caller adds the file it came from.
-pub(super) fn decode_texture(bytes: &[u8], name: String) -> Result<TextureImage, String> {
+/// Decodes an in-memory PNG or JPEG (grey, RGB, 16-bit, ... all become RGBA8); `srgb` records
+/// whether its values are sRGB-encoded colour or linear data. The error is the reason only,
+/// naming the image; the caller adds the file it came from.
+pub(super) fn decode_texture(bytes: &[u8], name: String, srgb: bool) -> Result<TextureImage, String> {
     let reader = || {
         ImageReader::new(Cursor::new(bytes))
             .with_guessed_format()
@@ -49,12 +50,14 @@ pub(super) fn decode_texture(bytes: &[u8], name: String) -> Result<TextureImage,
         width,
         height,
         texels,
+        srgb,
     })
 }
 
 /// Halves the largest textures (2x2 box filter) until their total size, width * height * 4 bytes,
-/// fits `budget_bytes`, or every texture is 1x1; returns the final total. Colour is averaged in
-/// linear light, as sRGB averages would darken edges; alpha is averaged as stored.
+/// fits `budget_bytes`, or every texture is 1x1; returns the final total. sRGB colour is averaged
+/// in linear light, as sRGB averages would darken edges; alpha and linear data are averaged as
+/// stored.
 pub fn downsample_to_fit(textures: &mut [TextureImage], budget_bytes: u64) -> u64 {
     let bytes = |t: &TextureImage| u64::from(t.width) * u64::from(t.height) * 4;
     let mut total: u64 = textures.iter().map(bytes).sum();
@@ -88,7 +91,7 @@ fn halve(texture: &mut TextureImage) {
                 for column in columns {
                     let texel = texture.texels[row * width + column];
                     for (c, s) in sum.iter_mut().enumerate() {
-                        *s += if c < 3 {
+                        *s += if c < 3 && texture.srgb {
                             srgb_to_linear(texel[c])
                         } else {
                             f32::from(texel[c]) / 255.0
@@ -97,13 +100,9 @@ fn halve(texture: &mut TextureImage) {
                 }
             }
             let [r, g, b, a] = sum.map(|s| s / 4.0);
-            let alpha = (a * 255.0).round() as u8;
-            texels.push([
-                linear_to_srgb(r),
-                linear_to_srgb(g),
-                linear_to_srgb(b),
-                alpha,
-            ]);
+            let stored = |v: f32| (v * 255.0).round() as u8;
+            let colour = |v: f32| if texture.srgb { linear_to_srgb(v) } else { stored(v) };
+            texels.push([colour(r), colour(g), colour(b), stored(a)]);
         }
     }
     texture.width = new_width as u32;
@@ -243,6 +242,7 @@ mod tests {
             width,
             height,
             texels: vec![texel; (width * height) as usize],
+            srgb: true,
         };
         let mut textures = vec![
             texture("big", 8, 8, [255, 0, 128, 255]),
@@ -272,8 +272,20 @@ mod tests {
             width: 2,
             height: 1,
             texels: vec![[0, 0, 0, 0], [255, 255, 255, 255]],
+            srgb: true,
         }];
         assert_eq!(downsample_to_fit(&mut stripes, 4), 4);
         assert_eq!(stripes[0].texels, vec![[188, 188, 188, 128]]);
+
+        // Linear data (metallic-roughness) averages as stored: 0 and 255 give 128 (127.5 rounded).
+        let mut data = vec![TextureImage {
+            name: "d".into(),
+            width: 2,
+            height: 1,
+            texels: vec![[0, 0, 0, 0], [255, 255, 255, 255]],
+            srgb: false,
+        }];
+        assert_eq!(downsample_to_fit(&mut data, 4), 4);
+        assert_eq!(data[0].texels, vec![[128, 128, 128, 128]]);
     }
 }
