@@ -3,6 +3,7 @@
 //! over rows and one conditional CDF per row (pbrt-v4's PiecewiseConstant2D). The kernel samples
 //! it in environment.glsl and evaluates its pdf there for MIS.
 
+use super::luminance;
 use crate::scene::{EnvironmentMap, MapProjection};
 use std::f64::consts::PI;
 
@@ -10,10 +11,6 @@ use std::f64::consts::PI;
 /// running from 0 to 1. Empty when the map has no radiance (nothing to sample).
 pub struct EnvDistribution {
     pub cdf: Vec<f32>,
-}
-
-fn luminance(p: [f32; 3]) -> f64 {
-    0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
 }
 
 /// Solid angle of texel cell (x, y) of a w x h map; zero where the map has no directions.
@@ -60,7 +57,7 @@ impl EnvDistribution {
             // The kernel filters bilinearly, so a cell shows its neighbours' radiance too: weight
             // it by the brightest of them, so no direction with radiance gets zero probability.
             let x = if map.projection == MapProjection::LatLong { x.rem_euclid(w as i64) } else { x.clamp(0, w as i64 - 1) };
-            luminance(map.image.pixels[(y.clamp(0, h as i64 - 1) * w as i64 + x) as usize])
+            luminance(&map.image.pixels[(y.clamp(0, h as i64 - 1) * w as i64 + x) as usize])
         };
         let mut rows = Vec::with_capacity(h as usize);
         let mut row_weights = Vec::with_capacity(h as usize);

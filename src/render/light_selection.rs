@@ -4,6 +4,7 @@
 //! entry and keeps it or takes its alias in lights.glsl, and recomputes the same power formula
 //! there (`light_power`) for the pick probability of an emitter hit by BSDF sampling.
 
+use super::luminance;
 use super::layout::{GpuAliasEntry, GpuMaterial, GpuPrimitive, PRIM_QUAD, PRIM_SPHERE};
 use glam::Vec3;
 use std::f64::consts::PI;
@@ -13,10 +14,6 @@ use std::f64::consts::PI;
 pub struct LightDistribution {
     pub table: Vec<GpuAliasEntry>,
     pub total_power: f32,
-}
-
-fn luminance(c: [f32; 4]) -> f64 {
-    0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64
 }
 
 /// Flux of a world-space emitter: area x pi x luminance of its radiance (a Lambertian emitter),
@@ -32,7 +29,7 @@ pub fn light_power(light: &GpuPrimitive, materials: &[GpuMaterial]) -> f64 {
         if kind == PRIM_QUAD { parallelogram } else { 0.5 * parallelogram }
     };
     let sides = if kind != PRIM_SPHERE && material.params[1] > 0.5 { 2.0 } else { 1.0 };
-    area * PI * luminance(material.emission_t) * sides
+    area * PI * luminance(&material.emission_t) * sides
 }
 
 impl LightDistribution {

@@ -16,3 +16,9 @@ pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
 pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, TEXTURE_BUDGET_BYTES};
 pub use scene_data::SceneData;
+
+/// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling
+/// make their distributions proportional to (lights.glsl evaluates the same weights in the kernel).
+fn luminance(rgb: &[f32]) -> f64 {
+    0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64
+}
