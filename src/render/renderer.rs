@@ -207,10 +207,15 @@ impl<'a> Renderer<'a> {
             ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
             ("light alias table", BufferKind::Storage, bytemuck::cast_slice(&data.light_distribution.table)),
         ];
-        let size = |i: usize| if i == ACCUM { accum_bytes } else { contents[i].2.len() as u64 };
         let aov_names: &[&str] = if aovs.needs_kernel() { &["albedo and depth sums", "normal sums"] } else { &[] };
-        let aov_sizes = AOV_BINDINGS.iter().zip(aov_names).map(|(&binding, &name)| (binding, name, accum_bytes));
-        let plans = plan_bindings(ctx, &scene.name, (0..contents.len()).map(|i| (i as u32, contents[i].0, size(i))).chain(aov_sizes))?;
+        // Every buffer as (binding, name, bytes): the scene's in binding order, then the AOV sums.
+        let slots: Vec<(u32, &str, u64)> = contents
+            .iter()
+            .enumerate()
+            .map(|(i, &(name, _, bytes))| (i as u32, name, if i == ACCUM { accum_bytes } else { bytes.len() as u64 }))
+            .chain(AOV_BINDINGS.iter().zip(aov_names).map(|(&binding, &name)| (binding, name, accum_bytes)))
+            .collect();
+        let plans = plan_bindings(ctx, &scene.name, slots.iter().copied())?;
         let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
         for (i, &(name, kind, bytes)) in contents.iter().enumerate() {
@@ -228,8 +233,7 @@ impl<'a> Renderer<'a> {
             aov_buffers.push(Buffer::with_data(ctx, name, BufferKind::Storage, &vec![0u8; accum_bytes as usize])?);
         }
         let mut bindings = Vec::new();
-        let numbered = buffers.iter().enumerate().map(|(i, b)| (i as u32, b, size(i))).chain(AOV_BINDINGS.iter().zip(&aov_buffers).map(|(&i, b)| (i, b, accum_bytes)));
-        for (binding, buffer, bytes) in numbered {
+        for (buffer, &(binding, _, bytes)) in buffers.iter().chain(&aov_buffers).zip(&slots) {
             match chunked_array_at(binding) {
                 Some((k, array)) if plans[k].chunks > 1 => {
                     for (c, (offset, range)) in plans[k].windows(array.element_bytes, bytes).into_iter().enumerate() {
@@ -240,10 +244,9 @@ impl<'a> Renderer<'a> {
                 _ => bindings.push(Binding::whole(binding, buffer)),
             }
         }
-        let split_arrays = (0..contents.len())
-            .map(|i| (i as u32, contents[i].0))
-            .chain(AOV_BINDINGS.iter().copied().zip(aov_names.iter().copied()))
-            .filter_map(|(binding, name)| chunked_array_at(binding).map(|(k, _)| (name, plans[k].chunks)))
+        let split_arrays = slots
+            .iter()
+            .filter_map(|&(binding, name, _)| chunked_array_at(binding).map(|(k, _)| (name, plans[k].chunks)))
             .filter(|&(_, windows)| windows > 1)
             .collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, aovs.needs_kernel())?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
