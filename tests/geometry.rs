@@ -249,19 +249,21 @@ fn textured_albedo_is_sampled_bilinearly_with_wrapping() {
     assert!(checked > 2000, "only {checked} pixels checked");
 }
 
-/// A glTF file written here: one emissive square (0.5 across) on a node translated to z = -1 and
-/// scaled by 2, and a camera node at z = 3 with a 0.5 rad field of view.
-fn write_square_gltf(path: &std::path::Path) {
+/// A glTF file written here: one square (0.5 across; texture coordinates run left to right and
+/// top to bottom across it) on a node translated to z = -1 and scaled by 2, and a camera node at
+/// z = 3 with a 0.5 rad field of view. `material` is the square's material, `top_level` more
+/// members of the root object (each followed by a comma).
+fn write_square_gltf_with(path: &std::path::Path, material: &str, top_level: &str) {
     use base64::Engine as _;
     let positions: [[f32; 3]; 4] = [[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
     let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
-    let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+    let mut bytes: Vec<u8> = positions.iter().flatten().chain(uvs.iter().flatten()).flat_map(|f| f.to_le_bytes()).collect();
     bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
-    let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bytes));
     let json = format!(
         r#"{{
   "asset": {{"version": "2.0"}},
-  "extensionsUsed": ["KHR_materials_emissive_strength"],
+  {top_level}
   "scene": 0,
   "scenes": [{{"nodes": [0, 1]}}],
   "nodes": [
@@ -269,25 +271,35 @@ fn write_square_gltf(path: &std::path::Path) {
     {{"camera": 0, "translation": [0, 0, 3]}}
   ],
   "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.5, "aspectRatio": 1.0, "znear": 0.1}}}}],
-  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
-  "materials": [{{
-    "pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0}},
-    "emissiveFactor": [1, 0.5, 0.25],
-    "extensions": {{"KHR_materials_emissive_strength": {{"emissiveStrength": 2}}}}
-  }}],
-  "buffers": [{{"byteLength": {len}, "uri": "{uri}"}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "indices": 2, "material": 0}}]}}],
+  "materials": [{material}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}],
   "bufferViews": [
     {{"buffer": 0, "byteOffset": 0, "byteLength": 48}},
-    {{"buffer": 0, "byteOffset": 48, "byteLength": 12}}
+    {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
+    {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}
   ],
   "accessors": [
     {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.5, -0.5, 0], "max": [0.5, 0.5, 0]}},
-    {{"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}}
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}
   ]
 }}"#,
-        len = bytes.len()
+        len = bytes.len(),
+        data = base64::engine::general_purpose::STANDARD.encode(&bytes),
     );
     std::fs::write(path, json).unwrap();
+}
+
+/// The square of [`write_square_gltf_with`], emissive: black base, emissive factor (1, 0.5, 0.25)
+/// at strength 2 (`KHR_materials_emissive_strength`).
+fn write_square_gltf(path: &std::path::Path) {
+    let material = r#"{
+    "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0},
+    "emissiveFactor": [1, 0.5, 0.25],
+    "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2}}
+  }"#;
+    write_square_gltf_with(path, material, r#""extensionsUsed": ["KHR_materials_emissive_strength"],"#);
 }
 
 /// `caustica render model.gltf` end to end: the file's camera, node transform and emissive
@@ -321,17 +333,10 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// A glTF square facing the camera like `write_square_gltf`'s, with texture coordinates running
-/// left to right and top to bottom across it: base colour `base`, the given metallic and
+/// The square of [`write_square_gltf_with`] with base colour `base`, the given metallic and
 /// roughness factors and, if given, a metallic-roughness texture (width x 1 texels of (G, B)).
 fn write_metal_square_gltf(path: &std::path::Path, base: [f32; 3], metallic: f32, roughness: f32, texture: Option<&[(u8, u8)]>) {
     use base64::Engine as _;
-    let encode = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
-    let positions: [[f32; 3]; 4] = [[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]];
-    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
-    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
-    let mut bytes: Vec<u8> = positions.iter().flatten().chain(uvs.iter().flatten()).flat_map(|f| f.to_le_bytes()).collect();
-    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
     let (texture_json, textures) = match texture {
         Some(texels) => {
             let mut png = Vec::new();
@@ -341,45 +346,19 @@ fn write_metal_square_gltf(path: &std::path::Path, base: [f32; 3], metallic: f32
             encoder.write_header().unwrap().write_image_data(&data).unwrap();
             (
                 r#", "metallicRoughnessTexture": {"index": 0}"#.to_owned(),
-                format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{}"}}],"#, encode(&png)),
+                format!(
+                    r#""textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{}"}}],"#,
+                    base64::engine::general_purpose::STANDARD.encode(&png)
+                ),
             )
         }
         None => (String::new(), String::new()),
     };
-    let json = format!(
-        r#"{{
-  "asset": {{"version": "2.0"}},
-  "scene": 0,
-  "scenes": [{{"nodes": [0, 1]}}],
-  "nodes": [
-    {{"mesh": 0, "translation": [0, 0, -1], "scale": [2, 2, 2]}},
-    {{"camera": 0, "translation": [0, 0, 3]}}
-  ],
-  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.5, "aspectRatio": 1.0, "znear": 0.1}}}}],
-  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "indices": 2, "material": 0}}]}}],
-  "materials": [{{
-    "pbrMetallicRoughness": {{"baseColorFactor": [{r}, {g}, {b}, 1], "metallicFactor": {metallic}, "roughnessFactor": {roughness}{texture_json}}}
-  }}],
-  {textures}
-  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}],
-  "bufferViews": [
-    {{"buffer": 0, "byteOffset": 0, "byteLength": 48}},
-    {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
-    {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}
-  ],
-  "accessors": [
-    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.5, -0.5, 0], "max": [0.5, 0.5, 0]}},
-    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
-    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}
-  ]
-}}"#,
-        r = base[0],
-        g = base[1],
-        b = base[2],
-        len = bytes.len(),
-        data = encode(&bytes),
+    let [r, g, b] = base;
+    let material = format!(
+        r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [{r}, {g}, {b}, 1], "metallicFactor": {metallic}, "roughnessFactor": {roughness}{texture_json}}}}}"#
     );
-    std::fs::write(path, json).unwrap();
+    write_square_gltf_with(path, &material, &textures);
 }
 
 /// The metallic-roughness texture (linear; G = roughness, B = metallic, scaling factors 1 and 1)
