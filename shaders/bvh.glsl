@@ -68,6 +68,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     // Start at the top-level root, or with a single instance, in that instance right away.
     stack[sp++] = frame.env_size.z == 1u ? INSTANCE_ENTRY : 0u;
     while (true) {
+        LOOP_ITERATION();
         // Next entry: leave the instance once its part of the stack is used up.
         if (instance != NO_INDEX && sp == instance_sp) {
             if (instance_kind == INSTANCE_MESH) {
@@ -97,6 +98,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
         }
         // Walk down from this node, nearer child first, until a leaf or a miss.
         while (true) {
+            LOOP_ITERATION();
             BvhNode node = load_nodes(node_index);
             if (!ray_box(node.bmin, node.bmax, ro, inv_d, hit.t)) break;
             uint count = node.meta >> 2u;
@@ -108,9 +110,13 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 continue;
             }
             if (instance == NO_INDEX) {
-                for (uint i = 0u; i < count; ++i) stack[sp++] = INSTANCE_ENTRY | (node.offset + i);
+                for (uint i = 0u; i < count; ++i) {
+                    LOOP_ITERATION();
+                    stack[sp++] = INSTANCE_ENTRY | (node.offset + i);
+                }
             } else if (instance_kind == INSTANCE_MESH) {
                 for (uint i = node.offset; i < node.offset + count; ++i) {
+                    LOOP_ITERATION();
                     uvec4 tri = load_mesh_triangles(i);
                     vec3 v0 = vertex_position(tri.x);
                     vec2 bary;
@@ -122,6 +128,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 }
             } else {
                 for (uint i = node.offset; i < node.offset + count; ++i) {
+                    LOOP_ITERATION();
                     float t = intersect_primitive(prims[i], ro, rd, hit.t);
                     if (t > 0.0) {
                         hit = Hit(t, i, instance, vec2(0.0));

@@ -85,6 +85,7 @@ uint cdf_search(uint offset, uint count, float u) {
     uint lo = 0u;
     uint hi = count;
     while (hi - lo > 1u) {
+        LOOP_ITERATION();
         uint mid = (lo + hi) / 2u;
         if (env_cdf[offset + mid] <= u) lo = mid; else hi = mid;
     }

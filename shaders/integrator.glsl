@@ -83,6 +83,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout Fir
 
     uint max_bounces = frame.integrator.w;
     for (uint depth = 0u; depth < max_bounces; ++depth) {
+        LOOP_ITERATION();
         bounce_dimensions(rng, depth, 0u, DIMS_SCATTER);
         Hit hit;
         rays += 1u;

@@ -112,10 +112,12 @@ layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
 } frame;
 
 layout(push_constant) uniform PassBlock {
-    uint sample_base;   // index of the first sample this dispatch adds
-    uint sample_count;  // samples per pixel this dispatch adds
-    uint row_offset;    // first image row of this dispatch's band
-    uint row_count;     // rows in the band
+    uint stream_offset;         // index of the render's first sample: a pixel holding c samples
+                                // takes sample stream_offset + c next
+    uint target_samples;        // bring every pixel of the band up to this many samples
+    uint row_offset;            // first image row of this dispatch's band
+    uint row_count;             // rows in the band
+    uint loop_check_iterations; // 2: the trip count of loop_limit_intact()'s loop
 } pass;
 
 // Arrays that can outgrow one storage binding (marked "binding N: type name[]") are declared in
@@ -129,9 +131,10 @@ layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { Primitive lig
 // binding 5: vec4 env_texels[]
 // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
 // binding 6: vec4 accum[]
-// Rays traced and non-finite samples dropped (each wraps per dispatch; the host reads and clears
-// both each dispatch).
-layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; uint nonfinite_samples; } stats;
+// Per dispatch, cleared and read by the host: rays traced, non-finite samples dropped, pixels of the
+// band that hold the target sample count afterwards (the host checks that this is all of them),
+// samples added, and the most loop iterations one subgroup ran (with COUNT_LOOP_ITERATIONS).
+layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; uint nonfinite_samples; uint pixels_complete; uint samples_added; uint max_loop_iterations; } stats;
 // Top-level BVH leaves index instances; node 0 is the top-level root.
 layout(std430, set = 0, binding = 8) readonly buffer InstanceBuffer { Instance instances[]; };
 // Mesh triangles in their BVH's leaf order: xyz = global vertex indices, w = material.

@@ -1,12 +1,18 @@
 #version 460
-// caustica's path tracing kernel: one invocation per pixel of the dispatched row band, adding
-// `pass.sample_count` samples to the pixel's running sum.
-// The host prepends `#define BVH_MAX_DEPTH` and `BVH_MAX_LEAF_SIZE` (the BVH builder's bounds), and
-// `AOVS` (1: also accumulate the denoiser features at bindings 20 and 21; 0: a kernel without them).
+// caustica's path tracing kernel: one invocation per pixel of the dispatched row band, bringing the
+// pixel's running sum up to `pass.target_samples` samples. Each pixel continues from the count it
+// holds, so a dispatch repeated after it was cut short (see loop_limit.glsl) adds exactly the
+// samples that are missing, and the sums are bit for bit those of one uninterrupted render.
+// The host prepends `#define BVH_MAX_DEPTH` and `BVH_MAX_LEAF_SIZE` (the BVH builder's bounds),
+// `AOVS` (1: also accumulate the denoiser features at bindings 20 and 21; 0: a kernel without them)
+// and `COUNT_LOOP_ITERATIONS` (1 on devices that end loops early).
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "layout.glsl"
+#include "loop_limit.glsl"
 #include "chunked_buffers.glsl"
 #include "rng.glsl"
 #include "sampling.glsl"
@@ -23,42 +29,60 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 void main() {
     uvec2 pixel = uvec2(gl_GlobalInvocationID.x, gl_GlobalInvocationID.y + pass.row_offset);
     uint width = frame.image.x;
-    if (pixel.x >= width || gl_GlobalInvocationID.y >= pass.row_count || pixel.y >= frame.image.y) return;
+    bool inside = pixel.x < width && gl_GlobalInvocationID.y < pass.row_count && pixel.y < frame.image.y;
     uint index = pixel.y * width + pixel.x;
-    vec4 sum = load_accum(index);
+    vec4 sum = inside ? load_accum(index) : vec4(0.0);
+    // Counts are exact in a float up to 2^24, which the host does not exceed.
+    uint first = uint(sum.w);
+    uint target = inside ? pass.target_samples : first;
     uint rays = 0u;
     uint nonfinite = 0u;
     float clamp_max = frame.lens.z;
 #if AOVS
-    vec4 albedo_depth = load_aov_albedo_depth(index);
-    vec4 normal_hits = load_aov_normal_hits(index);
+    vec4 albedo_depth = inside ? load_aov_albedo_depth(index) : vec4(0.0);
+    vec4 normal_hits = inside ? load_aov_normal_hits(index) : vec4(0.0);
 #endif
-    for (uint s = 0u; s < pass.sample_count; ++s) {
-        Rng rng = rng_for_sample(frame.image.z, index, pass.sample_base + s, frame.sampling.x);
+    for (uint s = first; s < target; ++s) {
+        LOOP_ITERATION();
+        Rng rng = rng_for_sample(frame.image.z, index, pass.stream_offset + s, frame.sampling.x);
         rng_set_dimensions(rng, 0u, DIMS_CAMERA);
         vec3 origin, dir;
         camera_ray(pixel, rng, origin, dir);
-        FirstHit first = FirstHit(vec3(0.0), vec3(0.0), 0.0, false, AOVS == 1);
-        vec3 radiance = trace_path(origin, dir, rng, rays, first);
-        // A NaN or infinity would poison the pixel for good; drop that sample's radiance, count it.
-        if (any(isnan(radiance)) || any(isinf(radiance))) {
-            radiance = vec3(0.0);
-            nonfinite += 1u;
-        }
+        FirstHit first_hit = FirstHit(vec3(0.0), vec3(0.0), 0.0, false, AOVS == 1);
+        vec3 radiance = trace_path(origin, dir, rng, rays, first_hit);
         // Optional firefly clamp (biased): scale down, keeping the sample's colour.
         float peak = max3(radiance);
         if (clamp_max > 0.0 && peak > clamp_max) radiance *= clamp_max / peak;
+        // A NaN or infinity, in the sample or in the sum it would make (an emission near the float
+        // range), would poison the pixel for good; drop that sample's radiance, count it.
+        vec3 next = sum.rgb + radiance;
+        if (any(isnan(next)) || any(isinf(next))) {
+            radiance = vec3(0.0);
+            nonfinite += 1u;
+        }
         sum += vec4(radiance, 1.0);
 #if AOVS
-        albedo_depth += vec4(first.albedo, first.depth);
-        normal_hits += vec4(first.normal, first.hit ? 1.0 : 0.0);
+        albedo_depth += vec4(first_hit.albedo, first_hit.depth);
+        normal_hits += vec4(first_hit.normal, first_hit.hit ? 1.0 : 0.0);
 #endif
     }
-    store_accum(index, sum);
-#if AOVS
-    store_aov_albedo_depth(index, albedo_depth);
-    store_aov_normal_hits(index, normal_hits);
-#endif
+    // Every invocation takes part in the subgroup sum, in or out of the image.
+    uint loop_iterations = subgroup_loop_iterations();
+    if (gl_SubgroupInvocationID == 0u && loop_iterations > 0u) atomicMax(stats.max_loop_iterations, loop_iterations);
+    if (!inside) return;
     atomicAdd(stats.ray_count, rays);
-    if (nonfinite > 0u) atomicAdd(stats.nonfinite_samples, nonfinite);
+    // Cut short (the sample loop ended early, or any loop did): keep the samples the pixel held,
+    // so that the host's repeat adds exactly the missing ones. It sees this pixel missing from
+    // pixels_complete.
+    if (uint(sum.w) != target || !loop_limit_intact()) return;
+    if (target > first) {
+        store_accum(index, sum);
+#if AOVS
+        store_aov_albedo_depth(index, albedo_depth);
+        store_aov_normal_hits(index, normal_hits);
+#endif
+        atomicAdd(stats.samples_added, target - first);
+        if (nonfinite > 0u) atomicAdd(stats.nonfinite_samples, nonfinite);
+    }
+    atomicAdd(stats.pixels_complete, 1u);
 }

@@ -13,15 +13,20 @@
 // the stratification.
 
 // Sobol dimension 1's direction numbers follow v_{k+1} = v_k ^ (v_k >> 1) from v_0 = 1/2
-// (primitive polynomial x + 1, m = 1, 3, 5, 15, 17, ...). Dimension 0 is bitfieldReverse(index).
+// (primitive polynomial x + 1, m = 1, 3, 5, 15, 17, ...), so v_k holds bit j (from the top) exactly
+// when C(k, j) is odd, that is (Lucas) when j's bits are a subset of k's. Bit j of the result is then
+// the XOR of the index bits k over the supersets k of j: five butterfly steps, one per bit of j,
+// then a reversal to count from the top. No loop: on llvmpipe loops cost a shared iteration budget
+// (loop_limit.glsl), and a loop over the index's bits spent up to 32 of it per draw.
+// Dimension 0 is bitfieldReverse(index).
 uint sobol_dimension1(uint index) {
-    uint result = 0u;
-    uint v = 0x80000000u;
-    for (; index != 0u; index >>= 1u) {
-        if ((index & 1u) != 0u) result ^= v;
-        v ^= v >> 1u;
-    }
-    return result;
+    uint x = index;
+    x ^= (x >> 1u) & 0x55555555u;
+    x ^= (x >> 2u) & 0x33333333u;
+    x ^= (x >> 4u) & 0x0f0f0f0fu;
+    x ^= (x >> 8u) & 0x00ff00ffu;
+    x ^= (x >> 16u) & 0x0000ffffu;
+    return bitfieldReverse(x);
 }
 
 // A random permutation of 32-bit integers in which bit k is flipped by a function of the bits

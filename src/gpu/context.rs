@@ -6,7 +6,7 @@ use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::mem::ManuallyDrop;
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum DeviceType {
@@ -77,6 +77,8 @@ pub struct GpuContext {
     pub(super) command_pool: vk::CommandPool,
     pub(super) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub info: DeviceInfo,
+    /// See [`GpuContext::loop_limit`]; probed on first use.
+    loop_limit: OnceLock<Option<u32>>,
 }
 
 fn load_entry() -> Result<ash::Entry> {
@@ -223,7 +225,19 @@ impl GpuContext {
             command_pool,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             info,
+            loop_limit: OnceLock::new(),
         })
+    }
+
+    /// The most loop iterations a shader invocation runs on this device before its loops are
+    /// ended early without an error (llvmpipe before Mesa 24: 65,535), or `None` where loops run
+    /// to their end. Probed once, by a tiny kernel (see loop_limit.rs).
+    pub fn loop_limit(&self) -> Result<Option<u32>> {
+        if let Some(&limit) = self.loop_limit.get() {
+            return Ok(limit);
+        }
+        let limit = super::loop_limit::probe_loop_limit(self).with_context(|| format!("probing {} for a loop limit", self.info.name))?;
+        Ok(*self.loop_limit.get_or_init(|| limit))
     }
 
     /// Validation messages recorded since the last call (empty when validation is off).

@@ -5,6 +5,7 @@ mod buffer;
 mod compute;
 mod context;
 mod failure;
+mod loop_limit;
 mod shader;
 mod validation;
 

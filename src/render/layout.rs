@@ -122,17 +122,29 @@ pub struct FrameParams {
 pub struct GpuStats {
     pub ray_count: u32,
     pub nonfinite_samples: u32,
+    /// Pixels of the band holding the target sample count after the dispatch.
+    pub pixels_complete: u32,
+    pub samples_added: u32,
+    /// Most loop iterations one subgroup ran (kernels built with COUNT_LOOP_ITERATIONS; else 0).
+    pub max_loop_iterations: u32,
 }
 
-/// `push_constant PassBlock`.
+/// `push_constant PassBlock`: bring every pixel of rows `row_offset..row_offset + row_count` up to
+/// `target_samples` samples, a pixel holding `c` taking sample `stream_offset + c` next.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct PassParams {
-    pub sample_base: u32,
-    pub sample_count: u32,
+    pub stream_offset: u32,
+    pub target_samples: u32,
     pub row_offset: u32,
     pub row_count: u32,
+    /// The trip count of loop_limit_intact()'s check loop (LOOP_CHECK_ITERATIONS).
+    pub loop_check_iterations: u32,
 }
+
+/// Trip count of the kernel's check for loops cut short (shaders/loop_limit.glsl): it runs fewer
+/// times exactly when the device's loop limit ran out in that invocation.
+pub const LOOP_CHECK_ITERATIONS: u32 = 2;
 
 #[cfg(test)]
 mod tests {
@@ -215,10 +227,14 @@ mod tests {
 
     #[test]
     fn stats_match_glsl_std430() {
-        assert_eq!(size_of::<GpuStats>(), 8);
+        assert_eq!(size_of::<GpuStats>(), 20);
         assert_eq!(offset_of!(GpuStats, nonfinite_samples), 4);
+        assert_eq!(offset_of!(GpuStats, pixels_complete), 8);
+        assert_eq!(offset_of!(GpuStats, samples_added), 12);
+        assert_eq!(offset_of!(GpuStats, max_loop_iterations), 16);
         let glsl = include_str!("../../shaders/layout.glsl");
-        assert!(glsl.contains("buffer StatsBuffer { uint ray_count; uint nonfinite_samples; } stats;"), "StatsBuffer members differ from GpuStats");
+        let members = "buffer StatsBuffer { uint ray_count; uint nonfinite_samples; uint pixels_complete; uint samples_added; uint max_loop_iterations; } stats;";
+        assert!(glsl.contains(members), "StatsBuffer members differ from GpuStats");
     }
 
     #[test]
@@ -232,7 +248,11 @@ mod tests {
 
     #[test]
     fn pass_params_fit_the_push_constant_minimum() {
-        assert_eq!(size_of::<PassParams>(), 16);
+        assert_eq!(size_of::<PassParams>(), 20);
+        let glsl = include_str!("../../shaders/layout.glsl");
+        let block = glsl.split("uniform PassBlock {").nth(1).and_then(|b| b.split("} pass;").next()).expect("layout.glsl declares PassBlock");
+        let members: Vec<&str> = block.lines().filter_map(|l| l.trim().strip_prefix("uint ")?.split(';').next()).collect();
+        assert_eq!(members, ["stream_offset", "target_samples", "row_offset", "row_count", "loop_check_iterations"], "PassBlock members differ from PassParams");
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 

@@ -1,9 +1,13 @@
 //! Progressive rendering: uploads a scene, then adds samples in dispatches sized to take about
 //! `DISPATCH_TARGET_S` each, so a desktop GPU's watchdog never fires and progress stays smooth.
+//! Every dispatch is checked: each pixel of its band must hold the target sample count afterwards.
+//! On devices that end shader loops early (llvmpipe before Mesa 24, see shaders/loop_limit.glsl)
+//! dispatches are also sized from the loop iterations the kernel counts, and a band cut short is
+//! repeated in smaller steps, which gives the same sums bit for bit.
 
 use super::chunks::{self, chunked_array_at, ChunkPlan, CHUNKED_ARRAYS};
-use super::kernel::{kernel_spirv, UNSPLIT, WORKGROUP};
-use super::layout::{FrameParams, GpuStats, PassParams, AOV_BINDINGS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
+use super::kernel::{kernel_spirv, KernelVariant, UNSPLIT, WORKGROUP};
+use super::layout::{FrameParams, GpuStats, PassParams, AOV_BINDINGS, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::scene_data::SceneData;
@@ -17,6 +21,11 @@ use std::time::Instant;
 const DISPATCH_TARGET_S: f64 = 0.2;
 /// Upper bound on pixel-samples in one dispatch, so the 32-bit counters cannot wrap in practice.
 const MAX_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 24;
+/// Most samples one pixel can hold: the kernel keeps each pixel's count in a float, exact to 2^24.
+pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 24;
+/// Share of a device's loop limit that one invocation is planned to use; the rest is margin for
+/// pixels costlier than any measured so far (a dispatch that exceeds it anyway is repeated).
+const LOOP_LIMIT_SHARE: f64 = 0.5;
 
 pub struct Renderer<'a> {
     ctx: &'a GpuContext,
@@ -42,6 +51,19 @@ pub struct Renderer<'a> {
     pub geometry: GeometryReport,
     /// Estimated seconds per pixel-row-sample, refined after every dispatch.
     cost_per_row_sample: Option<f64>,
+    /// See [`GpuContext::loop_limit`].
+    loop_limit: Option<u32>,
+    /// Most loop iterations one subgroup has run per sample so far (devices with a loop limit).
+    loop_iterations_per_sample: f64,
+    /// Samples per pixel of every dispatch when the caller fixed them, instead of sizing
+    /// dispatches by time ([`Self::fix_samples_per_dispatch`]).
+    fixed_samples_per_dispatch: Option<u32>,
+    /// Most samples per pixel in one dispatch since the loop limit cut one short.
+    samples_per_dispatch_after_repeat: u32,
+    /// Whether dispatches are sized to stay within the loop limit (off only to test the repeat).
+    plan_for_loop_limit: bool,
+    /// Dispatches repeated in smaller steps because the device's loop limit cut them short.
+    pub repeated_dispatches: u32,
 }
 
 /// What was uploaded, for logs and `caustica bench`.
@@ -67,7 +89,7 @@ const ACCUM: usize = 6;
 const STATS: usize = 7;
 const TEXELS: u32 = 14;
 /// The statistics buffer's contents at the start of every dispatch.
-const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0 };
+const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0 };
 
 pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     let cam = &scene.camera;
@@ -249,7 +271,9 @@ impl<'a> Renderer<'a> {
             .filter_map(|&(binding, name, _)| chunked_array_at(binding).map(|(k, _)| (name, plans[k].chunks)))
             .filter(|&(_, windows)| windows > 1)
             .collect();
-        let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, aovs.needs_kernel())?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
+        let loop_limit = ctx.loop_limit()?;
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some() };
+        let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
         Ok(Self { ctx, kernel: Some(kernel), buffers, aov_buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
@@ -258,7 +282,32 @@ impl<'a> Renderer<'a> {
             lights: data.lights.len(),
             gpu_bytes: data.gpu_bytes(),
             split_arrays,
-        }, cost_per_row_sample: None })
+        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0 })
+    }
+
+    /// Dispatches `samples` samples per pixel over the whole image at a time (at least 1; fewer
+    /// where the device's loop limit requires it) instead of sizing dispatches to take
+    /// `DISPATCH_TARGET_S`. The image does not depend on it: renders split into any dispatches
+    /// agree bit for bit.
+    pub fn fix_samples_per_dispatch(&mut self, samples: u32) {
+        self.fixed_samples_per_dispatch = Some(samples.max(1));
+    }
+
+    /// Sizes dispatches as if the device had no loop limit, so that the limit cuts them short and
+    /// they are repeated: for tests of that repeat on devices with a limit.
+    pub fn ignore_loop_limit_in_planning(&mut self) {
+        self.plan_for_loop_limit = false;
+    }
+
+    /// The device's loop limit (see [`GpuContext::loop_limit`]).
+    pub fn loop_limit(&self) -> Option<u32> {
+        self.loop_limit
+    }
+
+    /// Samples per pixel this render can still add: its stream ends at sample index `u32::MAX`,
+    /// and a pixel holds at most [`MAX_SAMPLES_PER_PIXEL`].
+    pub fn samples_left(&self) -> u32 {
+        MAX_SAMPLES_PER_PIXEL.saturating_sub(self.samples_done).min((u32::MAX - self.sample_offset).saturating_sub(self.samples_done))
     }
 
     /// Starts this render's sample stream at `first_sample` instead of 0 (farm renders: one range
@@ -290,6 +339,11 @@ impl<'a> Renderer<'a> {
     /// of this render's stream, so that rendering on adds the samples that follow them: the result
     /// is bit for bit that of an uninterrupted render.
     pub fn restore(&mut self, accumulation: &[[f32; 4]], samples: u32) -> Result<()> {
+        anyhow::ensure!(samples <= MAX_SAMPLES_PER_PIXEL, "the accumulation holds {samples} samples per pixel; a render holds at most {MAX_SAMPLES_PER_PIXEL}");
+        anyhow::ensure!(
+            accumulation.iter().all(|a| a[3] == samples as f32),
+            "the accumulation's per-pixel sample counts are not all {samples}"
+        );
         anyhow::ensure!(
             accumulation.len() == self.width as usize * self.height as usize,
             "the accumulation has {} pixels, the image {}x{}",
@@ -321,19 +375,19 @@ impl<'a> Renderer<'a> {
     }
 
     /// Adds up to `spp` samples per pixel, calling `keep_going(samples_done)` after each full pass and
-    /// stopping early when it says no. Sample indices end at `u32::MAX`.
+    /// stopping early when it says no. Ends at [`Self::samples_left`].
     pub fn render_while(&mut self, spp: u32, mut keep_going: impl FnMut(u32) -> bool) -> Result<()> {
-        let target = self.samples_done.saturating_add(spp).min(u32::MAX - self.sample_offset);
+        let target = self.samples_done + spp.min(self.samples_left());
         while self.samples_done < target {
-            let remaining = target - self.samples_done;
-            let (samples, band) = self.plan_pass(remaining);
+            let (samples, band) = self.plan_pass(target - self.samples_done);
+            let pass_target = self.samples_done + samples;
             let mut row = 0;
             while row < self.height {
                 let rows = band.min(self.height - row);
-                self.dispatch(PassParams { sample_base: self.sample_offset + self.samples_done, sample_count: samples, row_offset: row, row_count: rows })?;
+                self.fill_band(row, rows, pass_target)?;
                 row += rows;
             }
-            self.samples_done += samples;
+            self.samples_done = pass_target;
             if !keep_going(self.samples_done) {
                 break;
             }
@@ -343,6 +397,9 @@ impl<'a> Renderer<'a> {
 
     /// Samples per pixel and rows per dispatch for the next pass.
     fn plan_pass(&self, remaining: u32) -> (u32, u32) {
+        if let Some(samples) = self.fixed_samples_per_dispatch {
+            return (samples.min(self.loop_safe_samples()).min(remaining), self.height);
+        }
         let Some(cost) = self.cost_per_row_sample else {
             // First dispatch: one sample over a band small enough for any device.
             return (1, self.height.min(32));
@@ -350,17 +407,76 @@ impl<'a> Renderer<'a> {
         let budget_row_samples = (DISPATCH_TARGET_S / cost.max(1e-12)).max(1.0);
         let max_samples = (MAX_PIXEL_SAMPLES_PER_DISPATCH / (self.width as u64 * self.height as u64)).max(1) as f64;
         if budget_row_samples >= self.height as f64 {
-            let samples = (budget_row_samples / self.height as f64).min(max_samples).min(remaining as f64).max(1.0);
+            let samples = (budget_row_samples / self.height as f64).min(max_samples).min(self.loop_safe_samples() as f64).min(remaining as f64).max(1.0);
             (samples as u32, self.height)
         } else {
             (1, budget_row_samples as u32)
         }
     }
 
-    fn dispatch(&mut self, pass: PassParams) -> Result<()> {
+    /// Most samples per pixel one dispatch may add: on a device with a loop limit, what keeps the
+    /// costliest subgroup measured so far within LOOP_LIMIT_SHARE of it (one sample until a
+    /// dispatch has been measured), and no more than since a dispatch was last cut short.
+    fn loop_safe_samples(&self) -> u32 {
+        let planned = match self.loop_limit {
+            Some(_) if !self.plan_for_loop_limit => u32::MAX,
+            Some(_) if self.loop_iterations_per_sample == 0.0 => 1,
+            Some(limit) => (limit as f64 * LOOP_LIMIT_SHARE / self.loop_iterations_per_sample).max(1.0) as u32,
+            None => u32::MAX,
+        };
+        planned.min(self.samples_per_dispatch_after_repeat)
+    }
+
+    /// Brings every pixel of rows `row..row + rows` from `samples_done` up to `target` samples and
+    /// checks that it did. Where invocations were cut short (the device's loop limit), the band is
+    /// repeated in halved steps, each pixel continuing from the count it holds, and later
+    /// dispatches are planned no larger; a single sample that cannot complete is an error.
+    fn fill_band(&mut self, row: u32, rows: u32, target: u32) -> Result<()> {
+        let pixels = self.width * rows;
+        let mut reached = self.samples_done;
+        let mut step = target - reached;
+        let mut samples_added = 0u64;
+        while reached < target {
+            let next = (reached + step).min(target);
+            let stats = self.dispatch(row, rows, next, next - reached)?;
+            samples_added += stats.samples_added as u64;
+            if stats.pixels_complete == pixels {
+                reached = next;
+                continue;
+            }
+            let missing = pixels - stats.pixels_complete;
+            let why = match self.loop_limit {
+                Some(limit) => format!("its loops stop after {limit} iterations in total"),
+                None => "it reported no loop limit".to_owned(),
+            };
+            anyhow::ensure!(
+                step > 1,
+                "{}: {missing} of {pixels} pixels in rows {row}..{} could not complete one sample: the device cut their shader invocations short ({why}) after {} loop iterations; render on another device or a newer Mesa",
+                self.ctx.info.name,
+                row + rows,
+                stats.max_loop_iterations
+            );
+            step = (step / 2).max(1);
+            self.samples_per_dispatch_after_repeat = self.samples_per_dispatch_after_repeat.min(step);
+            self.repeated_dispatches += 1;
+        }
+        let expected = pixels as u64 * (target - self.samples_done) as u64;
+        anyhow::ensure!(
+            samples_added == expected,
+            "{}: rows {row}..{} received {samples_added} samples where {expected} were dispatched",
+            self.ctx.info.name,
+            row + rows
+        );
+        Ok(())
+    }
+
+    /// One dispatch: rows `row..row + rows` up to `target` samples per pixel, `samples` of them new
+    /// for the pixels furthest behind. Returns the kernel's counters.
+    fn dispatch(&mut self, row: u32, rows: u32, target: u32, samples: u32) -> Result<GpuStats> {
         let kernel = self.kernel.as_ref().expect("kernel lives until drop");
         self.buffers[STATS].write(bytemuck::bytes_of(&CLEARED_STATS))?;
-        let groups = [self.width.div_ceil(WORKGROUP), pass.row_count.div_ceil(WORKGROUP), 1];
+        let groups = [self.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1];
+        let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS };
         let start = Instant::now();
         kernel.dispatch(self.ctx, bytemuck::bytes_of(&pass), groups)?;
         let elapsed = start.elapsed().as_secs_f64();
@@ -368,13 +484,14 @@ impl<'a> Renderer<'a> {
         let stats: GpuStats = bytemuck::pod_read_unaligned(&self.buffers[STATS].read()?[..std::mem::size_of::<GpuStats>()]);
         self.rays_traced += stats.ray_count as u64;
         self.nonfinite_samples += stats.nonfinite_samples as u64;
-        let cost = elapsed / (pass.row_count as f64 * pass.sample_count as f64);
+        self.loop_iterations_per_sample = self.loop_iterations_per_sample.max(stats.max_loop_iterations as f64 / samples as f64);
+        let cost = elapsed / (rows as f64 * samples as f64);
         // Smooth, but follow quickly: scenes differ in cost across the image.
         self.cost_per_row_sample = Some(match self.cost_per_row_sample {
             Some(c) => 0.5 * c + 0.5 * cost,
             None => cost,
         });
-        Ok(())
+        Ok(stats)
     }
 
     /// Raw accumulation: per pixel (sum of radiance, sample count), top row first.
