@@ -305,6 +305,8 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
             "samples_per_second": samples_per_s,
             "rays_per_second": rays_per_s,
             "nonfinite_samples": renderer.nonfinite_samples,
+            "loop_limit": renderer.loop_limit(),
+            "repeated_dispatches": renderer.repeated_dispatches,
             "outcome": outcome,
             "output": output,
             "checkpoint": farm_args.checkpointing().then_some(&checkpoint),
@@ -365,6 +367,8 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
             "rays_per_second": rays / seconds,
             "rays_per_sample": rays / samples,
             "nonfinite_samples": renderer.nonfinite_samples,
+            "loop_limit": renderer.loop_limit(),
+            "repeated_dispatches": renderer.repeated_dispatches,
             "primitives": renderer.geometry.acceleration.primitives,
             "gpu_bytes": renderer.geometry.gpu_bytes,
         });
@@ -381,6 +385,10 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
     println!("rays/s:       {:.3} M", rays / seconds / 1e6);
     println!("rays/sample:  {:.2}", rays / samples);
     println!("non-finite:   {} samples dropped", renderer.nonfinite_samples);
+    if let Some(limit) = renderer.loop_limit() {
+        // Such a device ends shader loops early: dispatches are sized to stay within the limit.
+        println!("loop limit:   {limit} iterations per invocation; {} dispatches repeated", renderer.repeated_dispatches);
+    }
     Ok(())
 }
 

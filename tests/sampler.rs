@@ -205,3 +205,51 @@ fn sobol_renders_depend_on_the_seed_only() {
     let differing = a.pixels.iter().zip(&c.pixels).filter(|(p, q)| p != q).count();
     assert!(differing > a.pixels.len() / 2, "seeds 5 and 6 differ in {differing} of {} pixels only", a.pixels.len());
 }
+
+/// Sobol dimension 1 by its definition: direction numbers v_{k+1} = v_k ^ (v_k >> 1) from
+/// v_0 = 2^31, XORed for the index's set bits.
+fn sobol_dimension1_reference(mut index: u32) -> u32 {
+    let (mut result, mut v) = (0u32, 0x8000_0000u32);
+    while index != 0 {
+        if index & 1 != 0 {
+            result ^= v;
+        }
+        v ^= v >> 1;
+        index >>= 1;
+    }
+    result
+}
+
+/// sobol.glsl computes dimension 1 without a loop (butterfly steps over the index's bits): it must
+/// equal the definition for every index, here the first 2^20 and the last 2^20.
+#[test]
+fn sobol_dimension1_without_a_loop_equals_its_definition() {
+    const KERNEL: &str = r#"#version 460
+layout(local_size_x = 64) in;
+#include "rng.glsl"
+layout(push_constant) uniform Params { uint first; } params;
+layout(std430, set = 0, binding = 0) buffer Out { uint values[]; };
+void main() { values[gl_GlobalInvocationID.x] = sobol_dimension1(params.first + gl_GlobalInvocationID.x); }
+"#;
+    let (_lock, ctx) = gpu();
+    let sources: caustica::gpu::ShaderSources = &[
+        ("test.comp", KERNEL),
+        ("rng.glsl", include_str!("../shaders/rng.glsl")),
+        ("sobol.glsl", include_str!("../shaders/sobol.glsl")),
+    ];
+    let spirv = compile_compute(&assemble_source(sources, "test.comp", &[]).unwrap()).expect("test kernel compiles");
+    const COUNT: u32 = 1 << 20;
+    let out = Buffer::with_data(&ctx, "sobol dimension 1", BufferKind::HostStorage, &vec![0u8; COUNT as usize * 4]).unwrap();
+    let kernel = ComputeKernel::new(&ctx, &spirv, &[Binding::whole(0, &out)], 4).unwrap();
+    for first in [0u32, u32::MAX - COUNT + 1] {
+        kernel.dispatch(&ctx, &first.to_le_bytes(), [COUNT / 64, 1, 1]).unwrap();
+        let values: &[u32] = bytemuck::cast_slice(&out.read().unwrap()[..COUNT as usize * 4]);
+        for (i, &value) in values.iter().enumerate() {
+            let index = first + i as u32;
+            assert_eq!(value, sobol_dimension1_reference(index), "sobol_dimension1({index})");
+        }
+    }
+    kernel.destroy(&ctx);
+    out.destroy(&ctx);
+    ctx.check_validation().expect("no validation messages");
+}

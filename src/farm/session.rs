@@ -103,8 +103,8 @@ pub fn run(renderer: &mut Renderer, job: &RenderJob, mut progress: impl FnMut(u3
             }
             last_checkpoint = Instant::now();
         }
-        // render_while also ends at the last sample index there is.
-        let finished = renderer.samples_done >= target || renderer.sample_offset() as u64 + renderer.samples_done as u64 >= u32::MAX as u64;
+        // render_while also ends where the render can hold no more samples.
+        let finished = renderer.samples_done >= target || renderer.samples_left() == 0;
         if outcome != Outcome::Done || finished {
             return Ok(outcome);
         }
