@@ -86,3 +86,38 @@ fn loop_limit_probe_finds_the_limit_of_mesa_22_lavapipe() {
         assert_eq!(limit, Some(65535), "Mesa 22's lavapipe ends loops after 65,535 iterations");
     }
 }
+
+/// An emitter near the top of the float range: one sample is finite, but the sum of a few
+/// overflows. The kernel must drop and count the sample that would make the sum infinite, never
+/// write an infinite pixel while reporting no non-finite samples.
+#[test]
+fn sums_that_would_overflow_drop_the_sample_and_count_it() {
+    let (_lock, ctx) = gpu();
+    let scene = common::parse(
+        r#"
+        [camera]
+        position = [0.0, 0.0, 3.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov = 30.0
+        [film]
+        width = 4
+        height = 4
+        spp = 8
+        [materials.hot]
+        albedo = [0.0, 0.0, 0.0]
+        emission = [1e38, 1e38, 1e38]
+        [[quads]]
+        origin = [-2.0, -2.0, 0.0]
+        edge_u = [4.0, 0.0, 0.0]
+        edge_v = [0.0, 4.0, 0.0]
+        material = "hot"
+        "#,
+    );
+    let mut renderer = Renderer::new(&ctx, &scene, 1).expect("scene uploads");
+    renderer.render(8, |_| {}).expect("render succeeds");
+    let accumulation = renderer.accumulation().expect("readback");
+    assert!(accumulation.iter().all(|a| a.iter().all(|v| v.is_finite())), "a pixel's sum overflowed: {:?}", accumulation[0]);
+    assert_every_pixel_holds(&accumulation, 8, "overflowing emitter");
+    // 1e38 fits three times below f32::MAX (3.4e38): the fourth sample of every pixel overflows.
+    assert_eq!(renderer.nonfinite_samples, 16 * 5, "samples dropped for overflowing the sum");
+}
