@@ -16,7 +16,8 @@
 mod common;
 
 use bytemuck::Zeroable;
-use caustica::gpu::{assemble_source, compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
+use caustica::gpu::{compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
+use caustica::render::assemble_with_kernel_files;
 use caustica::render::layout::{GpuMaterial, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, NO_TEXTURE};
 use caustica::scene::average_fresnel;
 use common::*;
@@ -157,17 +158,7 @@ fn bin_of(dir: [f32; 3]) -> usize {
 
 impl<'a> Kernel<'a> {
     fn new(ctx: &'a GpuContext) -> Self {
-        let sources: caustica::gpu::ShaderSources = &[
-            ("test.comp", TEST_KERNEL),
-            ("layout.glsl", include_str!("../shaders/layout.glsl")),
-            ("rng.glsl", include_str!("../shaders/rng.glsl")),
-            ("sobol.glsl", include_str!("../shaders/sobol.glsl")),
-            ("sampling.glsl", include_str!("../shaders/sampling.glsl")),
-            ("materials.glsl", include_str!("../shaders/materials.glsl")),
-            ("fresnel.glsl", include_str!("../shaders/fresnel.glsl")),
-            ("microfacet.glsl", include_str!("../shaders/microfacet.glsl")),
-        ];
-        let spirv = compile_compute(&assemble_source(sources, "test.comp", &[]).unwrap()).expect("test kernel compiles");
+        let spirv = compile_compute(&assemble_with_kernel_files(TEST_KERNEL).unwrap()).expect("test kernel compiles");
         let dirs_len = THETA_BINS * PHI_BINS * GL_NODES.len() * GL_NODES.len();
         let results_len = (3 * SAMPLES as usize).max(dirs_len);
         let material = Buffer::with_data(ctx, "material", BufferKind::HostStorage, bytemuck::bytes_of(&GpuMaterial::zeroed())).unwrap();

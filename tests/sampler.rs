@@ -6,8 +6,9 @@
 
 mod common;
 
-use caustica::gpu::{assemble_source, compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
+use caustica::gpu::{compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use caustica::image::compare;
+use caustica::render::assemble_with_kernel_files;
 use caustica::render::layout::{SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use caustica::scene::{Sampler, Scene};
 use common::*;
@@ -42,12 +43,7 @@ void main() {
 /// `samples` consecutive samples from `sample_base` for each of `pixels` pixels, as
 /// [pixel][sample][value].
 fn draws(ctx: &GpuContext, kind: u32, pixels: u32, samples: u32, sample_base: u32) -> Vec<Vec<[f32; VALUES]>> {
-    let sources: caustica::gpu::ShaderSources = &[
-        ("test.comp", TEST_KERNEL),
-        ("rng.glsl", include_str!("../shaders/rng.glsl")),
-        ("sobol.glsl", include_str!("../shaders/sobol.glsl")),
-    ];
-    let spirv = compile_compute(&assemble_source(sources, "test.comp", &[]).unwrap()).expect("test kernel compiles");
+    let spirv = compile_compute(&assemble_with_kernel_files(TEST_KERNEL).unwrap()).expect("test kernel compiles");
     let count = (pixels * samples) as usize;
     let out = Buffer::with_data(ctx, "draws", BufferKind::HostStorage, &vec![0u8; count * VALUES * 4]).unwrap();
     let kernel = ComputeKernel::new(ctx, &spirv, &[Binding::whole(0, &out)], 16).unwrap();
@@ -232,12 +228,7 @@ layout(std430, set = 0, binding = 0) buffer Out { uint values[]; };
 void main() { values[gl_GlobalInvocationID.x] = sobol_dimension1(params.first + gl_GlobalInvocationID.x); }
 "#;
     let (_lock, ctx) = gpu();
-    let sources: caustica::gpu::ShaderSources = &[
-        ("test.comp", KERNEL),
-        ("rng.glsl", include_str!("../shaders/rng.glsl")),
-        ("sobol.glsl", include_str!("../shaders/sobol.glsl")),
-    ];
-    let spirv = compile_compute(&assemble_source(sources, "test.comp", &[]).unwrap()).expect("test kernel compiles");
+    let spirv = compile_compute(&assemble_with_kernel_files(KERNEL).unwrap()).expect("test kernel compiles");
     const COUNT: u32 = 1 << 20;
     let out = Buffer::with_data(&ctx, "sobol dimension 1", BufferKind::HostStorage, &vec![0u8; COUNT as usize * 4]).unwrap();
     let kernel = ComputeKernel::new(&ctx, &spirv, &[Binding::whole(0, &out)], 4).unwrap();

@@ -1,11 +1,18 @@
-//! The path tracing kernel's sources (embedded) and its compiled SPIR-V, built once per process
-//! for each way of splitting the large arrays (see chunks.rs).
+//! The path tracing kernel's sources (embedded, or read from `$CAUSTICA_SHADER_DIR`) and its
+//! compiled SPIR-V, built once per process for each way of splitting the large arrays (see
+//! chunks.rs) and each variant.
 
 use super::chunks::{self, ChunkPlan, CHUNKED_ARRAYS};
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
-use anyhow::Result;
+use anyhow::{anyhow, Context as _, Result};
+use std::borrow::Cow;
 use std::collections::HashMap;
+use std::path::Path;
 use std::sync::{Mutex, OnceLock};
+
+/// Names a folder whose shader files replace the embedded ones at run time: shader work and
+/// mutation testing (scripts/mutate.py) without rebuilding the crate.
+pub const SHADER_DIR_VAR: &str = "CAUSTICA_SHADER_DIR";
 
 pub const SHADERS: ShaderSources<'static> = &[
     ("pathtrace.comp", include_str!("../../shaders/pathtrace.comp")),
@@ -27,6 +34,33 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("integrator.glsl", include_str!("../../shaders/integrator.glsl")),
 ];
 
+/// The text of the kernel's shader file `name`: from `$CAUSTICA_SHADER_DIR` when it is set, else as
+/// embedded in the binary.
+pub fn shader_file(name: &str) -> Result<Cow<'static, str>> {
+    let embedded = SHADERS.iter().find(|(n, _)| *n == name).map(|(_, text)| *text).ok_or_else(|| anyhow!("no shader file named {name}"))?;
+    match std::env::var_os(SHADER_DIR_VAR) {
+        Some(dir) => {
+            let path = Path::new(&dir).join(name);
+            let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read the shader ({SHADER_DIR_VAR} is set)", path.display()))?;
+            Ok(Cow::Owned(text))
+        }
+        None => Ok(Cow::Borrowed(embedded)),
+    }
+}
+
+/// Every shader file of the kernel, as [`shader_file`] reads it.
+fn kernel_files() -> Result<Vec<(&'static str, Cow<'static, str>)>> {
+    SHADERS.iter().map(|&(name, _)| Ok((name, shader_file(name)?))).collect()
+}
+
+/// A compute shader of `main` (GLSL whose `#include`s name the kernel's shader files) with those
+/// files as [`shader_file`] reads them: test kernels run the kernel's own code, mutations included.
+pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
+    let files = kernel_files()?;
+    let sources: Vec<(&str, &str)> = std::iter::once(("main.comp", main)).chain(files.iter().map(|(name, text)| (*name, text.as_ref()))).collect();
+    assemble_source(&sources, "main.comp", &[])
+}
+
 /// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
 pub const WORKGROUP: u32 = 8;
 
@@ -46,7 +80,8 @@ pub struct KernelVariant {
 /// The kernel's GLSL for this split of the arrays and variant.
 pub fn kernel_source(plans: &[ChunkPlan; CHUNKED_ARRAYS.len()], variant: KernelVariant) -> Result<String> {
     let generated = chunks::glsl(plans);
-    let mut sources = SHADERS.to_vec();
+    let files = kernel_files()?;
+    let mut sources: Vec<(&str, &str)> = files.iter().map(|(name, text)| (*name, text.as_ref())).collect();
     sources.push(("chunked_buffers.glsl", &generated));
     assemble_source(&sources, "pathtrace.comp", &[
             ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),

@@ -11,7 +11,7 @@ mod light_selection;
 mod renderer;
 mod scene_data;
 
-pub use kernel::{kernel_source, kernel_spirv, KernelVariant, UNSPLIT};
+pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR, UNSPLIT};
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
 pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, TEXTURE_BUDGET_BYTES};
