@@ -91,6 +91,15 @@ vec3 sample_spherical_triangle(SphericalTriangle s, vec2 u) {
     return cos_theta * s.b + sin_theta * orthonormal_to(cp, s.b);
 }
 
+// Whether a sphere light is sampled by the cone it subtends from a point `d2` (squared) from its
+// centre: only from clearly outside. A point on the sphere itself (a surface of the light lit by
+// its own inside) is sampled by area: the cone there is the whole inward hemisphere, and its near
+// intersection is the point itself, so cone samples would be lost to rounding (5 % of the light
+// inside an emissive sphere was, before).
+bool sphere_sampled_by_cone(float d2, float r2) {
+    return d2 > r2 * 1.0001;
+}
+
 // Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, triangle by solid
 // angle where it can, otherwise by area).
 float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
@@ -101,7 +110,7 @@ float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
         vec3 to_center = p.a.xyz - ref;
         float d2 = dot(to_center, to_center);
         float r2 = p.a.w * p.a.w;
-        if (d2 > r2) {
+        if (sphere_sampled_by_cone(d2, r2)) {
             float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
             return pick / (2.0 * PI * (1.0 - cos_max));
         }
@@ -133,7 +142,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
         vec3 to_center = p.a.xyz - ref;
         float d2 = dot(to_center, to_center);
         float r2 = p.a.w * p.a.w;
-        if (d2 > r2) {
+        if (sphere_sampled_by_cone(d2, r2)) {
             float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
             vec3 dir = sample_cone(u, to_center / sqrt(d2), cos_max);
             float t = intersect_sphere(p.a.xyz, p.a.w, ref, dir, 1e30);

@@ -1,0 +1,204 @@
+//! Tests sized to catch small biases: the estimators of the light transport against exact values
+//! in scenes built so that the answer is known in closed form and the noise is low, at sample
+//! counts that resolve a bias of a few tenths of a percent. Each test states the smallest bias it
+//! fails and checks at run time that its own noise still allows that claim (a test that lost its
+//! power fails rather than passing quietly). The mutations of tests/mutations.toml, run by
+//! scripts/mutate.py, show what each one catches (docs/testing.md).
+
+mod common;
+
+use caustica::image::RgbImage;
+use caustica::scene::{Environment, EnvironmentMap, MapProjection, Scene};
+use common::*;
+use glam::Vec3;
+use std::f64::consts::PI;
+
+/// Mean over the image of the pixels' mean luminance, and its standard error from the scatter of
+/// the pixels: each pixel is an independent estimate (its random numbers are scrambled by pixel).
+fn mean_and_stderr_of(image: &RgbImage) -> (f64, f64) {
+    let values: Vec<f64> = image.pixels.iter().map(|&p| luminance(p)).collect();
+    mean_and_stderr(&values)
+}
+
+/// Asserts that `image`'s mean is `expected` within 5 standard errors plus `floor` (relative: the
+/// rounding of f32 sums and ray offsets), and that this tolerance is below `bias` (relative), the
+/// smallest bias the test claims to fail.
+fn assert_mean_is(image: &RgbImage, expected: f64, floor: f64, bias: f64, what: &str) {
+    let (mean, stderr) = mean_and_stderr_of(image);
+    let tolerance = 5.0 * stderr + floor * expected;
+    eprintln!("{what}: mean {mean:.6}, expected {expected:.6}, difference {:+.4} %, tolerance {:.4} %", (mean / expected - 1.0) * 100.0, tolerance / expected * 100.0);
+    assert!(tolerance <= bias * expected, "{what}: the tolerance {:.3} % no longer resolves a {:.2} % bias: raise the sample count", tolerance / expected * 100.0, bias * 100.0);
+    assert!((mean - expected).abs() <= tolerance, "{what}: mean {mean:.6}, expected {expected:.6} ({:+.3} %, tolerance {:.3} %)", (mean / expected - 1.0) * 100.0, tolerance / expected * 100.0);
+}
+
+/// The camera inside a closed, two-sided emissive diffuse sphere: every surface point sees only
+/// the sphere's inside, whose radiance is therefore everywhere L = Le + albedo L, so
+/// L = Le / (1 - albedo) exactly, at every pixel. With albedo 0.7 most of it arrives after
+/// several bounces, through Russian roulette (from the first bounce), next-event estimation of a
+/// sphere light from inside it (area sampling) and the MIS weights of emitters hit by BSDF
+/// sampling: a bias in any of them shows in the mean.
+fn inside_emissive_sphere(spp: u32) -> Scene {
+    parse(&format!(
+        r#"
+        camera = {{ position = [0.1, -0.2, 0.15], look_at = [0.5, 0.3, -1.0], fov = 70 }}
+        film = {{ width = 32, height = 32, spp = {spp} }}
+        integrator = {{ rr_start = 1 }}
+        [materials.shell]
+        albedo = [0.7, 0.7, 0.7]
+        emission = [0.3, 0.3, 0.3]
+        two_sided = true
+        [[spheres]]
+        center = [0.0, 0.0, 0.0]
+        radius = 1.0
+        material = "shell"
+        "#
+    ))
+}
+
+/// Fails a 0.3 % bias in the mean (1 M paths; about 1.2 % relative noise per path).
+#[test]
+fn inside_an_emissive_sphere_radiance_is_emission_over_one_minus_albedo() {
+    let (_lock, ctx) = gpu();
+    let scene = inside_emissive_sphere(1024);
+    let image = render(&ctx, &scene, 3);
+    assert_mean_is(&image, 0.3 / (1.0 - 0.7), 0.0002, 0.003, "inside an emissive sphere, throughput roulette");
+}
+
+/// The same with roulette at a fixed absorption (survival 0.5 from the first bounce): the other
+/// way q is chosen, dividing by it just the same. Fails a 0.5 % bias.
+#[test]
+fn inside_an_emissive_sphere_with_fixed_absorption_roulette() {
+    let (_lock, ctx) = gpu();
+    let mut scene = inside_emissive_sphere(1024);
+    scene.integrator.absorption = Some(0.5);
+    let image = render(&ctx, &scene, 4);
+    assert_mean_is(&image, 0.3 / (1.0 - 0.7), 0.0002, 0.005, "inside an emissive sphere, fixed absorption 0.5");
+}
+
+/// A diffuse floor (albedo 0.5, y = 0) under one light and a black sky, seen at the origin through
+/// a 0.01 degree field of view, so that every pixel sees the same point and the answer is one
+/// number. Nothing but the floor can receive light, and the light's own albedo is 0: the pixel
+/// is the direct light alone (next-event estimation plus emitters hit by BSDF sampling, MIS
+/// weighted), albedo / pi x the irradiance.
+fn floor_under(light: &str, spp: u32) -> Scene {
+    parse(&format!(
+        r#"
+        camera = {{ position = [0.0, 1.0, 3.0], look_at = [0.0, 0.0, 0.0], fov = 0.01 }}
+        film = {{ width = 32, height = 32, spp = {spp} }}
+        [materials.floor]
+        albedo = [0.5, 0.5, 0.5]
+        [materials.lamp]
+        albedo = [0.0, 0.0, 0.0]
+        emission = [4.0, 4.0, 4.0]
+        [[quads]]
+        origin = [-50.0, 0.0, 50.0]
+        edge_u = [100.0, 0.0, 0.0]
+        edge_v = [0.0, 0.0, -100.0]
+        material = "floor"
+        {light}
+        "#
+    ))
+}
+
+/// Irradiance at the origin (normal +y) from a polygon of uniform radiance `radiance` facing it:
+/// Lambert's formula, E = L / 2 sum_i angle(v_i, v_i+1) (n . unit(v_i x v_i+1)).
+fn polygon_irradiance(vertices: &[Vec3], radiance: f64) -> f64 {
+    let sum: f64 = (0..vertices.len())
+        .map(|i| {
+            let (a, b) = (vertices[i].as_dvec3(), vertices[(i + 1) % vertices.len()].as_dvec3());
+            let angle = a.angle_between(b);
+            angle * a.cross(b).normalize().y
+        })
+        .sum();
+    radiance / 2.0 * sum.abs()
+}
+
+/// A sphere light (radius 0.5, centre 2 above the point), sampled by the cone it subtends:
+/// E = pi L sin^2(half angle). Fails a 0.1 % bias.
+#[test]
+fn sphere_light_irradiance_is_exact() {
+    let (_lock, ctx) = gpu();
+    let scene = floor_under("[[spheres]]\ncenter = [0.0, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 256);
+    let irradiance = PI * 4.0 * (0.5f64 / 2.0).powi(2);
+    assert_mean_is(&render(&ctx, &scene, 1), 0.5 / PI * irradiance, 0.0002, 0.001, "floor under a sphere light");
+}
+
+/// A square light (1 x 1, 1.5 above the point, off centre), sampled by area. Fails a 0.2 % bias.
+#[test]
+fn quad_light_irradiance_is_exact() {
+    let (_lock, ctx) = gpu();
+    // The emitting side faces cross(edge_u, edge_v) = -y: down at the floor.
+    let scene = floor_under("[[quads]]\norigin = [-0.3, 1.5, -0.2]\nedge_u = [1.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, 1.0]\nmaterial = \"lamp\"", 512);
+    let corners = [Vec3::new(-0.3, 1.5, -0.2), Vec3::new(-0.3, 1.5, 0.8), Vec3::new(0.7, 1.5, 0.8), Vec3::new(0.7, 1.5, -0.2)];
+    assert_mean_is(&render(&ctx, &scene, 2), 0.5 / PI * polygon_irradiance(&corners, 4.0), 0.0002, 0.002, "floor under a quad light");
+}
+
+/// A triangle light large and near enough to be sampled by solid angle (spherical triangle).
+/// Fails a 0.1 % bias.
+#[test]
+fn triangle_light_sampled_by_solid_angle_is_exact() {
+    let (_lock, ctx) = gpu();
+    let v = [Vec3::new(-0.8, 1.0, -0.5), Vec3::new(0.9, 1.2, -0.3), Vec3::new(0.1, 0.9, 1.0)];
+    let light = triangle_mesh_light(&v);
+    let scene = floor_under(&light, 256);
+    assert_mean_is(&render(&ctx, &scene, 3), 0.5 / PI * polygon_irradiance(&v, 4.0), 0.0002, 0.001, "floor under a near triangle light");
+}
+
+/// A triangle light so small and far that it subtends less than 3e-4 sr: sampled by area.
+/// Fails a 0.3 % bias.
+#[test]
+fn triangle_light_sampled_by_area_is_exact() {
+    let (_lock, ctx) = gpu();
+    let v = [Vec3::new(-0.05, 4.0, -0.02), Vec3::new(0.04, 4.1, -0.03), Vec3::new(0.0, 3.95, 0.05)];
+    let light = triangle_mesh_light(&v);
+    let scene = floor_under(&light, 256);
+    assert_mean_is(&render(&ctx, &scene, 4), 0.5 / PI * polygon_irradiance(&v, 4.0), 0.0002, 0.003, "floor under a small far triangle light");
+}
+
+/// A one-triangle OBJ with the lamp material, written to a scratch file, as a scene fragment;
+/// wound so that its front face looks down at the floor.
+fn triangle_mesh_light(v: &[Vec3; 3]) -> String {
+    let dir = temp_dir("bias-triangle");
+    let normal = (v[1] - v[0]).cross(v[2] - v[0]);
+    let order = if normal.y < 0.0 { [0, 1, 2] } else { [0, 2, 1] };
+    let mut obj = String::new();
+    for i in order {
+        obj.push_str(&format!("v {} {} {}\n", v[i].x, v[i].y, v[i].z));
+    }
+    obj.push_str("f 1 2 3\n");
+    let path = dir.join(format!("triangle-{}-{}.obj", v[0].x, v[0].y));
+    std::fs::write(&path, obj).expect("write the triangle");
+    format!("[[meshes]]\nfile = \"{}\"\nmaterial = \"lamp\"", path.display())
+}
+
+/// A lat-long sky whose rows vary (a bright band near the zenith over a dim sky), importance
+/// sampled: the floor's radiance is albedo / pi x the integral of the map's radiance times the
+/// cosine over the upper hemisphere, integrated here from the same row values with the kernel's
+/// interpolation between row centres. Fails a 0.2 % bias.
+#[test]
+fn floor_under_a_latlong_sky_is_its_cosine_weighted_integral() {
+    let (_lock, ctx) = gpu();
+    let (w, h) = (8u32, 16u32);
+    let row_value = |j: u32| if j == 2 { 6.0 } else { 0.2 + 0.05 * j as f64 };
+    let mut map = RgbImage::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            map.set(x, y, [row_value(y) as f32; 3]);
+        }
+    }
+    let mut scene = floor_under("", 512);
+    scene.environment = Environment::Map(EnvironmentMap { projection: MapProjection::LatLong, image: map, intensity: 1.0, rotation_deg: 0.0 });
+    // Radiance at polar angle theta: linear in the texel coordinate between row centres, held
+    // beyond the first and last (the kernel's bilinear lookup, constant along a row).
+    let radiance = |theta: f64| {
+        let t = (theta / PI * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
+        let j = (t.floor() as u32).min(h - 2);
+        let f = t - j as f64;
+        row_value(j) * (1.0 - f) + row_value(j + 1) * f
+    };
+    // Irradiance: 2 pi int_0^{pi/2} L(theta) cos sin dtheta, by the midpoint rule (exact to 1e-9 here).
+    let steps = 200_000;
+    let dtheta = PI / 2.0 / steps as f64;
+    let irradiance: f64 = 2.0 * PI * (0..steps).map(|k| (k as f64 + 0.5) * dtheta).map(|t| radiance(t) * t.cos() * t.sin() * dtheta).sum::<f64>();
+    assert_mean_is(&render(&ctx, &scene, 5), 0.5 / PI * irradiance, 0.0002, 0.002, "floor under a lat-long sky");
+}
