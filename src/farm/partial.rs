@@ -305,6 +305,61 @@ mod tests {
     }
 
     #[test]
+    fn inconsistent_ranges_samples_or_counts_are_refused_naming_the_file() {
+        let dir = crate::test_files::temp_dir("partial-consistency");
+        let path = dir.join("part.exr");
+        let good = PartialRender {
+            scene_hash: "ab12".into(),
+            seed: 7,
+            width: 2,
+            height: 2,
+            ranges: vec![0..2, 4..6],
+            accumulation: vec![[1.0, 1.0, 1.0, 4.0]; 4],
+            aovs: AovSet::default(),
+            aov_sums: None,
+        };
+        let refusal = |partial: &PartialRender, attribute: Option<(&str, &str)>| {
+            partial.write(&path).unwrap();
+            if let Some((name, value)) = attribute {
+                let mut doc = read_exr_document(&path).unwrap();
+                doc.attributes.insert(name.to_owned(), value.to_owned());
+                write_exr_document(&path, &doc).unwrap();
+            }
+            PartialRender::read(&path).err().map(|e| format!("{e:#}"))
+        };
+        let not_ours = format!("{} is not a caustica EXR checkpoint/partial (", path.display());
+        assert_eq!(refusal(&good, None), None);
+        let samples = refusal(&good, Some((SAMPLES, "5"))).expect("samples 5 with ranges of 4");
+        assert!(samples.starts_with(&not_ours) && samples.contains("caustica.samples says 5 samples per pixel, but caustica.sample_ranges 0..2,4..6 hold 4"), "{samples}");
+        let ranges = refusal(&good, Some((SAMPLE_RANGES, "0..5"))).expect("ranges of 5 with samples 4");
+        assert!(ranges.contains("caustica.samples says 4"), "{ranges}");
+        let mut counts = good.clone();
+        counts.accumulation[3][3] = 3.0;
+        counts.accumulation[1][3] = 5.0;
+        let counts = refusal(&counts, None).expect("pixels with 3 and 5 samples of 4");
+        assert!(counts.starts_with(&not_ours) && counts.contains("pixel (1, 0) holds 5 samples (and 1 more pixels disagree), but its sample ranges 0..2,4..6 hold 4"), "{counts}");
+        std::fs::write(&path, b"PF\n1 1\n-1.0\n\0\0\0\0\0\0\0\0\0\0\0\0").unwrap();
+        let pfm = PartialRender::read(&path).unwrap_err().to_string();
+        assert!(pfm.starts_with(&not_ours) && pfm.contains("not an OpenEXR file"), "{pfm}");
+        good.write(&path).unwrap();
+        let mut plain = read_exr_document(&path).unwrap();
+        plain.attributes.clear();
+        write_exr_document(&path, &plain).unwrap();
+        let plain = PartialRender::read(&path).unwrap_err().to_string();
+        assert!(plain.starts_with(&not_ours) && plain.contains("is missing"), "{plain}");
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn counts_past_two_to_the_24_are_taken_as_f32_keeps_them() {
+        assert!(count_matches(16777216.0, 16777216));
+        assert!(count_matches(16777216.0, 20_000_000), "the kernel's f32 count stops at 2^24");
+        assert!(count_matches(20_000_000.0, 20_000_000), "a merge adds counts past it");
+        assert!(!count_matches(16777215.0, 20_000_000));
+        assert!(!count_matches(3.0, 4));
+    }
+
+    #[test]
     fn aov_sums_round_trip_bit_exact_and_means_are_written() {
         let sums = AovSums { albedo_depth: vec![[0.5, 0.25, 1e-30, 7.0], [0.0, 1.0, 2.0, 0.0]], normal_hits: vec![[-1.0, 0.5, 1.0 / 3.0, 2.0], [0.0; 4]] };
         let partial = PartialRender {

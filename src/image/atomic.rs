@@ -110,7 +110,12 @@ impl Drop for TempFile {
 /// about to exit without finishing them (a second Ctrl-C): the targets keep
 /// their previous contents, and no temporary file is left behind.
 pub fn remove_temp_files_in_flight() {
-    for path in in_flight().iter() {
+    remove_temp_files_in_flight_where(|_| true);
+}
+
+/// Removes the temporary files in flight that `chosen` picks.
+fn remove_temp_files_in_flight_where(chosen: impl Fn(&Path) -> bool) {
+    for path in in_flight().iter().filter(|p| chosen(p)) {
         let _ = std::fs::remove_file(path);
     }
 }
@@ -252,6 +257,80 @@ mod tests {
         let path = Path::new("/nonexistent/caustica/out.bin");
         let err = write_atomically(path, |_| Ok(())).unwrap_err().to_string();
         assert!(err.starts_with("/nonexistent/caustica/out.bin: "), "{err}");
+    }
+
+    /// A file named as the `n`-th write of `target` by process `pid` would name its temporary
+    /// file, last modified `age` ago.
+    fn leftover(target: &Path, pid: u32, n: u32, age: Duration) -> PathBuf {
+        let name = target.file_name().unwrap().to_string_lossy();
+        let path = target.with_file_name(format!(".{name}.tmp-{pid}-{n}"));
+        let file = File::create(&path).unwrap();
+        file.set_modified(SystemTime::now() - age).unwrap();
+        path
+    }
+
+    /// The id of a process that has exited.
+    fn dead_pid() -> u32 {
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let pid = child.id();
+        child.wait().unwrap();
+        pid
+    }
+
+    #[test]
+    fn stale_temp_files_of_dead_writers_are_removed_and_nothing_else() {
+        let dir = temp_dir("stale");
+        let target = dir.join("out.png");
+        let (old, dead) = (Duration::from_secs(600), dead_pid());
+        let stale = leftover(&target, dead, 0, old);
+        let stale_of_ours = leftover(&target, std::process::id(), 999_999, old);
+        let live_writer = leftover(&target, 1, 0, old);
+        let recent = leftover(&target, dead, 1, Duration::ZERO);
+        let other_target = leftover(&dir.join("other.png"), dead, 0, old);
+        let not_ours = dir.join(".out.png.tmp-x-0");
+        std::fs::write(&not_ours, b"").unwrap();
+        let mut removed = remove_stale_temp_files(&target).unwrap();
+        removed.sort();
+        let mut expected = vec![stale, stale_of_ours];
+        expected.sort();
+        let left: Vec<bool> = [&live_writer, &recent, &other_target, &not_ours].iter().map(|p| p.exists()).collect();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(removed, expected);
+        assert_eq!(left, [true; 4], "a running writer's, a recent, another target's and a foreign file stay");
+    }
+
+    #[test]
+    fn a_quitting_process_removes_its_writes_in_flight() {
+        let dir = temp_dir("in-flight");
+        let path = dir.join("out.bin");
+        std::fs::write(&path, b"old").unwrap();
+        let mut during = vec![];
+        let result = write_atomically(&path, |w| {
+            w.write_all(b"partial").unwrap();
+            during = file_names(&dir);
+            // What the second Ctrl-C does before exiting, limited to this test's directory so
+            // that tests writing at the same time keep their files.
+            remove_temp_files_in_flight_where(|p| p.starts_with(&dir));
+            Ok(())
+        });
+        let (after, contents) = (file_names(&dir), std::fs::read(&path).unwrap());
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(during.len(), 2, "the temporary file exists while writing: {during:?}");
+        assert!(result.is_err(), "the write cannot complete once its file is gone");
+        assert_eq!((after, contents), (vec!["out.bin".to_owned()], b"old".to_vec()));
+    }
+
+    #[test]
+    fn check_writable_creates_nothing_and_refuses_directories_and_missing_ones() {
+        let dir = temp_dir("writable");
+        check_writable(&dir.join("out.exr")).unwrap();
+        let names = file_names(&dir);
+        let on_dir = check_writable(&dir).unwrap_err().to_string();
+        let missing = check_writable(&dir.join("missing/out.exr")).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(names.is_empty(), "{names:?}");
+        assert!(on_dir.ends_with("cannot be written: it is a directory"), "{on_dir}");
+        assert!(missing.contains("missing/out.exr: cannot be written: cannot create a file in"), "{missing}");
     }
 
     #[test]

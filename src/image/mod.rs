@@ -162,7 +162,8 @@ pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     }
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if !dir.is_dir() {
-        return Err(ImageError::Unwritable { file: file_name(path), reason: format!("directory {} does not exist", dir.display()) });
+        let problem = if dir.exists() { "is not a directory" } else { "does not exist" };
+        return Err(ImageError::Unwritable { file: file_name(path), reason: format!("directory {} {problem}", dir.display()) });
     }
     check_writable(path)
 }
