@@ -41,7 +41,7 @@ impl DeviceArgs {
 #[derive(clap::Args, Clone)]
 struct OutputArgs {
     /// Exposure in stops for PNG output.
-    #[arg(long, default_value_t = 0.0, value_parser = exposure, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, value_parser = exposure, allow_hyphen_values = true)]
     exposure: f32,
     /// Tone curve for PNG output, applied after exposure and before sRGB encoding.
     #[arg(long, value_enum, default_value_t = Tonemap::Clamp)]
