@@ -251,15 +251,15 @@ fn renderer_restore_continues_the_sample_stream() {
     assert_eq!((stops, stopped.samples_done), (1, 1), "the first pass is one sample, then it stops");
 }
 
-/// An 8x8 partial render of the built-in scene's sample `ranges` whose pixels hold `count` samples,
-/// written to `path` without rendering: what the file's checks see, consistent or not.
-fn write_partial(path: &Path, ranges: Vec<std::ops::Range<u32>>, count: f32) {
+/// An 8x8 partial render of the samples `range` whose pixels hold `count` samples, written to `path`
+/// without rendering: what the file's checks see, consistent or not.
+fn write_partial(path: &Path, range: std::ops::Range<u32>, count: f32) {
     let partial = PartialRender {
         scene_hash: "0".repeat(64),
         seed: 1,
         width: 8,
         height: 8,
-        ranges,
+        ranges: vec![range],
         accumulation: vec![[0.5, 0.5, 0.5, count]; 64],
         aovs: Default::default(),
         aov_sums: None,
@@ -271,8 +271,8 @@ fn write_partial(path: &Path, ranges: Vec<std::ops::Range<u32>>, count: f32) {
 fn partials_whose_ranges_disagree_with_their_counts_are_refused() {
     let dir = temp_dir("farm-inconsistent");
     let (good, bad, out) = (dir.join("good.exr"), dir.join("bad.exr"), dir.join("out.png"));
-    write_partial(&good, vec![0..4], 4.0);
-    write_partial(&bad, vec![4..8], 3.0);
+    write_partial(&good, 0..4, 4.0);
+    write_partial(&bad, 4..8, 3.0);
     let needles = [&format!("{} is not a caustica EXR checkpoint/partial", bad.display()), "pixel (0, 0) holds 3 samples (and 63 more pixels disagree), but its sample ranges 4..8 hold 4"];
     let merged = merge(&[&good, &bad], &out);
     for needle in needles {
@@ -290,7 +290,7 @@ fn partials_whose_ranges_disagree_with_their_counts_are_refused() {
 fn resuming_past_the_last_sample_index_is_refused_before_rendering() {
     let dir = temp_dir("farm-resume-range");
     let (checkpoint, out) = (dir.join("ck.exr"), dir.join("out.png"));
-    write_partial(&checkpoint, vec![4294967290..4294967292], 2.0);
+    write_partial(&checkpoint, 4294967290..4294967292, 2.0);
     let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "10", "--resume", "--checkpoint", checkpoint.to_str().unwrap(), "--device", "no-such-gpu"]);
     fails_with(&o, "ck.exr: cannot resume to --spp 10: samples 4294967290..4294967300 run past the last sample index (4294967294): from sample 4294967290, at most 5 samples per pixel");
     std::fs::remove_dir_all(dir).ok();
