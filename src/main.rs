@@ -1,7 +1,7 @@
 //! The `caustica` command line: a thin layer over the library.
 
 use anyhow::{Context as _, Result};
-use caustica::farm::{self, format_ranges, parse_duration, Outcome, PartialRender, RenderJob};
+use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
 use caustica::render::{AovSet, GeometryReport, Renderer};
@@ -41,7 +41,7 @@ impl DeviceArgs {
 #[derive(clap::Args, Clone)]
 struct OutputArgs {
     /// Exposure in stops for PNG output.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = exposure, allow_hyphen_values = true)]
     exposure: f32,
     /// Tone curve for PNG output, applied after exposure and before sRGB encoding.
     #[arg(long, value_enum, default_value_t = Tonemap::Clamp)]
@@ -94,12 +94,20 @@ fn duration(text: &str) -> Result<Duration, String> {
     parse_duration(text).map_err(|e| e.to_string())
 }
 
-fn aov_set(text: &str) -> Result<AovSet, String> {
-    AovSet::parse(text).map_err(|e| e.to_string())
+/// Stops of exposure: a finite number whose scale 2^EV is a finite, non-zero f32 (NaN or infinity
+/// would turn every pixel black or white).
+fn exposure(text: &str) -> Result<f32, String> {
+    const RANGE: std::ops::RangeInclusive<f32> = -126.0..=127.0;
+    match text.trim().parse::<f32>() {
+        Ok(ev) if RANGE.contains(&ev) => Ok(ev),
+        Ok(ev) if ev.is_finite() => Err(format!("{ev} stops is out of range: 2^EV must be a float, so from {} to {}", RANGE.start(), RANGE.end())),
+        Ok(_) => Err(format!("'{text}' is not a finite number of stops (e.g. -1, 0, 2.5)")),
+        Err(_) => Err(format!("'{text}' is not a number of stops (e.g. -1, 0, 2.5)")),
+    }
 }
 
-fn is_exr(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+fn aov_set(text: &str) -> Result<AovSet, String> {
+    AovSet::parse(text).map_err(|e| e.to_string())
 }
 
 #[derive(Subcommand)]
@@ -222,6 +230,29 @@ fn progress_bar(total: Option<u32>, quiet: bool) -> ProgressBar {
 /// Set by SIGINT or SIGTERM: the render stops after the pass in flight.
 static STOP: AtomicBool = AtomicBool::new(false);
 
+/// On SIGINT or SIGTERM: when `graceful`, the first signal sets [`STOP`] and a second quits; else
+/// the first quits. Quitting removes the temporary files of writes in flight, so that an image
+/// being written keeps its previous contents and leaves nothing else behind.
+fn handle_signals(graceful: bool) -> Result<()> {
+    ctrlc::set_handler(move || {
+        if !graceful || STOP.swap(true, Ordering::SeqCst) {
+            caustica::image::remove_temp_files_in_flight();
+            std::process::exit(130);
+        }
+        eprintln!("caustica: finishing the pass in flight (interrupt again to quit at once)");
+    })
+    .context("installing the SIGINT/SIGTERM handler")
+}
+
+/// Clears what killed earlier writes of `targets` left behind, saying so unless `quiet`.
+fn remove_leftovers(targets: &[&Path], quiet: bool) {
+    for path in farm::remove_leftovers(targets) {
+        if !quiet {
+            eprintln!("caustica: note: removed {}, left by an interrupted write", path.display());
+        }
+    }
+}
+
 struct RenderRequest {
     output: PathBuf,
     seed: u32,
@@ -234,37 +265,55 @@ struct RenderRequest {
 
 fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_args: &FarmArgs, gpu: &DeviceArgs) -> Result<()> {
     let output = &request.output;
-    // Fail on a bad output path before spending minutes rendering.
-    caustica::image::check_output_path(output)?;
+    let checkpoint = farm_args.checkpoint_path(output);
+    // Fail on a bad output or checkpoint path before spending minutes rendering.
+    farm::check_render_files(output, &checkpoint)?;
     if !request.aovs.is_empty() && !is_exr(output) {
         anyhow::bail!("--aov {}: AOVs are layers of an EXR file, so the output must be .exr, not {}", request.aovs, output.display());
     }
-    let checkpoint = farm_args.checkpoint_path(output);
-    ctrlc::set_handler(|| {
-        if STOP.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
+    let resume_from = if farm_args.resume { Some(PartialRender::read(&checkpoint)?) } else { None };
+    if let Some(spp) = request.spp {
+        match &resume_from {
+            Some(partial) => farm::check_sample_range(farm::resumable_range(partial, &checkpoint)?.start, spp)
+                .with_context(|| format!("{}: cannot resume to --spp {spp}", checkpoint.display()))?,
+            None => farm::check_sample_range(farm_args.sample_offset, spp).with_context(|| format!("--sample-offset {} --spp {spp}", farm_args.sample_offset))?,
         }
-        eprintln!("caustica: finishing the pass in flight (interrupt again to quit at once)");
-    })
-    .context("installing the SIGINT/SIGTERM handler")?;
+    }
+    remove_leftovers(&[output, &checkpoint], request.quiet);
+    handle_signals(true)?;
     let ctx = gpu.context()?;
     let started = Instant::now();
     let mut renderer = Renderer::with_aovs(&ctx, &scene, request.seed, request.aovs)?;
     renderer.set_sample_offset(farm_args.sample_offset);
-    let resumed = if farm_args.resume { farm::resume(&mut renderer, &checkpoint)?.samples() } else { 0 };
+    if let Some(partial) = &resume_from {
+        farm::resume(&mut renderer, partial, &checkpoint)?;
+    }
+    let resumed = resume_from.map_or(0, |p| p.samples());
     let bar = progress_bar(request.spp, request.quiet);
     bar.set_position(resumed as u64);
     let job = RenderJob { spp: request.spp, time: farm_args.time, checkpoint: checkpoint.clone(), checkpoint_every: farm_args.checkpoint_every, stop: &STOP };
     let outcome = farm::run(&mut renderer, &job, |done| bar.set_position(done as u64)).with_context(|| scene.name.clone())?;
     bar.finish_and_clear();
     let partial = farm::snapshot(&renderer)?.context("no samples were rendered")?;
-    write_render(output, &partial, output_args)?;
-    if farm_args.checkpointing() {
+    if let Err(e) = write_render(output, &partial, output_args) {
+        // The samples are worth more than the image: keep them where --resume finds them.
+        return Err(match partial.write(&checkpoint) {
+            Ok(()) => anyhow::anyhow!(
+                "{e:#}; the {} samples per pixel are saved in {}: rerun with --resume --checkpoint {} to write the image from them",
+                partial.samples(),
+                checkpoint.display(),
+                checkpoint.display()
+            ),
+            Err(_) => e,
+        });
+    }
+    // An EXR output that is its own checkpoint was written just now.
+    if farm_args.checkpointing() && !farm::same_file(output, &checkpoint) {
         partial.write(&checkpoint)?;
     }
     let rendered = renderer.samples_done - resumed;
     let pixel_samples = scene.film.width as f64 * scene.film.height as f64 * rendered as f64;
-    let (samples_per_s, rays_per_s) = (pixel_samples / renderer.seconds, renderer.rays_traced as f64 / renderer.seconds);
+    let (samples_per_s, rays_per_s) = (per_second(pixel_samples, renderer.seconds), per_second(renderer.rays_traced as f64, renderer.seconds));
     if !request.quiet {
         let why = match outcome {
             Outcome::Done => String::new(),
@@ -276,16 +325,19 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
             0 => String::new(),
             n => format!(", {n} non-finite samples dropped"),
         };
+        let speed = match (rendered, samples_per_s, rays_per_s) {
+            (0, ..) => format!("no samples added ({} already held {resumed} spp)", checkpoint.display()),
+            (_, Some(samples), Some(rays)) => format!("{:.2} Msamples/s, {:.1} Mrays/s", samples / 1e6, rays / 1e6),
+            _ => "too quick to time".to_owned(),
+        };
         eprintln!(
-            "wrote {} ({}x{}, {} spp{why}) in {:.2} s on {}: {:.2} Msamples/s, {:.1} Mrays/s{dropped}",
+            "wrote {} ({}x{}, {} spp{why}) in {:.2} s on {}: {speed}{dropped}",
             output.display(),
             scene.film.width,
             scene.film.height,
             renderer.samples_done,
             started.elapsed().as_secs_f64(),
             ctx.info.name,
-            samples_per_s / 1e6,
-            rays_per_s / 1e6,
         );
     }
     if request.json {
@@ -328,6 +380,8 @@ fn write_render(output: &Path, partial: &PartialRender, output_args: &OutputArgs
 
 fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: bool) -> Result<()> {
     caustica::image::check_output_path(output)?;
+    remove_leftovers(&[output], quiet);
+    handle_signals(false)?;
     let merged = farm::merge_files(inputs)?;
     write_render(output, &merged, output_args)?;
     if !quiet && !merged.aovs.is_empty() && !is_exr(output) {
@@ -352,6 +406,7 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
     let seconds = renderer.seconds - secs0;
     let samples = (renderer.samples_done - spp0) as f64 * width as f64 * height as f64;
     let rays = (renderer.rays_traced - rays0) as f64;
+    let (samples_per_s, rays_per_s, rays_per_sample) = (per_second(samples, seconds), per_second(rays, seconds), (samples > 0.0).then(|| rays / samples));
     if json {
         let summary = json!({
             "scene": scene.name,
@@ -363,9 +418,9 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
             "aovs": aovs.to_string(),
             "setup_seconds": setup_s,
             "seconds": seconds,
-            "samples_per_second": samples / seconds,
-            "rays_per_second": rays / seconds,
-            "rays_per_sample": rays / samples,
+            "samples_per_second": samples_per_s,
+            "rays_per_second": rays_per_s,
+            "rays_per_sample": rays_per_sample,
             "nonfinite_samples": renderer.nonfinite_samples,
             "loop_limit": renderer.loop_limit(),
             "repeated_dispatches": renderer.repeated_dispatches,
@@ -381,9 +436,10 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
     print_geometry(&renderer.geometry);
     println!("setup:        {setup_s:.3} s (load excluded: BVH, upload, kernel compile)");
     println!("render:       {seconds:.3} s");
-    println!("samples/s:    {:.3} M", samples / seconds / 1e6);
-    println!("rays/s:       {:.3} M", rays / seconds / 1e6);
-    println!("rays/sample:  {:.2}", rays / samples);
+    let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));
+    println!("samples/s:    {} M", shown(samples_per_s, 1e6, 3));
+    println!("rays/s:       {} M", shown(rays_per_s, 1e6, 3));
+    println!("rays/sample:  {}", shown(rays_per_sample, 1.0, 2));
     println!("non-finite:   {} samples dropped", renderer.nonfinite_samples);
     if let Some(limit) = renderer.loop_limit() {
         // Such a device ends shader loops early: dispatches are sized to stay within the limit.
@@ -415,8 +471,17 @@ fn print_geometry(g: &GeometryReport) {
     }
 }
 
+/// The command line, or exit: 0 after --help or --version, and 1, as for any bad input, after a
+/// usage error (clap's own default would be 2).
+fn parse_command_line() -> Cli {
+    Cli::try_parse().unwrap_or_else(|e| {
+        let _ = e.print();
+        std::process::exit(if e.use_stderr() { 1 } else { 0 });
+    })
+}
+
 fn run() -> Result<()> {
-    match Cli::parse().command {
+    match parse_command_line().command {
         Command::Render { scene, output, spp, width, height, seed, aov, output_args, farm, quiet, json, gpu } => {
             let mut s = load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
@@ -430,7 +495,10 @@ fn run() -> Result<()> {
             let c = caustica::image::compare(&a, &b, (&image.display().to_string(), &reference.display().to_string()))?;
             println!("relative MSE:        {:.6e}", c.relative_mse);
             println!("mean absolute error: {:.6e}", c.mean_absolute_error);
-            println!("ratio of means:      {:.6}", c.mean_ratio);
+            match c.mean_ratio {
+                Some(ratio) => println!("ratio of means:      {ratio:.6}"),
+                None => println!("ratio of means:      none (the reference is black)"),
+            }
             Ok(())
         }
         Command::Devices => {
@@ -455,9 +523,50 @@ fn run() -> Result<()> {
     }
 }
 
+/// The error and its causes, outermost first, each said once: a cause whose text a message already
+/// includes (errors that print their source and also return it, as I/O wrappers often do) is left
+/// out.
+fn error_report(error: &anyhow::Error) -> String {
+    let mut report = String::new();
+    for cause in error.chain() {
+        let text = cause.to_string();
+        if report.contains(&text) {
+            continue;
+        }
+        if !report.is_empty() {
+            report.push_str(": ");
+        }
+        report.push_str(&text);
+    }
+    report
+}
+
 fn main() {
     if let Err(e) = run() {
-        eprintln!("caustica: error: {e:#}");
+        eprintln!("caustica: error: {}", error_report(&e));
         std::process::exit(1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_report_says_each_cause_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory (os error 2)");
+        let repeating = anyhow::Error::new(io).context("out.exr: No such file or directory (os error 2)").context("writing the image");
+        assert_eq!(error_report(&repeating), "writing the image: out.exr: No such file or directory (os error 2)");
+        let plain = anyhow::anyhow!("disk full").context("out.png");
+        assert_eq!(error_report(&plain), "out.png: disk full");
+    }
+
+    #[test]
+    fn exposure_must_be_finite_stops() {
+        assert_eq!(exposure("-1.5"), Ok(-1.5));
+        for bad in ["NaN", "nan", "inf", "-inf", "infinity", "1e9", "200", "x"] {
+            let err = exposure(bad).unwrap_err();
+            assert!(err.contains("stops"), "{bad}: {err}");
+        }
     }
 }

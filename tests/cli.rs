@@ -121,3 +121,147 @@ fn compare_prints_the_error_metrics_and_rejects_mismatched_sizes() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("c.pfm"), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A device no machine has: a run that fails for another reason failed before it looked for a
+/// device, so before any work.
+const NO_DEVICE: [&str; 2] = ["--device", "no-such-gpu"];
+
+/// Asserts exit status 1 and a `caustica: error:` or clap error naming each of `needles`; returns
+/// stderr.
+fn fails_naming(o: &std::process::Output, needles: &[&str]) -> String {
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "exit status {:?}, stderr {stderr}", o.status);
+    assert!(stderr.contains("error"), "{stderr}");
+    for needle in needles {
+        assert!(stderr.contains(needle), "stderr does not say '{needle}': {stderr}");
+    }
+    stderr
+}
+
+#[test]
+fn non_finite_exposure_is_refused_by_render_and_merge() {
+    let dir = temp_dir("cli-exposure");
+    let (png, part) = (dir.join("out.png"), dir.join("part.exr"));
+    let (png, part) = (png.to_str().unwrap(), part.to_str().unwrap());
+    for value in ["NaN", "inf", "-inf", "1e9"] {
+        let render = caustica(&["render", "-o", png, "--width", "8", "--height", "8", "--spp", "1", "-q", "--exposure", value]);
+        fails_naming(&render, &["--exposure", value]);
+        let merge = caustica(&["merge", part, "-o", png, "-q", "--exposure", value]);
+        fails_naming(&merge, &["--exposure", value]);
+    }
+    assert!(!Path::new(png).exists(), "a refused run wrote its image");
+    let o = caustica(&["render", "-o", png, "--width", "8", "--height", "8", "--spp", "1", "-q", "--exposure", "-1.5"]);
+    assert!(o.status.success(), "a negative exposure is fine: {}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bad_output_checkpoint_and_sample_range_fail_before_the_device_is_touched() {
+    let dir = temp_dir("cli-paths");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_owned();
+    std::fs::create_dir_all(dir.join("folder.png")).unwrap();
+    std::fs::write(dir.join("plain-file"), b"not a directory").unwrap();
+    std::fs::write(dir.join("out.png"), b"an earlier image").unwrap();
+    let (out, folder, in_missing, in_file) = (path("out.png"), path("folder.png"), path("missing/out.png"), path("plain-file/out.png"));
+    let (ck_missing, ck_png, out_again) = (path("missing/ck.exr"), path("ck.png"), format!("{}/./out.png", dir.display()));
+    let cases: [(&[&str], &[&str]); 8] = [
+        (&["-o", &folder], &[&folder, "is a directory"]),
+        (&["-o", &in_missing], &[&in_missing, "does not exist"]),
+        (&["-o", &in_file], &[&in_file, "is not a directory"]),
+        (&["-o", &out, "--checkpoint", &ck_missing], &[&ck_missing, "does not exist"]),
+        (&["-o", &out, "--checkpoint", &out_again], &[&out_again, "are the same file"]),
+        (&["-o", &out, "--checkpoint", &out], &["-o", "--checkpoint", "are the same file"]),
+        (&["-o", &out, "--checkpoint", &ck_png], &["--checkpoint", &ck_png, "must end in .exr"]),
+        (&["-o", &out, "--sample-offset", "4294967290", "--spp", "4294967295"], &["--sample-offset 4294967290", "at most 5 samples per pixel"]),
+    ];
+    for (args, needles) in cases {
+        let mut all = vec!["render", "--width", "8", "--height", "8", "-q"];
+        all.extend_from_slice(args);
+        if !args.contains(&"--spp") {
+            all.extend(["--spp", "1"]);
+        }
+        all.extend_from_slice(&NO_DEVICE);
+        let stderr = fails_naming(&caustica(&all), needles);
+        assert!(!stderr.contains("no-such-gpu"), "{args:?}: checked only after the device: {stderr}");
+    }
+    assert_eq!(std::fs::read(dir.join("out.png")).unwrap(), b"an earlier image");
+    // merge checks its output before reading any input.
+    let missing_input = path("missing-part.exr");
+    for (output, problem) in [(&folder, "is a directory"), (&in_missing, "does not exist")] {
+        let stderr = fails_naming(&caustica(&["merge", &missing_input, "-o", output]), &[output, problem]);
+        assert!(!stderr.contains("missing-part.exr"), "{stderr}");
+    }
+    let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert!(names.iter().all(|n| !n.contains(".tmp-")), "a probe left a file: {names:?}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn compare_refuses_images_with_non_finite_pixels() {
+    let dir = temp_dir("cli-compare-nan");
+    let mut image = caustica::image::RgbImage::new(4, 2);
+    image.set(1, 0, [f32::NAN, 0.0, 0.0]);
+    image.set(3, 1, [0.0, f32::INFINITY, 0.0]);
+    let (bad, good) = (dir.join("bad.pfm"), dir.join("good.pfm"));
+    caustica::image::pfm::write(&bad, &image).unwrap();
+    caustica::image::pfm::write(&good, &caustica::image::RgbImage::new(4, 2)).unwrap();
+    let (bad, good) = (bad.to_str().unwrap(), good.to_str().unwrap());
+    for (a, b) in [(bad, good), (good, bad)] {
+        let o = caustica(&["compare", a, b]);
+        fails_naming(&o, &[&format!("{bad} holds 2 non-finite pixels"), "(1, 0)"]);
+        assert!(o.stdout.is_empty(), "no figures: {}", String::from_utf8_lossy(&o.stdout));
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn errors_say_each_cause_once() {
+    let dir = temp_dir("cli-cause-once");
+    let (missing, garbage) = (dir.join("missing.exr"), dir.join("garbage.exr"));
+    std::fs::write(&garbage, b"not an exr").unwrap();
+    let (missing, garbage) = (missing.to_str().unwrap(), garbage.to_str().unwrap());
+    let cases: [(&[&str], &str); 3] = [
+        (&["compare", missing, garbage], "No such file or directory"),
+        (&["compare", garbage, garbage], "file identifier missing"),
+        (&["merge", missing, "-o", garbage], "No such file or directory"),
+    ];
+    for (args, cause) in cases {
+        let stderr = fails_naming(&caustica(args), &[cause]);
+        assert_eq!(stderr.matches(cause).count(), 1, "{args:?}: {stderr}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn temp_files_of_killed_writes_are_cleared_and_no_others() {
+    let dir = temp_dir("cli-leftovers");
+    let dead = {
+        let mut child = Command::new("true").spawn().unwrap();
+        let pid = child.id();
+        child.wait().unwrap();
+        pid
+    };
+    let old = std::time::SystemTime::now() - std::time::Duration::from_secs(600);
+    let leftover = |name: String, modified| {
+        let path = dir.join(name);
+        std::fs::File::create(&path).unwrap().set_modified(modified).unwrap();
+        path
+    };
+    let stale_image = leftover(format!(".out.png.tmp-{dead}-0"), old);
+    let stale_checkpoint = leftover(format!(".out.checkpoint.exr.tmp-{dead}-3"), old);
+    let recent = leftover(format!(".out.png.tmp-{dead}-1"), std::time::SystemTime::now());
+    let live_writer = leftover(format!(".out.png.tmp-{}-0", std::process::id()), old);
+    let other_target = leftover(format!(".other.png.tmp-{dead}-0"), old);
+    let out = dir.join("out.png");
+    let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    for removed in [&stale_image, &stale_checkpoint] {
+        assert!(!removed.exists(), "{} is still there", removed.display());
+        assert!(stderr.contains(&format!("removed {}", removed.display())), "{stderr}");
+    }
+    for kept in [&recent, &live_writer, &other_target] {
+        assert!(kept.exists(), "{} was removed", kept.display());
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

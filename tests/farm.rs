@@ -137,7 +137,7 @@ fn merge_refuses_other_scenes_sizes_seeds_and_overlaps() {
     fails_with(&merge(&[&a, &path("seed.exr")], &path("m.exr")), "seed.exr: cannot merge with");
     fails_with(&merge(&[&a, &path("small.exr")], &path("m.exr")), "different size (8x8, not 16x16)");
     fails_with(&merge(&[&a, &path("sky.exr")], &path("m.exr")), "different scene");
-    fails_with(&merge(&[&a, &path("plain.pfm")], &path("m.exr")), "plain.pfm");
+    fails_with(&merge(&[&a, &path("plain.pfm")], &path("m.exr")), "plain.pfm is not a caustica EXR checkpoint/partial");
     assert!(!path("m.exr").exists(), "a refused merge wrote its output");
     std::fs::remove_dir_all(dir).ok();
 }
@@ -249,4 +249,91 @@ fn renderer_restore_continues_the_sample_stream() {
         false
     }).unwrap();
     assert_eq!((stops, stopped.samples_done), (1, 1), "the first pass is one sample, then it stops");
+}
+
+/// An 8x8 partial render of the samples `range` whose pixels hold `count` samples, written to `path`
+/// without rendering: what the file's checks see, consistent or not.
+fn write_partial(path: &Path, range: std::ops::Range<u32>, count: f32) {
+    let partial = PartialRender {
+        scene_hash: "0".repeat(64),
+        seed: 1,
+        width: 8,
+        height: 8,
+        ranges: vec![range],
+        accumulation: vec![[0.5, 0.5, 0.5, count]; 64],
+        aovs: Default::default(),
+        aov_sums: None,
+    };
+    partial.write(path).unwrap();
+}
+
+#[test]
+fn partials_whose_ranges_disagree_with_their_counts_are_refused() {
+    let dir = temp_dir("farm-inconsistent");
+    let (good, bad, out) = (dir.join("good.exr"), dir.join("bad.exr"), dir.join("out.png"));
+    write_partial(&good, 0..4, 4.0);
+    write_partial(&bad, 4..8, 3.0);
+    let needles = [&format!("{} is not a caustica EXR checkpoint/partial", bad.display()), "pixel (0, 0) holds 3 samples (and 63 more pixels disagree), but its sample ranges 4..8 hold 4"];
+    let merged = merge(&[&good, &bad], &out);
+    for needle in needles {
+        fails_with(&merged, needle);
+    }
+    let resumed = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "9", "--resume", "--checkpoint", bad.to_str().unwrap(), "--device", "no-such-gpu"]);
+    for needle in needles {
+        fails_with(&resumed, needle);
+    }
+    assert!(!out.exists());
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn resuming_past_the_last_sample_index_is_refused_before_rendering() {
+    let dir = temp_dir("farm-resume-range");
+    let (checkpoint, out) = (dir.join("ck.exr"), dir.join("out.png"));
+    write_partial(&checkpoint, 4294967290..4294967292, 2.0);
+    let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "10", "--resume", "--checkpoint", checkpoint.to_str().unwrap(), "--device", "no-such-gpu"]);
+    fails_with(&o, "ck.exr: cannot resume to --spp 10: samples 4294967290..4294967300 run past the last sample index (4294967294): from sample 4294967290, at most 5 samples per pixel");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn a_resume_that_adds_no_samples_says_so() {
+    let dir = temp_dir("farm-no-samples");
+    let (out, checkpoint) = (dir.join("out.png"), dir.join("ck.exr"));
+    let ck = checkpoint.to_str().unwrap();
+    render(&out, &["--spp", "2", "--checkpoint", ck]);
+    let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "2", "--resume", "--checkpoint", ck]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(stderr.contains("no samples added (") && stderr.contains("already held 2 spp") && !stderr.contains("NaN"), "{stderr}");
+    let o = render(&out, &["--spp", "2", "--resume", "--checkpoint", ck, "--json"]);
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints JSON");
+    assert_eq!(summary["samples_this_run"], 0);
+    assert!(summary["samples_per_second"].is_null() && summary["rays_per_second"].is_null(), "{summary}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn a_failed_image_write_keeps_the_samples_in_the_checkpoint() {
+    let dir = temp_dir("farm-write-fails");
+    let (images, checkpoint) = (dir.join("images"), dir.join("ck.exr"));
+    std::fs::create_dir_all(&images).unwrap();
+    let out = images.join("out.png");
+    let mut child = caustica_command(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "10000000", "-q", "--checkpoint-every", "0s", "--checkpoint", checkpoint.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !checkpoint.exists() {
+        assert!(Instant::now() < deadline && child.try_wait().unwrap().is_none(), "no checkpoint appeared");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // The output's directory goes away mid-render, after the up-front checks passed.
+    std::fs::remove_dir_all(&images).unwrap();
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let o = child.wait_with_output().unwrap();
+    let kept = PartialRender::read(&checkpoint).unwrap();
+    fails_with(&o, &format!("images/out.png: No such file or directory (os error 2); the {} samples per pixel are saved in {}: rerun with --resume", kept.samples(), checkpoint.display()));
+    std::fs::remove_dir_all(dir).ok();
 }

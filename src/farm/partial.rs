@@ -12,7 +12,7 @@
 //! kernel's raw sums, "accumulation.albedo.R/G/B", "accumulation.normal.X/Y/Z" and
 //! "accumulation.depth.Z/hits", so AOVs resume and merge exactly like the beauty.
 
-use crate::image::{read_exr_document, write_exr_document, ExrDocument, ExrLayer, RgbImage};
+use crate::image::{read_exr_document, write_exr_document, ExrDocument, ExrLayer, ImageError, RgbImage};
 use crate::render::{mean_image, AovSet, AovSums};
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use std::collections::BTreeMap;
@@ -129,10 +129,21 @@ impl PartialRender {
         layers
     }
 
-    /// Reads a file written by [`Self::write`]; names the file and what is wrong otherwise.
+    /// Reads a file written by [`Self::write`], checking that it is consistent; names the file and
+    /// what is wrong otherwise.
     pub fn read(path: &Path) -> Result<Self> {
-        let doc = read_exr_document(path)?;
-        Self::from_document(doc).with_context(|| format!("{}: not a caustica partial render", path.display()))
+        let not_ours = |reason: String| anyhow!("{} is not a caustica EXR checkpoint/partial ({reason})", path.display());
+        if !starts_like_exr(path)? {
+            return Err(not_ours("not an OpenEXR file; checkpoints and partial renders are the .exr files caustica writes".to_owned()));
+        }
+        // A failure to read is the file system's to report; anything else is the file's content.
+        let doc = read_exr_document(path).map_err(|e| match e {
+            e @ (ImageError::Io { .. } | ImageError::Exr { cause: ::exr::error::Error::Io(_), .. }) => anyhow::Error::from(e),
+            e => not_ours(without_file_name(&e.to_string(), path)),
+        })?;
+        let partial = Self::from_document(doc).map_err(|e| not_ours(format!("{e:#}")))?;
+        partial.check_consistent().map_err(|e| not_ours(format!("{e:#}")))?;
+        Ok(partial)
     }
 
     fn from_document(doc: ExrDocument) -> Result<Self> {
@@ -163,7 +174,33 @@ impl PartialRender {
             aov_sums,
         };
         ensure!(partial.samples() > 0, "{SAMPLE_RANGES} is empty");
+        let recorded: u32 = attr(SAMPLES)?.parse().map_err(|e| anyhow!("{SAMPLES}: {e}"))?;
+        ensure!(
+            recorded == partial.samples(),
+            "{SAMPLES} says {recorded} samples per pixel, but {SAMPLE_RANGES} {} hold {}",
+            format_ranges(&partial.ranges),
+            partial.samples()
+        );
         Ok(partial)
+    }
+
+    /// Fails unless every pixel's sample count is the number of samples in the ranges: what the
+    /// kernel and merges keep, and what resuming and merging rely on (the mean divides by it).
+    pub fn check_consistent(&self) -> Result<()> {
+        let samples = self.samples();
+        let wrong = |a: &&[f32; 4]| !count_matches(a[3], samples);
+        let Some(first) = self.accumulation.iter().position(|a| wrong(&a)) else { return Ok(()) };
+        let others = self.accumulation.iter().filter(wrong).count() - 1;
+        let (x, y) = (first % self.width as usize, first / self.width as usize);
+        bail!(
+            "pixel ({x}, {y}) holds {} samples{}, but its sample ranges {} hold {samples}",
+            self.accumulation[first][3],
+            match others {
+                0 => String::new(),
+                n => format!(" (and {n} more pixels disagree)"),
+            },
+            format_ranges(&self.ranges)
+        )
     }
 
     /// Fails unless `other` is of the same size, seed and scene, naming the first difference (size
@@ -183,6 +220,35 @@ impl PartialRender {
         }
         Ok(())
     }
+}
+
+/// Whether a pixel's sample count `count` is right for `samples` samples. The kernel counts in an
+/// f32, which is exact up to 2^24 and stays there beyond (adding 1 no longer changes it), while a
+/// merge adds counts: past 2^24 a count is only known to lie between 2^24 and the samples.
+fn count_matches(count: f32, samples: u32) -> bool {
+    const EXACT: u32 = 1 << 24;
+    if samples <= EXACT {
+        count == samples as f32
+    } else {
+        count >= EXACT as f32 && count as f64 <= samples as f64 * (1.0 + 1e-6)
+    }
+}
+
+/// Whether the file begins with OpenEXR's magic number: anything else (a PFM, a PNG) is not a
+/// partial render, which is worth saying before the EXR reader finds fault with it.
+fn starts_like_exr(path: &Path) -> Result<bool> {
+    use std::io::Read as _;
+    let mut start = Vec::with_capacity(4);
+    let file = std::fs::File::open(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    file.take(4).read_to_end(&mut start).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    Ok(start == [0x76, 0x2f, 0x31, 0x01])
+}
+
+/// An image error's message without the "{file}: " it starts with, for messages that name the file
+/// their own way.
+fn without_file_name(message: &str, path: &Path) -> String {
+    let prefix = format!("{}: ", path.display());
+    message.strip_prefix(&prefix).unwrap_or(message).to_owned()
 }
 
 pub fn format_ranges(ranges: &[Range<u32>]) -> String {
@@ -236,6 +302,61 @@ mod tests {
         assert_eq!(back, partial);
         assert_eq!(crate::image::read_image(&path).unwrap(), partial.image());
         std::fs::remove_file(path).ok();
+    }
+
+    #[test]
+    fn inconsistent_ranges_samples_or_counts_are_refused_naming_the_file() {
+        let dir = crate::test_files::temp_dir("partial-consistency");
+        let path = dir.join("part.exr");
+        let good = PartialRender {
+            scene_hash: "ab12".into(),
+            seed: 7,
+            width: 2,
+            height: 2,
+            ranges: vec![0..2, 4..6],
+            accumulation: vec![[1.0, 1.0, 1.0, 4.0]; 4],
+            aovs: AovSet::default(),
+            aov_sums: None,
+        };
+        let refusal = |partial: &PartialRender, attribute: Option<(&str, &str)>| {
+            partial.write(&path).unwrap();
+            if let Some((name, value)) = attribute {
+                let mut doc = read_exr_document(&path).unwrap();
+                doc.attributes.insert(name.to_owned(), value.to_owned());
+                write_exr_document(&path, &doc).unwrap();
+            }
+            PartialRender::read(&path).err().map(|e| format!("{e:#}"))
+        };
+        let not_ours = format!("{} is not a caustica EXR checkpoint/partial (", path.display());
+        assert_eq!(refusal(&good, None), None);
+        let samples = refusal(&good, Some((SAMPLES, "5"))).expect("samples 5 with ranges of 4");
+        assert!(samples.starts_with(&not_ours) && samples.contains("caustica.samples says 5 samples per pixel, but caustica.sample_ranges 0..2,4..6 hold 4"), "{samples}");
+        let ranges = refusal(&good, Some((SAMPLE_RANGES, "0..5"))).expect("ranges of 5 with samples 4");
+        assert!(ranges.contains("caustica.samples says 4"), "{ranges}");
+        let mut counts = good.clone();
+        counts.accumulation[3][3] = 3.0;
+        counts.accumulation[1][3] = 5.0;
+        let counts = refusal(&counts, None).expect("pixels with 3 and 5 samples of 4");
+        assert!(counts.starts_with(&not_ours) && counts.contains("pixel (1, 0) holds 5 samples (and 1 more pixels disagree), but its sample ranges 0..2,4..6 hold 4"), "{counts}");
+        std::fs::write(&path, b"PF\n1 1\n-1.0\n\0\0\0\0\0\0\0\0\0\0\0\0").unwrap();
+        let pfm = PartialRender::read(&path).unwrap_err().to_string();
+        assert!(pfm.starts_with(&not_ours) && pfm.contains("not an OpenEXR file"), "{pfm}");
+        good.write(&path).unwrap();
+        let mut plain = read_exr_document(&path).unwrap();
+        plain.attributes.clear();
+        write_exr_document(&path, &plain).unwrap();
+        let plain = PartialRender::read(&path).unwrap_err().to_string();
+        assert!(plain.starts_with(&not_ours) && plain.contains("is missing"), "{plain}");
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn counts_past_two_to_the_24_are_taken_as_f32_keeps_them() {
+        assert!(count_matches(16777216.0, 16777216));
+        assert!(count_matches(16777216.0, 20_000_000), "the kernel's f32 count stops at 2^24");
+        assert!(count_matches(20_000_000.0, 20_000_000), "a merge adds counts past it");
+        assert!(!count_matches(16777215.0, 20_000_000));
+        assert!(!count_matches(3.0, 4));
     }
 
     #[test]

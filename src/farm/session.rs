@@ -3,8 +3,9 @@
 
 use super::partial::PartialRender;
 use crate::gpu::DeviceFailure;
-use crate::render::Renderer;
+use crate::render::{Renderer, MAX_SAMPLES_PER_PIXEL};
 use anyhow::{bail, Context as _, Result};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -54,22 +55,49 @@ pub fn snapshot(renderer: &Renderer) -> Result<Option<PartialRender>> {
     }))
 }
 
-/// Loads the checkpoint at `path` into a fresh renderer, which then continues its sample stream.
-/// Refuses a checkpoint of another scene, seed, size or AOV set, or a merge of separate ranges.
-pub fn resume(renderer: &mut Renderer, path: &Path) -> Result<PartialRender> {
-    let checkpoint = PartialRender::read(path)?;
-    let (width, height) = renderer.size();
-    let this = PartialRender { scene_hash: renderer.scene_hash.clone(), seed: renderer.seed(), width, height, ranges: vec![], accumulation: vec![], aovs: renderer.aovs(), aov_sums: None };
-    this.check_same_render(&checkpoint).with_context(|| format!("{}: cannot resume", path.display()))?;
+/// The one sample range a checkpoint holds, which resuming continues; refuses a merge of separate
+/// ranges. `path` is the checkpoint's file, for messages.
+pub fn resumable_range(checkpoint: &PartialRender, path: &Path) -> Result<Range<u32>> {
     let [range] = &checkpoint.ranges[..] else {
         bail!("{}: cannot resume: it holds separate sample ranges (a merge); render more as another partial", path.display());
     };
+    Ok(range.clone())
+}
+
+/// Loads `checkpoint` (read from `path`) into a fresh renderer, which then continues its sample
+/// stream. Refuses a checkpoint of another scene, seed, size or AOV set, or a merge of separate
+/// ranges.
+pub fn resume(renderer: &mut Renderer, checkpoint: &PartialRender, path: &Path) -> Result<()> {
+    let (width, height) = renderer.size();
+    let this = PartialRender { scene_hash: renderer.scene_hash.clone(), seed: renderer.seed(), width, height, ranges: vec![], accumulation: vec![], aovs: renderer.aovs(), aov_sums: None };
+    this.check_same_render(checkpoint).with_context(|| format!("{}: cannot resume", path.display()))?;
+    let range = resumable_range(checkpoint, path)?;
     renderer.set_sample_offset(range.start);
     renderer.restore(&checkpoint.accumulation, range.end - range.start)?;
     if let Some(sums) = &checkpoint.aov_sums {
         renderer.restore_aovs(sums)?;
     }
-    Ok(checkpoint)
+    Ok(())
+}
+
+/// One past the last sample index: the kernel numbers samples with 32-bit integers.
+pub const SAMPLE_INDEX_END: u64 = u32::MAX as u64;
+
+/// Fails unless a render whose stream starts at sample `first` can hold `spp` samples per pixel:
+/// indices past [`SAMPLE_INDEX_END`] do not exist, and rendering would stop short of `spp` there.
+pub fn check_sample_range(first: u32, spp: u32) -> Result<()> {
+    let end = first as u64 + spp as u64;
+    if end > SAMPLE_INDEX_END {
+        bail!(
+            "samples {first}..{end} run past the last sample index ({}): from sample {first}, at most {} samples per pixel can be rendered",
+            SAMPLE_INDEX_END - 1,
+            SAMPLE_INDEX_END - first as u64
+        );
+    }
+    if spp > MAX_SAMPLES_PER_PIXEL {
+        bail!("{spp} samples per pixel asked; a render holds at most {MAX_SAMPLES_PER_PIXEL} (pixel counts are 32-bit floats, exact that far): render partials and merge them");
+    }
+    Ok(())
 }
 
 /// Renders until `job` says stop, calling `progress(samples_done)` after every pass. On a lost
@@ -119,7 +147,7 @@ fn salvage(renderer: &Renderer, job: &RenderJob, checkpointed: bool, error: anyh
         return error;
     }
     let done = renderer.samples_done;
-    let consistent = snapshot(renderer).ok().flatten().filter(|p| p.accumulation.iter().all(|a| a[3] == done as f32));
+    let consistent = snapshot(renderer).ok().flatten().filter(|p| p.check_consistent().is_ok());
     let path = job.checkpoint.display();
     let saved = match consistent.map(|p| p.write(&job.checkpoint)) {
         Some(Ok(())) => format!("wrote the {done} samples per pixel rendered so far to {path}"),

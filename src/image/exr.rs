@@ -48,9 +48,9 @@ pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
 /// file, which is stricter than needed but avoids duplicating the crate's
 /// choice of "first valid layer".
 pub(crate) fn check_header_sizes(path: &Path) -> Result<(), ImageError> {
-    let file = std::fs::File::open(path).map_err(|source| ImageError::Io {
+    let file = std::fs::File::open(path).map_err(|cause| ImageError::Io {
         file: file_name(path),
-        source,
+        cause,
     })?;
     let meta = MetaData::read_from_unbuffered(file, false).map_err(|e| exr_error(path, e))?;
     for header in &meta.headers {
@@ -60,10 +60,10 @@ pub(crate) fn check_header_sizes(path: &Path) -> Result<(), ImageError> {
     Ok(())
 }
 
-pub(crate) fn exr_error(path: &Path, source: ::exr::error::Error) -> ImageError {
+pub(crate) fn exr_error(path: &Path, cause: ::exr::error::Error) -> ImageError {
     ImageError::Exr {
         file: file_name(path),
-        source,
+        cause,
     }
 }
 

@@ -12,6 +12,7 @@ pub mod tonemap;
 
 use std::path::Path;
 
+pub use atomic::{check_writable, remove_stale_temp_files, remove_temp_files_in_flight};
 pub use compare::{compare, Comparison};
 pub use exr_layers::{read_exr_document, write_exr_document, ExrDocument, ExrLayer};
 pub use png::PngDepth;
@@ -64,14 +65,17 @@ impl RgbImage {
 
 /// Every variant names the file first so a failed load of one of many inputs
 /// (scene, probes, outputs) is traceable from the message alone.
+///
+/// Each message is complete, with the underlying error's text in it, so these
+/// errors report no `source()`: printers of error chains (`{:#}`) would print
+/// that text a second time. (The `exr` crate's I/O errors even report
+/// themselves as their own source.)
 #[derive(Debug, thiserror::Error)]
 pub enum ImageError {
-    #[error("{file}: {source}")]
-    Io {
-        file: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{file}: {cause}")]
+    Io { file: String, cause: std::io::Error },
+    #[error("{file}: cannot be written: {reason}")]
+    Unwritable { file: String, reason: String },
     #[error("{file}: unsupported image format: expected extension {expected}")]
     UnsupportedExtension {
         file: String,
@@ -98,21 +102,19 @@ pub enum ImageError {
         y: u32,
         value: [f32; 3],
     },
-    #[error("{file}: EXR: {source}")]
+    #[error("{file}: EXR: {cause}")]
     Exr {
         file: String,
-        #[source]
-        source: ::exr::error::Error,
+        cause: ::exr::error::Error,
     },
     #[error("{file}: invalid EXR layers: {reason}")]
     ExrLayout { file: String, reason: String },
     #[error("{file} {reason}")]
     Incomparable { file: String, reason: String },
-    #[error("{file}: PNG: {source}")]
+    #[error("{file}: PNG: {cause}")]
     Png {
         file: String,
-        #[source]
-        source: ::png::EncodingError,
+        cause: ::png::EncodingError,
     },
 }
 
@@ -151,20 +153,19 @@ pub fn read_image(path: &Path) -> Result<RgbImage, ImageError> {
     }
 }
 
-/// Checks, before any work is done, that `write_image` can take this path: a known extension and
-/// an existing directory.
+/// Checks, before any work is done, that `write_image` can take this path: a
+/// known extension, an existing directory, and a place where a file can be
+/// written (see [`check_writable`]).
 pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     if !matches!(extension(path).as_deref(), Some("pfm" | "exr" | "png")) {
         return Err(ImageError::UnsupportedExtension { file: file_name(path), expected: ".pfm, .exr or .png" });
     }
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if !dir.is_dir() {
-        return Err(ImageError::Io {
-            file: file_name(path),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, format!("directory {} does not exist", dir.display())),
-        });
+        let problem = if dir.exists() { "is not a directory" } else { "does not exist" };
+        return Err(ImageError::Unwritable { file: file_name(path), reason: format!("directory {} {problem}", dir.display()) });
     }
-    Ok(())
+    check_writable(path)
 }
 
 /// How to turn radiance into display values. Only PNG uses these: the float

@@ -11,9 +11,9 @@ use super::{check_size, file_name, ImageError, RgbImage};
 /// Reads a PFM file. Non-finite pixels are kept; see [`check_finite`].
 pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
     let file = file_name(path);
-    let bytes = std::fs::read(path).map_err(|source| ImageError::Io {
+    let bytes = std::fs::read(path).map_err(|cause| ImageError::Io {
         file: file.clone(),
-        source,
+        cause,
     })?;
     decode(&bytes, &file)
 }
@@ -22,9 +22,9 @@ pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
 pub fn write(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     write_atomically(path, |out| {
         out.write_all(&encode(img))
-            .map_err(|source| ImageError::Io {
+            .map_err(|cause| ImageError::Io {
                 file: file_name(path),
-                source,
+                cause,
             })
     })
 }

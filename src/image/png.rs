@@ -42,9 +42,9 @@ impl FromStr for PngDepth {
 /// Writes `img` tonemapped as `options` say, atomically.
 pub fn write(path: &Path, img: &RgbImage, options: &OutputOptions) -> Result<(), ImageError> {
     write_atomically(path, |out| {
-        encode(out, img, options).map_err(|source| ImageError::Png {
+        encode(out, img, options).map_err(|cause| ImageError::Png {
             file: file_name(path),
-            source,
+            cause,
         })
     })
 }

@@ -14,7 +14,7 @@ mod scene_data;
 pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR, UNSPLIT};
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
-pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, TEXTURE_BUDGET_BYTES};
+pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};
 pub use scene_data::SceneData;
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling
