@@ -65,14 +65,14 @@ fn inside_an_emissive_sphere_radiance_is_emission_over_one_minus_albedo() {
 }
 
 /// The same with roulette at a fixed absorption (survival 0.5 from the first bounce): the other
-/// way q is chosen, dividing by it just the same. Fails a 0.5 % bias.
+/// way q is chosen, dividing by it just the same. Fails a 1.5 % bias (its noise is higher).
 #[test]
 fn inside_an_emissive_sphere_with_fixed_absorption_roulette() {
     let (_lock, ctx) = gpu();
-    let mut scene = inside_emissive_sphere(1024);
+    let mut scene = inside_emissive_sphere(512);
     scene.integrator.absorption = Some(0.5);
     let image = render(&ctx, &scene, 4);
-    assert_mean_is(&image, 0.3 / (1.0 - 0.7), 0.0002, 0.005, "inside an emissive sphere, fixed absorption 0.5");
+    assert_mean_is(&image, 0.3 / (1.0 - 0.7), 0.0002, 0.015, "inside an emissive sphere, fixed absorption 0.5");
 }
 
 /// A diffuse floor (albedo 0.5, y = 0) under one light and a black sky, seen at the origin through
