@@ -1,6 +1,7 @@
 //! glTF 2.0 (`.gltf` with external or data-URI buffers and images, and binary `.glb`), via the
 //! gltf crate for parsing and accessors. Buffers and images are loaded here rather than with
-//! `gltf::import`, so that only the textures we read are decoded, under our size limit.
+//! `gltf::import`, so that only the textures we read are decoded, under our size limit, and every
+//! file is read through [`InputFiles`] (regular files, size caps, `--confine`).
 //!
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
 //! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
@@ -34,13 +35,14 @@ use super::{
     texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, MeshData,
     MetallicRoughness,
 };
+use crate::input_file::{InputFiles, InputKind};
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
 const MAX_NODE_DEPTH: usize = 1000;
 
 /// Loads a `.gltf` or `.glb` file: its default scene (else scene 0, else every root node).
-pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
-    let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
+pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
+    let bytes = files.read(path, InputKind::Mesh)?;
     // gltf 1.4 computes `length - 12` from a GLB header without checking it, which overflows
     // (a panic with overflow checks on) for a length field below 12 (found by fuzzing).
     if bytes.starts_with(b"glTF") && bytes.len() >= 12 {
@@ -76,9 +78,12 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
     }
     let document = gltf::Document::from_json(json)
         .map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
-    let directory = path.parent().unwrap_or(Path::new("."));
+    let sources = Sources {
+        files,
+        directory: path.parent().unwrap_or(Path::new(".")),
+    };
     let buffers =
-        load_buffers(&document, blob, directory).map_err(|m| AssetError::invalid(path, m))?;
+        load_buffers(&document, blob, &sources).map_err(|m| AssetError::invalid(path, m))?;
 
     let mut asset = Asset::default();
     let mut decoded_images = DecodedImages::new();
@@ -86,7 +91,7 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
         let converted = convert_material(
             &material,
             &buffers,
-            directory,
+            &sources,
             &mut decoded_images,
             &mut asset,
         )
@@ -126,11 +131,39 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
     Ok(asset)
 }
 
+/// Where a glTF's URIs lead: data URIs, or files relative to the glTF read through `files`.
+struct Sources<'a> {
+    files: &'a InputFiles,
+    directory: &'a Path,
+}
+
+impl Sources<'_> {
+    /// The bytes behind a URI: a base64 `data:` URI, or a percent-encoded path relative to the
+    /// glTF, read as `kind`.
+    fn read_uri(&self, uri: &str, kind: InputKind) -> Result<Vec<u8>, String> {
+        if let Some(data) = uri.strip_prefix("data:") {
+            let (_, payload) = data
+                .split_once(";base64,")
+                .ok_or("only base64 data URIs are supported")?;
+            return base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| format!("bad base64 data URI: {e}"));
+        }
+        if uri.contains("://") {
+            return Err(format!("'{uri}' is not a local file"));
+        }
+        let relative = urlencoding::decode(uri).map_err(|e| format!("bad URI '{uri}': {e}"))?;
+        self.files
+            .read(&self.directory.join(relative.as_ref()), kind)
+            .map_err(|e| e.to_string())
+    }
+}
+
 /// Loads every buffer: the GLB binary chunk, a base64 data URI, or a file next to the glTF.
 fn load_buffers(
     document: &Document,
     mut blob: Option<Vec<u8>>,
-    directory: &Path,
+    sources: &Sources,
 ) -> Result<Vec<Vec<u8>>, String> {
     document
         .buffers()
@@ -142,7 +175,8 @@ fn load_buffers(
                         buffer.index()
                     )
                 })?,
-                gltf::buffer::Source::Uri(uri) => read_uri(uri, directory)
+                gltf::buffer::Source::Uri(uri) => sources
+                    .read_uri(uri, InputKind::Mesh)
                     .map_err(|m| format!("buffer {}: {m}", buffer.index()))?,
             };
             if data.len() < buffer.length() {
@@ -158,24 +192,6 @@ fn load_buffers(
         .collect()
 }
 
-/// The bytes behind a URI: a base64 `data:` URI, or a percent-encoded path relative to the glTF.
-fn read_uri(uri: &str, directory: &Path) -> Result<Vec<u8>, String> {
-    if let Some(data) = uri.strip_prefix("data:") {
-        let (_, payload) = data
-            .split_once(";base64,")
-            .ok_or("only base64 data URIs are supported")?;
-        return base64::engine::general_purpose::STANDARD
-            .decode(payload)
-            .map_err(|e| format!("bad base64 data URI: {e}"));
-    }
-    if uri.contains("://") {
-        return Err(format!("'{uri}' is not a local file"));
-    }
-    let relative = urlencoding::decode(uri).map_err(|e| format!("bad URI '{uri}': {e}"))?;
-    let file = directory.join(relative.as_ref());
-    std::fs::read(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))
-}
-
 /// Textures decoded so far: (image index, sRGB) → index into `asset.textures`. An image used as
 /// both colour and data is stored twice, as its texels are decoded differently.
 type DecodedImages = HashMap<(usize, bool), usize>;
@@ -186,7 +202,7 @@ fn image_texture(
     image: gltf::Image,
     srgb: bool,
     buffers: &[Vec<u8>],
-    directory: &Path,
+    sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<usize, String> {
@@ -220,7 +236,9 @@ fn image_texture(
                 str::to_owned,
             );
             (
-                read_uri(uri, directory).map_err(|m| format!("image {}: {m}", image.index()))?,
+                sources
+                    .read_uri(uri, InputKind::Texture)
+                    .map_err(|m| format!("image {}: {m}", image.index()))?,
                 name,
             )
         }
@@ -238,7 +256,7 @@ fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Option<&
 fn convert_material(
     material: &gltf::Material,
     buffers: &[Vec<u8>],
-    directory: &Path,
+    sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<AssetMaterial, String> {
@@ -250,7 +268,7 @@ fn convert_material(
             info.texture().source(),
             true,
             buffers,
-            directory,
+            sources,
             decoded_images,
             asset,
         )?),
@@ -286,7 +304,7 @@ fn convert_material(
                 info.texture().source(),
                 false,
                 buffers,
-                directory,
+                sources,
                 decoded_images,
                 asset,
             )? as u32,

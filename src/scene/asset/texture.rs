@@ -6,14 +6,16 @@ use std::path::Path;
 use image::ImageReader;
 
 use super::{AssetError, TextureImage};
+use crate::input_file::{InputFiles, InputKind};
 
 /// Largest accepted width or height: GPUs commonly cap 2D images at 16384, and the check runs
 /// before any pixel is decoded so a hostile header cannot demand gigabytes.
 const MAX_TEXTURE_SIDE: u32 = 16384;
 
-/// Reads a PNG or JPEG colour image (format guessed from its bytes) as sRGB-encoded RGBA8.
-pub fn load_texture(path: &Path) -> Result<TextureImage, AssetError> {
-    let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
+/// Reads a PNG or JPEG colour image (format guessed from its bytes) through `files` as
+/// sRGB-encoded RGBA8.
+pub fn load_texture(files: &InputFiles, path: &Path) -> Result<TextureImage, AssetError> {
+    let bytes = files.read(path, InputKind::Texture)?;
     let name = path.file_name().map_or_else(
         || path.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
@@ -165,7 +167,7 @@ mod tests {
             png::BitDepth::Eight,
             &data,
         );
-        let texture = load_texture(&path).unwrap();
+        let texture = load_texture(&InputFiles::anywhere(), &path).unwrap();
         assert_eq!(
             (texture.width, texture.height, texture.name.as_str()),
             (4, 2, "tex.png")
@@ -189,7 +191,7 @@ mod tests {
             &[10, 200],
         );
         assert_eq!(
-            load_texture(&grey).unwrap().texels,
+            load_texture(&InputFiles::anywhere(), &grey).unwrap().texels,
             vec![[10, 10, 10, 255], [200, 200, 200, 255]]
         );
         let rgb16 = dir.join("rgb16.png");
@@ -202,7 +204,7 @@ mod tests {
             &[0xff, 0xff, 0x80, 0x00, 0x00, 0x00],
         );
         assert_eq!(
-            load_texture(&rgb16).unwrap().texels,
+            load_texture(&InputFiles::anywhere(), &rgb16).unwrap().texels,
             vec![[255, 128, 0, 255]]
         );
     }
@@ -220,16 +222,16 @@ mod tests {
             png::BitDepth::Eight,
             &[0; 20000],
         );
-        let err = load_texture(&huge).unwrap_err().to_string();
+        let err = load_texture(&InputFiles::anywhere(), &huge).unwrap_err().to_string();
         assert!(err.contains("huge.png") && err.contains("20000x1"), "{err}");
 
         let junk = dir.join("junk.png");
         std::fs::write(&junk, b"not an image at all").unwrap();
-        assert!(load_texture(&junk)
+        assert!(load_texture(&InputFiles::anywhere(), &junk)
             .unwrap_err()
             .to_string()
             .contains("junk.png"));
-        assert!(load_texture(&dir.join("missing.png"))
+        assert!(load_texture(&InputFiles::anywhere(), &dir.join("missing.png"))
             .unwrap_err()
             .to_string()
             .contains("missing.png"));
