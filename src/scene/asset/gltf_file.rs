@@ -29,8 +29,9 @@ use base64::Engine as _;
 use glam::{Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
-use gltf::{Accessor, Document, Semantic};
+use gltf::{Document, Semantic};
 
+use super::gltf_accessors::AccessorLimits;
 use super::{
     texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, MeshData,
     MetallicRoughness,
@@ -78,6 +79,9 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     }
     let document = gltf::Document::from_json(json)
         .map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
+    // The blob is a copy: the file's bytes are not needed past here, only their count.
+    let file_bytes = bytes.len() as u64;
+    drop(bytes);
     let sources = Sources {
         files,
         directory: path.parent().unwrap_or(Path::new(".")),
@@ -100,10 +104,11 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     }
     let mut skipped_primitives = 0;
     let mut default_material = None;
+    let mut limits = AccessorLimits::new(&buffers, file_bytes);
     for mesh in document.meshes() {
         let mut converted = convert_mesh(
             &mesh,
-            &buffers,
+            &mut limits,
             &mut asset.materials,
             &mut default_material,
             &mut skipped_primitives,
@@ -335,7 +340,7 @@ fn convert_material(
 /// primitive has it, since the result needs exactly one per position.
 fn convert_mesh(
     mesh: &gltf::Mesh,
-    buffers: &[Vec<u8>],
+    limits: &mut AccessorLimits,
     materials: &mut Vec<AssetMaterial>,
     default_material: &mut Option<u32>,
     skipped_primitives: &mut usize,
@@ -352,6 +357,7 @@ fn convert_mesh(
             *skipped_primitives += 1;
             continue;
         }
+        let buffers = limits.buffers();
         let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(Vec::as_slice));
         let outside =
             |what: &str| format!("primitive {p}: the {what} accessor lies outside its buffer");
@@ -359,7 +365,7 @@ fn convert_mesh(
         let position_accessor = primitive
             .get(&Semantic::Positions)
             .ok_or_else(|| format!("primitive {p} has no POSITION"))?;
-        check_accessor(&position_accessor, Dimensions::Vec3, &[DataType::F32])
+        limits.admit(&position_accessor, Dimensions::Vec3, &[DataType::F32])
             .map_err(|m| format!("primitive {p}: POSITION {m}"))?;
         let positions: Vec<Vec3> = reader
             .read_positions()
@@ -377,7 +383,7 @@ fn convert_mesh(
 
         match primitive.get(&Semantic::Normals) {
             Some(accessor) if all_normals => {
-                check_accessor(&accessor, Dimensions::Vec3, &[DataType::F32])
+                limits.admit(&accessor, Dimensions::Vec3, &[DataType::F32])
                     .map_err(|m| format!("primitive {p}: NORMAL {m}"))?;
                 normals.extend(
                     reader
@@ -391,7 +397,7 @@ fn convert_mesh(
         }
         match primitive.get(&Semantic::TexCoords(0)) {
             Some(accessor) if all_uvs => {
-                check_accessor(
+                limits.admit(
                     &accessor,
                     Dimensions::Vec2,
                     &[DataType::F32, DataType::U8, DataType::U16],
@@ -411,7 +417,7 @@ fn convert_mesh(
 
         let indices: Vec<u32> = match primitive.indices() {
             Some(accessor) => {
-                check_accessor(
+                limits.admit(
                     &accessor,
                     Dimensions::Scalar,
                     &[DataType::U8, DataType::U16, DataType::U32],
@@ -454,34 +460,6 @@ fn convert_mesh(
         out.uvs.clear();
     }
     Ok(out)
-}
-
-/// Rejects accessor shapes the crate's readers would panic on (they assume a valid file).
-fn check_accessor(
-    accessor: &Accessor,
-    dimensions: Dimensions,
-    types: &[DataType],
-) -> Result<(), String> {
-    if accessor.dimensions() != dimensions || !types.contains(&accessor.data_type()) {
-        return Err(format!(
-            "accessor {} has an unsupported type {:?} {:?}",
-            accessor.index(),
-            accessor.dimensions(),
-            accessor.data_type()
-        ));
-    }
-    let stride_too_small = accessor
-        .view()
-        .and_then(|view| view.stride())
-        .is_some_and(|stride| stride < accessor.size());
-    let sparse_empty = accessor.sparse().is_some_and(|sparse| sparse.count() == 0);
-    if accessor.count() == 0 || sparse_empty || stride_too_small {
-        return Err(format!(
-            "accessor {} is empty or has a byte stride below its element size",
-            accessor.index()
-        ));
-    }
-    Ok(())
 }
 
 /// Triangles of a triangle-list, strip or fan primitive; strips alternate winding so that every

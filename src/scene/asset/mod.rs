@@ -2,6 +2,7 @@
 //! textures, instances and an optional camera. The renderer turns an [`Asset`] into GPU buffers;
 //! nothing here knows about Vulkan.
 
+mod gltf_accessors;
 mod gltf_file;
 mod obj;
 mod ply;
