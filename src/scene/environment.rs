@@ -45,7 +45,7 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) ->
         bail!("environment.rotation must be finite, got {}", e.rotation);
     }
     let Some(&(file, projection)) = given.first() else {
-        let color = Vec3::from(e.color.unwrap_or([0.0; 3]));
+        let color = Vec3::from(e.color.map_or([0.0; 3], |c| c.0));
         if !color.is_finite() || color.min_element() < 0.0 {
             bail!("environment.color must be finite and >= 0, got {color:?}");
         }

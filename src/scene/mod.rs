@@ -5,6 +5,7 @@ mod environment;
 mod format;
 mod mesh;
 mod optics;
+mod toml_error;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, load_asset_from, Asset, AssetError};
@@ -14,7 +15,7 @@ pub use optics::{average_fresnel, metal, METALS};
 
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{bail, Context as _, Result};
-use format::{FilmFile, IntegratorFile, MaterialFile, Placement, Scale, SceneFile};
+use format::{Array, FilmFile, IntegratorFile, MaterialFile, Placement, Scale, SceneFile, Triple};
 use glam::{Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -214,7 +215,7 @@ impl Scene {
     /// Parses scene text; `name` appears in messages, `base` resolves relative file paths and the
     /// files they name are read through `files`.
     pub fn parse_from(files: &InputFiles, text: &str, name: &str, base: &Path) -> Result<Scene> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        let file: SceneFile = toml::from_str(text).map_err(|e| anyhow::anyhow!("{name}: {}", toml_error::describe(&e, text)))?;
         build(file, name, base, files).with_context(|| name.to_string())
     }
 
@@ -226,7 +227,7 @@ impl Scene {
     }
 }
 
-fn vec3(key: &str, v: [f32; 3]) -> Result<Vec3> {
+fn vec3(key: &str, Array(v): Triple) -> Result<Vec3> {
     if v.iter().any(|c| !c.is_finite()) {
         bail!("{key} must be finite, got {v:?}");
     }
@@ -240,7 +241,7 @@ fn finite(key: &str, v: f32) -> Result<f32> {
     Ok(v)
 }
 
-fn non_negative3(key: &str, v: [f32; 3]) -> Result<Vec3> {
+fn non_negative3(key: &str, v: Triple) -> Result<Vec3> {
     let v = vec3(key, v)?;
     if v.min_element() < 0.0 {
         bail!("{key} must not be negative, got {v:?}");
@@ -354,7 +355,8 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
     }
     for (k, t) in file.triangles.iter().enumerate() {
         let key = format!("triangles[{k}].vertices");
-        let v = [vec3(&key, t.vertices[0])?, vec3(&key, t.vertices[1])?, vec3(&key, t.vertices[2])?];
+        let Array([a, b, c]) = t.vertices;
+        let v = [vec3(&key, a)?, vec3(&key, b)?, vec3(&key, c)?];
         if (v[1] - v[0]).cross(v[2] - v[0]).length() == 0.0 {
             bail!("{key}: the triangle has no area");
         }
