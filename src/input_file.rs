@@ -103,7 +103,7 @@ enum Problem {
     Io(io::Error),
     #[error("not a regular file ({0}): caustica reads its inputs only from regular files")]
     NotRegular(&'static str),
-    #[error("{} is over the {} limit for {}", describe_bytes(*size), describe_bytes(kind.cap()), kind.noun())]
+    #[error("{size} bytes, over the {} limit for {}", describe_bytes(kind.cap()), kind.noun())]
     TooLarge { size: u64, kind: InputKind },
     #[error("grew past the {} limit for {} while being read", describe_bytes(kind.cap()), kind.noun())]
     Grew { kind: InputKind },
