@@ -334,7 +334,7 @@ mod tests {
         let mut sink = Vec::new();
         let err = file.read_to_end(&mut sink).unwrap_err().to_string();
         assert!(err.contains("scene.toml") && err.contains("grew past the 16 MiB limit"), "{err}");
-        assert_eq!(sink.len() as u64, InputKind::Scene.cap() + 1, "reading stops one byte past the cap");
+        assert!(sink.len() as u64 <= InputKind::Scene.cap(), "{} bytes came through", sink.len());
     }
 
     #[test]
@@ -373,7 +373,8 @@ mod tests {
             "fs::read_to_string(",
             "File::open(",
             "OpenOptions::new(",
-            "from_file(",
+            ".from_file(",
+            "_from_file(",
             "load_obj(",
             "load_mtl(",
             "gltf::import",

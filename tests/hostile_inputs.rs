@@ -316,6 +316,36 @@ fn one_accessor_reused_by_very_many_primitives_cannot_multiply_the_file() {
     assert!(e.contains("more than 64 times the") && e.contains("glTF and its buffers"), "{e}");
 }
 
+/// A glTF naming one 8 MiB file for 2,000 buffers, and one 4096 x 4096 PNG (64 MiB as RGBA8) for
+/// 200 materials' textures: read and decoded once each, it loads in well under the 1 GiB
+/// address-space limit (16 GB and 12.8 GB if each name were read or decoded again). It has no
+/// meshes, so it fails after loading, with "no triangles to render".
+#[cfg(unix)]
+#[test]
+fn one_file_named_many_times_in_a_gltf_is_read_and_decoded_once() {
+    let dir = fresh_dir("hostile-reuse");
+    std::fs::File::create(dir.join("big.bin")).unwrap().set_len(8 << 20).unwrap();
+    let mut png = Vec::new();
+    let mut encoder = png::Encoder::new(&mut png, 4096, 4096);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.write_header().unwrap().write_image_data(&vec![200; 4096 * 4096]).unwrap();
+    write(&dir.join("big.png"), png);
+    let buffers = vec![format!(r#"{{"uri": "big.bin", "byteLength": {}}}"#, 8 << 20); 2000].join(", ");
+    let materials = (0..200).map(|i| format!(r#"{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": {i}}}}}}}"#)).collect::<Vec<_>>().join(", ");
+    let textures = (0..200).map(|i| format!(r#"{{"source": {i}}}"#)).collect::<Vec<_>>().join(", ");
+    let images = vec![r#"{"uri": "big.png"}"#; 200].join(", ");
+    let gltf = write(
+        &dir.join("reuse.gltf"),
+        format!(r#"{{"asset": {{"version": "2.0"}}, "buffers": [{buffers}], "materials": [{materials}], "textures": [{textures}], "images": [{images}]}}"#),
+    );
+    let out = dir.join("out.png");
+    let started = Instant::now();
+    let o = run_with(&["render", gltf.to_str().unwrap(), "-o", out.to_str().unwrap()], &[], Some("ulimit -v 1048576"));
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(o.stderr.contains("reuse.gltf: no triangles to render"), "{}", o.stderr);
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+}
+
 /// A scene folder with a mesh, its MTL and its texture in subfolders, and files outside it.
 struct Confined {
     root: PathBuf,

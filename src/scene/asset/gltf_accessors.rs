@@ -13,6 +13,8 @@
 //!   that size: one large accessor reused by thousands of primitives would otherwise be copied
 //!   thousands of times.
 
+use std::rc::Rc;
+
 use gltf::accessor::{DataType, Dimensions};
 use gltf::Accessor;
 
@@ -24,7 +26,7 @@ pub(super) const DECODE_FACTOR: u64 = 64;
 
 /// What reading accessors from one glTF may still allocate.
 pub(super) struct AccessorLimits<'b> {
-    buffers: &'b [Vec<u8>],
+    buffers: &'b [Rc<Vec<u8>>],
     /// Bytes of the glTF file and all its buffers.
     file_bytes: u64,
     /// Bytes the accessors admitted so far decode to.
@@ -32,14 +34,20 @@ pub(super) struct AccessorLimits<'b> {
 }
 
 impl<'b> AccessorLimits<'b> {
-    /// Limits for a glTF of `file_bytes` bytes (the file itself) whose buffers are `buffers`.
-    pub(super) fn new(buffers: &'b [Vec<u8>], file_bytes: u64) -> Self {
-        let buffer_bytes: u64 = buffers.iter().map(|b| b.len() as u64).sum();
+    /// Limits for a glTF of `file_bytes` bytes (the file itself) whose buffers are `buffers`
+    /// (several may share one file's bytes, which count once).
+    pub(super) fn new(buffers: &'b [Rc<Vec<u8>>], file_bytes: u64) -> Self {
+        let mut seen = std::collections::HashSet::new();
+        let buffer_bytes: u64 = buffers
+            .iter()
+            .filter(|b| seen.insert(Rc::as_ptr(b)))
+            .map(|b| b.len() as u64)
+            .sum();
         AccessorLimits { buffers, file_bytes: file_bytes + buffer_bytes, decoded: 0 }
     }
 
     /// The buffers' data, for the crate's readers.
-    pub(super) fn buffers(&self) -> &'b [Vec<u8>] {
+    pub(super) fn buffers(&self) -> &'b [Rc<Vec<u8>>] {
         self.buffers
     }
 

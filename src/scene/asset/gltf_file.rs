@@ -22,8 +22,10 @@
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 use base64::Engine as _;
 use glam::{Mat4, Vec2, Vec3};
@@ -85,6 +87,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     let sources = Sources {
         files,
         directory: path.parent().unwrap_or(Path::new(".")),
+        read: RefCell::new(HashMap::new()),
     };
     let buffers =
         load_buffers(&document, blob, &sources).map_err(|m| AssetError::invalid(path, m))?;
@@ -140,27 +143,42 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
 struct Sources<'a> {
     files: &'a InputFiles,
     directory: &'a Path,
+    /// Files read so far. A glTF naming one file for many buffers or images reads it once: a
+    /// short JSON listing a large file a thousand times must not read it a thousand times.
+    read: RefCell<HashMap<PathBuf, Rc<Vec<u8>>>>,
 }
 
 impl Sources<'_> {
-    /// The bytes behind a URI: a base64 `data:` URI, or a percent-encoded path relative to the
-    /// glTF, read as `kind`.
-    fn read_uri(&self, uri: &str, kind: InputKind) -> Result<Vec<u8>, String> {
-        if let Some(data) = uri.strip_prefix("data:") {
-            let (_, payload) = data
-                .split_once(";base64,")
-                .ok_or("only base64 data URIs are supported")?;
-            return base64::engine::general_purpose::STANDARD
-                .decode(payload)
-                .map_err(|e| format!("bad base64 data URI: {e}"));
+    /// The file a URI names (a percent-encoded path relative to the glTF), or `None` for a
+    /// `data:` URI.
+    fn file_of(&self, uri: &str) -> Result<Option<PathBuf>, String> {
+        if uri.starts_with("data:") {
+            return Ok(None);
         }
         if uri.contains("://") {
             return Err(format!("'{uri}' is not a local file"));
         }
         let relative = urlencoding::decode(uri).map_err(|e| format!("bad URI '{uri}': {e}"))?;
-        self.files
-            .read(&self.directory.join(relative.as_ref()), kind)
-            .map_err(|e| e.to_string())
+        Ok(Some(self.directory.join(relative.as_ref())))
+    }
+
+    /// The bytes behind a URI: a base64 `data:` URI, or a file read as `kind`.
+    fn read_uri(&self, uri: &str, kind: InputKind) -> Result<Rc<Vec<u8>>, String> {
+        let Some(file) = self.file_of(uri)? else {
+            let (_, payload) = uri
+                .split_once(";base64,")
+                .ok_or("only base64 data URIs are supported")?;
+            return base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map(Rc::new)
+                .map_err(|e| format!("bad base64 data URI: {e}"));
+        };
+        if let Some(bytes) = self.read.borrow().get(&file) {
+            return Ok(Rc::clone(bytes));
+        }
+        let bytes = Rc::new(self.files.read(&file, kind).map_err(|e| e.to_string())?);
+        self.read.borrow_mut().insert(file, Rc::clone(&bytes));
+        Ok(bytes)
     }
 }
 
@@ -169,12 +187,12 @@ fn load_buffers(
     document: &Document,
     mut blob: Option<Vec<u8>>,
     sources: &Sources,
-) -> Result<Vec<Vec<u8>>, String> {
+) -> Result<Vec<Rc<Vec<u8>>>, String> {
     document
         .buffers()
         .map(|buffer| {
             let data = match buffer.source() {
-                gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                gltf::buffer::Source::Bin => blob.take().map(Rc::new).ok_or_else(|| {
                     format!(
                         "buffer {} refers to a missing GLB binary chunk",
                         buffer.index()
@@ -197,23 +215,40 @@ fn load_buffers(
         .collect()
 }
 
-/// Textures decoded so far: (image index, sRGB) → index into `asset.textures`. An image used as
-/// both colour and data is stored twice, as its texels are decoded differently.
-type DecodedImages = HashMap<(usize, bool), usize>;
+/// What an image's bytes come from: images sharing a buffer view or a file are decoded once.
+#[derive(Clone, PartialEq, Eq, Hash)]
+enum ImageSource {
+    /// A data URI of this image.
+    Image(usize),
+    View(usize),
+    File(PathBuf),
+}
+
+/// Textures decoded so far: (source, sRGB) → index into `asset.textures`. An image used as both
+/// colour and data is stored twice, as its texels are decoded differently.
+type DecodedImages = HashMap<(ImageSource, bool), usize>;
 
 /// Decodes each image the first time a material uses it in a colour space (sRGB for base colour,
 /// linear for metallic-roughness), into `asset.textures`.
 fn image_texture(
     image: gltf::Image,
     srgb: bool,
-    buffers: &[Vec<u8>],
+    buffers: &[Rc<Vec<u8>>],
     sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<usize, String> {
-    if let Some(&index) = decoded_images.get(&(image.index(), srgb)) {
+    let source = match image.source() {
+        gltf::image::Source::View { view, .. } => ImageSource::View(view.index()),
+        gltf::image::Source::Uri { uri, .. } => sources
+            .file_of(uri)
+            .map_err(|m| format!("image {}: {m}", image.index()))?
+            .map_or(ImageSource::Image(image.index()), ImageSource::File),
+    };
+    if let Some(&index) = decoded_images.get(&(source.clone(), srgb)) {
         return Ok(index);
     }
+    let file_bytes;
     let (bytes, name) = match image.source() {
         gltf::image::Source::View { view, .. } => {
             let bytes = view_bytes(&view, buffers).ok_or_else(|| {
@@ -223,7 +258,7 @@ fn image_texture(
                 )
             })?;
             (
-                bytes.to_vec(),
+                bytes,
                 image
                     .name()
                     .map_or_else(|| format!("image {}", image.index()), str::to_owned),
@@ -240,27 +275,25 @@ fn image_texture(
                 },
                 str::to_owned,
             );
-            (
-                sources
-                    .read_uri(uri, InputKind::Texture)
-                    .map_err(|m| format!("image {}: {m}", image.index()))?,
-                name,
-            )
+            file_bytes = sources
+                .read_uri(uri, InputKind::Texture)
+                .map_err(|m| format!("image {}: {m}", image.index()))?;
+            (file_bytes.as_slice(), name)
         }
     };
-    asset.textures.push(texture::decode_texture(&bytes, name, srgb)?);
-    decoded_images.insert((image.index(), srgb), asset.textures.len() - 1);
+    asset.textures.push(texture::decode_texture(bytes, name, srgb)?);
+    decoded_images.insert((source, srgb), asset.textures.len() - 1);
     Ok(asset.textures.len() - 1)
 }
 
-fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Option<&'b [u8]> {
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Rc<Vec<u8>>]) -> Option<&'b [u8]> {
     let end = view.offset().checked_add(view.length())?;
     buffers.get(view.buffer().index())?.get(view.offset()..end)
 }
 
 fn convert_material(
     material: &gltf::Material,
-    buffers: &[Vec<u8>],
+    buffers: &[Rc<Vec<u8>>],
     sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
@@ -358,7 +391,7 @@ fn convert_mesh(
             continue;
         }
         let buffers = limits.buffers();
-        let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(Vec::as_slice));
+        let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|b| b.as_slice()));
         let outside =
             |what: &str| format!("primitive {p}: the {what} accessor lies outside its buffer");
 
