@@ -1,13 +1,15 @@
 //! caustica: a physically based path tracer with a Rust host and a GLSL compute kernel on Vulkan.
 //!
 //! Rooms: `scene` (TOML scenes, meshes, environment maps), `bvh` (build, flatten, CPU traversal),
-//! `image` (PFM/EXR/PNG), `gpu` (all Vulkan), `render` (the kernel and progressive passes), `farm` (time budgets, checkpoints, partial renders and
-//! merging them).
+//! `image` (PFM/EXR/PNG), `input_file` (how every input file is read: regular files only, size
+//! caps, `--confine`), `gpu` (all Vulkan), `render` (the kernel and progressive passes), `farm`
+//! (time budgets, checkpoints, partial renders and merging them).
 
 pub mod bvh;
 pub mod farm;
 pub mod gpu;
 pub mod image;
+pub mod input_file;
 pub mod render;
 pub mod scene;
 #[cfg(test)]

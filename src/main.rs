@@ -146,6 +146,10 @@ enum Command {
         /// Print a summary as JSON on standard output at the end.
         #[arg(long)]
         json: bool,
+        /// Read only files inside the scene's folder and the shared data folder ($CAUSTICA_DATA), after
+        /// resolving `..` and symbolic links: for scenes someone else wrote (docs/farm.md).
+        #[arg(long)]
+        confine: bool,
         #[command(flatten)]
         gpu: DeviceArgs,
     },
@@ -189,13 +193,18 @@ enum Command {
         /// Print the results as JSON.
         #[arg(long)]
         json: bool,
+        /// Read only files inside the scene's folder and the shared data folder ($CAUSTICA_DATA), after
+        /// resolving `..` and symbolic links: for scenes someone else wrote (docs/farm.md).
+        #[arg(long)]
+        confine: bool,
         #[command(flatten)]
         gpu: DeviceArgs,
     },
 }
 
-fn load_scene(path: Option<&PathBuf>) -> Result<Scene> {
+fn load_scene(path: Option<&PathBuf>, confine: bool) -> Result<Scene> {
     match path {
+        Some(p) if confine => Scene::load_from(&caustica::scene::confinement(p), p),
         Some(p) => Scene::load(p),
         None => Ok(Scene::default_scene()),
     }
@@ -482,8 +491,8 @@ fn parse_command_line() -> Cli {
 
 fn run() -> Result<()> {
     match parse_command_line().command {
-        Command::Render { scene, output, spp, width, height, seed, aov, output_args, farm, quiet, json, gpu } => {
-            let mut s = load_scene(scene.as_ref())?;
+        Command::Render { scene, output, spp, width, height, seed, aov, output_args, farm, quiet, json, confine, gpu } => {
+            let mut s = load_scene(scene.as_ref(), confine)?;
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
@@ -519,7 +528,7 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, aov, json, gpu } => bench(load_scene(scene.as_ref())?, width, height, spp, aov.unwrap_or_default(), json, &gpu),
+        Command::Bench { width, height, spp, scene, aov, json, confine, gpu } => bench(load_scene(scene.as_ref(), confine)?, width, height, spp, aov.unwrap_or_default(), json, &gpu),
     }
 }
 

@@ -60,6 +60,105 @@ fn unknown_key_is_named_with_its_line() {
     assert!(e.contains("test.toml"), "{e}");
 }
 
+/// A scene setting every fixed-length array the format has (`square.obj` must be in its folder).
+const EVERY_ARRAY: &str = r#"[camera]
+position = [0.0, 1.0, 3.0]
+look_at = [0.0, 1.0, 0.0]
+up = [0.0, 1.0, 0.0]
+[materials.m]
+albedo = [0.5, 0.5, 0.5]
+emission = [0.0, 0.0, 0.0]
+[materials.c]
+eta = [0.2, 0.9, 1.1]
+k = [3.9, 2.4, 2.1]
+[[spheres]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "m"
+[[quads]]
+origin = [0.0, 0.0, 0.0]
+edge_u = [1.0, 0.0, 0.0]
+edge_v = [0.0, 1.0, 0.0]
+material = "m"
+[[triangles]]
+vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5]]
+material = "m"
+[[meshes]]
+file = "square.obj"
+translate = [0.0, 0.0, -1.0]
+rotate = [0.0, 0.0, 10.0]
+scale = [1.0, 1.0, 1.0]
+instances = [{ translate = [1.0, 0.0, 0.0], rotate = [0.0, 90.0, 0.0], scale = [1.0, 2.0, 1.0] }]
+[environment]
+color = [1.0, 1.0, 1.0]
+"#;
+
+#[test]
+fn every_array_key_refuses_a_wrong_number_of_elements() {
+    let dir = temp_dir("every-array");
+    std::fs::write(dir.join("square.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n").unwrap();
+    Scene::parse(EVERY_ARRAY, "test.toml", &dir).expect("the unchanged scene is valid");
+    // (text in EVERY_ARRAY, a wrong replacement, the key the error must name, the length it got)
+    let mut cases: Vec<(&str, String, &str, usize)> = Vec::new();
+    for (original, key) in [
+        ("position = [0.0, 1.0, 3.0]", "camera.position"),
+        ("look_at = [0.0, 1.0, 0.0]", "camera.look_at"),
+        ("up = [0.0, 1.0, 0.0]", "camera.up"),
+        ("albedo = [0.5, 0.5, 0.5]", "materials.m.albedo"),
+        ("emission = [0.0, 0.0, 0.0]", "materials.m.emission"),
+        ("eta = [0.2, 0.9, 1.1]", "materials.c.eta"),
+        ("k = [3.9, 2.4, 2.1]", "materials.c.k"),
+        ("center = [0.0, 0.0, 0.0]", "spheres.center"),
+        ("origin = [0.0, 0.0, 0.0]", "quads.origin"),
+        ("edge_u = [1.0, 0.0, 0.0]", "quads.edge_u"),
+        ("edge_v = [0.0, 1.0, 0.0]", "quads.edge_v"),
+        ("translate = [0.0, 0.0, -1.0]", "meshes.translate"),
+        ("rotate = [0.0, 0.0, 10.0]", "meshes.rotate"),
+        ("scale = [1.0, 1.0, 1.0]", "meshes.scale"),
+        ("translate = [1.0, 0.0, 0.0]", "translate"),
+        ("rotate = [0.0, 90.0, 0.0]", "rotate"),
+        ("scale = [1.0, 2.0, 1.0]", "scale"),
+        ("color = [1.0, 1.0, 1.0]", "environment.color"),
+    ] {
+        cases.push((original, original.replace(']', ", 7.0]"), key, 4));
+        cases.push((original, format!("{}]", &original[..original.rfind(", ").unwrap()]), key, 2));
+    }
+    cases.push(("[0.0, 1.0, 0.5]]", "[0.0, 1.0, 0.5, 7.0]]".to_owned(), "triangles.vertices", 4));
+    cases.push(("[0.0, 1.0, 0.5]]", "[0.0, 1.0, 0.5], [1.0, 1.0, 1.0]]".to_owned(), "triangles.vertices", 4));
+    cases.push((", [0.0, 1.0, 0.5]]", "]".to_owned(), "triangles.vertices", 2));
+    for (original, wrong, key, length) in &cases {
+        assert_eq!(EVERY_ARRAY.matches(original).count(), 1, "{original}");
+        let text = EVERY_ARRAY.replace(original, wrong);
+        let line = EVERY_ARRAY[..EVERY_ARRAY.find(original).unwrap()].matches('\n').count() + 1;
+        let e = format!("{:#}", Scene::parse(&text, "test.toml", &dir).expect_err(wrong));
+        for needle in ["test.toml: ", &format!("line {line}, "), &format!("invalid length {length}, expected an array of exactly 3 elements"), key] {
+            assert!(e.contains(needle), "{wrong}: '{needle}' missing from: {e}");
+        }
+    }
+}
+
+#[test]
+fn a_long_line_is_quoted_in_part_only() {
+    let e = error_of(&format!("{MINIMAL}fov = \"{}\"\n", "x".repeat(1 << 20)));
+    assert!(e.starts_with("test.toml: line 4, column 7: invalid type: string"), "{}", &e[..e.len().min(2000)]);
+    assert!(e.len() < 1500, "{} bytes for one error", e.len());
+}
+
+#[test]
+fn nesting_beyond_the_parser_limit_is_an_error_with_its_line() {
+    let deep = 5000;
+    let cases = [
+        format!("{MINIMAL}\n[{}]\n", vec!["a"; deep].join(".")),
+        format!("{MINIMAL}\nx = {}{}\n", "[".repeat(deep), "]".repeat(deep)),
+        format!("{MINIMAL}\nx = {}1{}\n", "{ a = ".repeat(deep), " }".repeat(deep)),
+    ];
+    for text in cases {
+        let e = error_of(&text);
+        assert!(e.starts_with("test.toml: line 5, column "), "{}", &e[..e.len().min(2000)]);
+        assert!(e.len() < 1500, "{} bytes for one error", e.len());
+    }
+}
+
 #[test]
 fn unknown_material_is_named() {
     let e = error_of(&format!("{MINIMAL}[[spheres]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"gold\"\n"));

@@ -2,13 +2,14 @@
 
 use std::path::Path;
 
+use std::io::BufReader;
+
 use ::exr::meta::MetaData;
-use ::exr::prelude::{
-    read_first_rgba_layer_from_file, Image, SpecificChannels, Vec2, WritableImage,
-};
+use ::exr::prelude::{Image, ReadChannels as _, ReadLayers as _, SpecificChannels, Vec2, WritableImage};
 
 use super::atomic::write_atomically;
 use super::{check_size, file_name, ImageError, RgbImage};
+use crate::input_file::{InputFiles, InputKind};
 
 /// Writes full-precision f32 RGB with the crate's default lossless
 /// compression, atomically.
@@ -28,18 +29,26 @@ pub fn write(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
 
 /// Reads the first layer that has R, G and B channels; alpha is dropped and
 /// half or u32 samples are converted to f32. In a layered file written by
-/// [`super::write_exr_document`] that is the top-level (beauty) layer.
-pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
-    check_header_sizes(path)?;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        // Sizes fit in u32: check_header_sizes bounded them by 2^28.
-        |size: Vec2<usize>, _| RgbImage::new(size.0 as u32, size.1 as u32),
-        |img: &mut RgbImage, pos: Vec2<usize>, (r, g, b, _): (f32, f32, f32, f32)| {
-            img.set(pos.0 as u32, pos.1 as u32, [r, g, b])
-        },
-    )
-    .map_err(|e| exr_error(path, e))?;
+/// [`super::write_exr_document`] that is the top-level (beauty) layer. The
+/// file is read through `files` (as the crate's `read_first_rgba_layer_from_file`
+/// would, but never opening it itself).
+pub fn read(files: &InputFiles, path: &Path) -> Result<RgbImage, ImageError> {
+    let kind = InputKind::RadianceImage;
+    check_header_sizes(files, path, kind)?;
+    let image = ::exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            // Sizes fit in u32: check_header_sizes bounded them by 2^28.
+            |size: Vec2<usize>, _| RgbImage::new(size.0 as u32, size.1 as u32),
+            |img: &mut RgbImage, pos: Vec2<usize>, (r, g, b, _): (f32, f32, f32, f32)| {
+                img.set(pos.0 as u32, pos.1 as u32, [r, g, b])
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(BufReader::new(files.open(path, kind)?))
+        .map_err(|e| exr_error(path, e))?;
     Ok(image.layer_data.channel_data.pixels)
 }
 
@@ -47,12 +56,8 @@ pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
 /// checks sizes from the headers alone first. Any oversized layer rejects the
 /// file, which is stricter than needed but avoids duplicating the crate's
 /// choice of "first valid layer".
-pub(crate) fn check_header_sizes(path: &Path) -> Result<(), ImageError> {
-    let file = std::fs::File::open(path).map_err(|cause| ImageError::Io {
-        file: file_name(path),
-        cause,
-    })?;
-    let meta = MetaData::read_from_unbuffered(file, false).map_err(|e| exr_error(path, e))?;
+pub(crate) fn check_header_sizes(files: &InputFiles, path: &Path, kind: InputKind) -> Result<(), ImageError> {
+    let meta = MetaData::read_from_unbuffered(files.open(path, kind)?, false).map_err(|e| exr_error(path, e))?;
     for header in &meta.headers {
         let Vec2(width, height) = header.layer_size;
         check_size(&file_name(path), width as u64, height as u64)?;
@@ -87,7 +92,7 @@ mod tests {
         }
         let path = temp_path("roundtrip");
         write(&path, &img).unwrap();
-        let back = read(&path);
+        let back = read(&InputFiles::anywhere(), &path);
         std::fs::remove_file(&path).unwrap();
         assert_eq!(back.unwrap(), img);
     }
@@ -96,7 +101,7 @@ mod tests {
     fn garbage_is_rejected_with_file_name() {
         let path = temp_path("garbage");
         std::fs::write(&path, b"not an exr file at all").unwrap();
-        let err = read(&path).unwrap_err().to_string();
+        let err = read(&InputFiles::anywhere(), &path).unwrap_err().to_string();
         std::fs::remove_file(&path).unwrap();
         assert!(
             err.starts_with(&format!("{}: EXR: ", path.display())),

@@ -14,13 +14,14 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use ::exr::prelude::{
-    read_all_flat_layers_from_file, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatImage,
+    read, AnyChannel, ReadChannels as _, ReadLayers as _, AnyChannels, AttributeValue, Encoding, FlatImage,
     FlatSamples, Image, Layer, LayerAttributes, Text, Vec2, WritableImage,
 };
 
 use super::atomic::write_atomically;
 use super::exr::{check_header_sizes, exr_error};
 use super::{check_size, file_name, ImageError, RgbImage};
+use crate::input_file::{InputFiles, InputKind};
 
 /// One group of channels, e.g. beauty "R", "G", "B", or depth "Z".
 #[derive(Clone, Debug, PartialEq)]
@@ -87,9 +88,20 @@ pub fn write_exr_document(path: &Path, doc: &ExrDocument) -> Result<(), ImageErr
 /// Reads every channel of every layer (half and u32 samples converted to
 /// f32) and the text attributes. Files with several parts are accepted if
 /// all parts have the same size; a part's name then prefixes its channels.
+/// Partial renders come from the command line (`merge`, `--resume`), so from anywhere; they are
+/// read as the crate's `read_all_flat_layers_from_file` would, through [`InputFiles`].
 pub fn read_exr_document(path: &Path) -> Result<ExrDocument, ImageError> {
-    check_header_sizes(path)?;
-    let image = read_all_flat_layers_from_file(path).map_err(|e| exr_error(path, e))?;
+    let (files, kind) = (InputFiles::anywhere(), InputKind::PartialRender);
+    check_header_sizes(&files, path, kind)?;
+    let file = std::io::BufReader::new(files.open(path, kind)?);
+    let image: FlatImage = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(file)
+        .map_err(|e| exr_error(path, e))?;
     decode(&image).map_err(|reason| ImageError::ExrLayout {
         file: file_name(path),
         reason,

@@ -13,6 +13,9 @@ pub mod tonemap;
 use std::path::Path;
 
 pub use atomic::{check_writable, remove_stale_temp_files, remove_temp_files_in_flight};
+
+use crate::input_file::{InputError, InputFiles};
+
 pub use compare::{compare, Comparison};
 pub use exr_layers::{read_exr_document, write_exr_document, ExrDocument, ExrLayer};
 pub use png::PngDepth;
@@ -72,6 +75,9 @@ impl RgbImage {
 /// themselves as their own source.)
 #[derive(Debug, thiserror::Error)]
 pub enum ImageError {
+    /// Not a readable regular file within its size cap (or outside `--confine`).
+    #[error(transparent)]
+    Input(#[from] InputError),
     #[error("{file}: {cause}")]
     Io { file: String, cause: std::io::Error },
     #[error("{file}: cannot be written: {reason}")]
@@ -141,11 +147,18 @@ fn extension(path: &Path) -> Option<String> {
         .map(str::to_ascii_lowercase)
 }
 
-/// Reads a radiance image, choosing the format by extension (case-insensitive).
+/// Reads a radiance image from anywhere (the command line's images), choosing the format by
+/// extension (case-insensitive).
 pub fn read_image(path: &Path) -> Result<RgbImage, ImageError> {
+    read_image_from(&InputFiles::anywhere(), path)
+}
+
+/// Reads a radiance image through `files` (a scene's environment map, under the scene's
+/// confinement), choosing the format by extension (case-insensitive).
+pub fn read_image_from(files: &InputFiles, path: &Path) -> Result<RgbImage, ImageError> {
     match extension(path).as_deref() {
-        Some("pfm") => pfm::read(path),
-        Some("exr") => exr::read(path),
+        Some("pfm") => pfm::read(files, path),
+        Some("exr") => exr::read(files, path),
         _ => Err(ImageError::UnsupportedExtension {
             file: file_name(path),
             expected: ".pfm or .exr",

@@ -7,15 +7,12 @@ use std::path::Path;
 
 use super::atomic::write_atomically;
 use super::{check_size, file_name, ImageError, RgbImage};
+use crate::input_file::{InputFiles, InputKind};
 
-/// Reads a PFM file. Non-finite pixels are kept; see [`check_finite`].
-pub fn read(path: &Path) -> Result<RgbImage, ImageError> {
-    let file = file_name(path);
-    let bytes = std::fs::read(path).map_err(|cause| ImageError::Io {
-        file: file.clone(),
-        cause,
-    })?;
-    decode(&bytes, &file)
+/// Reads a PFM file through `files`. Non-finite pixels are kept; see [`check_finite`].
+pub fn read(files: &InputFiles, path: &Path) -> Result<RgbImage, ImageError> {
+    let bytes = files.read(path, InputKind::RadianceImage)?;
+    decode(&bytes, &file_name(path))
 }
 
 /// Writes a little-endian RGB PFM file, atomically.
@@ -250,7 +247,7 @@ mod tests {
         let path = std::env::temp_dir().join(format!("caustica-pfm-{}.pfm", std::process::id()));
         let img = asymmetric();
         write(&path, &img).unwrap();
-        let back = read(&path);
+        let back = read(&InputFiles::anywhere(), &path);
         std::fs::remove_file(&path).unwrap();
         assert_eq!(back.unwrap(), img);
     }

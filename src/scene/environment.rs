@@ -3,6 +3,7 @@
 
 use super::format::EnvironmentFile;
 use crate::image::{self, RgbImage};
+use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
 use glam::{Vec2, Vec3};
 use std::path::Path;
@@ -31,7 +32,7 @@ pub enum Environment {
     Map(EnvironmentMap),
 }
 
-pub(super) fn from_file(e: &EnvironmentFile, base: &Path) -> Result<Environment> {
+pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) -> Result<Environment> {
     let maps = [(e.probe.as_ref(), MapProjection::Angular), (e.latlong.as_ref(), MapProjection::LatLong)];
     let given: Vec<_> = maps.iter().filter_map(|(f, p)| f.map(|f| (f, *p))).collect();
     if given.len() + usize::from(e.color.is_some()) > 1 {
@@ -44,14 +45,14 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path) -> Result<Environment>
         bail!("environment.rotation must be finite, got {}", e.rotation);
     }
     let Some(&(file, projection)) = given.first() else {
-        let color = Vec3::from(e.color.unwrap_or([0.0; 3]));
+        let color = Vec3::from(e.color.map_or([0.0; 3], |c| c.0));
         if !color.is_finite() || color.min_element() < 0.0 {
             bail!("environment.color must be finite and >= 0, got {color:?}");
         }
         return Ok(Environment::Constant(color * e.intensity));
     };
     let path = super::resolve(base, file);
-    let mut image = image::read_image(&path)?;
+    let mut image = image::read_image_from(files, &path)?;
     let name = path.display().to_string();
     image::pfm::check_finite(&image, &name)?;
     if image.pixels.iter().flatten().any(|&c| c < 0.0) {

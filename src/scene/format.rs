@@ -1,7 +1,61 @@
-//! The TOML scene file as written by people: serde structs that reject unknown keys. `scene::load`
-//! turns them into a validated `Scene`.
+//! The TOML scene file as written by people: serde structs that reject unknown keys and arrays of
+//! the wrong length. `scene::load` turns them into a validated `Scene`.
 
+use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
 use serde::Deserialize;
+use std::fmt;
+use std::marker::PhantomData;
+
+/// A TOML array of exactly `N` values. Serde's own `[T; N]` reads N elements and never looks at
+/// the rest, so `position = [0.0, 1.0, 3.9, 7.0]` was silently taken as a 3-vector; every
+/// fixed-length array of the format is read through this type instead, which refuses (with the
+/// expected length, the key and the line) one element too many as firmly as one too few.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Array<T, const N: usize>(pub [T; N]);
+
+/// Zeros (an origin, no rotation).
+impl<T: Default, const N: usize> Default for Array<T, N> {
+    fn default() -> Self {
+        Array(std::array::from_fn(|_| T::default()))
+    }
+}
+
+/// Three numbers: a point, a direction, a colour, angles, per-axis factors.
+pub type Triple = Array<f32, 3>;
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Array<T, N> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_seq(ArrayVisitor(PhantomData))
+    }
+}
+
+struct ArrayVisitor<T, const N: usize>(PhantomData<T>);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for ArrayVisitor<T, N> {
+    type Value = Array<T, N>;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        write!(f, "an array of exactly {N} elements")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut values = Vec::with_capacity(N);
+        while values.len() < N {
+            match seq.next_element()? {
+                Some(value) => values.push(value),
+                None => return Err(de::Error::invalid_length(values.len(), &self)),
+            }
+        }
+        let mut extra = 0;
+        while seq.next_element::<IgnoredAny>()?.is_some() {
+            extra += 1;
+        }
+        match values.try_into() {
+            Ok(array) if extra == 0 => Ok(Array(array)),
+            _ => Err(de::Error::invalid_length(N + extra, &self)),
+        }
+    }
+}
 
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
@@ -27,10 +81,10 @@ pub struct SceneFile {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct CameraFile {
-    pub position: [f32; 3],
-    pub look_at: [f32; 3],
+    pub position: Triple,
+    pub look_at: Triple,
     #[serde(default = "default_up")]
-    pub up: [f32; 3],
+    pub up: Triple,
     /// Vertical field of view in degrees.
     #[serde(default = "default_fov")]
     pub fov: f32,
@@ -41,8 +95,8 @@ pub struct CameraFile {
     pub focus_distance: Option<f32>,
 }
 
-fn default_up() -> [f32; 3] {
-    [0.0, 1.0, 0.0]
+fn default_up() -> Triple {
+    Array([0.0, 1.0, 0.0])
 }
 fn default_fov() -> f32 {
     40.0
@@ -126,12 +180,12 @@ pub enum Sampler {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialFile {
-    pub albedo: [f32; 3],
+    pub albedo: Triple,
     /// R; absent: 0, or 1 when `metal` or `eta`/`k` make the material a conductor.
     pub reflectivity: Option<f32>,
     pub transparency: f32,
     pub ior: f32,
-    pub emission: [f32; 3],
+    pub emission: Triple,
     pub two_sided: bool,
     /// Perceptual GGX roughness of the R and T lobes and the coat, in [0, 1].
     pub roughness: f32,
@@ -139,8 +193,8 @@ pub struct MaterialFile {
     /// with the albedo as F0.
     pub metal: Option<String>,
     /// Complex IOR eta + i k of the R lobe (both or neither; not with `metal`).
-    pub eta: Option<[f32; 3]>,
-    pub k: Option<[f32; 3]>,
+    pub eta: Option<Triple>,
+    pub k: Option<Triple>,
     /// The base is a plastic: the albedo under a dielectric coat of index `ior`.
     pub coat: bool,
 }
@@ -148,11 +202,11 @@ pub struct MaterialFile {
 impl Default for MaterialFile {
     fn default() -> Self {
         Self {
-            albedo: [0.8; 3],
+            albedo: Array([0.8; 3]),
             reflectivity: None,
             transparency: 0.0,
             ior: 1.5,
-            emission: [0.0; 3],
+            emission: Array([0.0; 3]),
             two_sided: false,
             roughness: 0.0,
             metal: None,
@@ -166,7 +220,7 @@ impl Default for MaterialFile {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SphereFile {
-    pub center: [f32; 3],
+    pub center: Triple,
     pub radius: f32,
     pub material: String,
 }
@@ -174,16 +228,16 @@ pub struct SphereFile {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct QuadFile {
-    pub origin: [f32; 3],
-    pub edge_u: [f32; 3],
-    pub edge_v: [f32; 3],
+    pub origin: Triple,
+    pub edge_u: Triple,
+    pub edge_v: Triple,
     pub material: String,
 }
 
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct TriangleFile {
-    pub vertices: [[f32; 3]; 3],
+    pub vertices: Array<Triple, 3>,
     pub material: String,
 }
 
@@ -197,11 +251,11 @@ pub struct MeshFile {
     /// Where the file's meshes go (after the file's own node transforms). Listed here rather than
     /// as a flattened `Placement`, which serde cannot combine with deny_unknown_fields.
     #[serde(default)]
-    pub translate: [f32; 3],
+    pub translate: Triple,
     #[serde(default)]
     pub scale: Option<Scale>,
     #[serde(default)]
-    pub rotate: [f32; 3],
+    pub rotate: Triple,
     /// Several placements of the same geometry, each applied after the entry's own translate,
     /// scale and rotate (which can thus size and centre the model once); stored once on the GPU.
     #[serde(default)]
@@ -218,27 +272,53 @@ impl MeshFile {
 #[serde(deny_unknown_fields)]
 pub struct Placement {
     #[serde(default)]
-    pub translate: [f32; 3],
+    pub translate: Triple,
     /// Uniform scale, or per axis.
     #[serde(default)]
     pub scale: Option<Scale>,
     /// Euler angles in degrees, applied about x, then y, then z.
     #[serde(default)]
-    pub rotate: [f32; 3],
+    pub rotate: Triple,
 }
 
-#[derive(Deserialize, Debug, Clone, Copy)]
-#[serde(untagged)]
+#[derive(Debug, Clone, Copy)]
 pub enum Scale {
     Uniform(f32),
-    PerAxis([f32; 3]),
+    PerAxis(Triple),
+}
+
+/// A number or three. Written out rather than `#[serde(untagged)]`, whose only error is "did not
+/// match any variant", so that `scale = [1, 2]` says what length it wants.
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct ScaleVisitor;
+        impl<'de> Visitor<'de> for ScaleVisitor {
+            type Value = Scale;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "a number or an array of exactly 3 numbers")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f32))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f32))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f32))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Scale, A::Error> {
+                ArrayVisitor(PhantomData).visit_seq(seq).map(Scale::PerAxis)
+            }
+        }
+        deserializer.deserialize_any(ScaleVisitor)
+    }
 }
 
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentFile {
     /// Constant sky radiance (when no map is given).
-    pub color: Option<[f32; 3]>,
+    pub color: Option<Triple>,
     /// Debevec angular-map light probe (PFM).
     pub probe: Option<String>,
     /// Equirectangular (lat-long) map, PFM or EXR.

@@ -3,6 +3,7 @@
 
 use super::asset::{self, Asset, AssetMaterial};
 use super::{Material, MetallicRoughness, Scene};
+use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
 use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
@@ -43,19 +44,25 @@ struct LoadedFile {
 
 /// Loads each (file, material override) once: later placements of the same file share its
 /// meshes, materials and textures.
-#[derive(Default)]
-pub struct MeshImporter {
+pub struct MeshImporter<'a> {
+    /// How the files are read (and from where).
+    files: &'a InputFiles,
     /// The file's own placements of its meshes, as scene mesh indices.
     loaded: HashMap<(PathBuf, Option<u32>), LoadedFile>,
 }
 
-impl MeshImporter {
+impl<'a> MeshImporter<'a> {
+    /// An importer reading every file through `files`.
+    pub fn new(files: &'a InputFiles) -> Self {
+        MeshImporter { files, loaded: HashMap::new() }
+    }
+
     /// Places the meshes of `path` with `transform` applied after the file's own node transforms.
     /// `material` replaces every material of the file. Returns the file's camera, if it has one.
     pub fn place(&mut self, scene: &mut Scene, path: &Path, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
         let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), material);
         if !self.loaded.contains_key(&key) {
-            let asset = asset::load_asset(path)?;
+            let asset = asset::load_asset_from(self.files, path)?;
             if asset.dropped_triangles > 0 {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }

@@ -5,15 +5,17 @@ mod environment;
 mod format;
 mod mesh;
 mod optics;
+mod toml_error;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
-pub use asset::{downsample_to_fit, load_asset, Asset, AssetError};
+pub use asset::{downsample_to_fit, load_asset, load_asset_from, Asset, AssetError};
 pub use format::{Filter, LightSelection, Sampler};
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 pub use optics::{average_fresnel, metal, METALS};
 
+use crate::input_file::{InputFiles, InputKind};
 use anyhow::{bail, Context as _, Result};
-use format::{FilmFile, IntegratorFile, MaterialFile, Placement, Scale, SceneFile};
+use format::{Array, FilmFile, IntegratorFile, MaterialFile, Placement, Scale, SceneFile, Triple};
 use glam::{Mat4, Quat, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -149,20 +151,31 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Reads a scene file; relative paths inside it are relative to the file.
+    /// Reads a scene file and every file it names from anywhere; see [`Scene::load_from`].
     pub fn load(path: &Path) -> Result<Scene> {
+        Scene::load_from(&InputFiles::anywhere(), path)
+    }
+
+    /// Reads a scene file (TOML, or a mesh file rendered on its own) through `files`, and every
+    /// file it names (meshes, textures, environment maps) too; relative paths inside it are
+    /// relative to the file. [`confinement`] gives the `files` of `render --confine`.
+    pub fn load_from(files: &InputFiles, path: &Path) -> Result<Scene> {
         let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         if matches!(extension.as_str(), "gltf" | "glb" | "obj" | "ply") {
-            return Scene::from_model(path);
+            return Scene::model_from(files, path);
         }
-        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read scene", path.display()))?;
+        let text = files.read_to_string(path, InputKind::Scene)?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Scene::parse(&text, &path.display().to_string(), &base)
+        Scene::parse_from(files, &text, &path.display().to_string(), &base)
     }
 
     /// A mesh file as a whole scene: its own camera (glTF) or one framing it from the front, under
     /// a white sky, with the default film and integrator.
     pub fn from_model(path: &Path) -> Result<Scene> {
+        Scene::model_from(&InputFiles::anywhere(), path)
+    }
+
+    fn model_from(files: &InputFiles, path: &Path) -> Result<Scene> {
         let name = path.display().to_string();
         let film = FilmFile::default();
         let mut scene = Scene {
@@ -177,7 +190,7 @@ impl Scene {
             textures: vec![],
             environment: Environment::Constant(Vec3::ONE),
         };
-        match MeshImporter::default().place(&mut scene, path, None, Mat4::IDENTITY)? {
+        match MeshImporter::new(files).place(&mut scene, path, None, Mat4::IDENTITY)? {
             Some(c) => {
                 scene.camera = Camera::pinhole(c.position, c.look_at, c.up, c.yfov_degrees);
                 if let Some(aspect) = c.aspect.filter(|a| a.is_finite() && *a > 0.0) {
@@ -194,10 +207,16 @@ impl Scene {
         Scene::parse(DEFAULT_SCENE_TOML, "built-in cornell.toml", Path::new(".")).expect("the built-in scene is valid")
     }
 
-    /// Parses scene text; `name` appears in messages and `base` resolves relative file paths.
+    /// Parses scene text, reading the files it names from anywhere; see [`Scene::parse_from`].
     pub fn parse(text: &str, name: &str, base: &Path) -> Result<Scene> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-        build(file, name, base).with_context(|| name.to_string())
+        Scene::parse_from(&InputFiles::anywhere(), text, name, base)
+    }
+
+    /// Parses scene text; `name` appears in messages, `base` resolves relative file paths and the
+    /// files they name are read through `files`.
+    pub fn parse_from(files: &InputFiles, text: &str, name: &str, base: &Path) -> Result<Scene> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| anyhow::anyhow!("{name}: {}", toml_error::describe(&e, text)))?;
+        build(file, name, base, files).with_context(|| name.to_string())
     }
 
     /// Emissive shapes plus emissive mesh triangles, each instance counted.
@@ -208,7 +227,7 @@ impl Scene {
     }
 }
 
-fn vec3(key: &str, v: [f32; 3]) -> Result<Vec3> {
+fn vec3(key: &str, Array(v): Triple) -> Result<Vec3> {
     if v.iter().any(|c| !c.is_finite()) {
         bail!("{key} must be finite, got {v:?}");
     }
@@ -222,7 +241,7 @@ fn finite(key: &str, v: f32) -> Result<f32> {
     Ok(v)
 }
 
-fn non_negative3(key: &str, v: [f32; 3]) -> Result<Vec3> {
+fn non_negative3(key: &str, v: Triple) -> Result<Vec3> {
     let v = vec3(key, v)?;
     if v.min_element() < 0.0 {
         bail!("{key} must not be negative, got {v:?}");
@@ -230,7 +249,7 @@ fn non_negative3(key: &str, v: [f32; 3]) -> Result<Vec3> {
     Ok(v)
 }
 
-fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
+fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result<Scene> {
     let c = &file.camera;
     let mut camera = Camera::pinhole(
         vec3("camera.position", c.position)?,
@@ -336,7 +355,8 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     }
     for (k, t) in file.triangles.iter().enumerate() {
         let key = format!("triangles[{k}].vertices");
-        let v = [vec3(&key, t.vertices[0])?, vec3(&key, t.vertices[1])?, vec3(&key, t.vertices[2])?];
+        let Array([a, b, c]) = t.vertices;
+        let v = [vec3(&key, a)?, vec3(&key, b)?, vec3(&key, c)?];
         if (v[1] - v[0]).cross(v[2] - v[0]).length() == 0.0 {
             bail!("{key}: the triangle has no area");
         }
@@ -344,10 +364,10 @@ fn build(file: SceneFile, name: &str, base: &Path) -> Result<Scene> {
     }
     let environment = match &file.environment {
         None => Environment::Constant(Vec3::ZERO),
-        Some(e) => environment::from_file(e, base)?,
+        Some(e) => environment::from_file(e, base, files)?,
     };
     let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures: vec![], environment };
-    let mut importer = MeshImporter::default();
+    let mut importer = MeshImporter::new(files);
     for (k, m) in file.meshes.iter().enumerate() {
         let key = format!("meshes[{k}]");
         let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;
@@ -464,6 +484,14 @@ pub fn check_film(film: &Film) -> Result<()> {
 /// working directory.
 pub fn data_dir() -> PathBuf {
     std::env::var_os("CAUSTICA_DATA").map(PathBuf::from).unwrap_or_else(|| PathBuf::from("../shared/data"))
+}
+
+/// What `render --confine` lets a scene read: files inside the scene file's folder and inside the
+/// shared data folder ([`data_dir`], where `$CAUSTICA_DATA/` paths lead), after `..` and symbolic
+/// links are resolved.
+pub fn confinement(scene_path: &Path) -> InputFiles {
+    let folder = scene_path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    InputFiles::confined_to([folder, data_dir().as_path()])
 }
 
 /// A path in a scene file: absolute, relative to the scene file, or `$CAUSTICA_DATA/...` inside

@@ -1,6 +1,7 @@
 //! glTF 2.0 (`.gltf` with external or data-URI buffers and images, and binary `.glb`), via the
 //! gltf crate for parsing and accessors. Buffers and images are loaded here rather than with
-//! `gltf::import`, so that only the textures we read are decoded, under our size limit.
+//! `gltf::import`, so that only the textures we read are decoded, under our size limit, and every
+//! file is read through [`InputFiles`] (regular files, size caps, `--confine`).
 //!
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
 //! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
@@ -21,26 +22,30 @@
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 use base64::Engine as _;
 use glam::{Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
-use gltf::{Accessor, Document, Semantic};
+use gltf::{Document, Semantic};
 
+use super::gltf_accessors::AccessorLimits;
 use super::{
     texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, MeshData,
     MetallicRoughness,
 };
+use crate::input_file::{InputFiles, InputKind};
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
 const MAX_NODE_DEPTH: usize = 1000;
 
 /// Loads a `.gltf` or `.glb` file: its default scene (else scene 0, else every root node).
-pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
-    let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
+pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
+    let bytes = files.read(path, InputKind::Mesh)?;
     // gltf 1.4 computes `length - 12` from a GLB header without checking it, which overflows
     // (a panic with overflow checks on) for a length field below 12 (found by fuzzing).
     if bytes.starts_with(b"glTF") && bytes.len() >= 12 {
@@ -76,9 +81,16 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
     }
     let document = gltf::Document::from_json(json)
         .map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
-    let directory = path.parent().unwrap_or(Path::new("."));
+    // The blob is a copy: the file's bytes are not needed past here, only their count.
+    let file_bytes = bytes.len() as u64;
+    drop(bytes);
+    let sources = Sources {
+        files,
+        directory: path.parent().unwrap_or(Path::new(".")),
+        read: RefCell::new(HashMap::new()),
+    };
     let buffers =
-        load_buffers(&document, blob, directory).map_err(|m| AssetError::invalid(path, m))?;
+        load_buffers(&document, blob, &sources).map_err(|m| AssetError::invalid(path, m))?;
 
     let mut asset = Asset::default();
     let mut decoded_images = DecodedImages::new();
@@ -86,7 +98,7 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
         let converted = convert_material(
             &material,
             &buffers,
-            directory,
+            &sources,
             &mut decoded_images,
             &mut asset,
         )
@@ -95,10 +107,11 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
     }
     let mut skipped_primitives = 0;
     let mut default_material = None;
+    let mut limits = AccessorLimits::new(&buffers, file_bytes);
     for mesh in document.meshes() {
         let mut converted = convert_mesh(
             &mesh,
-            &buffers,
+            &mut limits,
             &mut asset.materials,
             &mut default_material,
             &mut skipped_primitives,
@@ -126,23 +139,67 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
     Ok(asset)
 }
 
+/// Where a glTF's URIs lead: data URIs, or files relative to the glTF read through `files`.
+struct Sources<'a> {
+    files: &'a InputFiles,
+    directory: &'a Path,
+    /// Files read so far. A glTF naming one file for many buffers or images reads it once: a
+    /// short JSON listing a large file a thousand times must not read it a thousand times.
+    read: RefCell<HashMap<PathBuf, Rc<Vec<u8>>>>,
+}
+
+impl Sources<'_> {
+    /// The file a URI names (a percent-encoded path relative to the glTF), or `None` for a
+    /// `data:` URI.
+    fn file_of(&self, uri: &str) -> Result<Option<PathBuf>, String> {
+        if uri.starts_with("data:") {
+            return Ok(None);
+        }
+        if uri.contains("://") {
+            return Err(format!("'{uri}' is not a local file"));
+        }
+        let relative = urlencoding::decode(uri).map_err(|e| format!("bad URI '{uri}': {e}"))?;
+        Ok(Some(self.directory.join(relative.as_ref())))
+    }
+
+    /// The bytes behind a URI: a base64 `data:` URI, or a file read as `kind`.
+    fn read_uri(&self, uri: &str, kind: InputKind) -> Result<Rc<Vec<u8>>, String> {
+        let Some(file) = self.file_of(uri)? else {
+            let (_, payload) = uri
+                .split_once(";base64,")
+                .ok_or("only base64 data URIs are supported")?;
+            return base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map(Rc::new)
+                .map_err(|e| format!("bad base64 data URI: {e}"));
+        };
+        if let Some(bytes) = self.read.borrow().get(&file) {
+            return Ok(Rc::clone(bytes));
+        }
+        let bytes = Rc::new(self.files.read(&file, kind).map_err(|e| e.to_string())?);
+        self.read.borrow_mut().insert(file, Rc::clone(&bytes));
+        Ok(bytes)
+    }
+}
+
 /// Loads every buffer: the GLB binary chunk, a base64 data URI, or a file next to the glTF.
 fn load_buffers(
     document: &Document,
     mut blob: Option<Vec<u8>>,
-    directory: &Path,
-) -> Result<Vec<Vec<u8>>, String> {
+    sources: &Sources,
+) -> Result<Vec<Rc<Vec<u8>>>, String> {
     document
         .buffers()
         .map(|buffer| {
             let data = match buffer.source() {
-                gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                gltf::buffer::Source::Bin => blob.take().map(Rc::new).ok_or_else(|| {
                     format!(
                         "buffer {} refers to a missing GLB binary chunk",
                         buffer.index()
                     )
                 })?,
-                gltf::buffer::Source::Uri(uri) => read_uri(uri, directory)
+                gltf::buffer::Source::Uri(uri) => sources
+                    .read_uri(uri, InputKind::Mesh)
                     .map_err(|m| format!("buffer {}: {m}", buffer.index()))?,
             };
             if data.len() < buffer.length() {
@@ -158,41 +215,40 @@ fn load_buffers(
         .collect()
 }
 
-/// The bytes behind a URI: a base64 `data:` URI, or a percent-encoded path relative to the glTF.
-fn read_uri(uri: &str, directory: &Path) -> Result<Vec<u8>, String> {
-    if let Some(data) = uri.strip_prefix("data:") {
-        let (_, payload) = data
-            .split_once(";base64,")
-            .ok_or("only base64 data URIs are supported")?;
-        return base64::engine::general_purpose::STANDARD
-            .decode(payload)
-            .map_err(|e| format!("bad base64 data URI: {e}"));
-    }
-    if uri.contains("://") {
-        return Err(format!("'{uri}' is not a local file"));
-    }
-    let relative = urlencoding::decode(uri).map_err(|e| format!("bad URI '{uri}': {e}"))?;
-    let file = directory.join(relative.as_ref());
-    std::fs::read(&file).map_err(|e| format!("cannot read '{}': {e}", file.display()))
+/// What an image's bytes come from: images sharing a buffer view or a file are decoded once.
+#[derive(Clone, PartialEq, Eq, Hash)]
+enum ImageSource {
+    /// A data URI of this image.
+    Image(usize),
+    View(usize),
+    File(PathBuf),
 }
 
-/// Textures decoded so far: (image index, sRGB) → index into `asset.textures`. An image used as
-/// both colour and data is stored twice, as its texels are decoded differently.
-type DecodedImages = HashMap<(usize, bool), usize>;
+/// Textures decoded so far: (source, sRGB) → index into `asset.textures`. An image used as both
+/// colour and data is stored twice, as its texels are decoded differently.
+type DecodedImages = HashMap<(ImageSource, bool), usize>;
 
 /// Decodes each image the first time a material uses it in a colour space (sRGB for base colour,
 /// linear for metallic-roughness), into `asset.textures`.
 fn image_texture(
     image: gltf::Image,
     srgb: bool,
-    buffers: &[Vec<u8>],
-    directory: &Path,
+    buffers: &[Rc<Vec<u8>>],
+    sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<usize, String> {
-    if let Some(&index) = decoded_images.get(&(image.index(), srgb)) {
+    let source = match image.source() {
+        gltf::image::Source::View { view, .. } => ImageSource::View(view.index()),
+        gltf::image::Source::Uri { uri, .. } => sources
+            .file_of(uri)
+            .map_err(|m| format!("image {}: {m}", image.index()))?
+            .map_or(ImageSource::Image(image.index()), ImageSource::File),
+    };
+    if let Some(&index) = decoded_images.get(&(source.clone(), srgb)) {
         return Ok(index);
     }
+    let file_bytes;
     let (bytes, name) = match image.source() {
         gltf::image::Source::View { view, .. } => {
             let bytes = view_bytes(&view, buffers).ok_or_else(|| {
@@ -202,7 +258,7 @@ fn image_texture(
                 )
             })?;
             (
-                bytes.to_vec(),
+                bytes,
                 image
                     .name()
                     .map_or_else(|| format!("image {}", image.index()), str::to_owned),
@@ -219,26 +275,26 @@ fn image_texture(
                 },
                 str::to_owned,
             );
-            (
-                read_uri(uri, directory).map_err(|m| format!("image {}: {m}", image.index()))?,
-                name,
-            )
+            file_bytes = sources
+                .read_uri(uri, InputKind::Texture)
+                .map_err(|m| format!("image {}: {m}", image.index()))?;
+            (file_bytes.as_slice(), name)
         }
     };
-    asset.textures.push(texture::decode_texture(&bytes, name, srgb)?);
-    decoded_images.insert((image.index(), srgb), asset.textures.len() - 1);
+    asset.textures.push(texture::decode_texture(bytes, name, srgb)?);
+    decoded_images.insert((source, srgb), asset.textures.len() - 1);
     Ok(asset.textures.len() - 1)
 }
 
-fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Option<&'b [u8]> {
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Rc<Vec<u8>>]) -> Option<&'b [u8]> {
     let end = view.offset().checked_add(view.length())?;
     buffers.get(view.buffer().index())?.get(view.offset()..end)
 }
 
 fn convert_material(
     material: &gltf::Material,
-    buffers: &[Vec<u8>],
-    directory: &Path,
+    buffers: &[Rc<Vec<u8>>],
+    sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<AssetMaterial, String> {
@@ -250,7 +306,7 @@ fn convert_material(
             info.texture().source(),
             true,
             buffers,
-            directory,
+            sources,
             decoded_images,
             asset,
         )?),
@@ -286,7 +342,7 @@ fn convert_material(
                 info.texture().source(),
                 false,
                 buffers,
-                directory,
+                sources,
                 decoded_images,
                 asset,
             )? as u32,
@@ -317,7 +373,7 @@ fn convert_material(
 /// primitive has it, since the result needs exactly one per position.
 fn convert_mesh(
     mesh: &gltf::Mesh,
-    buffers: &[Vec<u8>],
+    limits: &mut AccessorLimits,
     materials: &mut Vec<AssetMaterial>,
     default_material: &mut Option<u32>,
     skipped_primitives: &mut usize,
@@ -334,14 +390,15 @@ fn convert_mesh(
             *skipped_primitives += 1;
             continue;
         }
-        let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(Vec::as_slice));
+        let buffers = limits.buffers();
+        let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|b| b.as_slice()));
         let outside =
             |what: &str| format!("primitive {p}: the {what} accessor lies outside its buffer");
 
         let position_accessor = primitive
             .get(&Semantic::Positions)
             .ok_or_else(|| format!("primitive {p} has no POSITION"))?;
-        check_accessor(&position_accessor, Dimensions::Vec3, &[DataType::F32])
+        limits.admit(&position_accessor, Dimensions::Vec3, &[DataType::F32])
             .map_err(|m| format!("primitive {p}: POSITION {m}"))?;
         let positions: Vec<Vec3> = reader
             .read_positions()
@@ -359,7 +416,7 @@ fn convert_mesh(
 
         match primitive.get(&Semantic::Normals) {
             Some(accessor) if all_normals => {
-                check_accessor(&accessor, Dimensions::Vec3, &[DataType::F32])
+                limits.admit(&accessor, Dimensions::Vec3, &[DataType::F32])
                     .map_err(|m| format!("primitive {p}: NORMAL {m}"))?;
                 normals.extend(
                     reader
@@ -373,7 +430,7 @@ fn convert_mesh(
         }
         match primitive.get(&Semantic::TexCoords(0)) {
             Some(accessor) if all_uvs => {
-                check_accessor(
+                limits.admit(
                     &accessor,
                     Dimensions::Vec2,
                     &[DataType::F32, DataType::U8, DataType::U16],
@@ -393,7 +450,7 @@ fn convert_mesh(
 
         let indices: Vec<u32> = match primitive.indices() {
             Some(accessor) => {
-                check_accessor(
+                limits.admit(
                     &accessor,
                     Dimensions::Scalar,
                     &[DataType::U8, DataType::U16, DataType::U32],
@@ -436,34 +493,6 @@ fn convert_mesh(
         out.uvs.clear();
     }
     Ok(out)
-}
-
-/// Rejects accessor shapes the crate's readers would panic on (they assume a valid file).
-fn check_accessor(
-    accessor: &Accessor,
-    dimensions: Dimensions,
-    types: &[DataType],
-) -> Result<(), String> {
-    if accessor.dimensions() != dimensions || !types.contains(&accessor.data_type()) {
-        return Err(format!(
-            "accessor {} has an unsupported type {:?} {:?}",
-            accessor.index(),
-            accessor.dimensions(),
-            accessor.data_type()
-        ));
-    }
-    let stride_too_small = accessor
-        .view()
-        .and_then(|view| view.stride())
-        .is_some_and(|stride| stride < accessor.size());
-    let sparse_empty = accessor.sparse().is_some_and(|sparse| sparse.count() == 0);
-    if accessor.count() == 0 || sparse_empty || stride_too_small {
-        return Err(format!(
-            "accessor {} is empty or has a byte stride below its element size",
-            accessor.index()
-        ));
-    }
-    Ok(())
 }
 
 /// Triangles of a triangle-list, strip or fan primitive; strips alternate winding so that every

@@ -2,6 +2,7 @@
 //! textures, instances and an optional camera. The renderer turns an [`Asset`] into GPU buffers;
 //! nothing here knows about Vulkan.
 
+mod gltf_accessors;
 mod gltf_file;
 mod obj;
 mod ply;
@@ -10,6 +11,7 @@ mod texture;
 pub use texture::downsample_to_fit;
 
 use super::{Conductor, MetallicRoughness};
+use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
@@ -115,12 +117,10 @@ pub struct AssetCamera {
 /// Every way loading can fail; the message always starts with the file's path.
 #[derive(Debug, thiserror::Error)]
 pub enum AssetError {
-    // Not a `source` field: the message already carries the I/O error, and anyhow would print it twice.
-    #[error("{}: {error}", path.display())]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
+    /// The file itself could not be read (missing, not a regular file, over its size cap, outside
+    /// `--confine`).
+    #[error(transparent)]
+    Input(#[from] InputError),
     #[error("{}: {message}", path.display())]
     Invalid { path: PathBuf, message: String },
     #[error("{}: unsupported mesh format '{extension}' (expected .obj, .ply, .gltf or .glb)", path.display())]
@@ -134,27 +134,26 @@ impl AssetError {
             message: message.into(),
         }
     }
-
-    fn io(path: &Path, error: std::io::Error) -> Self {
-        AssetError::Io {
-            path: path.to_owned(),
-            error,
-        }
-    }
 }
 
-/// Loads a mesh file, choosing the format by its extension (case-insensitive). A file that ends
-/// up without a single triangle is an error: there would be nothing to render.
+/// Loads a mesh file from anywhere; see [`load_asset_from`].
 pub fn load_asset(path: &Path) -> Result<Asset, AssetError> {
+    load_asset_from(&InputFiles::anywhere(), path)
+}
+
+/// Loads a mesh file, choosing the format by its extension (case-insensitive). It and every file
+/// it names (MTL libraries, textures, glTF buffers and images) are read through `files`. A file
+/// that ends up without a single triangle is an error: there would be nothing to render.
+pub fn load_asset_from(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
     let asset = match extension.as_str() {
-        "obj" => obj::load(path)?,
-        "ply" => ply::load(path)?,
-        "gltf" | "glb" => gltf_file::load(path)?,
+        "obj" => obj::load(files, path)?,
+        "ply" => ply::load(files, path)?,
+        "gltf" | "glb" => gltf_file::load(files, path)?,
         _ => {
             return Err(AssetError::UnsupportedExtension {
                 path: path.to_owned(),

@@ -11,8 +11,12 @@
 //! - `Ni` → ior, 1.5 when missing or not positive. R + T <= 1 is kept by lowering R.
 //!
 //! Faces without a material get [`AssetMaterial::default_grey`].
+//!
+//! tobj parses bytes that [`InputFiles`] read (the OBJ and each `mtllib`), never a path: its own
+//! file reading would skip the checks on devices, sizes and `--confine`.
 
-use std::collections::HashMap;
+use std::cell::RefCell;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
@@ -21,22 +25,40 @@ use super::{
     single_mesh_asset, texture, unit_normals, Asset, AssetError, AssetMaterial, MeshData,
     TextureImage,
 };
+use crate::input_file::{InputError, InputFiles, InputKind};
 
 /// Loads every object of an OBJ file into one mesh with per-triangle materials.
-pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
+pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
         ..Default::default()
     };
-    let (models, mtl) = tobj::load_obj(path, &options)
-        .map_err(|e| AssetError::invalid(path, format!("cannot load OBJ: {e}")))?;
+    let bytes = files.read(path, InputKind::Mesh)?;
+    let directory = path.parent().unwrap_or(Path::new("."));
+    let libraries = MaterialLibraries {
+        files,
+        directory,
+        read: RefCell::new(HashSet::new()),
+        failure: RefCell::new(None),
+    };
+    let (models, mtl) = tobj::load_obj_buf(&mut bytes.as_slice(), &options, |name| {
+        libraries.load(name)
+    })
+    .map_err(|e| AssetError::invalid(path, format!("cannot load OBJ: {e}")))?;
+    if let Some(failure) = libraries.failure.into_inner() {
+        return Err(AssetError::invalid(
+            path,
+            format!("cannot load its MTL material library: {failure}"),
+        ));
+    }
     let mtl = mtl.map_err(|e| {
         AssetError::invalid(path, format!("cannot load its MTL material library: {e}"))
     })?;
+    drop(bytes);
 
-    let directory = path.parent().unwrap_or(Path::new("."));
     let mut textures = Textures {
+        files,
         directory,
         by_path: HashMap::new(),
         images: Vec::new(),
@@ -131,8 +153,36 @@ pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
     Ok(single_mesh_asset(mesh, materials, textures.images, dropped))
 }
 
+/// The MTL libraries an OBJ names, read when tobj meets their `mtllib` line. A library named again
+/// is not read again: a short OBJ repeating one `mtllib` line must not make caustica read a large
+/// library thousands of times (tobj would append its materials each time). tobj's errors carry no
+/// message, so the first read failure is kept here and reported instead.
+struct MaterialLibraries<'a> {
+    files: &'a InputFiles,
+    directory: &'a Path,
+    read: RefCell<HashSet<PathBuf>>,
+    failure: RefCell<Option<InputError>>,
+}
+
+impl MaterialLibraries<'_> {
+    fn load(&self, name: &Path) -> tobj::MTLLoadResult {
+        let path = self.directory.join(name);
+        if !self.read.borrow_mut().insert(path.clone()) {
+            return Ok((Vec::new(), Default::default()));
+        }
+        match self.files.read(&path, InputKind::MaterialLibrary) {
+            Ok(bytes) => tobj::load_mtl_buf(&mut bytes.as_slice()),
+            Err(e) => {
+                self.failure.borrow_mut().get_or_insert(e);
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    }
+}
+
 /// Decodes each `map_Kd` image once, however many materials share it.
 struct Textures<'a> {
+    files: &'a InputFiles,
     directory: &'a Path,
     by_path: HashMap<PathBuf, usize>,
     images: Vec<TextureImage>,
@@ -150,7 +200,7 @@ impl Textures<'_> {
         if let Some(&index) = self.by_path.get(&path) {
             return Ok(index);
         }
-        self.images.push(texture::load_texture(&path)?);
+        self.images.push(texture::load_texture(self.files, &path)?);
         self.by_path.insert(path, self.images.len() - 1);
         Ok(self.images.len() - 1)
     }

@@ -15,10 +15,11 @@ use ply_rs_bw::ply::{
 };
 
 use super::{single_mesh_asset, unit_normals, Asset, AssetError, AssetMaterial, MeshData};
+use crate::input_file::{InputFiles, InputKind};
 
 /// Loads a PLY file as one mesh with the default material.
-pub(super) fn load(path: &Path) -> Result<Asset, AssetError> {
-    let bytes = std::fs::read(path).map_err(|e| AssetError::io(path, e))?;
+pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
+    let bytes = files.read(path, InputKind::Mesh)?;
     let error = |message: String| AssetError::invalid(path, message);
     let mut reader = Reader::new(Cursor::new(bytes.as_slice()));
     let header = Parser::<Vertex>::new()
