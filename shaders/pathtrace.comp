@@ -74,7 +74,7 @@ void main() {
     // Cut short (the sample loop ended early, or any loop did): keep the samples the pixel held,
     // so that the host's repeat adds exactly the missing ones. It sees this pixel missing from
     // pixels_complete.
-    if (uint(sum.w) != target || !loop_limit_intact()) return;
+    if (uint(sum.w) < target || !loop_limit_intact()) return;
     if (target > first) {
         store_accum(index, sum);
 #if AOVS

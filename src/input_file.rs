@@ -36,6 +36,9 @@ pub enum InputKind {
     /// A partial render or checkpoint (EXR) read by `merge` and `--resume`: 32 GiB, a 16384 x 16384
     /// render with every AOV stored uncompressed.
     PartialRender,
+    /// A kernel shader file read from `$CAUSTICA_SHADER_DIR` (shader work, mutation testing):
+    /// 4 MiB, a hundred times the largest shader file.
+    Shader,
 }
 
 impl InputKind {
@@ -48,6 +51,7 @@ impl InputKind {
             InputKind::Texture => 1 << 30,
             InputKind::RadianceImage => 4 << 30,
             InputKind::PartialRender => 32 << 30,
+            InputKind::Shader => 4 << 20,
         }
     }
 
@@ -59,6 +63,7 @@ impl InputKind {
             InputKind::Texture => "a texture",
             InputKind::RadianceImage => "a PFM or EXR image",
             InputKind::PartialRender => "a partial render",
+            InputKind::Shader => "a shader file",
         }
     }
 }
@@ -310,6 +315,7 @@ mod tests {
             InputKind::Texture,
             InputKind::RadianceImage,
             InputKind::PartialRender,
+            InputKind::Shader,
         ] {
             // A sparse file: its length is over the cap, its disk use nothing.
             let path = dir.join(format!("{kind:?}.bin"));

@@ -14,6 +14,7 @@
 
 use crate::image::{read_exr_document, write_exr_document, ExrDocument, ExrLayer, ImageError, RgbImage};
 use crate::render::{mean_image, AovSet, AovSums};
+use crate::input_file::{InputFiles, InputKind};
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -239,7 +240,7 @@ fn count_matches(count: f32, samples: u32) -> bool {
 fn starts_like_exr(path: &Path) -> Result<bool> {
     use std::io::Read as _;
     let mut start = Vec::with_capacity(4);
-    let file = std::fs::File::open(path).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let file = InputFiles::anywhere().open(path, InputKind::PartialRender)?;
     file.take(4).read_to_end(&mut start).map_err(|e| anyhow!("{}: {e}", path.display()))?;
     Ok(start == [0x76, 0x2f, 0x31, 0x01])
 }

@@ -4,6 +4,7 @@
 
 use super::chunks::{self, ChunkPlan, CHUNKED_ARRAYS};
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
+use crate::input_file::{InputFiles, InputKind};
 use anyhow::{anyhow, Context as _, Result};
 use std::borrow::Cow;
 use std::collections::HashMap;
@@ -41,7 +42,7 @@ pub fn shader_file(name: &str) -> Result<Cow<'static, str>> {
     match std::env::var_os(SHADER_DIR_VAR) {
         Some(dir) => {
             let path = Path::new(&dir).join(name);
-            let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read the shader ({SHADER_DIR_VAR} is set)", path.display()))?;
+            let text = InputFiles::anywhere().read_to_string(&path, InputKind::Shader).with_context(|| format!("{SHADER_DIR_VAR} is set"))?;
             Ok(Cow::Owned(text))
         }
         None => Ok(Cow::Borrowed(embedded)),
