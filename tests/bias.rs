@@ -137,22 +137,23 @@ fn quad_light_irradiance_is_exact() {
 /// Fails a 0.1 % bias.
 #[test]
 fn triangle_light_sampled_by_solid_angle_is_exact() {
-    let (_lock, ctx) = gpu();
     let v = [Vec3::new(-0.8, 1.0, -0.5), Vec3::new(0.9, 1.2, -0.3), Vec3::new(0.1, 0.9, 1.0)];
-    let light = triangle_mesh_light(&v);
-    let scene = floor_under(&light, 256);
-    assert_mean_is(&render(&ctx, &scene, 3), 0.5 / PI * polygon_irradiance(&v, 4.0), 0.0002, 0.001, "floor under a near triangle light");
+    assert_floor_under_triangle_is_exact(v, 3, 0.001, "floor under a near triangle light");
 }
 
 /// A triangle light so small and far that it subtends less than 3e-4 sr: sampled by area.
 /// Fails a 0.3 % bias.
 #[test]
 fn triangle_light_sampled_by_area_is_exact() {
-    let (_lock, ctx) = gpu();
     let v = [Vec3::new(-0.05, 4.0, -0.02), Vec3::new(0.04, 4.1, -0.03), Vec3::new(0.0, 3.95, 0.05)];
-    let light = triangle_mesh_light(&v);
-    let scene = floor_under(&light, 256);
-    assert_mean_is(&render(&ctx, &scene, 4), 0.5 / PI * polygon_irradiance(&v, 4.0), 0.0002, 0.003, "floor under a small far triangle light");
+    assert_floor_under_triangle_is_exact(v, 4, 0.003, "floor under a small far triangle light");
+}
+
+/// The floor under a one-triangle mesh light with vertices `v`, 256 spp, against Lambert's formula.
+fn assert_floor_under_triangle_is_exact(v: [Vec3; 3], seed: u32, bias: f64, what: &str) {
+    let (_lock, ctx) = gpu();
+    let scene = floor_under(&triangle_mesh_light(&v), 256);
+    assert_mean_is(&render(&ctx, &scene, seed), 0.5 / PI * polygon_irradiance(&v, 4.0), 0.0002, bias, what);
 }
 
 /// A one-triangle OBJ with the lamp material, written to a scratch file, as a scene fragment;
