@@ -7,15 +7,19 @@
 
 // COUNT_LOOP_ITERATIONS (injected by the host: 1 on devices with a limit) counts what the limit
 // counts: one iteration per pass of the whole subgroup through a loop body, so the first active
-// invocation counts it, and subgroup_loop_iterations() sums them. (pathtrace.comp enables the
-// subgroup extensions; unused, they cost nothing.)
+// invocation counts it, and report_loop_iterations() sums them over the subgroup and keeps the
+// most in stats.max_loop_iterations. Every invocation of the subgroup must call it (in or out of
+// the image). (pathtrace.comp enables the subgroup extensions; unused, they cost nothing.)
 #if COUNT_LOOP_ITERATIONS
 uint loop_iterations = 0u;
 #define LOOP_ITERATION() if (subgroupElect()) loop_iterations += 1u
-uint subgroup_loop_iterations() { return subgroupAdd(loop_iterations); }
+void report_loop_iterations() {
+    uint subgroup_iterations = subgroupAdd(loop_iterations);
+    if (subgroupElect()) atomicMax(stats.max_loop_iterations, subgroup_iterations);
+}
 #else
 #define LOOP_ITERATION()
-uint subgroup_loop_iterations() { return 0u; }
+void report_loop_iterations() {}
 #endif
 
 // Whether every loop of this invocation ran to its end. The limit's counter only falls, so once it

@@ -66,9 +66,7 @@ void main() {
         normal_hits += vec4(first_hit.normal, first_hit.hit ? 1.0 : 0.0);
 #endif
     }
-    // Every invocation takes part in the subgroup sum, in or out of the image.
-    uint loop_iterations = subgroup_loop_iterations();
-    if (gl_SubgroupInvocationID == 0u && loop_iterations > 0u) atomicMax(stats.max_loop_iterations, loop_iterations);
+    report_loop_iterations();
     if (!inside) return;
     atomicAdd(stats.ray_count, rays);
     // Cut short (the sample loop ended early, or any loop did): keep the samples the pixel held,
