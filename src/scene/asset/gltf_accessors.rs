@@ -104,13 +104,20 @@ impl<'b> AccessorLimits<'b> {
             }
             let indices = sparse.indices();
             let index_size = indices.index_type().size() as u64;
+            let values = sparse.values();
+            // The gltf crate steps through a sparse block by its view's stride and reads a whole
+            // element at each step: a stride below the element (which glTF forbids on sparse
+            // views anyway) would read past the step, and it panics.
+            let stride_below = |view: &gltf::buffer::View, size: u64| view.stride().is_some_and(|s| (s as u64) < size);
+            if stride_below(&indices.view(), index_size) || stride_below(&values.view(), element) {
+                return Err(format!("accessor {index}'s sparse indices or values have a byte stride below their element size"));
+            }
             let index_stride = indices.view().stride().map_or(index_size, |s| s as u64);
             self.check_view(
                 &indices.view(),
                 extent(indices.offset() as u64, index_stride, sparse_count, index_size),
                 &format!("accessor {index}'s {sparse_count} sparse indices"),
             )?;
-            let values = sparse.values();
             let value_stride = values.view().stride().map_or(element, |s| s as u64);
             self.check_view(
                 &values.view(),
