@@ -49,17 +49,18 @@ pub fn shader_file(name: &str) -> Result<Cow<'static, str>> {
     }
 }
 
-/// Every shader file of the kernel, as [`shader_file`] reads it.
-fn kernel_files() -> Result<Vec<(&'static str, Cow<'static, str>)>> {
-    SHADERS.iter().map(|&(name, _)| Ok((name, shader_file(name)?))).collect()
+/// The shader `main` assembled from `extra` files and every shader file of the kernel, as
+/// [`shader_file`] reads them, with `defines`.
+fn assemble_with(extra: &[(&str, &str)], main: &str, defines: &[(&str, String)]) -> Result<String> {
+    let files = SHADERS.iter().map(|&(name, _)| Ok((name, shader_file(name)?))).collect::<Result<Vec<_>>>()?;
+    let sources: Vec<(&str, &str)> = extra.iter().copied().chain(files.iter().map(|(name, text)| (*name, text.as_ref()))).collect();
+    assemble_source(&sources, main, defines)
 }
 
 /// A compute shader of `main` (GLSL whose `#include`s name the kernel's shader files) with those
 /// files as [`shader_file`] reads them: test kernels run the kernel's own code, mutations included.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
-    let files = kernel_files()?;
-    let sources: Vec<(&str, &str)> = std::iter::once(("main.comp", main)).chain(files.iter().map(|(name, text)| (*name, text.as_ref()))).collect();
-    assemble_source(&sources, "main.comp", &[])
+    assemble_with(&[("main.comp", main)], "main.comp", &[])
 }
 
 /// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
@@ -81,10 +82,7 @@ pub struct KernelVariant {
 /// The kernel's GLSL for this split of the arrays and variant.
 pub fn kernel_source(plans: &[ChunkPlan; CHUNKED_ARRAYS.len()], variant: KernelVariant) -> Result<String> {
     let generated = chunks::glsl(plans);
-    let files = kernel_files()?;
-    let mut sources: Vec<(&str, &str)> = files.iter().map(|(name, text)| (*name, text.as_ref())).collect();
-    sources.push(("chunked_buffers.glsl", &generated));
-    assemble_source(&sources, "pathtrace.comp", &[
+    assemble_with(&[("chunked_buffers.glsl", &generated)], "pathtrace.comp", &[
             ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
             ("BVH_MAX_LEAF_SIZE", format!("{}u", crate::bvh::MAX_LEAF_SIZE)),
             ("AOVS", u32::from(variant.aovs).to_string()),
