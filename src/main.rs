@@ -146,10 +146,8 @@ enum Command {
         /// Print a summary as JSON on standard output at the end.
         #[arg(long)]
         json: bool,
-        /// Read only files inside the scene's folder and the shared data folder ($CAUSTICA_DATA), after
-        /// resolving `..` and symbolic links: for scenes someone else wrote (docs/farm.md).
-        #[arg(long)]
-        confine: bool,
+        #[command(flatten)]
+        scene_files: SceneFileArgs,
         #[command(flatten)]
         gpu: DeviceArgs,
     },
@@ -193,20 +191,30 @@ enum Command {
         /// Print the results as JSON.
         #[arg(long)]
         json: bool,
-        /// Read only files inside the scene's folder and the shared data folder ($CAUSTICA_DATA), after
-        /// resolving `..` and symbolic links: for scenes someone else wrote (docs/farm.md).
-        #[arg(long)]
-        confine: bool,
+        #[command(flatten)]
+        scene_files: SceneFileArgs,
         #[command(flatten)]
         gpu: DeviceArgs,
     },
 }
 
-fn load_scene(path: Option<&PathBuf>, confine: bool) -> Result<Scene> {
-    match path {
-        Some(p) if confine => Scene::load_from(&caustica::scene::confinement(p), p),
-        Some(p) => Scene::load(p),
-        None => Ok(Scene::default_scene()),
+/// Which files a scene may read (render and bench).
+#[derive(clap::Args, Clone)]
+struct SceneFileArgs {
+    /// Read only files inside the scene's folder and the shared data folder ($CAUSTICA_DATA), after
+    /// resolving `..` and symbolic links: for scenes someone else wrote (docs/farm.md).
+    #[arg(long)]
+    confine: bool,
+}
+
+impl SceneFileArgs {
+    /// The scene at `path` (the built-in Cornell box without one).
+    fn load_scene(&self, path: Option<&PathBuf>) -> Result<Scene> {
+        match path {
+            Some(p) if self.confine => Scene::load_from(&caustica::scene::confinement(p), p),
+            Some(p) => Scene::load(p),
+            None => Ok(Scene::default_scene()),
+        }
     }
 }
 
@@ -491,8 +499,8 @@ fn parse_command_line() -> Cli {
 
 fn run() -> Result<()> {
     match parse_command_line().command {
-        Command::Render { scene, output, spp, width, height, seed, aov, output_args, farm, quiet, json, confine, gpu } => {
-            let mut s = load_scene(scene.as_ref(), confine)?;
+        Command::Render { scene, output, spp, width, height, seed, aov, output_args, farm, quiet, json, scene_files, gpu } => {
+            let mut s = scene_files.load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
@@ -528,7 +536,7 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, aov, json, confine, gpu } => bench(load_scene(scene.as_ref(), confine)?, width, height, spp, aov.unwrap_or_default(), json, &gpu),
+        Command::Bench { width, height, spp, scene, aov, json, scene_files, gpu } => bench(scene_files.load_scene(scene.as_ref())?, width, height, spp, aov.unwrap_or_default(), json, &gpu),
     }
 }
 
