@@ -3,8 +3,10 @@
 //! Rooms: `scene` (TOML scenes, meshes, environment maps), `bvh` (build, flatten, CPU traversal),
 //! `image` (PFM/EXR/PNG), `input_file` (how every input file is read: regular files only, size
 //! caps, `--confine`), `gpu` (all Vulkan), `render` (the kernel and progressive passes), `farm`
-//! (time budgets, checkpoints, partial renders and merging them).
+//! (time budgets, checkpoints, partial renders and merging them), `bench` (throughput of one scene
+//! or of the suite of checked-in scenes).
 
+pub mod bench;
 pub mod bvh;
 pub mod farm;
 pub mod gpu;

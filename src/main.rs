@@ -4,8 +4,9 @@ use anyhow::{Context as _, Result};
 use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
-use caustica::render::{AovSet, GeometryReport, Renderer};
-use caustica::scene::{check_film, Scene};
+use caustica::bench;
+use caustica::render::{AovSet, Renderer};
+use caustica::scene::{check_film, Film, Filter, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -175,20 +176,33 @@ enum Command {
         reference: PathBuf,
     },
     /// Render a scene (default: the Cornell box) and report geometry, BVH build, memory, and samples
-    /// and rays per second.
+    /// and rays per second; with --suite, every checked-in scene in one table.
     Bench {
-        #[arg(long, default_value_t = 256)]
-        width: u32,
-        #[arg(long, default_value_t = 256)]
-        height: u32,
-        #[arg(long, default_value_t = 64)]
-        spp: u32,
+        /// Image width (default 256; with --suite, each scene's own, see src/bench/suite.rs).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height (default 256; with --suite, each scene's own).
+        #[arg(long)]
+        height: Option<u32>,
+        /// Samples per pixel timed, after one warm-up sample (default 64; with --suite, each
+        /// scene's own).
+        #[arg(long)]
+        spp: Option<u32>,
         /// Scene to measure instead of the built-in Cornell box.
+        #[arg(conflicts_with = "suite")]
         scene: Option<PathBuf>,
+        /// Measure the built-in Cornell box and every scene file of the scenes folder, one row
+        /// each; scenes that need the shared data folder ($CAUSTICA_DATA) are skipped, saying so,
+        /// when it is missing.
+        #[arg(long)]
+        suite: bool,
+        /// The suite's scenes folder (default: scenes, from the working directory).
+        #[arg(long, requires = "suite")]
+        scenes: Option<PathBuf>,
         /// Accumulate these AOVs too (as `render --aov`), to measure what they cost.
         #[arg(long, value_parser = aov_set)]
         aov: Option<AovSet>,
-        /// Print the results as JSON.
+        /// Print the results as JSON (with --suite, one document: the device and a row per scene).
         #[arg(long)]
         json: bool,
         #[command(flatten)]
@@ -410,82 +424,40 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
     Ok(())
 }
 
-fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json: bool, gpu: &DeviceArgs) -> Result<()> {
-    apply_overrides(&mut scene, Some(width), Some(height), Some(spp))?;
+/// `bench SCENE`: one scene, by default at 256x256 and 64 spp (not the scene's own film, so that
+/// figures of different scenes compare).
+fn bench(mut scene: Scene, (width, height, spp): (Option<u32>, Option<u32>, Option<u32>), aovs: AovSet, json: bool, gpu: &DeviceArgs) -> Result<()> {
+    apply_overrides(&mut scene, Some(width.unwrap_or(256)), Some(height.unwrap_or(256)), Some(spp.unwrap_or(64)))?;
     let ctx = gpu.context()?;
-    let setup = Instant::now();
-    let mut renderer = Renderer::with_aovs(&ctx, &scene, 1, aovs)?;
-    let setup_s = setup.elapsed().as_secs_f64();
-    // Warm-up pass: first-dispatch costs (pipeline caches, page faults) are not throughput.
-    renderer.render(1, |_| {})?;
-    let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
-    renderer.render(spp, |_| {})?;
-    let seconds = renderer.seconds - secs0;
-    let samples = (renderer.samples_done - spp0) as f64 * width as f64 * height as f64;
-    let rays = (renderer.rays_traced - rays0) as f64;
-    let (samples_per_s, rays_per_s, rays_per_sample) = (per_second(samples, seconds), per_second(rays, seconds), (samples > 0.0).then(|| rays / samples));
+    let measured = bench::measure(&ctx, &scene, aovs)?;
     if json {
-        let summary = json!({
-            "scene": scene.name,
-            "device": ctx.info.name,
-            "device_type": ctx.info.kind.label(),
-            "width": width,
-            "height": height,
-            "samples": spp,
-            "aovs": aovs.to_string(),
-            "setup_seconds": setup_s,
-            "seconds": seconds,
-            "samples_per_second": samples_per_s,
-            "rays_per_second": rays_per_s,
-            "rays_per_sample": rays_per_sample,
-            "nonfinite_samples": renderer.nonfinite_samples,
-            "loop_limit": renderer.loop_limit(),
-            "repeated_dispatches": renderer.repeated_dispatches,
-            "primitives": renderer.geometry.acceleration.primitives,
-            "gpu_bytes": renderer.geometry.gpu_bytes,
-        });
-        println!("{summary}");
-        return Ok(());
-    }
-    println!("scene:        {}", scene.name);
-    println!("device:       {} ({})", ctx.info.name, ctx.info.kind.label());
-    println!("image:        {width}x{height}, {spp} spp, AOVs: {aovs}");
-    print_geometry(&renderer.geometry);
-    println!("setup:        {setup_s:.3} s (load excluded: BVH, upload, kernel compile)");
-    println!("render:       {seconds:.3} s");
-    let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));
-    println!("samples/s:    {} M", shown(samples_per_s, 1e6, 3));
-    println!("rays/s:       {} M", shown(rays_per_s, 1e6, 3));
-    println!("rays/sample:  {}", shown(rays_per_sample, 1.0, 2));
-    println!("non-finite:   {} samples dropped", renderer.nonfinite_samples);
-    if let Some(limit) = renderer.loop_limit() {
-        // Such a device ends shader loops early: dispatches are sized to stay within the limit.
-        println!("loop limit:   {limit} iterations per invocation; {} dispatches repeated", renderer.repeated_dispatches);
+        println!("{}", measured.json_with_device(&ctx.info));
+    } else {
+        bench::print_measurement(&measured, &ctx.info);
     }
     Ok(())
 }
 
-fn print_geometry(g: &GeometryReport) {
-    let a = &g.acceleration;
-    let mib = |b: u64| b as f64 / 1048576.0;
-    println!(
-        "geometry:     {} primitives, {} mesh triangles stored, {} in the world, {} instances, {} lights",
-        a.primitives, a.mesh_triangles, a.instanced_triangles, a.instances, g.lights
-    );
-    let rate = a.mesh_triangles as f64 / a.build_seconds.max(1e-9) / 1e6;
-    println!("BVH build:    {:.3} s ({rate:.2} M triangles/s), {} nodes", a.build_seconds, a.nodes);
-    if let Some(b) = &a.largest_mesh {
-        println!("largest mesh: {} nodes, depth {}, SAH cost {:.2}", b.nodes, b.max_depth, b.sah_cost);
+/// `bench --suite`: every scene of the suite on one device; fails (after the table) when a scene
+/// that should have run did not.
+fn bench_suite(scenes: &Path, overrides: (Option<u32>, Option<u32>, Option<u32>), aovs: AovSet, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
+    // A bad override is refused once, before any work, rather than by every scene in turn.
+    let (w, h, spp) = overrides;
+    check_film(&Film { width: w.unwrap_or(1), height: h.unwrap_or(1), spp: spp.unwrap_or(1), filter: Filter::Box }).context("command-line film settings")?;
+    let entries = bench::suite_entries(scenes, &caustica::scene::data_dir())?;
+    let ctx = gpu.context()?;
+    let outcome = bench::run_suite(&ctx, &entries, overrides, aovs, |path| scene_files.load_scene(Some(&path.to_path_buf())));
+    if json {
+        println!("{}", bench::suite_json(&outcome, &ctx.info));
+        bench::print_left_out(&outcome);
+    } else {
+        bench::print_suite(&outcome, &ctx.info);
     }
-    if let Some(t) = &a.top {
-        println!("top level:    {} nodes, depth {}, SAH cost {:.2}", t.nodes, t.max_depth, t.sah_cost);
+    if !outcome.failed.is_empty() {
+        let names: Vec<&str> = outcome.failed.iter().map(|(name, _)| name.as_str()).collect();
+        anyhow::bail!("{} of the suite's scenes failed: {}", names.len(), names.join(", "));
     }
-    let per_triangle = if a.mesh_triangles > 0 { format!(", {:.1} B/triangle", a.bytes_per_triangle(g.geometry_bytes)) } else { String::new() };
-    println!("GPU memory:   {:.1} MiB geometry + BVH{per_triangle}, {:.1} MiB textures, {:.1} MiB in all", mib(g.geometry_bytes), mib(g.texture_bytes), mib(g.gpu_bytes));
-    if !g.split_arrays.is_empty() {
-        let split: Vec<String> = g.split_arrays.iter().map(|(name, windows)| format!("{name} x{windows}")).collect();
-        println!("split:        {} (larger than one storage binding of this device)", split.join(", "));
-    }
+    Ok(())
 }
 
 /// The command line, or exit: 0 after --help or --version, and 1, as for any bad input, after a
@@ -536,7 +508,14 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, aov, json, scene_files, gpu } => bench(scene_files.load_scene(scene.as_ref())?, width, height, spp, aov.unwrap_or_default(), json, &gpu),
+        Command::Bench { width, height, spp, scene, suite, scenes, aov, json, scene_files, gpu } => {
+            let aovs = aov.unwrap_or_default();
+            if suite {
+                let scenes = scenes.unwrap_or_else(|| PathBuf::from("scenes"));
+                return bench_suite(&scenes, (width, height, spp), aovs, json, &scene_files, &gpu);
+            }
+            bench(scene_files.load_scene(scene.as_ref())?, (width, height, spp), aovs, json, &gpu)
+        }
     }
 }
 

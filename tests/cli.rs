@@ -10,11 +10,16 @@ use std::path::Path;
 use std::process::Command;
 
 fn caustica(args: &[&str]) -> std::process::Output {
+    caustica_command(args).output().expect("run caustica")
+}
+
+fn caustica_command(args: &[&str]) -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustica"));
     if let Some(icd) = lavapipe_override() {
         cmd.env("VK_DRIVER_FILES", icd);
     }
-    cmd.args(args).output().expect("run caustica")
+    cmd.args(args);
+    cmd
 }
 
 #[test]
@@ -264,4 +269,90 @@ fn temp_files_of_killed_writes_are_cleared_and_no_others() {
         assert!(kept.exists(), "{} was removed", kept.display());
     }
     std::fs::remove_dir_all(dir).ok();
+}
+
+/// A shared data folder that is not there, so the suite must skip the scenes that need it.
+const NO_DATA: &str = "/nonexistent/caustica-shared-data";
+
+/// `bench --suite` at 8x8, 1 spp without the shared data: returns stdout and stderr.
+fn tiny_suite(extra: &[&str]) -> (String, String) {
+    let mut args = vec!["bench", "--suite", "--width", "8", "--height", "8", "--spp", "1"];
+    args.extend_from_slice(extra);
+    let o = caustica_command(&args).env("CAUSTICA_DATA", NO_DATA).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned());
+    assert!(o.status.success(), "{stderr}");
+    (stdout, stderr)
+}
+
+/// The checked-in scenes that need no shared data, and one that does.
+const LOCAL_SCENES: [&str; 5] = ["cornell.toml (built-in)", "cornell_original.toml", "materials.toml", "probe.toml", "sky.toml"];
+const SHARED_SCENE: &str = "bunny_cornell.toml";
+
+#[test]
+fn bench_suite_prints_one_table_and_says_loudly_what_it_skipped() {
+    let (stdout, stderr) = tiny_suite(&[]);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(lines[0].starts_with("device: "), "{stdout}");
+    let header: Vec<&str> = lines[1].split_whitespace().collect();
+    assert_eq!(header, ["scene", "size", "spp", "Msamples/s", "Mrays/s", "rays/sample", "seconds"], "{stdout}");
+    for scene in LOCAL_SCENES {
+        let row = lines.iter().find(|l| l.starts_with(scene)).unwrap_or_else(|| panic!("no row for {scene}: {stdout}"));
+        let cells: Vec<&str> = row[scene.len()..].split_whitespace().collect();
+        assert_eq!(cells[..2], ["8x8", "1"], "{row}");
+        assert_eq!(cells.len(), 6, "{row}");
+        assert!(cells[2..].iter().all(|c| c.parse::<f64>().is_ok_and(|v| v >= 0.0)), "{row}");
+    }
+    assert!(!stdout.contains(SHARED_SCENE), "{stdout}");
+    assert_eq!(lines.iter().filter(|l| l.starts_with("cornell.toml")).count(), 1, "the built-in box runs once (it is scenes/cornell.toml): {stdout}");
+    let skip = stderr.lines().find(|l| l.contains(&format!("SKIPPED {SHARED_SCENE}"))).unwrap_or_else(|| panic!("no skip line for {SHARED_SCENE}: {stderr}"));
+    assert!(skip.contains("shared data") && skip.contains(NO_DATA), "the reason names the folder: {skip}");
+    assert!(stderr.lines().any(|l| l.starts_with("caustica: SKIPPED") && l.contains("of the suite's scenes")), "a summary of the skips at the end: {stderr}");
+}
+
+#[test]
+fn bench_suite_json_is_one_document_with_the_device_and_a_row_per_scene() {
+    let (stdout, stderr) = tiny_suite(&["--json"]);
+    let doc: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON document");
+    for key in ["device", "device_type", "api_version", "driver_name", "driver_info", "driver_version"] {
+        assert!(doc[key].is_string(), "{key} in {doc}");
+    }
+    let rows = doc["rows"].as_array().unwrap();
+    let scenes: Vec<&str> = rows.iter().map(|r| r["scene"].as_str().unwrap()).collect();
+    for scene in LOCAL_SCENES {
+        assert!(scenes.contains(&scene), "no row for {scene}: {scenes:?}");
+    }
+    for row in rows {
+        assert_eq!((row["width"].as_u64(), row["height"].as_u64(), row["samples"].as_u64()), (Some(8), Some(8), Some(1)), "{row}");
+        for key in ["samples_per_second", "rays_per_second", "rays_per_sample", "seconds"] {
+            assert!(row[key].as_f64().is_some_and(|v| v > 0.0), "{key} in {row}");
+        }
+    }
+    let skipped = doc["skipped"].as_array().unwrap();
+    let bunny = skipped.iter().find(|s| s["scene"] == SHARED_SCENE).unwrap_or_else(|| panic!("{SHARED_SCENE} not among the skipped: {doc}"));
+    assert!(bunny["reason"].as_str().unwrap().contains(NO_DATA), "{bunny}");
+    assert_eq!(doc["failed"].as_array().map(Vec::len), Some(0), "{doc}");
+    assert!(stderr.contains(&format!("SKIPPED {SHARED_SCENE}")), "said on stderr too: {stderr}");
+}
+
+#[test]
+fn bench_of_one_scene_keeps_its_json_keys() {
+    let o = caustica(&["bench", "--width", "8", "--height", "8", "--spp", "1", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let keys = [
+        "scene", "device", "device_type", "width", "height", "samples", "aovs", "setup_seconds", "seconds", "samples_per_second",
+        "rays_per_second", "rays_per_sample", "nonfinite_samples", "loop_limit", "repeated_dispatches", "primitives", "gpu_bytes",
+    ];
+    for key in keys {
+        assert!(summary.get(key).is_some(), "{key} missing: {summary}");
+    }
+    assert_eq!((summary["width"].as_u64(), summary["samples"].as_u64()), (Some(8), Some(1)));
+}
+
+#[test]
+fn bench_suite_refuses_a_scene_argument_and_bad_sizes_before_any_work() {
+    fails_naming(&caustica(&["bench", "--suite", "scenes/sky.toml"]), &["--suite"]);
+    fails_naming(&caustica(&["bench", "--scenes", "scenes"]), &["--suite"]);
+    let stderr = fails_naming(&caustica(&["bench", "--suite", "--spp", "0", "--device", "no-such-gpu"]), &["spp"]);
+    assert!(!stderr.contains("no-such-gpu"), "checked only after the device: {stderr}");
 }

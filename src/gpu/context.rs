@@ -46,7 +46,13 @@ pub struct DeviceInfo {
     pub name: String,
     pub kind: DeviceType,
     pub api_version: String,
+    /// The driver's version number as the device reports it (its encoding is the vendor's).
     pub driver: String,
+    /// The driver's name and its own description of its version (VK_KHR_driver_properties, core in
+    /// Vulkan 1.2), e.g. `llvmpipe` and `Mesa 25.0.7 (LLVM 19.1.7)`: which Mesa a lavapipe
+    /// measurement ran on, which the device name does not say. Empty on devices below Vulkan 1.2.
+    pub driver_name: String,
+    pub driver_info: String,
     /// Bytes one storage-buffer binding can see (lowered by `ContextOptions::storage_binding_limit`).
     pub max_storage_buffer_range: u64,
     pub min_storage_buffer_offset_alignment: u64,
@@ -124,18 +130,34 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         .max()
         .unwrap_or(0);
     let v = props.api_version;
+    let (driver_name, driver_info) = driver_properties(instance, pd, v);
     DeviceInfo {
         index,
         name: props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
         kind: DeviceType::from_vk(props.device_type),
         api_version: format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v)),
         driver: format!("{:#x}", props.driver_version),
+        driver_name,
+        driver_info,
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
         device_local_bytes,
         has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
     }
+}
+
+/// The driver's name and version text; chained only where the device supports Vulkan 1.2, which
+/// made the structure core (the instance is created for 1.2).
+fn driver_properties(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> (String, String) {
+    if api_version < vk::API_VERSION_1_2 {
+        return (String::new(), String::new());
+    }
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    unsafe { instance.get_physical_device_properties2(pd, &mut props) };
+    let text = |c: Result<&std::ffi::CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
+    (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()))
 }
 
 fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {

@@ -1,0 +1,121 @@
+//! Throughput measurement: how many samples and rays per second one device renders a scene at
+//! (`caustica bench SCENE`), and the same for every checked-in scene in one run (`bench --suite`),
+//! so that a kernel change can be judged by one table before and after. Both go through
+//! [`measure`], so a single scene and a suite row are measured the same way.
+//!
+//! `suite` says which scenes the suite runs and at what size; `report` prints measurements as text
+//! and JSON.
+
+mod report;
+mod suite;
+
+pub use report::{print_left_out, print_measurement, print_suite, suite_json, SUITE_COLUMNS};
+pub use suite::{run_suite, suite_entries, SuiteEntry, SuiteOutcome, SuiteSize};
+
+use crate::farm::per_second;
+use crate::gpu::{DeviceInfo, GpuContext};
+use crate::render::{AovSet, GeometryReport, Renderer};
+use crate::scene::Scene;
+use anyhow::Result;
+use serde_json::{json, Value};
+use std::time::Instant;
+
+/// One scene's throughput on one device. The timed samples follow one warm-up sample, whose
+/// first-dispatch costs (pipeline caches, page faults) are not throughput.
+pub struct Measurement {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel timed (the warm-up sample excluded).
+    pub spp: u32,
+    pub aovs: AovSet,
+    /// BVH build, upload and kernel compile (the scene's loading excluded).
+    pub setup_seconds: f64,
+    /// Wall time of the timed dispatches, fences included.
+    pub seconds: f64,
+    pub samples_per_second: Option<f64>,
+    pub rays_per_second: Option<f64>,
+    /// Camera, bounce and shadow rays per sample (every `trace_ray` of the kernel).
+    pub rays_per_sample: Option<f64>,
+    pub nonfinite_samples: u64,
+    /// Shader loop iterations the device allows per invocation, where it ends loops early.
+    pub loop_limit: Option<u32>,
+    pub repeated_dispatches: u32,
+    pub geometry: GeometryReport,
+}
+
+/// Renders `scene` at its film's size and sample count (seed 1) and times it.
+pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet) -> Result<Measurement> {
+    let (width, height, spp) = (scene.film.width, scene.film.height, scene.film.spp);
+    let setup = Instant::now();
+    let mut renderer = Renderer::with_aovs(ctx, scene, 1, aovs)?;
+    let setup_seconds = setup.elapsed().as_secs_f64();
+    renderer.render(1, |_| {})?;
+    let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
+    renderer.render(spp, |_| {})?;
+    let seconds = renderer.seconds - secs0;
+    let samples = (renderer.samples_done - spp0) as f64 * width as f64 * height as f64;
+    let rays = (renderer.rays_traced - rays0) as f64;
+    Ok(Measurement {
+        scene: scene.name.clone(),
+        width,
+        height,
+        spp,
+        aovs,
+        setup_seconds,
+        seconds,
+        samples_per_second: per_second(samples, seconds),
+        rays_per_second: per_second(rays, seconds),
+        rays_per_sample: (samples > 0.0).then(|| rays / samples),
+        nonfinite_samples: renderer.nonfinite_samples,
+        loop_limit: renderer.loop_limit(),
+        repeated_dispatches: renderer.repeated_dispatches,
+        geometry: renderer.geometry.clone(),
+    })
+}
+
+impl Measurement {
+    /// The figures of this scene; the keys are those `bench --json` has always printed (scripts
+    /// and tests read them), less the device's, which [`device_json`] gives.
+    pub fn json(&self) -> Value {
+        json!({
+            "scene": self.scene,
+            "width": self.width,
+            "height": self.height,
+            "samples": self.spp,
+            "aovs": self.aovs.to_string(),
+            "setup_seconds": self.setup_seconds,
+            "seconds": self.seconds,
+            "samples_per_second": self.samples_per_second,
+            "rays_per_second": self.rays_per_second,
+            "rays_per_sample": self.rays_per_sample,
+            "nonfinite_samples": self.nonfinite_samples,
+            "loop_limit": self.loop_limit,
+            "repeated_dispatches": self.repeated_dispatches,
+            "primitives": self.geometry.acceleration.primitives,
+            "gpu_bytes": self.geometry.gpu_bytes,
+        })
+    }
+
+    /// `bench SCENE --json`: the scene's figures and the device's in one object.
+    pub fn json_with_device(&self, device: &DeviceInfo) -> Value {
+        let mut summary = self.json();
+        if let (Value::Object(figures), Value::Object(device)) = (&mut summary, device_json(device)) {
+            figures.extend(device);
+        }
+        summary
+    }
+}
+
+/// The device and driver a measurement ran on: a lavapipe figure means little without the Mesa
+/// version (`driver_info`), since Mesa 25 runs the same kernel about 3x faster than Mesa 22.3.
+pub fn device_json(device: &DeviceInfo) -> Value {
+    json!({
+        "device": device.name,
+        "device_type": device.kind.label(),
+        "api_version": device.api_version,
+        "driver_name": device.driver_name,
+        "driver_info": device.driver_info,
+        "driver_version": device.driver,
+    })
+}
