@@ -1,0 +1,431 @@
+#!/usr/bin/env python3
+"""Renders one caustica scene with caustica and with Mitsuba 3, in one run: both renderers'
+samples per second and their ratio, and both images' error against one high-spp reference.
+
+    python3 scripts/mitsuba_compare.py [SCENE.toml] [--width W] [--height H] [--spp N]
+        [--reference REF.pfm | --reference-spp N] [--out DIR] [--json]
+
+SCENE defaults to scenes/cornell.toml (the built-in Cornell box). caustica is timed by
+`caustica bench --json` (one warm-up sample, then the timed ones) and its image comes from
+`caustica render`; Mitsuba's scene is built from the same TOML file, rendered once to compile its
+kernels (Dr.Jit caches them), then rendered again and timed up to the image in memory (Dr.Jit
+evaluates lazily: the time stops only once the image is a numpy array). Both errors are relative MSE
+from `caustica compare` against a reference that caustica renders at --reference-spp (default
+16 x spp; seed 99, unlike the measured renders' seed 1), or against --reference.
+
+Needs: `pip install mitsuba numpy`; on Debian 12 also `apt-get install libllvm19` (Mitsuba's CPU
+variant crashes on the system's LLVM 15; Dr.Jit finds LLVM 19 by itself once it is installed,
+or set DRJIT_LIBLLVM_PATH). The Vulkan driver is whatever the environment selects (e.g.
+VK_DRIVER_FILES); the report names it.
+
+Mapped (anything else in the scene is an error naming it): the pinhole or thin-lens camera
+(vertical fov), film size and spp and box/tent/gaussian filter, spheres, quads, PLY and OBJ meshes
+with a `material` and their placements (several: Mitsuba instances), materials mixing diffuse
+(albedo), a perfect mirror (reflectivity) and smooth glass (transparency, ior) with emission
+(one-sided area lights), a constant sky, and the path integrator's depth and roulette settings.
+The renderers then compute the same image; they still differ in how they sample it (Mitsuba picks
+a light uniformly and plays roulette on throughput x eta^2 without caustica's floor of 0.05), which
+changes noise and speed but not the expected value.
+"""
+
+import argparse
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+DATA_PREFIX = "$CAUSTICA_DATA/"
+
+
+class Unmapped(Exception):
+    """The scene uses something this script cannot give Mitsuba."""
+
+
+# --- the scene file, read as caustica reads it -------------------------------------------------
+
+
+def data_dir():
+    """caustica's shared data folder: $CAUSTICA_DATA, or ../shared/data from the working directory
+    (src/scene/mod.rs, data_dir)."""
+    return Path(os.environ.get("CAUSTICA_DATA", "../shared/data"))
+
+
+def resolve(base, file):
+    """A path in a scene file: `$CAUSTICA_DATA/...`, absolute, or relative to the scene file."""
+    if file.startswith(DATA_PREFIX):
+        return data_dir() / file[len(DATA_PREFIX):]
+    p = Path(file)
+    return p if p.is_absolute() else base / p
+
+
+def placement(entry):
+    """Object to world of a mesh entry or instance: scale, then rotate about x, y and z (degrees),
+    then translate, as caustica's `placement` (src/scene/mod.rs)."""
+    import numpy as np
+
+    scale = entry.get("scale", 1.0)
+    s = np.diag(list(scale if isinstance(scale, list) else [scale] * 3) + [1.0])
+    rx, ry, rz = (math.radians(a) for a in entry.get("rotate", [0.0, 0.0, 0.0]))
+    cx, sx, cy, sy, cz, sz = math.cos(rx), math.sin(rx), math.cos(ry), math.sin(ry), math.cos(rz), math.sin(rz)
+    r_x = np.array([[1, 0, 0, 0], [0, cx, -sx, 0], [0, sx, cx, 0], [0, 0, 0, 1]])
+    r_y = np.array([[cy, 0, sy, 0], [0, 1, 0, 0], [-sy, 0, cy, 0], [0, 0, 0, 1]])
+    r_z = np.array([[cz, -sz, 0, 0], [sz, cz, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+    t = np.eye(4)
+    t[:3, 3] = entry.get("translate", [0.0, 0.0, 0.0])
+    return t @ r_z @ r_y @ r_x @ s
+
+
+def has_vertex_normals(path):
+    """Whether a PLY or OBJ file brings its own vertex normals. caustica interpolates them when it
+    does and shades with the flat triangle normal when it does not; Mitsuba would compute smooth
+    normals instead, so it is told to use face normals then."""
+    if path.suffix.lower() == ".ply":
+        with open(path, "rb") as f:
+            header = b""
+            while b"end_header" not in header:
+                line = f.readline()
+                if not line:
+                    break
+                header += line
+        return re.search(rb"property\s+\w+\s+nx\b", header) is not None
+    with open(path, errors="replace") as f:
+        return any(line.startswith("vn ") for line in f)
+
+
+# --- Mitsuba's scene ---------------------------------------------------------------------------
+
+
+def rgb(value):
+    return {"type": "rgb", "value": [float(c) for c in value]}
+
+
+MATERIAL_KEYS = {"albedo", "reflectivity", "transparency", "ior", "emission", "two_sided", "roughness", "metal", "eta", "k", "coat"}
+
+
+def material_bsdf(name, m):
+    """caustica's R/T model as a Mitsuba BSDF: with probability R a perfect mirror, with T smooth
+    glass, else diffuse; a linear mix, which Mitsuba's blendbsdf is. caustica scatters from both
+    sides of a diffuse or mirror surface (Mitsuba's BSDFs are one-sided: `twosided`)."""
+    key = f"materials.{name}"
+    unknown = set(m) - MATERIAL_KEYS
+    if unknown:
+        raise Unmapped(f"{key}: unknown keys {sorted(unknown)}")
+    for field, why in [("metal", "conductors"), ("eta", "conductors"), ("k", "conductors")]:
+        if field in m:
+            raise Unmapped(f"{key}.{field}: {why} are not mapped (only the perfect mirror is)")
+    if m.get("roughness", 0.0) > 0.0:
+        raise Unmapped(f"{key}.roughness = {m['roughness']}: rough (GGX) lobes are not mapped")
+    if m.get("coat", False):
+        raise Unmapped(f"{key}.coat: plastics are not mapped")
+    albedo = m.get("albedo", [0.8, 0.8, 0.8])
+    r, t, ior = m.get("reflectivity", 0.0), m.get("transparency", 0.0), m.get("ior", 1.5)
+    base = 1.0 - r - t
+    reflecting = None
+    if base > 0.0:
+        reflecting = {"type": "diffuse", "reflectance": rgb(albedo)}
+    if r > 0.0:
+        mirror = {"type": "conductor", "material": "none"}
+        reflecting = mirror if reflecting is None else {"type": "blendbsdf", "weight": r / (r + base), "bsdf_0": reflecting, "bsdf_1": mirror}
+    glass = {"type": "dielectric", "int_ior": float(ior), "ext_ior": 1.0} if t > 0.0 else None
+    if glass is None:
+        return {"type": "twosided", "bsdf": reflecting}
+    if reflecting is None:
+        return glass
+    return {"type": "blendbsdf", "weight": t, "bsdf_0": {"type": "twosided", "bsdf": reflecting}, "bsdf_1": glass}
+
+
+def emitter(name, m):
+    emission = m.get("emission", [0.0, 0.0, 0.0])
+    if max(emission) <= 0.0:
+        return None
+    if m.get("two_sided", False):
+        raise Unmapped(f"materials.{name}.two_sided: two-sided emitters are not mapped (Mitsuba's area lights emit on one side)")
+    return {"type": "area", "radiance": rgb(emission)}
+
+
+def with_material(shape, materials, name, where):
+    if name not in materials:
+        raise Unmapped(f"{where}: unknown material '{name}'")
+    bsdf, light = materials[name]
+    shape["bsdf"] = bsdf
+    if light is not None:
+        shape["emitter"] = light
+    return shape
+
+
+def quad_to_world(q):
+    """Mitsuba's rectangle is [-1, 1]^2 in the xy plane facing +z; caustica's quad is origin +
+    s u + t v, s and t in [0, 1], facing u x v."""
+    import numpy as np
+
+    o, u, v = (np.array(q[k], dtype=float) for k in ("origin", "edge_u", "edge_v"))
+    n = np.cross(u, v)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = u / 2, v / 2, n / np.linalg.norm(n), o + (u + v) / 2
+    return m
+
+
+SCENE_KEYS = {"camera", "film", "integrator", "materials", "spheres", "quads", "triangles", "meshes", "environment"}
+
+
+def mitsuba_scene(scene_path, width, height, spp):
+    """The Mitsuba scene dictionary of a caustica TOML scene, or Unmapped naming what it cannot map."""
+    import mitsuba as mi
+    import numpy as np
+
+    text = scene_path.read_text()
+    doc = tomllib.loads(text)
+    base = scene_path.parent
+    unknown = set(doc) - SCENE_KEYS
+    if unknown:
+        raise Unmapped(f"unknown tables {sorted(unknown)}")
+
+    cam = doc["camera"]
+    to_world = mi.ScalarTransform4f().look_at(origin=cam["position"], target=cam["look_at"], up=cam.get("up", [0.0, 1.0, 0.0]))
+    film = doc.get("film", {})
+    filters = {"box": {"type": "box"}, "tent": {"type": "tent", "radius": 1.0}, "gaussian": {"type": "gaussian", "stddev": 0.5}}
+    integ = doc.get("integrator", {})
+    sampler = {"sobol": "multijitter", "independent": "independent"}[integ.get("sampler", "sobol")]
+    sensor = {
+        "type": "perspective",
+        "fov": float(cam.get("fov", 40.0)),
+        "fov_axis": "y",  # caustica's fov is vertical
+        "to_world": to_world,
+        "sampler": {"type": sampler, "sample_count": spp},
+        "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": filters[film.get("filter", "box")], "pixel_format": "rgb"},
+    }
+    if cam.get("aperture", 0.0) > 0.0:
+        focus = cam.get("focus_distance", float(np.linalg.norm(np.subtract(cam["look_at"], cam["position"]))))
+        sensor.update({"type": "thinlens", "aperture_radius": float(cam["aperture"]), "focus_distance": float(focus)})
+
+    if not integ.get("nee", True):
+        raise Unmapped("integrator.nee = false: Mitsuba's path integrator always samples the lights")
+    if "clamp" in integ:
+        raise Unmapped("integrator.clamp: Mitsuba's path integrator has no clamp (it changes the image)")
+    # caustica traces at most max_bounces rays a path (the camera's included) and samples a light
+    # at each vertex it reaches; Mitsuba's max_depth counts segments, the one to a sampled light
+    # included, so max_bounces + 1 holds every path caustica can complete. Only a cap that
+    # roulette does not reach first (the default, 1024, is never reached) tells them apart.
+    # Roulette: caustica's rr_start counts bounces traced before it starts, Mitsuba's rr_depth the
+    # vertices: the same number.
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": int(integ.get("max_bounces", 1024)) + 1, "rr_depth": int(integ.get("rr_start", 4))},
+        "sensor": sensor,
+    }
+    materials = {name: (material_bsdf(name, m), emitter(name, m)) for name, m in doc.get("materials", {}).items()}
+
+    for k, s in enumerate(doc.get("spheres", [])):
+        scene[f"sphere_{k}"] = with_material({"type": "sphere", "center": s["center"], "radius": float(s["radius"])}, materials, s["material"], f"spheres[{k}]")
+    for k, q in enumerate(doc.get("quads", [])):
+        scene[f"quad_{k}"] = with_material({"type": "rectangle", "to_world": mi.ScalarTransform4f(quad_to_world(q))}, materials, q["material"], f"quads[{k}]")
+    if doc.get("triangles"):
+        raise Unmapped(f"triangles ({len(doc['triangles'])}): single triangles are not mapped")
+    for k, m in enumerate(doc.get("meshes", [])):
+        key = f"meshes[{k}]"
+        path = resolve(base, m["file"])
+        kind = path.suffix.lower().lstrip(".")
+        if kind not in ("ply", "obj"):
+            raise Unmapped(f"{key}: {path.name}: only PLY and OBJ meshes are mapped")
+        if "material" not in m:
+            raise Unmapped(f"{key}: the file's own materials are not mapped; give the entry a material")
+        if not path.is_file():
+            raise Unmapped(f"{key}: {path} does not exist (is the shared data folder, $CAUSTICA_DATA, there?)")
+        shape = with_material({"type": kind, "filename": str(path), "face_normals": not has_vertex_normals(path)}, materials, m["material"], key)
+        outer = placement(m)
+        instances = m.get("instances", [])
+        if not instances:
+            scene[f"mesh_{k}"] = dict(shape, to_world=mi.ScalarTransform4f(outer))
+        elif "emitter" in shape:
+            raise Unmapped(f"{key}: instances of an emitting mesh are not mapped (Mitsuba instances cannot emit)")
+        else:
+            # One mesh and BVH, several placements: what caustica does, so the two compare.
+            scene[f"mesh_{k}_group"] = {"type": "shapegroup", "shape": shape}
+            for j, inst in enumerate(instances):
+                scene[f"mesh_{k}_instance_{j}"] = {"type": "instance", "shapegroup": {"type": "ref", "id": f"mesh_{k}_group"}, "to_world": mi.ScalarTransform4f(placement(inst) @ outer)}
+
+    env = doc.get("environment")
+    if env is not None:
+        for field in ("probe", "latlong"):
+            if field in env:
+                raise Unmapped(f"environment.{field}: environment maps are not mapped (only a constant sky)")
+        if "color" in env:
+            scene["sky"] = {"type": "constant", "radiance": rgb([c * env.get("intensity", 1.0) for c in env["color"]])}
+    return scene
+
+
+# --- running both renderers --------------------------------------------------------------------
+
+
+def write_pfm(path, image):
+    """A linear RGB float image (rows top to bottom) as PFM: rows bottom to top, little-endian."""
+    import numpy as np
+
+    h, w, _ = image.shape
+    with open(path, "wb") as f:
+        f.write(f"PF\n{w} {h}\n-1.0\n".encode())
+        f.write(np.ascontiguousarray(image[::-1], dtype="<f4").tobytes())
+
+
+def run(cmd, **kwargs):
+    done = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, **kwargs)
+    if done.returncode != 0:
+        sys.exit(f"mitsuba_compare: {' '.join(map(str, cmd))} failed:\n{done.stderr}")
+    return done.stdout
+
+
+def compare(caustica, image, reference):
+    """`caustica compare`: the project's relative MSE and ratio of means, so the figures are those
+    of docs/benchmarks.md."""
+    out = run([caustica, "compare", image, reference])
+    figure = lambda label: float(re.search(rf"{label}:\s+(\S+)", out).group(1))
+    ratio = re.search(r"ratio of means:\s+([0-9.eE+-]+)", out)
+    return {"relative_mse": figure("relative MSE"), "ratio_of_means": float(ratio.group(1)) if ratio else None}
+
+
+def size_args(width, height, spp):
+    return ["--width", width, "--height", height, "--spp", spp]
+
+
+def measure_caustica(caustica, scene, width, height, spp, out):
+    bench = json.loads(run([caustica, "bench", scene, *size_args(width, height, spp), "--json"]))
+    image = out / "caustica.pfm"
+    run([caustica, "render", scene, "-o", image, *size_args(width, height, spp), "--seed", 1, "-q"])
+    return bench, image
+
+
+def loaded_llvm():
+    """The LLVM library Dr.Jit loaded (Debian 12's LLVM 15 crashes Mitsuba; 19 works)."""
+    try:
+        with open("/proc/self/maps") as maps:
+            return sorted({Path(line.split()[-1]).name for line in maps if "libLLVM" in line})
+    except OSError:
+        return []
+
+
+def measure_mitsuba(scene_dict, width, height, spp, variant, out):
+    import mitsuba as mi
+    import numpy as np
+
+    started = time.perf_counter()
+    scene = mi.load_dict(scene_dict)
+    load_seconds = time.perf_counter() - started
+    # Mitsuba's multi-jittered sampler rounds some counts up (512 becomes 528): the rate counts
+    # the samples it takes.
+    spp = scene.sensors()[0].sampler().sample_count()
+    # The first render compiles the kernels (cached by Dr.Jit); the second, with the same
+    # shapes and seed, reuses them and is the one timed. np.array forces the evaluation.
+    started = time.perf_counter()
+    np.array(mi.render(scene, spp=spp, seed=1))
+    first_seconds = time.perf_counter() - started
+    started = time.perf_counter()
+    image = np.array(mi.render(scene, spp=spp, seed=1))
+    seconds = time.perf_counter() - started
+    path = out / "mitsuba.pfm"
+    write_pfm(path, image)
+    import drjit as dr
+
+    return {
+        "version": mi.__version__,
+        "drjit_version": dr.__version__,
+        "variant": variant,
+        "llvm": loaded_llvm(),
+        "threads": os.cpu_count(),
+        "spp": spp,
+        "load_seconds": load_seconds,
+        "first_render_seconds": first_seconds,
+        "seconds": seconds,
+        "samples_per_second": width * height * spp / seconds,
+    }, path
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("scene", nargs="?", default=str(REPO / "scenes" / "cornell.toml"), help="caustica TOML scene (default: scenes/cornell.toml)")
+    parser.add_argument("--width", type=int, help="image width (default: the scene's film.width)")
+    parser.add_argument("--height", type=int, help="image height (default: the scene's film.height)")
+    parser.add_argument("--spp", type=int, help="samples per pixel (default: the scene's film.spp)")
+    parser.add_argument("--reference", help="reference image (PFM or EXR) of the same size; default: rendered by caustica")
+    parser.add_argument("--reference-spp", type=int, help="spp of the reference caustica renders (default: 16 x spp)")
+    parser.add_argument("--caustica", default=str(REPO / "target" / "release" / "caustica"), help="the caustica binary (default: target/release/caustica)")
+    parser.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (default: llvm_ad_rgb, the CPU one)")
+    parser.add_argument("--out", help="folder for the images (default: a temporary folder, kept and printed)")
+    parser.add_argument("--json", action="store_true", help="print the results as one JSON document")
+    args = parser.parse_args()
+
+    scene_path = Path(args.scene)
+    doc = tomllib.loads(scene_path.read_text())
+    film = doc.get("film", {})
+    width, height, spp = args.width or film.get("width", 512), args.height or film.get("height", 512), args.spp or film.get("spp", 64)
+    try:
+        import mitsuba as mi
+    except ImportError:
+        sys.exit("mitsuba_compare: Mitsuba 3 is not installed: pip install mitsuba numpy (and on Debian 12: apt-get install libllvm19)")
+    mi.set_variant(args.variant)
+    try:
+        scene_dict = mitsuba_scene(scene_path, width, height, spp)
+    except Unmapped as e:
+        sys.exit(f"mitsuba_compare: {scene_path}: cannot give this scene to Mitsuba: {e}")
+
+    if args.reference is not None:
+        # Refused now rather than after minutes of rendering.
+        ref_size = tuple(mi.Bitmap(args.reference).size())
+        if ref_size != (width, height):
+            sys.exit(f"mitsuba_compare: --reference {args.reference} is {ref_size[0]}x{ref_size[1]}, not {width}x{height}")
+    out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="mitsuba-compare-"))
+    out.mkdir(parents=True, exist_ok=True)
+    load_before = os.getloadavg()
+    bench, caustica_image = measure_caustica(args.caustica, scene_path, width, height, spp, out)
+    mitsuba, mitsuba_image = measure_mitsuba(scene_dict, width, height, spp, args.variant, out)
+    reference, reference_spp = args.reference, None
+    if reference is None:
+        reference_spp = args.reference_spp or 16 * spp
+        reference = out / "reference.pfm"
+        run([args.caustica, "render", scene_path, "-o", reference, *size_args(width, height, reference_spp), "--seed", 99, "-q"])
+    load_after = os.getloadavg()
+    errors = {"caustica": compare(args.caustica, caustica_image, reference), "mitsuba": compare(args.caustica, mitsuba_image, reference)}
+
+    speed_ratio = bench["samples_per_second"] / mitsuba["samples_per_second"]
+    result = {
+        "scene": str(scene_path),
+        "width": width,
+        "height": height,
+        "spp": spp,
+        "reference": {"image": str(reference), "spp": reference_spp},
+        "caustica": {**bench, **errors["caustica"], "image": str(caustica_image)},
+        "mitsuba": {**mitsuba, **errors["mitsuba"], "image": str(mitsuba_image)},
+        "caustica_over_mitsuba_samples_per_second": speed_ratio,
+        "load_average_before": load_before,
+        "load_average_after": load_after,
+    }
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return
+    c, m = result["caustica"], result["mitsuba"]
+    driver = f"{c.get('driver_name', '')}, {c.get('driver_info', '')}".strip(", ")
+    ref = f"{reference} ({reference_spp} spp, caustica)" if reference_spp else reference
+    print(f"scene:      {scene_path} at {width}x{height}, {spp} spp")
+    print(f"reference:  {ref}")
+    print(f"caustica:   {c['device']} ({driver})")
+    rounded = f", {m['spp']} spp (its sampler's rounding)" if m["spp"] != spp else ""
+    print(f"Mitsuba:    {m['version']} {m['variant']} on {m['threads']} threads ({', '.join(m['llvm']) or 'LLVM not found'}){rounded}")
+    print(f"load:       {load_before[0]:.2f} before, {load_after[0]:.2f} after (1-minute averages)")
+    print()
+    print(f"{'renderer':<10}  {'Msamples/s':>10}  {'seconds':>8}  {'relative MSE':>12}  {'ratio of means':>14}")
+    for name, r in (("caustica", c), ("Mitsuba", m)):
+        ratio = "-" if r["ratio_of_means"] is None else f"{r['ratio_of_means']:.4f}"
+        print(f"{name:<10}  {r['samples_per_second'] / 1e6:>10.3f}  {r['seconds']:>8.2f}  {r['relative_mse']:>12.5f}  {ratio:>14}")
+    print()
+    print(f"caustica / Mitsuba, samples per second: {speed_ratio:.3f}")
+    print(f"images in {out}")
+
+
+if __name__ == "__main__":
+    main()
