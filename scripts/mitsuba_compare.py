@@ -29,6 +29,7 @@ changes noise and speed but not the expected value.
 """
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -310,6 +311,21 @@ def loaded_llvm():
         return []
 
 
+@contextlib.contextmanager
+def stdout_to_stderr():
+    """Mitsuba's log (warnings such as "ASCII PLY is slow to parse") goes to the process's standard
+    output, from C++: the file descriptor itself is pointed at stderr, so --json output stays one
+    document."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    os.dup2(2, 1)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def measure_mitsuba(scene_dict, width, height, spp, variant, out):
     import mitsuba as mi
     import numpy as np
@@ -383,7 +399,8 @@ def main():
     out.mkdir(parents=True, exist_ok=True)
     load_before = os.getloadavg()
     bench, caustica_image = measure_caustica(args.caustica, scene_path, width, height, spp, out)
-    mitsuba, mitsuba_image = measure_mitsuba(scene_dict, width, height, spp, args.variant, out)
+    with stdout_to_stderr():
+        mitsuba, mitsuba_image = measure_mitsuba(scene_dict, width, height, spp, args.variant, out)
     reference, reference_spp = args.reference, None
     if reference is None:
         reference_spp = args.reference_spp or 16 * spp

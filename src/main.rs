@@ -4,7 +4,7 @@ use anyhow::{Context as _, Result};
 use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
-use caustica::bench;
+use caustica::bench::{self, FilmOverrides};
 use caustica::render::{AovSet, Renderer};
 use caustica::scene::{check_film, Film, Filter, Scene};
 use clap::{Parser, Subcommand};
@@ -426,8 +426,8 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
 
 /// `bench SCENE`: one scene, by default at 256x256 and 64 spp (not the scene's own film, so that
 /// figures of different scenes compare).
-fn bench(mut scene: Scene, (width, height, spp): (Option<u32>, Option<u32>, Option<u32>), aovs: AovSet, json: bool, gpu: &DeviceArgs) -> Result<()> {
-    apply_overrides(&mut scene, Some(width.unwrap_or(256)), Some(height.unwrap_or(256)), Some(spp.unwrap_or(64)))?;
+fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, json: bool, gpu: &DeviceArgs) -> Result<()> {
+    apply_overrides(&mut scene, Some(film.width.unwrap_or(256)), Some(film.height.unwrap_or(256)), Some(film.spp.unwrap_or(64)))?;
     let ctx = gpu.context()?;
     let measured = bench::measure(&ctx, &scene, aovs)?;
     if json {
@@ -440,10 +440,10 @@ fn bench(mut scene: Scene, (width, height, spp): (Option<u32>, Option<u32>, Opti
 
 /// `bench --suite`: every scene of the suite on one device; fails (after the table) when a scene
 /// that should have run did not.
-fn bench_suite(scenes: &Path, overrides: (Option<u32>, Option<u32>, Option<u32>), aovs: AovSet, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
+fn bench_suite(scenes: &Path, overrides: FilmOverrides, aovs: AovSet, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
     // A bad override is refused once, before any work, rather than by every scene in turn.
-    let (w, h, spp) = overrides;
-    check_film(&Film { width: w.unwrap_or(1), height: h.unwrap_or(1), spp: spp.unwrap_or(1), filter: Filter::Box }).context("command-line film settings")?;
+    let (w, h, spp) = (overrides.width.unwrap_or(1), overrides.height.unwrap_or(1), overrides.spp.unwrap_or(1));
+    check_film(&Film { width: w, height: h, spp, filter: Filter::Box }).context("command-line film settings")?;
     let entries = bench::suite_entries(scenes, &caustica::scene::data_dir())?;
     let ctx = gpu.context()?;
     let outcome = bench::run_suite(&ctx, &entries, overrides, aovs, |path| scene_files.load_scene(Some(&path.to_path_buf())));
@@ -509,12 +509,12 @@ fn run() -> Result<()> {
             Ok(())
         }
         Command::Bench { width, height, spp, scene, suite, scenes, aov, json, scene_files, gpu } => {
-            let aovs = aov.unwrap_or_default();
+            let (aovs, film) = (aov.unwrap_or_default(), FilmOverrides { width, height, spp });
             if suite {
                 let scenes = scenes.unwrap_or_else(|| PathBuf::from("scenes"));
-                return bench_suite(&scenes, (width, height, spp), aovs, json, &scene_files, &gpu);
+                return bench_suite(&scenes, film, aovs, json, &scene_files, &gpu);
             }
-            bench(scene_files.load_scene(scene.as_ref())?, (width, height, spp), aovs, json, &gpu)
+            bench(scene_files.load_scene(scene.as_ref())?, film, aovs, json, &gpu)
         }
     }
 }

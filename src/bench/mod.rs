@@ -10,7 +10,7 @@ mod report;
 mod suite;
 
 pub use report::{print_left_out, print_measurement, print_suite, suite_json, SUITE_COLUMNS};
-pub use suite::{run_suite, suite_entries, SuiteEntry, SuiteOutcome, SuiteSize};
+pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcome, SuiteSize};
 
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext};

@@ -20,6 +20,21 @@ pub struct SuiteSize {
     pub spp: u32,
 }
 
+/// Sizes given on the command line (`--width`, `--height`, `--spp`), each replacing its own
+/// dimension of every scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FilmOverrides {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+}
+
+impl FilmOverrides {
+    pub fn applied_to(self, size: SuiteSize) -> SuiteSize {
+        SuiteSize { width: self.width.unwrap_or(size.width), height: self.height.unwrap_or(size.height), spp: self.spp.unwrap_or(size.spp) }
+    }
+}
+
 /// Per-scene sizes chosen so that the whole suite (shared data included) takes a couple of
 /// minutes on the 2-core machine with Debian 12's lavapipe (Mesa 22.3), the slowest device it runs
 /// on, while each scene still renders a few seconds: long enough that dispatch overheads and the
@@ -108,7 +123,7 @@ pub struct SuiteOutcome {
 pub fn run_suite(
     ctx: &GpuContext,
     entries: &[SuiteEntry],
-    overrides: (Option<u32>, Option<u32>, Option<u32>),
+    overrides: FilmOverrides,
     aovs: AovSet,
     load: impl Fn(&Path) -> Result<Scene>,
 ) -> SuiteOutcome {
@@ -122,7 +137,7 @@ pub fn run_suite(
             }
             SuiteEntry::Run { name, path, size } => (name, path, size),
         };
-        let film = SuiteSize { width: overrides.0.unwrap_or(size.width), height: overrides.1.unwrap_or(size.height), spp: overrides.2.unwrap_or(size.spp) };
+        let film = overrides.applied_to(*size);
         eprintln!("caustica: bench {name} ({}x{}, {} spp)", film.width, film.height, film.spp);
         let measured = (|| {
             let mut scene = match path {
@@ -185,6 +200,14 @@ mod tests {
     fn a_missing_scenes_folder_leaves_the_built_in_box_and_says_why() {
         let entries = suite_entries(Path::new("/nonexistent/scenes"), Path::new("/nonexistent/data")).unwrap();
         assert_eq!(names(&entries), [(BUILT_IN, true), ("/nonexistent/scenes/*.toml", false)]);
+    }
+
+    #[test]
+    fn each_override_replaces_only_its_own_dimension() {
+        let size = SuiteSize { width: 160, height: 120, spp: 32 };
+        assert_eq!(FilmOverrides::default().applied_to(size), size);
+        let wider = FilmOverrides { width: Some(8), ..Default::default() };
+        assert_eq!(wider.applied_to(size), SuiteSize { width: 8, height: 120, spp: 32 });
     }
 
     #[test]
