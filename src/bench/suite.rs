@@ -35,21 +35,21 @@ impl FilmOverrides {
     }
 }
 
-/// Per-scene sizes chosen so that the whole suite (shared data included) takes a couple of
-/// minutes on the 2-core machine with Debian 12's lavapipe (Mesa 22.3), the slowest device it runs
-/// on, while each scene still renders a few seconds: long enough that dispatch overheads and the
-/// machine's noise do not dominate. Measured timings are in docs/benchmarks.md (issue 11).
+/// Per-scene sizes chosen so that the whole suite (shared data included) takes about two minutes
+/// on the 2-core machine with Debian 12's lavapipe (Mesa 22.3), the slowest device it runs on,
+/// and each scene renders for about 10 s there and 2 s on Mesa 25: long enough that dispatch
+/// overheads and the machine's noise do not dominate. Timings are in docs/benchmarks.md (issue 11).
 const SIZES: &[(&str, SuiteSize)] = &[
-    ("cornell.toml", SuiteSize { width: 160, height: 120, spp: 32 }),
-    ("cornell_original.toml", SuiteSize { width: 128, height: 128, spp: 16 }),
-    ("sky.toml", SuiteSize { width: 160, height: 120, spp: 96 }),
-    ("probe.toml", SuiteSize { width: 160, height: 120, spp: 64 }),
-    ("materials.toml", SuiteSize { width: 160, height: 90, spp: 64 }),
-    ("bunny_cornell.toml", SuiteSize { width: 128, height: 128, spp: 8 }),
-    ("bunny_sky.toml", SuiteSize { width: 128, height: 128, spp: 32 }),
-    ("meshes_probe.toml", SuiteSize { width: 128, height: 96, spp: 32 }),
-    ("bunny_field.toml", SuiteSize { width: 128, height: 96, spp: 16 }),
-    ("helmet.toml", SuiteSize { width: 128, height: 128, spp: 24 }),
+    ("cornell.toml", SuiteSize { width: 160, height: 120, spp: 64 }),
+    ("cornell_original.toml", SuiteSize { width: 128, height: 128, spp: 32 }),
+    ("sky.toml", SuiteSize { width: 160, height: 120, spp: 192 }),
+    ("probe.toml", SuiteSize { width: 160, height: 120, spp: 128 }),
+    ("materials.toml", SuiteSize { width: 160, height: 90, spp: 128 }),
+    ("bunny_cornell.toml", SuiteSize { width: 128, height: 128, spp: 16 }),
+    ("bunny_sky.toml", SuiteSize { width: 128, height: 128, spp: 64 }),
+    ("meshes_probe.toml", SuiteSize { width: 128, height: 96, spp: 64 }),
+    ("bunny_field.toml", SuiteSize { width: 128, height: 96, spp: 32 }),
+    ("helmet.toml", SuiteSize { width: 128, height: 128, spp: 48 }),
 ];
 
 /// A scene the table above does not know yet: small, so an unexpectedly slow scene cannot hold the
