@@ -44,10 +44,6 @@ vec3 affine_vector(vec4 rows[3], vec3 v) {
     return vec3(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
 }
 
-vec3 vertex_position(uint v) {
-    return vec3(load_vertex_positions(3u * v), load_vertex_positions(3u * v + 1u), load_vertex_positions(3u * v + 2u));
-}
-
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found (shadow rays).
 // The object-space ray keeps the world parameter t: its direction is transformed, not renormalised.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
@@ -117,10 +113,9 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
             } else if (instance_kind == INSTANCE_MESH) {
                 for (uint i = node.offset; i < node.offset + count; ++i) {
                     LOOP_ITERATION();
-                    uvec4 tri = load_mesh_triangles(i);
-                    vec3 v0 = vertex_position(tri.x);
+                    MeshTriangle tri = load_mesh_triangles(i);
                     vec2 bary;
-                    float t = intersect_triangle(v0, vertex_position(tri.y) - v0, vertex_position(tri.z) - v0, ro, rd, hit.t, bary);
+                    float t = intersect_triangle(tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, ro, rd, hit.t, bary);
                     if (t > 0.0) {
                         hit = Hit(t, i, instance, bary);
                         if (any_hit) return true;

@@ -74,6 +74,15 @@ struct Instance {
     uvec4 info;
 };
 
+// A mesh triangle by value, in its BVH's leaf order: v0.xyz = first vertex, e1.xyz / e2.xyz = the
+// edges to the second / third; the w lanes hold the three global vertex indices (uint bits) for
+// normals and texture coordinates. Intersection needs no index indirection (loads are what costs).
+struct MeshTriangle {
+    vec4 v0;
+    vec4 e1;
+    vec4 e2;
+};
+
 // Texture descriptor: texels offset..offset + width * height (RGBA8, top row first); flags =
 // TEXTURE_* bits.
 struct TextureInfo {
@@ -137,11 +146,10 @@ layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { Primitive lig
 layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; uint nonfinite_samples; uint pixels_complete; uint samples_added; uint max_loop_iterations; } stats;
 // Top-level BVH leaves index instances; node 0 is the top-level root.
 layout(std430, set = 0, binding = 8) readonly buffer InstanceBuffer { Instance instances[]; };
-// Mesh triangles in their BVH's leaf order: xyz = global vertex indices, w = material.
-// binding 9: uvec4 mesh_triangles[]
-// Vertex attributes of every mesh, indexed by global vertex index. Positions are packed floats
-// (12 bytes a vertex), normals octahedral snorm16x2.
-// binding 10: float vertex_positions[]
+// Every mesh's triangles by value and their materials, in their BVH's leaf order.
+// binding 9: MeshTriangle mesh_triangles[]
+// binding 10: uint triangle_materials[]
+// Vertex attributes of every mesh, indexed by global vertex index; normals octahedral snorm16x2.
 // binding 11: uint vertex_normals[]
 // binding 12: vec2 vertex_uvs[]
 layout(std430, set = 0, binding = 13) readonly buffer TextureInfoBuffer { TextureInfo texture_infos[]; };

@@ -67,6 +67,18 @@ pub struct GpuInstance {
     pub info: [u32; 4],
 }
 
+/// `struct MeshTriangle`: a mesh triangle by value, in its BVH's leaf order, so intersecting it is
+/// three vec4 loads with no index indirection. `v0.xyz` is the first vertex, `e1.xyz` and `e2.xyz`
+/// the edges to the second and third; the w lanes hold the three global vertex indices (u32 bits)
+/// that shading uses for normals and texture coordinates.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuMeshTriangle {
+    pub v0: [f32; 4],
+    pub e1: [f32; 4],
+    pub e2: [f32; 4],
+}
+
 /// `struct TextureInfo`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -181,6 +193,9 @@ mod tests {
 
     #[test]
     fn texture_info_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuMeshTriangle>(), 48);
+        assert_eq!(offset_of!(GpuMeshTriangle, e1), 16);
+        assert_eq!(offset_of!(GpuMeshTriangle, e2), 32);
         assert_eq!(size_of::<GpuTexture>(), 16);
         assert_eq!(offset_of!(GpuTexture, width), 4);
         assert_eq!(offset_of!(GpuTexture, height), 8);

@@ -221,7 +221,7 @@ impl<'a> Renderer<'a> {
             ("statistics", BufferKind::HostStorage, bytemuck::bytes_of(&CLEARED_STATS)),
             ("instances", BufferKind::Storage, bytemuck::cast_slice(&a.instances)),
             ("mesh triangles", BufferKind::Storage, bytemuck::cast_slice(&a.triangles)),
-            ("vertex positions", BufferKind::Storage, bytemuck::cast_slice(&a.positions)),
+            ("triangle materials", BufferKind::Storage, bytemuck::cast_slice(&a.triangle_materials)),
             ("vertex normals", BufferKind::Storage, bytemuck::cast_slice(&a.normals)),
             ("vertex texture coordinates", BufferKind::Storage, bytemuck::cast_slice(&a.uvs)),
             ("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures)),
