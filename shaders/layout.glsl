@@ -46,13 +46,15 @@ struct LightAlias {
     uint alias;
 };
 
-// Flattened BVH node (src/bvh): first child is the next node, `offset` is the second child for an
-// interior node or the first primitive for a leaf; meta = prim_count << 2 | split_axis.
-struct BvhNode {
-    vec3 bmin;
-    uint offset;
-    vec3 bmax;
-    uint meta;
+// BVH node (src/bvh/pair_node.rs): both children of an interior node of the binary BVH, so one
+// load tests both boxes. Per child: xyz of *_min / *_max = its box; *_min.w = its link and
+// *_max.w = its primitive count (uint bits). Count 0: an interior child, the link is its node;
+// otherwise a leaf of primitives link..link + count. A missing child is a point box at +infinity.
+struct PairNode {
+    vec4 a_min;
+    vec4 a_max;
+    vec4 b_min;
+    vec4 b_max;
 };
 
 // Instance kinds (INSTANCE_* must match layout.rs): the scene's own spheres, quads and triangles
@@ -132,7 +134,7 @@ layout(push_constant) uniform PassBlock {
 // Arrays that can outgrow one storage binding (marked "binding N: type name[]") are declared in
 // chunked_buffers.glsl, which src/render/chunks.rs generates for each scene and device; the kernel
 // reads them with load_<name>(i) (and writes accum with store_accum).
-// binding 1: BvhNode nodes[]
+// binding 1: PairNode nodes[]
 layout(std430, set = 0, binding = 2) readonly buffer PrimitiveBuffer { Primitive prims[]; };
 layout(std430, set = 0, binding = 3) readonly buffer MaterialBuffer { Material materials[]; };
 // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).

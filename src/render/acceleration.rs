@@ -4,14 +4,15 @@
 //! is stored once.
 
 use super::layout::*;
-use crate::bvh::{self, Aabb, BuildStats, BvhNode};
+use crate::bvh::{self, pair_nodes, Aabb, BuildStats, PairNode};
 use crate::scene::{Mesh, Scene, Shape};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
 
 pub struct Acceleration {
-    pub nodes: Vec<BvhNode>,
+    /// Every BVH as pair nodes (crate::bvh::PairNode), the top level's root at 0.
+    pub nodes: Vec<PairNode>,
     /// In top-level leaf order.
     pub instances: Vec<GpuInstance>,
     /// The scene's own shapes, in their bottom-level leaf order.
@@ -142,13 +143,14 @@ fn transformed_bounds(b: &Aabb, m: Mat4) -> Aabb {
     }))
 }
 
-/// Appends a bottom level's nodes, rebasing child links onto the shared node array and leaf ranges
-/// onto the shared primitive array; returns its root's index.
-fn append_nodes(nodes: &mut Vec<BvhNode>, bottom: &[BvhNode], prim_base: u32) -> u32 {
+/// Appends a bottom level's nodes as pair nodes, rebasing child links onto the shared node array
+/// and leaf ranges onto the shared primitive array; returns its root's index.
+fn append_nodes(nodes: &mut Vec<PairNode>, bottom: &bvh::Bvh, prim_base: u32) -> u32 {
     let node_base = nodes.len() as u32;
-    nodes.extend(bottom.iter().map(|n| {
-        let mut n = *n;
-        n.offset += if n.is_leaf() { prim_base } else { node_base };
+    nodes.extend(pair_nodes(&bottom.nodes).into_iter().map(|mut n| {
+        for c in n.children.iter_mut().filter(|c| !c.is_missing()) {
+            c.link += if c.is_leaf() { prim_base } else { node_base };
+        }
         n
     }));
     node_base
@@ -173,13 +175,13 @@ impl Acceleration {
             let mesh = inst.mesh as usize;
             placements.push((Some(mesh), inst.transform, transformed_bounds(&meshes[mesh].root_bounds, inst.transform)));
         }
-        let top = bvh::build(&placements.iter().map(|p| p.2).collect::<Vec<_>>());
-        let mut nodes = top.nodes.clone();
+        let top = bvh::build_single_leaves(&placements.iter().map(|p| p.2).collect::<Vec<_>>());
+        let mut nodes = pair_nodes(&top.nodes);
 
         let mut primitives = Vec::new();
         let mut group_root = 0;
         if let Some(g) = &group {
-            group_root = append_nodes(&mut nodes, &g.bvh.nodes, 0);
+            group_root = append_nodes(&mut nodes, &g.bvh, 0);
             primitives = g.bvh.prim_order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
         }
 
@@ -188,7 +190,7 @@ impl Acceleration {
         let mut mesh_roots = Vec::with_capacity(meshes.len());
         let mut mesh_flags = Vec::with_capacity(meshes.len());
         for (mesh, bottom) in scene.meshes.iter().zip(&meshes) {
-            mesh_roots.push(append_nodes(&mut nodes, &bottom.bvh.nodes, triangles.len() as u32));
+            mesh_roots.push(append_nodes(&mut nodes, &bottom.bvh, triangles.len() as u32));
             let vertex_base = vertex_count;
             vertex_count += mesh.positions.len() as u32;
             triangles.extend(bottom.bvh.prim_order.iter().map(|&t| mesh_triangle(mesh, t as usize, vertex_base)));

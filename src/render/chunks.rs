@@ -30,7 +30,7 @@ pub const EXTRA_BINDING_BASE: u32 = 64;
 
 /// Every array the renderer may split, in no particular order (bindings say where they go).
 pub const CHUNKED_ARRAYS: [ChunkedArray; 10] = [
-    ChunkedArray { name: "nodes", glsl_type: "BvhNode", element_bytes: 32, binding: 1, writable: false },
+    ChunkedArray { name: "nodes", glsl_type: "PairNode", element_bytes: 64, binding: 1, writable: false },
     ChunkedArray { name: "env_texels", glsl_type: "vec4", element_bytes: 16, binding: 5, writable: false },
     ChunkedArray { name: "accum", glsl_type: "vec4", element_bytes: 16, binding: 6, writable: true },
     ChunkedArray { name: "mesh_triangles", glsl_type: "MeshTriangle", element_bytes: 48, binding: 9, writable: false },
@@ -150,18 +150,18 @@ mod tests {
 
     #[test]
     fn small_arrays_take_one_window() {
-        let p = plan(&NODES, 1000 * 32, 128 << 20, 16).unwrap();
-        assert_eq!(p, ChunkPlan { shift: 22, chunks: 1 });
-        assert_eq!(p.windows(32, 1000 * 32), vec![(0, 32000)]);
+        let p = plan(&NODES, 1000 * 64, 128 << 20, 16).unwrap();
+        assert_eq!(p, ChunkPlan { shift: 21, chunks: 1 });
+        assert_eq!(p.windows(64, 1000 * 64), vec![(0, 64000)]);
     }
 
     #[test]
     fn large_arrays_are_split_into_power_of_two_windows() {
-        // 10M triangles' worth of nodes (7M nodes, 224 MB) under lavapipe's 128 MiB.
-        let bytes = 7_000_000 * 32;
+        // 10M triangles' worth of nodes (3.5M pair nodes, 224 MB) under lavapipe's 128 MiB.
+        let bytes = 3_500_000 * 64;
         let p = plan(&NODES, bytes, 128 << 20, 16).unwrap();
-        assert_eq!(p, ChunkPlan { shift: 22, chunks: 2 });
-        let w = p.windows(32, bytes);
+        assert_eq!(p, ChunkPlan { shift: 21, chunks: 2 });
+        let w = p.windows(64, bytes);
         assert_eq!(w, vec![(0, 128 << 20), (128 << 20, bytes - (128 << 20))]);
         // A range that is not a power of two of elements rounds down.
         let p = plan(&CHUNKED_ARRAYS[4], 100, 30, 4).unwrap();
@@ -193,7 +193,7 @@ mod tests {
         let mut plans = [ChunkPlan { shift: 31, chunks: 1 }; CHUNKED_ARRAYS.len()];
         plans[2] = ChunkPlan { shift: 4, chunks: 3 };
         let src = glsl(&plans);
-        assert!(src.contains("BvhNode load_nodes(uint i) { return nodes_0[i]; }"));
+        assert!(src.contains("PairNode load_nodes(uint i) { return nodes_0[i]; }"));
         assert!(src.contains("binding = 80) buffer accum_window1 { vec4 accum_1[]; }"));
         assert!(src.contains("uint j = i & 0xfu;\n    switch (i >> 4u) {\n    case 0u: accum_0[j] = v; break;\n    case 1u: accum_1[j] = v; break;\n    default: accum_2[j] = v; break;"));
     }

@@ -84,7 +84,6 @@ pub fn kernel_source(plans: &[ChunkPlan; CHUNKED_ARRAYS.len()], variant: KernelV
     let generated = chunks::glsl(plans);
     assemble_with(&[("chunked_buffers.glsl", &generated)], "pathtrace.comp", &[
             ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
-            ("BVH_MAX_LEAF_SIZE", format!("{}u", crate::bvh::MAX_LEAF_SIZE)),
             ("AOVS", u32::from(variant.aovs).to_string()),
             ("COUNT_LOOP_ITERATIONS", u32::from(variant.count_loop_iterations).to_string()),
         ],)

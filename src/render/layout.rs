@@ -161,7 +161,7 @@ pub const LOOP_CHECK_ITERATIONS: u32 = 2;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::BvhNode;
+    use crate::bvh::{ChildBox, PairNode};
     use std::mem::{offset_of, size_of};
 
     #[test]
@@ -212,11 +212,12 @@ mod tests {
     }
 
     #[test]
-    fn bvh_node_matches_glsl_std430() {
-        assert_eq!(size_of::<BvhNode>(), 32);
-        assert_eq!(offset_of!(BvhNode, offset), 12);
-        assert_eq!(offset_of!(BvhNode, max), 16);
-        assert_eq!(offset_of!(BvhNode, meta), 28);
+    fn pair_node_matches_glsl_std430() {
+        assert_eq!(size_of::<PairNode>(), 64);
+        assert_eq!(offset_of!(PairNode, children) + size_of::<ChildBox>(), 32);
+        assert_eq!(offset_of!(ChildBox, link), 12);
+        assert_eq!(offset_of!(ChildBox, max), 16);
+        assert_eq!(offset_of!(ChildBox, prim_count), 28);
     }
 
     #[test]
