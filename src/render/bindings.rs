@@ -40,7 +40,7 @@ impl KernelBuffer {
     pub const COUNT: usize = KernelBuffer::AovNormalHits as usize + 1;
 
     /// The table's entry for this buffer.
-    pub fn binding(self) -> &'static BufferBinding {
+    pub fn entry(self) -> &'static BufferBinding {
         &BINDINGS[self as usize]
     }
 }
@@ -335,7 +335,7 @@ mod tests {
     #[test]
     fn the_generated_declarations_say_what_each_buffer_is() {
         let src = glsl(&UNSPLIT, KernelVariant { aovs: true, count_loop_iterations: false });
-        let materials = format!("binding = {}) readonly buffer materials_buffer {{ Material materials[]; }};", KernelBuffer::Materials.binding().binding);
+        let materials = format!("binding = {}) readonly buffer materials_buffer {{ Material materials[]; }};", KernelBuffer::Materials.entry().binding);
         assert!(src.contains(&materials), "{src}");
         assert!(src.contains("    // Number of area lights: the entries of `lights`.\n    uint light_count;\n"), "{src}");
         assert!(src.contains("vec4 load_aov_normal_hits(uint i)"), "{src}");

@@ -185,7 +185,7 @@ mod tests {
 
     #[test]
     fn accessors_select_the_window_by_the_high_bits() {
-        let [nodes, accum] = [KernelBuffer::Nodes, KernelBuffer::Accum].map(|b| b.binding());
+        let [nodes, accum] = [KernelBuffer::Nodes, KernelBuffer::Accum].map(|b| b.entry());
         let element = |b: &BufferBinding| match b.shape {
             Shape::Array { element, .. } => element,
             _ => unreachable!("{} is an array", b.name),

@@ -47,7 +47,7 @@ pub trait GlslBlock: bytemuck::Pod {
     const MEMBERS: &'static [GlslMember];
 }
 
-/// The members of `B` as GLSL, one a line, each after its doc comment.
+/// `members` as GLSL block members, one a line, each after its doc comment.
 pub fn glsl_members(members: &[GlslMember]) -> String {
     let mut out = String::new();
     for member in members {

@@ -253,7 +253,7 @@ impl<'a> Renderer<'a> {
     /// draw no random numbers.
     pub fn with_aovs(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet) -> Result<Self> {
         // One texel buffer holds every texture: it must fit the bindings it can be split across.
-        let texels = KernelBuffer::Texels.binding().chunked_element().expect("texels are chunked");
+        let texels = KernelBuffer::Texels.entry().chunked_element().expect("texels are chunked");
         let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texels.bytes, ctx.info.max_storage_buffer_range));
         let data = SceneData::new(scene, texture_budget);
         if data.texture_bytes() < data.texture_bytes_requested {
