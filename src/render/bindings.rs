@@ -36,7 +36,8 @@ pub enum KernelBuffer {
 }
 
 impl KernelBuffer {
-    /// How many buffers there are (keep the last variant here).
+    /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
+    /// place here).
     pub const COUNT: usize = KernelBuffer::AovNormalHits as usize + 1;
 
     /// The table's entry for this buffer.
