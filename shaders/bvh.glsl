@@ -54,7 +54,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit.prim = NO_INDEX;
     hit.instance = NO_INDEX;
     hit.bary = vec2(0.0);
-    if (frame.env_size.w == 0u) return false;  // empty scene: no root node to test
+    if (frame.node_count == 0u) return false;  // empty scene: no root node to test
     vec3 ro = o;
     vec3 rd = d;
     vec3 world_inv_d = safe_inverse(d);
@@ -65,7 +65,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     uint instance_kind = INSTANCE_PRIMITIVES;
     uint instance_sp = 0u;     // stack height when it was entered
     // Start at the top-level root, or with a single instance, in that instance right away.
-    stack[sp++] = frame.env_size.z == 1u ? INSTANCE_ENTRY : 0u;
+    stack[sp++] = frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
     while (true) {
         LOOP_ITERATION();
         // Next entry: leave the instance once its part of the stack is used up.

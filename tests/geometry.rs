@@ -28,8 +28,8 @@ impl PinholeRays {
             forward: Vec3::from_slice(&p.cam_forward),
             right: Vec3::from_slice(&p.cam_right),
             up: Vec3::from_slice(&p.cam_up),
-            tan_half: p.cam_forward[3],
-            aspect: p.cam_right[3],
+            tan_half: p.tan_half_fov,
+            aspect: p.aspect,
             size: Vec2::new(scene.film.width as f32, scene.film.height as f32),
         }
     }
