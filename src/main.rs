@@ -420,8 +420,10 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
     renderer.render(1, |_| {})?;
     let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
     let cpu0 = caustica::process_time::cpu_seconds();
+    let gpu0 = renderer.gpu_seconds;
     renderer.render(spp, |_| {})?;
     let cpu_seconds = cpu0.zip(caustica::process_time::cpu_seconds()).map(|(a, b)| b - a);
+    let gpu_seconds = gpu0.zip(renderer.gpu_seconds).map(|(a, b)| b - a);
     let seconds = renderer.seconds - secs0;
     let samples = (renderer.samples_done - spp0) as f64 * width as f64 * height as f64;
     let rays = (renderer.rays_traced - rays0) as f64;
@@ -438,6 +440,8 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
             "setup_seconds": setup_s,
             "seconds": seconds,
             "samples_per_second": samples_per_s,
+            "gpu_seconds": gpu_seconds,
+            "samples_per_gpu_second": gpu_seconds.and_then(|g| per_second(samples, g)),
             "cpu_seconds": cpu_seconds,
             "samples_per_cpu_second": cpu_seconds.and_then(|c| per_second(samples, c)),
             "rays_per_second": rays_per_s,
@@ -456,12 +460,16 @@ fn bench(mut scene: Scene, width: u32, height: u32, spp: u32, aovs: AovSet, json
     println!("image:        {width}x{height}, {spp} spp, AOVs: {aovs}");
     print_geometry(&renderer.geometry);
     println!("setup:        {setup_s:.3} s (load excluded: BVH, upload, kernel compile)");
+    let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));
     println!("render:       {seconds:.3} s");
+    if let Some(gpu) = gpu_seconds {
+        // The device's own timestamps around each dispatch: no submission or fence costs.
+        println!("device time:  {gpu:.3} s ({} M samples/s)", shown(gpu_seconds.and_then(|g| per_second(samples, g)), 1e6, 3));
+    }
     if let Some(cpu) = cpu_seconds {
         // On lavapipe the device is this process's threads: a throughput that other load barely moves.
         println!("host CPU:     {cpu:.3} s");
     }
-    let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));
     println!("samples/s:    {} M", shown(samples_per_s, 1e6, 3));
     println!("rays/s:       {} M", shown(rays_per_s, 1e6, 3));
     println!("rays/sample:  {}", shown(rays_per_sample, 1.0, 2));

@@ -48,7 +48,11 @@ pub struct Renderer<'a> {
     pub rays_traced: u64,
     /// Samples whose radiance was NaN or infinite, dropped by the kernel (counted as black).
     pub nonfinite_samples: u64,
+    /// Wall-clock seconds of the dispatches, submission and fences included.
     pub seconds: f64,
+    /// Seconds the device itself spent on the dispatches, by its timestamps; `None` on a device
+    /// whose queue records none.
+    pub gpu_seconds: Option<f64>,
     pub geometry: GeometryReport,
     /// Estimated seconds per pixel-row-sample, refined after every dispatch.
     cost_per_row_sample: Option<f64>,
@@ -311,7 +315,7 @@ impl<'a> Renderer<'a> {
         }
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
+        Ok(Self { ctx, kernel: Some(kernel), buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -517,9 +521,10 @@ impl<'a> Renderer<'a> {
         let groups = [self.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1];
         let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS };
         let start = Instant::now();
-        kernel.dispatch(self.ctx, bytemuck::bytes_of(&pass), groups)?;
+        let device_seconds = kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?;
         let elapsed = start.elapsed().as_secs_f64();
         self.seconds += elapsed;
+        self.gpu_seconds = self.gpu_seconds.zip(device_seconds).map(|(sum, s)| sum + s);
         let stats_buffer = self.buffer(KernelBuffer::Stats).expect("every kernel binds the statistics");
         let stats: GpuStats = bytemuck::pod_read_unaligned(&stats_buffer.read()?[..std::mem::size_of::<GpuStats>()]);
         self.rays_traced += stats.ray_count as u64;
