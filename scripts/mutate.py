@@ -15,6 +15,7 @@ import argparse
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -80,6 +81,11 @@ def run(mutation, timeout):
 
 
 def main():
+    # A Rust mutation lives in the working tree until its `finally` restores it; a plain SIGTERM
+    # (a timeout, a closed terminal) would skip that and leave the bug in the code. Exit through
+    # Python instead, so the file is restored first.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    signal.signal(signal.SIGHUP, lambda *_: sys.exit(129))
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--list", action="store_true", help="list the mutations and exit")
     parser.add_argument("--only", nargs="+", metavar="ID", help="run only these mutations")

@@ -1,11 +1,46 @@
 #!/usr/bin/env bash
 # Runs the whole test suite on lavapipe (forced even on a machine with a GPU, so every machine runs
 # the same checks) with the Khronos validation layer, which fails the tests on any message.
+#
+# Which lavapipe: a current one (Mesa 24 or newer) by default. Where the system's is older (Debian
+# 12 ships 22.3), scripts/current-lavapipe.sh puts Mesa 25 from bookworm-backports beside it in
+# .lavapipe/ (once) and the suite runs on that. CAUSTICA_LAVAPIPE=system runs on the system's
+# lavapipe whatever its version: Debian 12's 22.3 silently ends shader loops after 65,535
+# iterations, a defect only it shows, which tests/sample_integrity.rs checks that caustica survives.
+# An explicit VK_DRIVER_FILES wins over both.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+system_icd=/usr/share/vulkan/icd.d/lvp_icd.x86_64.json
+
+mesa_major() {
+    dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null | sed 's/^[0-9]*://; s/\..*//'
+}
+
+if [ -z "${VK_DRIVER_FILES:-}" ]; then
+    choice="${CAUSTICA_LAVAPIPE:-current}"
+    case "$choice" in
+    system)
+        export VK_DRIVER_FILES="$system_icd"
+        ;;
+    current)
+        major="$(mesa_major || true)"
+        if [ -n "$major" ] && [ "$major" -lt 24 ]; then
+            [ -f .lavapipe/env ] || bash scripts/current-lavapipe.sh .lavapipe >/dev/null
+            # shellcheck disable=SC1091
+            . .lavapipe/env
+        else
+            export VK_DRIVER_FILES="$system_icd"
+        fi
+        ;;
+    *)
+        echo "CAUSTICA_LAVAPIPE is '$choice': use 'current' (the default) or 'system'" >&2
+        exit 1
+        ;;
+    esac
+fi
 if [ ! -f "$VK_DRIVER_FILES" ]; then
     echo "lavapipe not found at $VK_DRIVER_FILES: run 'sudo apt-get install mesa-vulkan-drivers libvulkan1 vulkan-validationlayers'" >&2
     exit 1
 fi
+echo "scripts/test.sh: lavapipe from $VK_DRIVER_FILES" >&2
 cargo test --release "$@"

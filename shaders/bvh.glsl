@@ -4,12 +4,15 @@
 // pushes its instances as tagged entries, and popping one transforms the ray into the instance's
 // object space until the stack falls back below that entry. A scene with one instance skips the
 // top level.
-// BVH_MAX_DEPTH and BVH_MAX_LEAF_SIZE are injected by the host from the builder's bounds.
+// Both levels are pair nodes (two children's boxes a node). The top level has one instance a leaf.
+// BVH_MAX_DEPTH is injected by the host from the builder's bound.
 
 const uint NO_INDEX = 0xffffffffu;
 const uint INSTANCE_ENTRY = 0x80000000u;
-// The first entry, pending far children of the top level, one leaf's instances, then the bottom level's.
-const uint STACK_SIZE = 2u * BVH_MAX_DEPTH + BVH_MAX_LEAF_SIZE + 2u;
+const float MISSED_BOX = uintBitsToFloat(0x7f800000u);  // +infinity
+// Each node visit leaves at most one entry behind (the farther child; at the top level the nearer
+// is taken back at once): at most one a level of each BVH, plus the first entry and the nearer.
+const uint STACK_SIZE = 2u * BVH_MAX_DEPTH + 2u;
 
 struct Hit {
     float t;
@@ -18,8 +21,8 @@ struct Hit {
     vec2 bary;      // barycentric (u, v) on a mesh triangle
 };
 
-// Slab test against [bmin, bmax]; true when the box overlaps (0, t_max).
-bool ray_box(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float t_max) {
+// Where the ray enters [bmin, bmax] within (0, t_max), or +infinity when it misses the box.
+float box_entry(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float t_max) {
     vec3 t0 = (bmin - o) * inv_d;
     vec3 t1 = (bmax - o) * inv_d;
     vec3 tn = min(t0, t1);
@@ -27,7 +30,7 @@ bool ray_box(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float t_max) {
     float enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
     // The factor (1 + 2 gamma_3) keeps rounding from culling a box the ray grazes (pbrt-v4, 6.8).
     float leave = min(min(tf.x, tf.y), min(tf.z, t_max)) * 1.0000004;
-    return enter <= leave;
+    return enter <= leave ? enter : MISSED_BOX;
 }
 
 // Zero direction components would make 0 * inf = NaN in the slab test; nudge them.
@@ -44,10 +47,6 @@ vec3 affine_vector(vec4 rows[3], vec3 v) {
     return vec3(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
 }
 
-vec3 vertex_position(uint v) {
-    return vec3(load_vertex_positions(3u * v), load_vertex_positions(3u * v + 1u), load_vertex_positions(3u * v + 2u));
-}
-
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found (shadow rays).
 // The object-space ray keeps the world parameter t: its direction is transformed, not renormalised.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
@@ -55,7 +54,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit.prim = NO_INDEX;
     hit.instance = NO_INDEX;
     hit.bary = vec2(0.0);
-    if (frame.env_size.w == 0u) return false;  // empty scene: no root node to test
+    if (frame.node_count == 0u) return false;  // empty scene: no root node to test
     vec3 ro = o;
     vec3 rd = d;
     vec3 world_inv_d = safe_inverse(d);
@@ -66,7 +65,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     uint instance_kind = INSTANCE_PRIMITIVES;
     uint instance_sp = 0u;     // stack height when it was entered
     // Start at the top-level root, or with a single instance, in that instance right away.
-    stack[sp++] = frame.env_size.z == 1u ? INSTANCE_ENTRY : 0u;
+    stack[sp++] = frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
     while (true) {
         LOOP_ITERATION();
         // Next entry: leave the instance once its part of the stack is used up.
@@ -96,47 +95,62 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
             }
             node_index = info.y;
         }
-        // Walk down from this node, nearer child first, until a leaf or a miss.
+        // Walk down from this node: test both children, visit a leaf child at once, go on to the
+        // nearer interior child and leave the farther one on the stack.
         while (true) {
             LOOP_ITERATION();
-            BvhNode node = load_nodes(node_index);
-            if (!ray_box(node.bmin, node.bmax, ro, inv_d, hit.t)) break;
-            uint count = node.meta >> 2u;
-            if (count == 0u) {
-                uint axis = node.meta & 3u;
-                bool second_first = rd[axis] < 0.0;
-                stack[sp++] = second_first ? node_index + 1u : node.offset;
-                node_index = second_first ? node.offset : node_index + 1u;
-                continue;
+            PairNode node = load_nodes(node_index);
+            float t_a = box_entry(node.a_min.xyz, node.a_max.xyz, ro, inv_d, hit.t);
+            float t_b = box_entry(node.b_min.xyz, node.b_max.xyz, ro, inv_d, hit.t);
+            uvec2 a = floatBitsToUint(vec2(node.a_min.w, node.a_max.w));  // link, primitive count
+            uvec2 b = floatBitsToUint(vec2(node.b_min.w, node.b_max.w));
+            if (t_b < t_a) {
+                uvec2 c = a; a = b; b = c;
+                float t = t_a; t_a = t_b; t_b = t;
             }
             if (instance == NO_INDEX) {
-                for (uint i = 0u; i < count; ++i) {
-                    LOOP_ITERATION();
-                    stack[sp++] = INSTANCE_ENTRY | (node.offset + i);
-                }
-            } else if (instance_kind == INSTANCE_MESH) {
-                for (uint i = node.offset; i < node.offset + count; ++i) {
-                    LOOP_ITERATION();
-                    uvec4 tri = load_mesh_triangles(i);
-                    vec3 v0 = vertex_position(tri.x);
-                    vec2 bary;
-                    float t = intersect_triangle(v0, vertex_position(tri.y) - v0, vertex_position(tri.z) - v0, ro, rd, hit.t, bary);
-                    if (t > 0.0) {
-                        hit = Hit(t, i, instance, bary);
-                        if (any_hit) return true;
+                // Top level: every leaf is one instance (the host builds it so). Leave the farther
+                // child, then the nearer, on the stack and take the nearer from there: entering an
+                // instance happens when its entry is popped.
+                if (t_b <= hit.t) stack[sp++] = b.y == 0u ? b.x : INSTANCE_ENTRY | b.x;
+                if (t_a <= hit.t) stack[sp++] = a.y == 0u ? a.x : INSTANCE_ENTRY | a.x;
+                break;
+            }
+            uint next = NO_INDEX;
+            for (uint k = 0u; k < 2u; ++k) {
+                LOOP_ITERATION();
+                // A hit in the nearer child's leaf may put the farther child out of reach; a missed
+                // box enters at +infinity, so the same test skips it.
+                if ((k == 0u ? t_a : t_b) > hit.t) break;
+                uvec2 child = k == 0u ? a : b;
+                uint first = child.x;
+                uint count = child.y;
+                if (count == 0u) {
+                    if (next == NO_INDEX) next = first; else stack[sp++] = first;
+                } else if (instance_kind == INSTANCE_MESH) {
+                    for (uint i = first; i < first + count; ++i) {
+                        LOOP_ITERATION();
+                        MeshTriangle tri = load_mesh_triangles(i);
+                        vec2 bary;
+                        float t = intersect_triangle(tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, ro, rd, hit.t, bary);
+                        if (t > 0.0) {
+                            hit = Hit(t, i, instance, bary);
+                            if (any_hit) return true;
+                        }
                     }
-                }
-            } else {
-                for (uint i = node.offset; i < node.offset + count; ++i) {
-                    LOOP_ITERATION();
-                    float t = intersect_primitive(prims[i], ro, rd, hit.t);
-                    if (t > 0.0) {
-                        hit = Hit(t, i, instance, vec2(0.0));
-                        if (any_hit) return true;
+                } else {
+                    for (uint i = first; i < first + count; ++i) {
+                        LOOP_ITERATION();
+                        float t = intersect_primitive(prims[i], ro, rd, hit.t);
+                        if (t > 0.0) {
+                            hit = Hit(t, i, instance, vec2(0.0));
+                            if (any_hit) return true;
+                        }
                     }
                 }
             }
-            break;
+            if (next == NO_INDEX) break;
+            node_index = next;
         }
     }
     return hit.prim != NO_INDEX;

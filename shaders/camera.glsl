@@ -4,7 +4,7 @@
 // Film position inside the pixel, relative to its top-left corner in pixels, sampled from the
 // reconstruction filter so that every sample weighs 1 (filter importance sampling).
 vec2 filter_sample(vec2 u) {
-    uint kind = floatBitsToUint(frame.lens.w);
+    uint kind = frame.pixel_filter;
     if (kind == FILTER_TENT) {
         // Per axis inverse CDF of the tent of radius 1 pixel around the pixel centre.
         vec2 t = mix(1.0 - sqrt(2.0 - 2.0 * u), sqrt(2.0 * u) - 1.0, lessThan(u, vec2(0.5)));
@@ -32,18 +32,18 @@ vec2 sample_concentric_disk(vec2 u) {
 }
 
 void camera_ray(uvec2 pixel, inout Rng rng, out vec3 origin, out vec3 dir) {
-    vec2 film = (vec2(pixel) + filter_sample(rng_next2(rng))) / vec2(frame.image.xy);
-    float tan_half = frame.cam_forward.w;
-    float x = (2.0 * film.x - 1.0) * tan_half * frame.cam_right.w;
+    vec2 film = (vec2(pixel) + filter_sample(rng_next2(rng))) / vec2(frame.width, frame.height);
+    float tan_half = frame.tan_half_fov;
+    float x = (2.0 * film.x - 1.0) * tan_half * frame.aspect;
     float y = (1.0 - 2.0 * film.y) * tan_half;
     // Unit length along the viewing axis, so `focus * through` lies on the focal plane.
-    vec3 through = frame.cam_forward.xyz + x * frame.cam_right.xyz + y * frame.cam_up.xyz;
-    origin = frame.cam_origin.xyz;
-    float radius = frame.lens.x;
+    vec3 through = frame.cam_forward + x * frame.cam_right + y * frame.cam_up;
+    origin = frame.cam_origin;
+    float radius = frame.lens_radius;
     if (radius > 0.0) {
         vec2 lens = radius * sample_concentric_disk(rng_next2(rng));
-        vec3 offset = lens.x * frame.cam_right.xyz + lens.y * frame.cam_up.xyz;
-        dir = normalize(frame.lens.y * through - offset);
+        vec3 offset = lens.x * frame.cam_right + lens.y * frame.cam_up;
+        dir = normalize(frame.focus_distance * through - offset);
         origin += offset;
     } else {
         dir = normalize(through);

@@ -4,8 +4,8 @@
 
 // Bilinear lookup at continuous texel coordinates (texel centres at +0.5); `wrap_x` for lat-long maps.
 vec3 env_bilinear(vec2 texel, bool wrap_x) {
-    int w = int(frame.env_size.x);
-    int h = int(frame.env_size.y);
+    int w = int(frame.env_width);
+    int h = int(frame.env_height);
     vec2 f = texel - 0.5;
     ivec2 i0 = ivec2(floor(f));
     vec2 frac_part = f - vec2(i0);
@@ -56,7 +56,7 @@ vec3 map_to_world(vec3 r) {
 
 // Where a map-space direction falls on the map, in [0, 1]^2 (x right, y down the image).
 vec2 map_position(vec3 r) {
-    if (frame.integrator.z == ENV_ANGULAR) {
+    if (frame.env_kind == ENV_ANGULAR) {
         vec2 uv = angular_map_uv(r);
         return vec2(0.5 * (uv.x + 1.0), 0.5 * (1.0 - uv.y));
     }
@@ -64,10 +64,10 @@ vec2 map_position(vec3 r) {
 }
 
 vec3 environment_radiance(vec3 d) {
-    uint kind = frame.integrator.z;
-    if (kind == ENV_CONSTANT) return frame.env_color.rgb;
-    vec2 texel = map_position(world_to_map(d)) * vec2(frame.env_size.xy);
-    return frame.env_color.rgb * env_bilinear(texel, kind == ENV_LATLONG);
+    uint kind = frame.env_kind;
+    if (kind == ENV_CONSTANT) return frame.env_color;
+    vec2 texel = map_position(world_to_map(d)) * vec2(frame.env_width, frame.env_height);
+    return frame.env_color * env_bilinear(texel, kind == ENV_LATLONG);
 }
 
 // Importance sampling of the map (src/render/env_sampling.rs builds the distribution): a cell is
@@ -77,7 +77,7 @@ vec3 environment_radiance(vec3 d) {
 // (angular, r the distance from the centre in [-1, 1]^2 units).
 
 bool environment_sampled() {
-    return frame.env_rotation.z > 0.0;
+    return frame.env_selection_probability > 0.0;
 }
 
 // Index i in [0, count) with cdf[offset + i] <= u < cdf[offset + i + 1].
@@ -94,7 +94,7 @@ uint cdf_search(uint offset, uint count, float u) {
 
 // Solid angle per unit map area at map position p (0 where the map has no direction).
 float map_jacobian(vec2 p) {
-    if (frame.integrator.z == ENV_ANGULAR) {
+    if (frame.env_kind == ENV_ANGULAR) {
         float r = length(vec2(2.0 * p.x - 1.0, 1.0 - 2.0 * p.y));
         if (r > 1.0) return 0.0;
         return 4.0 * PI * (r < 1e-6 ? PI : sin(PI * r) / r);
@@ -104,8 +104,8 @@ float map_jacobian(vec2 p) {
 
 // Solid-angle density with which sample_environment picks world direction d.
 float environment_pdf(vec3 d) {
-    uint w = frame.env_size.x;
-    uint h = frame.env_size.y;
+    uint w = frame.env_width;
+    uint h = frame.env_height;
     vec2 p = map_position(world_to_map(d));
     uint x = min(uint(p.x * float(w)), w - 1u);
     uint y = min(uint(p.y * float(h)), h - 1u);
@@ -116,8 +116,8 @@ float environment_pdf(vec3 d) {
 }
 
 bool sample_environment(vec2 u, out vec3 dir, out float pdf) {
-    uint w = frame.env_size.x;
-    uint h = frame.env_size.y;
+    uint w = frame.env_width;
+    uint h = frame.env_height;
     uint y = cdf_search(0u, h, u.y);
     float p_row = env_cdf[y + 1u] - env_cdf[y];
     uint row = h + 1u + y * (w + 1u);
@@ -129,7 +129,7 @@ bool sample_environment(vec2 u, out vec3 dir, out float pdf) {
     float jacobian = map_jacobian(p);
     if (!(jacobian > 0.0)) return false;
     vec3 r;
-    if (frame.integrator.z == ENV_ANGULAR) {
+    if (frame.env_kind == ENV_ANGULAR) {
         vec2 ab = vec2(2.0 * p.x - 1.0, 1.0 - 2.0 * p.y);
         float radius = length(ab);
         float angle = PI * radius;

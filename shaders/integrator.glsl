@@ -26,9 +26,9 @@ vec3 offset_origin(vec3 p, vec3 n, vec3 dir) {
 
 // Survival probability for Russian roulette at a bounce past rr_start.
 float survival_probability(vec3 throughput) {
-    float absorption = frame.roulette.x;
+    float absorption = frame.rr_absorption;
     if (absorption >= 0.0) return 1.0 - absorption;
-    return clamp(max3(throughput), frame.roulette.y, frame.roulette.z);
+    return clamp(max3(throughput), frame.rr_survival_min, frame.rr_survival_max);
 }
 
 // Next-event estimation at a vertex with a non-delta lobe: one light sample, MIS-weighted
@@ -74,14 +74,14 @@ struct FirstHit {
 vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout FirstHit first) {
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
-    bool nee = frame.integrator.y != 0u;
-    uint rr_start = frame.integrator.x;
+    bool nee = frame.nee != 0u;
+    uint rr_start = frame.rr_start;
     // The previous bounce, for the MIS weight of emitters hit by BSDF sampling: the pdf of its
     // direction, 0 after the camera or a delta lobe (which light sampling cannot reproduce).
     float bsdf_pdf = 0.0;
     vec3 prev_point = origin;
 
-    uint max_bounces = frame.integrator.w;
+    uint max_bounces = frame.max_bounces;
     for (uint depth = 0u; depth < max_bounces; ++depth) {
         LOOP_ITERATION();
         bounce_dimensions(rng, depth, 0u, DIMS_SCATTER);
@@ -90,7 +90,7 @@ vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout Fir
         if (!trace_ray(origin, dir, 1e30, false, hit)) {
             float weight = 1.0;
             if (nee && bsdf_pdf > 0.0 && environment_sampled()) {
-                weight = power_heuristic(bsdf_pdf, frame.env_rotation.z * environment_pdf(dir));
+                weight = power_heuristic(bsdf_pdf, frame.env_selection_probability * environment_pdf(dir));
             }
             vec3 env = environment_radiance(dir);
             radiance += throughput * env * weight;

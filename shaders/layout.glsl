@@ -1,5 +1,4 @@
 // GPU data layout: every struct here has a twin in src/render/layout.rs, pinned by size/offset tests.
-// Only vec4/uvec4 members in the uniform block, so std140 and std430 agree.
 
 // Primitive kinds (PRIM_* must match layout.rs).
 const uint PRIM_SPHERE = 0u;
@@ -46,13 +45,15 @@ struct LightAlias {
     uint alias;
 };
 
-// Flattened BVH node (src/bvh): first child is the next node, `offset` is the second child for an
-// interior node or the first primitive for a leaf; meta = prim_count << 2 | split_axis.
-struct BvhNode {
-    vec3 bmin;
-    uint offset;
-    vec3 bmax;
-    uint meta;
+// BVH node (src/bvh/pair_node.rs): both children of an interior node of the binary BVH, so one
+// load tests both boxes. Per child: xyz of *_min / *_max = its box; *_min.w = its link and
+// *_max.w = its primitive count (uint bits). Count 0: an interior child, the link is its node;
+// otherwise a leaf of primitives link..link + count. A missing child is a point box at +infinity.
+struct PairNode {
+    vec4 a_min;
+    vec4 a_max;
+    vec4 b_min;
+    vec4 b_max;
 };
 
 // Instance kinds (INSTANCE_* must match layout.rs): the scene's own spheres, quads and triangles
@@ -74,6 +75,15 @@ struct Instance {
     uvec4 info;
 };
 
+// A mesh triangle by value, in its BVH's leaf order: v0.xyz = first vertex, e1.xyz / e2.xyz = the
+// edges to the second / third; the w lanes hold the three global vertex indices (uint bits) for
+// normals and texture coordinates. Intersection needs no index indirection (loads are what costs).
+struct MeshTriangle {
+    vec4 v0;
+    vec4 e1;
+    vec4 e2;
+};
+
 // Texture descriptor: texels offset..offset + width * height (RGBA8, top row first); flags =
 // TEXTURE_* bits.
 struct TextureInfo {
@@ -93,71 +103,12 @@ const uint FILTER_BOX = 0u;
 const uint FILTER_TENT = 1u;
 const uint FILTER_GAUSSIAN = 2u;
 
-layout(std140, set = 0, binding = 0) uniform FrameParamsBlock {
-    vec4 cam_origin;    // w unused
-    vec4 cam_forward;   // w = tan(vertical fov / 2)
-    vec4 cam_right;     // w = width / height
-    vec4 cam_up;        // w unused
-    vec4 env_color;     // constant radiance, or the map's intensity multiplier (rgb)
-    vec4 env_rotation;  // x = cos, y = sin of the map's rotation about +y, z = probability that
-                        // next-event estimation samples the map (0: it is not sampled)
-    uvec4 image;        // width, height, seed, light count
-    uvec4 integrator;   // rr_start, nee (0/1), env kind, max depth
-    uvec4 env_size;     // map width, map height, instance count, node count
-    vec4 roulette;      // x = fixed absorption (< 0: derive from throughput), y = q min, z = q max
-    vec4 lens;          // x = lens radius (0: pinhole), y = focus distance along the viewing axis,
-                        // z = per-sample radiance clamp (0: off), w = FILTER_* as raw uint bits
-    uvec4 sampling;     // x = SAMPLER_* (rng.glsl), yzw unused
-    vec4 lights;        // x = total power of the area lights when picked by power (0: uniformly)
-} frame;
-
-layout(push_constant) uniform PassBlock {
-    uint stream_offset;         // index of the render's first sample: a pixel holding c samples
-                                // takes sample stream_offset + c next
-    uint target_samples;        // bring every pixel of the band up to this many samples
-    uint row_offset;            // first image row of this dispatch's band
-    uint row_count;             // rows in the band
-    uint loop_check_iterations; // 2: the trip count of loop_limit_intact()'s loop
-} pass;
-
-// Arrays that can outgrow one storage binding (marked "binding N: type name[]") are declared in
-// chunked_buffers.glsl, which src/render/chunks.rs generates for each scene and device; the kernel
-// reads them with load_<name>(i) (and writes accum with store_accum).
-// binding 1: BvhNode nodes[]
-layout(std430, set = 0, binding = 2) readonly buffer PrimitiveBuffer { Primitive prims[]; };
-layout(std430, set = 0, binding = 3) readonly buffer MaterialBuffer { Material materials[]; };
-// Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
-layout(std430, set = 0, binding = 4) readonly buffer LightBuffer { Primitive lights[]; };
-// binding 5: vec4 env_texels[]
-// Per pixel: rgb = sum of sample radiance, a = samples accumulated.
-// binding 6: vec4 accum[]
-// Per dispatch, cleared and read by the host: rays traced, non-finite samples dropped, pixels of the
-// band that hold the target sample count afterwards (the host checks that this is all of them),
-// samples added, and the most loop iterations one subgroup ran (with COUNT_LOOP_ITERATIONS).
-layout(std430, set = 0, binding = 7) buffer StatsBuffer { uint ray_count; uint nonfinite_samples; uint pixels_complete; uint samples_added; uint max_loop_iterations; } stats;
-// Top-level BVH leaves index instances; node 0 is the top-level root.
-layout(std430, set = 0, binding = 8) readonly buffer InstanceBuffer { Instance instances[]; };
-// Mesh triangles in their BVH's leaf order: xyz = global vertex indices, w = material.
-// binding 9: uvec4 mesh_triangles[]
-// Vertex attributes of every mesh, indexed by global vertex index. Positions are packed floats
-// (12 bytes a vertex), normals octahedral snorm16x2.
-// binding 10: float vertex_positions[]
-// binding 11: uint vertex_normals[]
-// binding 12: vec2 vertex_uvs[]
-layout(std430, set = 0, binding = 13) readonly buffer TextureInfoBuffer { TextureInfo texture_infos[]; };
-// binding 14: uint texels[]
-// The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
-// one CDF per row (width + 1 values each); see src/render/env_sampling.rs.
-layout(std430, set = 0, binding = 15) readonly buffer EnvCdfBuffer { float env_cdf[]; };
-// Alias table over `lights` for picking them by power; empty when they are picked uniformly.
-layout(std430, set = 0, binding = 16) readonly buffer LightAliasBuffer { LightAlias light_alias[]; };
-
-// Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
-// xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
-// first hit summed over the samples that hit something, w = how many those were. Only the kernel
-// variant built with AOVS 1 touches them, and only then are they bound.
-// binding 20: vec4 aov_albedo_depth[]
-// binding 21: vec4 aov_normal_hits[]
+// The kernel's inputs: the frame's uniform block `frame` (FrameParams in src/render/layout.rs), the
+// pass's push constants `pass` (PassParams) and every storage buffer, each described beside its
+// entry in the table of src/render/bindings.rs, which generates interface.glsl from it for each
+// kernel variant, scene and device. Arrays that can outgrow one storage binding are read with
+// load_<name>(i) (and accum and the AOV sums written with store_<name>); the others by name.
+#include "interface.glsl"
 
 uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
 uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }

@@ -1,6 +1,6 @@
 // Direct lighting: the environment map (when importance sampled) with probability
-// frame.env_rotation.z, otherwise an area light: every emissive primitive and mesh triangle, in
-// world space (the `lights` buffer). An area light is picked in proportion to its power through
+// frame.env_selection_probability, otherwise an area light: every emissive primitive and mesh
+// triangle, in world space (the `lights` buffer). An area light is picked in proportion to its power through
 // an alias table (or uniformly: integrator.light_selection), then a point (or, for spheres, a
 // direction in the cone they subtend; for triangles, in their spherical triangle) is sampled on it. Pdfs are per unit solid angle at `ref`
 // and include the probability of the pick.
@@ -28,9 +28,9 @@ float light_power(Primitive p) {
 
 // Probability that next-event estimation picks area light `p` (the map's share taken out).
 float light_pick_probability(Primitive p) {
-    float share = 1.0 - frame.env_rotation.z;
-    float total_power = frame.lights.x;
-    return total_power > 0.0 ? share * light_power(p) / total_power : share / float(frame.image.w);
+    float share = 1.0 - frame.env_selection_probability;
+    float total_power = frame.light_total_power;
+    return total_power > 0.0 ? share * light_power(p) / total_power : share / float(frame.light_count);
 }
 
 // Spherical triangles (Arvo 1995): a triangle light that subtends a solid angle large enough for
@@ -126,12 +126,12 @@ float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
 // thousands of lights the remainder keeps too few bits for the thresholds of dim lights.
 uint pick_light(uint count, inout Rng rng) {
     uint index = min(uint(rng_next(rng) * float(count)), count - 1u);
-    if (frame.lights.x > 0.0 && rng_next(rng) >= light_alias[index].threshold) index = light_alias[index].alias;
+    if (frame.light_total_power > 0.0 && rng_next(rng) >= light_alias[index].threshold) index = light_alias[index].alias;
     return index;
 }
 
 bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
-    uint count = frame.image.w;
+    uint count = frame.light_count;
     ls.pdf = 0.0;
     if (count == 0u) return false;
     Primitive p = lights[pick_light(count, rng)];
@@ -179,7 +179,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
 // One direct-lighting sample from `ref`. No random number is drawn for the choice when the map is
 // not sampled, so scenes without one keep their sample streams.
 bool sample_direct(vec3 ref, inout Rng rng, out LightSample ls) {
-    float p_env = frame.env_rotation.z;
+    float p_env = frame.env_selection_probability;
     if (p_env > 0.0 && rng_next(rng) < p_env) {
         float pdf;
         if (!sample_environment(rng_next2(rng), ls.dir, pdf)) return false;

@@ -4,7 +4,7 @@
 // holds, so a dispatch repeated after it was cut short (see loop_limit.glsl) adds exactly the
 // samples that are missing, and the sums are bit for bit those of one uninterrupted render.
 // The host prepends `#define BVH_MAX_DEPTH` and `BVH_MAX_LEAF_SIZE` (the BVH builder's bounds),
-// `AOVS` (1: also accumulate the denoiser features at bindings 20 and 21; 0: a kernel without them)
+// `AOVS` (1: also accumulate the denoiser features, the AOV sums; 0: a kernel without them)
 // and `COUNT_LOOP_ITERATIONS` (1 on devices that end loops early).
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -13,7 +13,6 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "layout.glsl"
 #include "loop_limit.glsl"
-#include "chunked_buffers.glsl"
 #include "rng.glsl"
 #include "sampling.glsl"
 #include "intersect.glsl"
@@ -28,8 +27,8 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 void main() {
     uvec2 pixel = uvec2(gl_GlobalInvocationID.x, gl_GlobalInvocationID.y + pass.row_offset);
-    uint width = frame.image.x;
-    bool inside = pixel.x < width && gl_GlobalInvocationID.y < pass.row_count && pixel.y < frame.image.y;
+    uint width = frame.width;
+    bool inside = pixel.x < width && gl_GlobalInvocationID.y < pass.row_count && pixel.y < frame.height;
     uint index = pixel.y * width + pixel.x;
     vec4 sum = inside ? load_accum(index) : vec4(0.0);
     // Counts are exact in a float up to 2^24, which the host does not exceed.
@@ -37,14 +36,14 @@ void main() {
     uint target = inside ? pass.target_samples : first;
     uint rays = 0u;
     uint nonfinite = 0u;
-    float clamp_max = frame.lens.z;
+    float clamp_max = frame.radiance_clamp;
 #if AOVS
     vec4 albedo_depth = inside ? load_aov_albedo_depth(index) : vec4(0.0);
     vec4 normal_hits = inside ? load_aov_normal_hits(index) : vec4(0.0);
 #endif
     for (uint s = first; s < target; ++s) {
         LOOP_ITERATION();
-        Rng rng = rng_for_sample(frame.image.z, index, pass.stream_offset + s, frame.sampling.x);
+        Rng rng = rng_for_sample(frame.seed, index, pass.stream_offset + s, frame.sampler_kind);
         rng_set_dimensions(rng, 0u, DIMS_CAMERA);
         vec3 origin, dir;
         camera_ray(pixel, rng, origin, dir);

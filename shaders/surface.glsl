@@ -37,10 +37,10 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
         return s;
     }
     vec4 world_to_object[3] = instances[hit.instance].world_to_object;
-    uvec4 tri = load_mesh_triangles(hit.prim);
-    vec3 v0 = vertex_position(tri.x);
+    MeshTriangle triangle = load_mesh_triangles(hit.prim);
+    uvec3 tri = floatBitsToUint(vec3(triangle.v0.w, triangle.e1.w, triangle.e2.w));
     vec3 w = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
-    s.ng = normal_to_world(world_to_object, cross(vertex_position(tri.y) - v0, vertex_position(tri.z) - v0));
+    s.ng = normal_to_world(world_to_object, cross(triangle.e1.xyz, triangle.e2.xyz));
     s.ns = s.ng;
     if ((info.z & INSTANCE_HAS_NORMALS) != 0u) {
         vec3 n = w.x * unpack_normal(load_vertex_normals(tri.x)) + w.y * unpack_normal(load_vertex_normals(tri.y))
@@ -54,7 +54,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     if ((info.z & INSTANCE_HAS_UVS) != 0u) {
         s.uv = w.x * load_vertex_uvs(tri.x) + w.y * load_vertex_uvs(tri.y) + w.z * load_vertex_uvs(tri.z);
     }
-    s.material = tri.w;
+    s.material = load_triangle_materials(hit.prim);
     return s;
 }
 
@@ -62,12 +62,11 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 Primitive world_primitive(Hit hit) {
     if (instances[hit.instance].info.x == INSTANCE_PRIMITIVES) return prims[hit.prim];
     vec4 object_to_world[3] = instances[hit.instance].object_to_world;
-    uvec4 tri = load_mesh_triangles(hit.prim);
-    vec3 v0 = vertex_position(tri.x);
+    MeshTriangle tri = load_mesh_triangles(hit.prim);
     Primitive p;
-    p.a = vec4(affine_point(object_to_world, v0), 0.0);
-    p.b = vec4(affine_vector(object_to_world, vertex_position(tri.y) - v0), uintBitsToFloat(PRIM_TRIANGLE));
-    p.c = vec4(affine_vector(object_to_world, vertex_position(tri.z) - v0), uintBitsToFloat(tri.w));
+    p.a = vec4(affine_point(object_to_world, tri.v0.xyz), 0.0);
+    p.b = vec4(affine_vector(object_to_world, tri.e1.xyz), uintBitsToFloat(PRIM_TRIANGLE));
+    p.c = vec4(affine_vector(object_to_world, tri.e2.xyz), uintBitsToFloat(load_triangle_materials(hit.prim)));
     return p;
 }
 

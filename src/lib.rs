@@ -12,6 +12,7 @@ pub mod farm;
 pub mod gpu;
 pub mod image;
 pub mod input_file;
+pub mod process_time;
 pub mod render;
 pub mod scene;
 #[cfg(test)]

@@ -18,14 +18,16 @@ mod common;
 use bytemuck::Zeroable;
 use caustica::gpu::{compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use caustica::render::assemble_with_kernel_files;
+use caustica::render::bindings::KernelBuffer;
 use caustica::render::layout::{GpuMaterial, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, NO_TEXTURE};
 use caustica::scene::average_fresnel;
 use common::*;
 use std::f64::consts::PI;
 
-/// The test kernel. It includes layout.glsl for `struct Material` and binds only `materials`
-/// (binding 3); the frame uniform and the pass push constants that layout.glsl also declares are
-/// unused (the pipeline still has the 16-byte push range). Its own buffers sit at bindings 30-32.
+/// The test kernel. It includes layout.glsl for `struct Material` and binds only `materials` (at
+/// its binding in the kernel's table, src/render/bindings.rs); the other buffers, the frame uniform
+/// and the pass push constants that layout.glsl also declares are unused (the pipeline still has
+/// the 16-byte push range). Its own buffers sit at bindings 30-32, clear of the table's.
 /// Mode 0: invocation i picks a lobe with random stream i and samples it, writing
 ///   (dir, lobe code, or -1 - code when sample_lobe fails), (weight, pdf), (eval_lobe's f cos, its pdf).
 /// Mode 1: finds the lobe with the requested code (pick_lobe with successive streams) and writes
@@ -165,7 +167,7 @@ impl<'a> Kernel<'a> {
         let query = Buffer::with_data(ctx, "query", BufferKind::HostStorage, &[0u8; 32]).unwrap();
         let dirs = Buffer::with_data(ctx, "dirs", BufferKind::HostStorage, bytemuck::cast_slice(&quadrature().0)).unwrap();
         let results = Buffer::with_data(ctx, "results", BufferKind::HostStorage, &vec![0u8; results_len * 16]).unwrap();
-        let bindings = [Binding::whole(3, &material), Binding::whole(30, &query), Binding::whole(31, &dirs), Binding::whole(32, &results)];
+        let bindings = [Binding::whole(KernelBuffer::Materials.entry().binding, &material), Binding::whole(30, &query), Binding::whole(31, &dirs), Binding::whole(32, &results)];
         let kernel = ComputeKernel::new(ctx, &spirv, &bindings, 16).unwrap();
         Kernel { ctx, kernel, material, query, dirs, results }
     }

@@ -107,8 +107,8 @@ fn power_selection_lowers_the_error_among_many_lights() {
 fn assert_floor_is_analytic(scene: &Scene, radiance: impl Fn(Vec3, Vec3) -> f64, what: &str) {
     let (_lock, ctx) = gpu();
     let params = frame_params(scene, &SceneData::new(scene, 0), 0);
-    let v = |a: &[f32; 4]| Vec3::from_slice(&a[..3]);
-    let (eye, forward, right, up, tan_half) = (v(&params.cam_origin), v(&params.cam_forward), v(&params.cam_right), v(&params.cam_up), params.cam_forward[3]);
+    let v = Vec3::from_array;
+    let (eye, forward, right, up, tan_half) = (v(params.cam_origin), v(params.cam_forward), v(params.cam_right), v(params.cam_up), params.tan_half_fov);
     let size = scene.film.width as f32;
     let expected = |x: u32, y: u32| {
         let f = |p: u32, s: u32| (p as f32 + (s as f32 + 0.5) / 8.0) / size * 2.0 - 1.0;

@@ -14,6 +14,7 @@ pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcom
 
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext};
+use crate::process_time::cpu_seconds;
 use crate::render::{AovSet, GeometryReport, Renderer};
 use crate::scene::Scene;
 use anyhow::Result;
@@ -34,6 +35,12 @@ pub struct Measurement {
     /// Wall time of the timed dispatches, fences included.
     pub seconds: f64,
     pub samples_per_second: Option<f64>,
+    /// The device's own timestamps around the timed dispatches (no submission or fence costs);
+    /// None where the queue records no timestamps.
+    pub gpu_seconds: Option<f64>,
+    /// CPU time of this process during the timed render: on lavapipe the device is the process's
+    /// threads, so samples per CPU-second barely move with other load on a shared machine.
+    pub cpu_seconds: Option<f64>,
     pub rays_per_second: Option<f64>,
     /// Camera, bounce and shadow rays per sample (every `trace_ray` of the kernel).
     pub rays_per_sample: Option<f64>,
@@ -52,7 +59,10 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet) -> Result<Measurem
     let setup_seconds = setup.elapsed().as_secs_f64();
     renderer.render(1, |_| {})?;
     let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
+    let (cpu0, gpu0) = (cpu_seconds(), renderer.gpu_seconds);
     renderer.render(spp, |_| {})?;
+    let cpu_seconds = cpu0.zip(cpu_seconds()).map(|(a, b)| b - a);
+    let gpu_seconds = gpu0.zip(renderer.gpu_seconds).map(|(a, b)| b - a);
     let seconds = renderer.seconds - secs0;
     let samples = (renderer.samples_done - spp0) as f64 * width as f64 * height as f64;
     let rays = (renderer.rays_traced - rays0) as f64;
@@ -65,6 +75,8 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet) -> Result<Measurem
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
+        gpu_seconds,
+        cpu_seconds,
         rays_per_second: per_second(rays, seconds),
         rays_per_sample: (samples > 0.0).then(|| rays / samples),
         nonfinite_samples: renderer.nonfinite_samples,
@@ -75,6 +87,19 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet) -> Result<Measurem
 }
 
 impl Measurement {
+    /// Pixel samples timed (the image's pixels times the timed spp).
+    pub fn samples(&self) -> f64 {
+        self.width as f64 * self.height as f64 * self.spp as f64
+    }
+
+    pub fn samples_per_gpu_second(&self) -> Option<f64> {
+        self.gpu_seconds.and_then(|g| per_second(self.samples(), g))
+    }
+
+    pub fn samples_per_cpu_second(&self) -> Option<f64> {
+        self.cpu_seconds.and_then(|c| per_second(self.samples(), c))
+    }
+
     /// The figures of this scene; the keys are those `bench --json` has always printed (scripts
     /// and tests read them), less the device's, which [`device_json`] gives.
     pub fn json(&self) -> Value {
@@ -87,6 +112,10 @@ impl Measurement {
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,
+            "gpu_seconds": self.gpu_seconds,
+            "samples_per_gpu_second": self.samples_per_gpu_second(),
+            "cpu_seconds": self.cpu_seconds,
+            "samples_per_cpu_second": self.samples_per_cpu_second(),
             "rays_per_second": self.rays_per_second,
             "rays_per_sample": self.rays_per_sample,
             "nonfinite_samples": self.nonfinite_samples,

@@ -30,8 +30,16 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
     println!("image:        {}x{}, {} spp, AOVs: {}", m.width, m.height, m.spp, m.aovs);
     print_geometry(&m.geometry);
     println!("setup:        {:.3} s (load excluded: BVH, upload, kernel compile)", m.setup_seconds);
-    println!("render:       {:.3} s", m.seconds);
     let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));
+    println!("render:       {:.3} s", m.seconds);
+    if let Some(gpu) = m.gpu_seconds {
+        // The device's own timestamps around each dispatch: no submission or fence costs.
+        println!("device time:  {gpu:.3} s ({} M samples/s)", shown(m.samples_per_gpu_second(), 1e6, 3));
+    }
+    if let Some(cpu) = m.cpu_seconds {
+        // On lavapipe the device is this process's threads: a throughput that other load barely moves.
+        println!("host CPU:     {cpu:.3} s");
+    }
     println!("samples/s:    {} M", shown(m.samples_per_second, 1e6, 3));
     println!("rays/s:       {} M", shown(m.rays_per_second, 1e6, 3));
     println!("rays/sample:  {}", shown(m.rays_per_sample, 1.0, 2));

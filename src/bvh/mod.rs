@@ -12,6 +12,7 @@ mod blocks;
 mod box_a;
 mod flatten;
 mod node;
+mod pair_node;
 mod partition;
 mod sah;
 mod stats;
@@ -25,6 +26,7 @@ use box_a::BoxA;
 
 pub use aabb::Aabb;
 pub use node::BvhNode;
+pub use pair_node::{pair_nodes, ChildBox, PairNode, NO_CHILD};
 pub use stats::BuildStats;
 pub use traverse::{any_hit, closest_hit, ray_box, Ray};
 
@@ -55,11 +57,25 @@ impl Bvh {
 ///
 /// Panics when there are more than `u32::MAX` primitives, which the node format cannot index.
 pub fn build(prim_bounds: &[Aabb]) -> Bvh {
-    build_with_depth(prim_bounds, MAX_DEPTH)
+    build_with_limits(prim_bounds, MAX_DEPTH, MAX_LEAF_SIZE)
+}
+
+/// `build` with one primitive a leaf: for a top level, whose every primitive (an instance) is a
+/// whole BVH to enter, so a leaf child stands for one stack entry.
+pub fn build_single_leaves(prim_bounds: &[Aabb]) -> Bvh {
+    build_with_limits(prim_bounds, MAX_DEPTH, 1)
 }
 
 /// `build` with leaves no deeper than `max_depth`, which must be at least ceil(log2(prim count)).
+#[cfg(test)]
 fn build_with_depth(prim_bounds: &[Aabb], max_depth: usize) -> Bvh {
+    build_with_limits(prim_bounds, max_depth, MAX_LEAF_SIZE)
+}
+
+/// `build` with leaves no deeper than `max_depth`, which must be at least ceil(log2(prim count)),
+/// and holding at most `max_leaf_size` primitives (1 to [`MAX_LEAF_SIZE`]).
+fn build_with_limits(prim_bounds: &[Aabb], max_depth: usize, max_leaf_size: usize) -> Bvh {
+    debug_assert!((1..=MAX_LEAF_SIZE).contains(&max_leaf_size));
     if prim_bounds.is_empty() {
         return Bvh {
             nodes: vec![BvhNode::EMPTY_ROOT],
@@ -73,7 +89,7 @@ fn build_with_depth(prim_bounds: &[Aabb], max_depth: usize) -> Bvh {
     );
     let mut prims: Vec<BoxA> = prim_bounds.par_iter().map(BoxA::from).collect();
     let mut prim_order: Vec<u32> = (0..prim_bounds.len() as u32).collect();
-    let tree = sah::build_tree(&mut prims, &mut prim_order, max_depth);
+    let tree = sah::build_tree(&mut prims, &mut prim_order, max_depth, max_leaf_size);
     Bvh {
         nodes: flatten::flatten(&tree),
         prim_order,

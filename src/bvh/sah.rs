@@ -6,7 +6,7 @@ use super::binning::{self, Bins};
 use super::box_a::BoxA;
 use super::flatten::Subtree;
 use super::partition::{self, SetBounds};
-use super::{Aabb, BvhNode, MAX_LEAF_SIZE};
+use super::{Aabb, BvhNode};
 
 /// Cost of visiting an interior node in units of one primitive intersection (SAH: split =
 /// TRAVERSAL_COST * A + A_L * N_L + A_R * N_R, leaf = A * N). Above 1 it trades node visits for
@@ -18,8 +18,9 @@ const TRAVERSAL_COST: f32 = 2.0;
 const PARALLEL_THRESHOLD: usize = 8 * 1024;
 
 /// Builds the tree over `prims` and reorders them (with `indices`) into leaf order. No leaf lies
-/// deeper than `max_depth` (root = 0), which must be at least ceil(log2(prims.len())).
-pub(super) fn build_tree(prims: &mut [BoxA], indices: &mut [u32], max_depth: usize) -> Subtree {
+/// deeper than `max_depth` (root = 0), which must be at least ceil(log2(prims.len())), or holds
+/// more than `max_leaf_size` primitives (at least 1).
+pub(super) fn build_tree(prims: &mut [BoxA], indices: &mut [u32], max_depth: usize, max_leaf_size: usize) -> Subtree {
     debug_assert!(ceil_log2(prims.len()) <= max_depth);
     let set = super::blocks::map_merge(prims, SetBounds::of, SetBounds::merge);
     build_parallel(Range {
@@ -28,6 +29,7 @@ pub(super) fn build_tree(prims: &mut [BoxA], indices: &mut [u32], max_depth: usi
         set,
         first: 0,
         levels_left: max_depth,
+        max_leaf_size,
     })
 }
 
@@ -39,6 +41,7 @@ struct Range<'a> {
     set: SetBounds,
     first: usize,
     levels_left: usize,
+    max_leaf_size: usize,
 }
 
 /// An interior node's split axis and its two children's ranges.
@@ -82,10 +85,11 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
         set,
         first,
         levels_left,
+        max_leaf_size,
     } = range;
     let count = prims.len();
     // A split costs at least TRAVERSAL_COST * A, so it cannot beat a leaf of that many primitives.
-    if count <= 1 || (count <= MAX_LEAF_SIZE && count as f32 <= TRAVERSAL_COST) {
+    if count <= 1 || (count <= max_leaf_size && count as f32 <= TRAVERSAL_COST) {
         return None;
     }
 
@@ -101,7 +105,7 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
     let area = set.bounds.surface_area();
     let (axis, mid, [left_set, right_set]) = match best {
         Some(s)
-            if count > MAX_LEAF_SIZE || TRAVERSAL_COST * area + s.cost < area * count as f32 =>
+            if count > max_leaf_size || TRAVERSAL_COST * area + s.cost < area * count as f32 =>
         {
             let (mid, [left_centroids, right_centroids]) =
                 partition::partition(prims, indices, |p| {
@@ -119,7 +123,7 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
             ];
             (s.axis, mid, sets)
         }
-        _ if count <= MAX_LEAF_SIZE => return None,
+        _ if count <= max_leaf_size => return None,
         _ => partition::median_split(prims, indices, &set.centroids),
     };
 
@@ -135,6 +139,7 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
                 set: left_set,
                 first,
                 levels_left,
+                max_leaf_size,
             },
             Range {
                 prims: right_prims,
@@ -142,6 +147,7 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
                 set: right_set,
                 first: first + mid,
                 levels_left,
+                max_leaf_size,
             },
         ],
     ))

@@ -27,6 +27,8 @@ pub struct ComputeKernel {
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
     push_size: u32,
+    /// Two timestamps around each dispatch, where the device's queue records them.
+    timestamps: Option<vk::QueryPool>,
 }
 
 fn descriptor_type(kind: BufferKind) -> vk::DescriptorType {
@@ -107,17 +109,35 @@ impl ComputeKernel {
             })
             .collect();
         unsafe { device.update_descriptor_sets(&writes, &[]) };
-        Ok(Self { set_layout, layout, pipeline, pool, set, push_size })
+        let timestamps = match ctx.timestamp_period_ns {
+            Some(_) => Some(unsafe { device.create_query_pool(&vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2), None) }?),
+            None => None,
+        };
+        Ok(Self { set_layout, layout, pipeline, pool, set, push_size, timestamps })
     }
 
     /// Runs one dispatch of `groups` workgroups and waits for it.
     pub fn dispatch(&self, ctx: &GpuContext, push: &[u8], groups: [u32; 3]) -> Result<()> {
+        self.dispatch_timed(ctx, push, groups).map(|_| ())
+    }
+
+    /// [`dispatch`](Self::dispatch), returning the seconds the device spent on it by its own
+    /// timestamps (`None` where its queue has none): throughput without the submission, fence
+    /// and scheduling costs a wall clock also counts.
+    pub fn dispatch_timed(&self, ctx: &GpuContext, push: &[u8], groups: [u32; 3]) -> Result<Option<f64>> {
         assert_eq!(push.len() as u32, self.push_size, "push-constant block size");
         ctx.submit_and_wait(|device, cb| unsafe {
             device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, self.pipeline);
             device.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
             device.cmd_push_constants(cb, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            if let Some(pool) = self.timestamps {
+                device.cmd_reset_query_pool(cb, pool, 0, 2);
+                device.cmd_write_timestamp(cb, vk::PipelineStageFlags::TOP_OF_PIPE, pool, 0);
+            }
             device.cmd_dispatch(cb, groups[0], groups[1], groups[2]);
+            if let Some(pool) = self.timestamps {
+                device.cmd_write_timestamp(cb, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 1);
+            }
             // Make the kernel's writes visible to later transfers (readback) and host reads.
             let barrier = vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE)
@@ -131,12 +151,21 @@ impl ComputeKernel {
                 &[],
                 &[],
             );
-        })
+        })?;
+        let (Some(pool), Some(period_ns)) = (self.timestamps, ctx.timestamp_period_ns) else {
+            return Ok(None);
+        };
+        let mut ticks = [0u64; 2];
+        unsafe { ctx.device.get_query_pool_results(pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }?;
+        Ok(Some(ticks[1].wrapping_sub(ticks[0]) as f64 * period_ns * 1e-9))
     }
 
     pub fn destroy(self, ctx: &GpuContext) {
         let device = &ctx.device;
         unsafe {
+            if let Some(pool) = self.timestamps {
+                device.destroy_query_pool(pool, None);
+            }
             device.destroy_pipeline(self.pipeline, None);
             device.destroy_pipeline_layout(self.layout, None);
             device.destroy_descriptor_pool(self.pool, None);

@@ -83,6 +83,8 @@ pub struct GpuContext {
     pub(super) command_pool: vk::CommandPool,
     pub(super) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub info: DeviceInfo,
+    /// Nanoseconds per timestamp tick where the compute queue records timestamps, else `None`.
+    pub timestamp_period_ns: Option<f64>,
     /// See [`GpuContext::loop_limit`]; probed on first use.
     loop_limit: OnceLock<Option<u32>>,
 }
@@ -214,6 +216,8 @@ impl GpuContext {
             .iter()
             .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
             .ok_or_else(|| anyhow!("{} has no compute queue", info.name))? as u32;
+        let timestamp_period = unsafe { instance.get_physical_device_properties(physical) }.limits.timestamp_period;
+        let timestamp_period_ns = (families[family as usize].timestamp_valid_bits > 0 && timestamp_period > 0.0).then_some(timestamp_period as f64);
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
         let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
@@ -247,6 +251,7 @@ impl GpuContext {
             command_pool,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             info,
+            timestamp_period_ns,
             loop_limit: OnceLock::new(),
         })
     }

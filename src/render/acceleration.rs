@@ -4,23 +4,23 @@
 //! is stored once.
 
 use super::layout::*;
-use crate::bvh::{self, Aabb, BuildStats, BvhNode};
+use crate::bvh::{self, pair_nodes, Aabb, BuildStats, PairNode};
 use crate::scene::{Mesh, Scene, Shape};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
 
 pub struct Acceleration {
-    pub nodes: Vec<BvhNode>,
+    /// Every BVH as pair nodes (crate::bvh::PairNode), the top level's root at 0.
+    pub nodes: Vec<PairNode>,
     /// In top-level leaf order.
     pub instances: Vec<GpuInstance>,
     /// The scene's own shapes, in their bottom-level leaf order.
     pub primitives: Vec<GpuPrimitive>,
-    /// Every mesh's triangles, each mesh in its bottom-level leaf order: global vertex indices and
-    /// the material.
-    pub triangles: Vec<[u32; 4]>,
-    /// Three floats a vertex.
-    pub positions: Vec<f32>,
+    /// Every mesh's triangles by value, each mesh in its bottom-level leaf order (see
+    /// [`GpuMeshTriangle`]), and their materials in the same order.
+    pub triangles: Vec<GpuMeshTriangle>,
+    pub triangle_materials: Vec<u32>,
     /// Octahedral snorm16x2, one a vertex of meshes with normals (others have no entries).
     pub normals: Vec<u32>,
     pub uvs: Vec<[f32; 2]>,
@@ -104,6 +104,15 @@ fn mesh_bottom_level(mesh: &Mesh) -> BottomLevel {
     BottomLevel { root_bounds: bvh.nodes[0].bounds(), bvh }
 }
 
+/// Triangle `t` of `mesh` by value; its vertices are numbered from `vertex_base` in the shared
+/// normal and texture coordinate arrays.
+fn mesh_triangle(mesh: &Mesh, t: usize, vertex_base: u32) -> GpuMeshTriangle {
+    let [a, b, c] = mesh.triangles[t];
+    let p = |i: u32| mesh.positions[i as usize];
+    let lane = |v: Vec3, index: u32| v.extend(f32::from_bits(index + vertex_base)).into();
+    GpuMeshTriangle { v0: lane(p(a), a), e1: lane(p(b) - p(a), b), e2: lane(p(c) - p(a), c) }
+}
+
 /// Octahedral encoding into snorm16x2, x in the low half (GLSL unpackSnorm2x16; Cigolle et al. 2014).
 pub fn pack_normal(n: Vec3) -> u32 {
     let n = n / (n.x.abs() + n.y.abs() + n.z.abs());
@@ -134,13 +143,14 @@ fn transformed_bounds(b: &Aabb, m: Mat4) -> Aabb {
     }))
 }
 
-/// Appends a bottom level's nodes, rebasing child links onto the shared node array and leaf ranges
-/// onto the shared primitive array; returns its root's index.
-fn append_nodes(nodes: &mut Vec<BvhNode>, bottom: &[BvhNode], prim_base: u32) -> u32 {
+/// Appends a bottom level's nodes as pair nodes, rebasing child links onto the shared node array
+/// and leaf ranges onto the shared primitive array; returns its root's index.
+fn append_nodes(nodes: &mut Vec<PairNode>, bottom: &bvh::Bvh, prim_base: u32) -> u32 {
     let node_base = nodes.len() as u32;
-    nodes.extend(bottom.iter().map(|n| {
-        let mut n = *n;
-        n.offset += if n.is_leaf() { prim_base } else { node_base };
+    nodes.extend(pair_nodes(&bottom.nodes).into_iter().map(|mut n| {
+        for c in n.children.iter_mut().filter(|c| !c.is_missing()) {
+            c.link += if c.is_leaf() { prim_base } else { node_base };
+        }
         n
     }));
     node_base
@@ -165,28 +175,26 @@ impl Acceleration {
             let mesh = inst.mesh as usize;
             placements.push((Some(mesh), inst.transform, transformed_bounds(&meshes[mesh].root_bounds, inst.transform)));
         }
-        let top = bvh::build(&placements.iter().map(|p| p.2).collect::<Vec<_>>());
-        let mut nodes = top.nodes.clone();
+        let top = bvh::build_single_leaves(&placements.iter().map(|p| p.2).collect::<Vec<_>>());
+        let mut nodes = pair_nodes(&top.nodes);
 
         let mut primitives = Vec::new();
         let mut group_root = 0;
         if let Some(g) = &group {
-            group_root = append_nodes(&mut nodes, &g.bvh.nodes, 0);
+            group_root = append_nodes(&mut nodes, &g.bvh, 0);
             primitives = g.bvh.prim_order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
         }
 
-        let mut triangles = Vec::new();
-        let (mut positions, mut normals, mut uvs) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut triangles, mut triangle_materials) = (Vec::new(), Vec::new());
+        let (mut vertex_count, mut normals, mut uvs) = (0u32, Vec::new(), Vec::new());
         let mut mesh_roots = Vec::with_capacity(meshes.len());
         let mut mesh_flags = Vec::with_capacity(meshes.len());
         for (mesh, bottom) in scene.meshes.iter().zip(&meshes) {
-            mesh_roots.push(append_nodes(&mut nodes, &bottom.bvh.nodes, triangles.len() as u32));
-            let vertex_base = (positions.len() / 3) as u32;
-            triangles.extend(bottom.bvh.prim_order.iter().map(|&t| {
-                let [a, b, c] = mesh.triangles[t as usize];
-                [a + vertex_base, b + vertex_base, c + vertex_base, mesh.triangle_materials[t as usize]]
-            }));
-            positions.extend(mesh.positions.iter().flat_map(|p| p.to_array()));
+            mesh_roots.push(append_nodes(&mut nodes, &bottom.bvh, triangles.len() as u32));
+            let vertex_base = vertex_count;
+            vertex_count += mesh.positions.len() as u32;
+            triangles.extend(bottom.bvh.prim_order.iter().map(|&t| mesh_triangle(mesh, t as usize, vertex_base)));
+            triangle_materials.extend(bottom.bvh.prim_order.iter().map(|&t| mesh.triangle_materials[t as usize]));
             // Attribute arrays are indexed by global vertex index, so a mesh without normals
             // still needs placeholders when a later mesh has them.
             let mut flags = 0;
@@ -226,7 +234,7 @@ impl Acceleration {
             top: (!instances.is_empty()).then(|| top.stats()),
             largest_mesh: meshes.iter().max_by_key(|m| m.bvh.prim_order.len()).map(|m| m.bvh.stats()),
         };
-        Acceleration { nodes, instances, primitives, triangles, positions, normals, uvs, stats }
+        Acceleration { nodes, instances, primitives, triangles, triangle_materials, normals, uvs, stats }
     }
 
     pub fn gpu_bytes(&self) -> u64 {
@@ -234,7 +242,7 @@ impl Acceleration {
             + std::mem::size_of_val(&self.instances[..])
             + std::mem::size_of_val(&self.primitives[..])
             + std::mem::size_of_val(&self.triangles[..])
-            + std::mem::size_of_val(&self.positions[..])
+            + std::mem::size_of_val(&self.triangle_materials[..])
             + std::mem::size_of_val(&self.normals[..])
             + std::mem::size_of_val(&self.uvs[..])) as u64
     }

@@ -1,6 +1,7 @@
 //! Arbitrary output variables (AOVs): which ones a render produces, and their per-pixel sums as the
-//! kernel accumulates them (shaders/layout.glsl, bindings 20 and 21), turned into per-pixel means.
-//! Albedo and normal are the features denoisers such as Intel Open Image Denoise take.
+//! kernel accumulates them (`aov_albedo_depth` and `aov_normal_hits` in bindings.rs), turned into
+//! per-pixel means. Albedo and normal are the features denoisers such as Intel Open Image Denoise
+//! take.
 
 use anyhow::{bail, Result};
 use std::fmt;

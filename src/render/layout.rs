@@ -1,6 +1,9 @@
-//! Host twins of the GPU structs in shaders/layout.glsl. Field order, sizes and the kind constants
-//! must match the GLSL; the tests below pin every offset.
+//! Host twins of the GPU structs in shaders/layout.glsl, and the blocks the kernel's GLSL is
+//! generated from (FrameParams, GpuStats, PassParams: see glsl_block.rs). Field order, sizes and
+//! the kind constants of the twins must match the GLSL; the tests below pin every offset.
 
+use super::glsl_block::{glsl_block, GlslType};
+use crate::bvh::PairNode;
 use bytemuck::{Pod, Zeroable};
 
 pub const PRIM_SPHERE: u32 = 0;
@@ -25,10 +28,6 @@ pub const ENV_LATLONG: u32 = 2;
 pub const FILTER_BOX: u32 = 0;
 pub const FILTER_TENT: u32 = 1;
 pub const FILTER_GAUSSIAN: u32 = 2;
-
-/// Bindings of the AOV sums (`aov_albedo_depth`, `aov_normal_hits`, split like the accumulation
-/// by chunks.rs): one `vec4` a pixel each, so `[f32; 4]` on the host.
-pub const AOV_BINDINGS: [u32; 2] = [20, 21];
 
 pub const SAMPLER_INDEPENDENT: u32 = 0;
 pub const SAMPLER_SOBOL: u32 = 1;
@@ -67,6 +66,18 @@ pub struct GpuInstance {
     pub info: [u32; 4],
 }
 
+/// `struct MeshTriangle`: a mesh triangle by value, in its BVH's leaf order, so intersecting it is
+/// three vec4 loads with no index indirection. `v0.xyz` is the first vertex, `e1.xyz` and `e2.xyz`
+/// the edges to the second and third; the w lanes hold the three global vertex indices (u32 bits)
+/// that shading uses for normals and texture coordinates.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuMeshTriangle {
+    pub v0: [f32; 4],
+    pub e1: [f32; 4],
+    pub e2: [f32; 4],
+}
+
 /// `struct TextureInfo`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -88,58 +99,143 @@ pub struct GpuAliasEntry {
     pub alias: u32,
 }
 
-/// `uniform FrameParamsBlock` (std140; only 16-byte members, so it equals std430).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct FrameParams {
-    pub cam_origin: [f32; 4],
-    pub cam_forward: [f32; 4],
-    pub cam_right: [f32; 4],
-    pub cam_up: [f32; 4],
-    pub env_color: [f32; 4],
-    /// cos and sin of the map's rotation about +y, probability that NEE samples the map, unused
-    pub env_rotation: [f32; 4],
-    /// width, height, seed, light count
-    pub image: [u32; 4],
-    /// rr_start, nee, env kind, max bounces (safety cap)
-    pub integrator: [u32; 4],
-    /// map width, map height, instance count, node count (0: empty scene)
-    pub env_size: [u32; 4],
-    /// fixed absorption (< 0: derive from throughput), q min, q max, unused
-    pub roulette: [f32; 4],
-    /// lens radius (0: pinhole), focus distance along the viewing axis, radiance clamp (0: off),
-    /// FILTER_* as raw u32 bits
-    pub lens: [f32; 4],
-    /// SAMPLER_* (shaders/rng.glsl), unused, unused, unused
-    pub sampling: [u32; 4],
-    /// total power of the area lights when they are picked by power (0: picked uniformly), unused x3
-    pub lights: [f32; 4],
+glsl_block! {
+    /// The frame's parameters: the kernel's uniform block `frame` (std140), declared from this
+    /// list (bindings.rs). Each vec3 is followed by a scalar in the rest of its 16 bytes, so std140
+    /// places every member where `#[repr(C)]` does (the kernel's tests compare the offsets). The
+    /// `pad` members fill rows and are zero.
+    pub struct FrameParams {
+        /// Camera position in world space.
+        pub cam_origin: [f32; 3],
+        pub pad0: f32,
+        /// Unit viewing direction.
+        pub cam_forward: [f32; 3],
+        /// tan(vertical field of view / 2).
+        pub tan_half_fov: f32,
+        /// Unit vector along the image rows, to the right.
+        pub cam_right: [f32; 3],
+        /// Image width / height.
+        pub aspect: f32,
+        /// Unit vector up the image.
+        pub cam_up: [f32; 3],
+        pub pad1: f32,
+        /// The constant environment's radiance, or the environment map's intensity multiplier.
+        pub env_color: [f32; 3],
+        pub pad2: f32,
+        /// cos and sin of the environment map's rotation about +y.
+        pub env_rotation: [f32; 2],
+        /// Probability that next-event estimation samples the environment map rather than an area
+        /// light (0: the map is not sampled).
+        pub env_selection_probability: f32,
+        pub pad3: f32,
+        /// Image width in pixels.
+        pub width: u32,
+        /// Image height in pixels.
+        pub height: u32,
+        /// The render's random seed.
+        pub seed: u32,
+        /// Number of area lights: the entries of `lights`.
+        pub light_count: u32,
+        /// First bounce at which Russian roulette may end a path.
+        pub rr_start: u32,
+        /// 1: next-event estimation on, 0: off.
+        pub nee: u32,
+        /// The environment's ENV_* kind.
+        pub env_kind: u32,
+        /// Most bounces of a path (a safety cap).
+        pub max_bounces: u32,
+        /// Environment map width in texels (1 for a constant environment).
+        pub env_width: u32,
+        /// Environment map height in texels (1 for a constant environment).
+        pub env_height: u32,
+        /// Number of instances: the entries of `instances`.
+        pub instance_count: u32,
+        /// Number of BVH nodes (0: an empty scene, which has no root node).
+        pub node_count: u32,
+        /// Fixed probability that Russian roulette ends a path (< 0: derive it from the throughput).
+        pub rr_absorption: f32,
+        /// Least survival probability derived from the throughput.
+        pub rr_survival_min: f32,
+        /// Greatest survival probability derived from the throughput.
+        pub rr_survival_max: f32,
+        pub pad4: f32,
+        /// Thin-lens radius (0: a pinhole).
+        pub lens_radius: f32,
+        /// Distance of the focal plane along the viewing axis.
+        pub focus_distance: f32,
+        /// Per-sample radiance clamp (0: off).
+        pub radiance_clamp: f32,
+        /// The FILTER_* pixel reconstruction filter.
+        pub pixel_filter: u32,
+        /// The SAMPLER_* random sequence (shaders/rng.glsl).
+        pub sampler_kind: u32,
+        pub pad5: u32,
+        pub pad6: u32,
+        pub pad7: u32,
+        /// Total power of the area lights when they are picked by power (0: picked uniformly).
+        pub light_total_power: f32,
+        pub pad8: f32,
+        pub pad9: f32,
+        pub pad10: f32,
+    }
 }
 
-/// `buffer StatsBuffer`: per-dispatch counters, cleared and read by the host.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuStats {
-    pub ray_count: u32,
-    pub nonfinite_samples: u32,
-    /// Pixels of the band holding the target sample count after the dispatch.
-    pub pixels_complete: u32,
-    pub samples_added: u32,
-    /// Most loop iterations one subgroup ran (kernels built with COUNT_LOOP_ITERATIONS; else 0).
-    pub max_loop_iterations: u32,
+glsl_block! {
+    /// The kernel's storage block `stats`: per-dispatch counters, cleared and read by the host.
+    pub struct GpuStats {
+        /// Rays traced.
+        pub ray_count: u32,
+        /// Samples whose radiance was NaN or infinite, dropped.
+        pub nonfinite_samples: u32,
+        /// Pixels of the band holding the target sample count after the dispatch (the host checks
+        /// that this is all of them).
+        pub pixels_complete: u32,
+        /// Samples added.
+        pub samples_added: u32,
+        /// Most loop iterations one subgroup ran (kernels built with COUNT_LOOP_ITERATIONS; else 0).
+        pub max_loop_iterations: u32,
+    }
 }
 
-/// `push_constant PassBlock`: bring every pixel of rows `row_offset..row_offset + row_count` up to
-/// `target_samples` samples, a pixel holding `c` taking sample `stream_offset + c` next.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct PassParams {
-    pub stream_offset: u32,
-    pub target_samples: u32,
-    pub row_offset: u32,
-    pub row_count: u32,
-    /// The trip count of loop_limit_intact()'s check loop (LOOP_CHECK_ITERATIONS).
-    pub loop_check_iterations: u32,
+glsl_block! {
+    /// The kernel's push constants `pass`: bring every pixel of rows `row_offset..row_offset +
+    /// row_count` up to `target_samples` samples, a pixel holding `c` taking sample
+    /// `stream_offset + c` next.
+    pub struct PassParams {
+        /// Index of the render's first sample.
+        pub stream_offset: u32,
+        /// Bring every pixel of the band up to this many samples.
+        pub target_samples: u32,
+        /// First image row of this dispatch's band.
+        pub row_offset: u32,
+        /// Rows in the band.
+        pub row_count: u32,
+        /// The trip count of loop_limit_intact()'s check loop (LOOP_CHECK_ITERATIONS).
+        pub loop_check_iterations: u32,
+    }
+}
+
+// The GLSL names of the twins, for the arrays of them that the kernel binds (bindings.rs).
+impl GlslType for GpuPrimitive {
+    const NAME: &'static str = "Primitive";
+}
+impl GlslType for GpuMaterial {
+    const NAME: &'static str = "Material";
+}
+impl GlslType for GpuInstance {
+    const NAME: &'static str = "Instance";
+}
+impl GlslType for GpuTexture {
+    const NAME: &'static str = "TextureInfo";
+}
+impl GlslType for GpuAliasEntry {
+    const NAME: &'static str = "LightAlias";
+}
+impl GlslType for PairNode {
+    const NAME: &'static str = "PairNode";
+}
+impl GlslType for GpuMeshTriangle {
+    const NAME: &'static str = "MeshTriangle";
 }
 
 /// Trip count of the kernel's check for loops cut short (shaders/loop_limit.glsl): it runs fewer
@@ -149,7 +245,6 @@ pub const LOOP_CHECK_ITERATIONS: u32 = 2;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::BvhNode;
     use std::mem::{offset_of, size_of};
 
     #[test]
@@ -197,15 +292,26 @@ mod tests {
     }
 
     #[test]
-    fn bvh_node_matches_glsl_std430() {
-        assert_eq!(size_of::<BvhNode>(), 32);
-        assert_eq!(offset_of!(BvhNode, offset), 12);
-        assert_eq!(offset_of!(BvhNode, max), 16);
-        assert_eq!(offset_of!(BvhNode, meta), 28);
+    fn pair_node_matches_glsl_std430() {
+        use crate::bvh::ChildBox;
+        assert_eq!(size_of::<PairNode>(), 64);
+        assert_eq!(offset_of!(PairNode, children) + size_of::<ChildBox>(), 32);
+        assert_eq!(offset_of!(ChildBox, link), 12);
+        assert_eq!(offset_of!(ChildBox, max), 16);
+        assert_eq!(offset_of!(ChildBox, prim_count), 28);
     }
 
     #[test]
-    fn frame_params_match_glsl_std140() {
+    fn mesh_triangle_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuMeshTriangle>(), 48);
+        assert_eq!(offset_of!(GpuMeshTriangle, e1), 16);
+        assert_eq!(offset_of!(GpuMeshTriangle, e2), 32);
+    }
+    /// The kernel's own offsets are compared with these in bindings.rs's tests; here the sizes
+    /// and each 16-byte row's first member are pinned, so that a reordering is a visible change
+    /// (the scene hash covers these bytes).
+    #[test]
+    fn frame_params_rows_are_pinned() {
         assert_eq!(size_of::<FrameParams>(), 208);
         let offsets = [
             offset_of!(FrameParams, cam_origin),
@@ -214,45 +320,29 @@ mod tests {
             offset_of!(FrameParams, cam_up),
             offset_of!(FrameParams, env_color),
             offset_of!(FrameParams, env_rotation),
-            offset_of!(FrameParams, image),
-            offset_of!(FrameParams, integrator),
-            offset_of!(FrameParams, env_size),
-            offset_of!(FrameParams, roulette),
-            offset_of!(FrameParams, lens),
-            offset_of!(FrameParams, sampling),
-            offset_of!(FrameParams, lights),
+            offset_of!(FrameParams, width),
+            offset_of!(FrameParams, rr_start),
+            offset_of!(FrameParams, env_width),
+            offset_of!(FrameParams, rr_absorption),
+            offset_of!(FrameParams, lens_radius),
+            offset_of!(FrameParams, sampler_kind),
+            offset_of!(FrameParams, light_total_power),
         ];
         assert_eq!(offsets, [0, 16, 32, 48, 64, 80, 96, 112, 128, 144, 160, 176, 192]);
     }
 
     #[test]
-    fn stats_match_glsl_std430() {
+    fn stats_are_pinned() {
         assert_eq!(size_of::<GpuStats>(), 20);
         assert_eq!(offset_of!(GpuStats, nonfinite_samples), 4);
         assert_eq!(offset_of!(GpuStats, pixels_complete), 8);
         assert_eq!(offset_of!(GpuStats, samples_added), 12);
         assert_eq!(offset_of!(GpuStats, max_loop_iterations), 16);
-        let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "buffer StatsBuffer { uint ray_count; uint nonfinite_samples; uint pixels_complete; uint samples_added; uint max_loop_iterations; } stats;";
-        assert!(glsl.contains(members), "StatsBuffer members differ from GpuStats");
-    }
-
-    #[test]
-    fn aov_buffers_match_glsl() {
-        let glsl = include_str!("../../shaders/layout.glsl");
-        for (binding, name) in AOV_BINDINGS.iter().zip(["aov_albedo_depth", "aov_normal_hits"]) {
-            let line = format!("// binding {binding}: vec4 {name}[]");
-            assert!(glsl.contains(&line), "layout.glsl lacks {line}");
-        }
     }
 
     #[test]
     fn pass_params_fit_the_push_constant_minimum() {
         assert_eq!(size_of::<PassParams>(), 20);
-        let glsl = include_str!("../../shaders/layout.glsl");
-        let block = glsl.split("uniform PassBlock {").nth(1).and_then(|b| b.split("} pass;").next()).expect("layout.glsl declares PassBlock");
-        let members: Vec<&str> = block.lines().filter_map(|l| l.trim().strip_prefix("uint ")?.split(';').next()).collect();
-        assert_eq!(members, ["stream_offset", "target_samples", "row_offset", "row_count", "loop_check_iterations"], "PassBlock members differ from PassParams");
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 

@@ -1,17 +1,22 @@
-//! Driving the kernel: GPU struct layouts, scene flattening, the kernel source, progressive passes,
-//! AOVs.
+//! Driving the kernel: GPU struct layouts, the table of its bindings, scene flattening, the kernel
+//! source, progressive passes, AOVs.
 
 mod acceleration;
 mod aov;
+pub mod bindings;
 mod chunks;
 mod env_sampling;
+mod glsl_block;
 mod kernel;
 pub mod layout;
 mod light_selection;
 mod renderer;
 mod scene_data;
+#[cfg(test)]
+mod spirv_reflect;
 
-pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR, UNSPLIT};
+pub use chunks::UNSPLIT;
+pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
 pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};

@@ -5,9 +5,10 @@
 //! dispatches are also sized from the loop iterations the kernel counts, and a band cut short is
 //! repeated in smaller steps, which gives the same sums bit for bit.
 
-use super::chunks::{self, chunked_array_at, ChunkPlan, CHUNKED_ARRAYS};
-use super::kernel::{kernel_spirv, KernelVariant, UNSPLIT, WORKGROUP};
-use super::layout::{FrameParams, GpuStats, PassParams, AOV_BINDINGS, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
+use super::bindings::{BufferBinding, KernelBuffer, Shape, BINDINGS};
+use super::chunks::{self, SplitPlans, UNSPLIT};
+use super::kernel::{kernel_spirv, KernelVariant, WORKGROUP};
+use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::scene_data::SceneData;
@@ -15,6 +16,7 @@ use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
 use crate::scene::{Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
+use bytemuck::Zeroable;
 use std::time::Instant;
 
 /// Wall time one dispatch aims for. Windows' GPU watchdog fires at 2 s.
@@ -30,9 +32,8 @@ const LOOP_LIMIT_SHARE: f64 = 0.5;
 pub struct Renderer<'a> {
     ctx: &'a GpuContext,
     kernel: Option<ComputeKernel>,
-    buffers: Vec<Buffer>,
-    /// Bindings 20 and 21 (albedo + depth, normal + hits) when the render has kernel AOVs; else none.
-    aov_buffers: Vec<Buffer>,
+    /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
+    buffers: Vec<(KernelBuffer, Buffer)>,
     aovs: AovSet,
     width: u32,
     height: u32,
@@ -47,7 +48,11 @@ pub struct Renderer<'a> {
     pub rays_traced: u64,
     /// Samples whose radiance was NaN or infinite, dropped by the kernel (counted as black).
     pub nonfinite_samples: u64,
+    /// Wall-clock seconds of the dispatches, submission and fences included.
     pub seconds: f64,
+    /// Seconds the device itself spent on the dispatches, by its timestamps; `None` on a device
+    /// whose queue records none.
+    pub gpu_seconds: Option<f64>,
     pub geometry: GeometryReport,
     /// Estimated seconds per pixel-row-sample, refined after every dispatch.
     cost_per_row_sample: Option<f64>,
@@ -84,10 +89,6 @@ pub struct GeometryReport {
 /// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so).
 pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 
-// Binding indices of shaders/layout.glsl.
-const ACCUM: usize = 6;
-const STATS: usize = 7;
-const TEXELS: u32 = 14;
 /// The statistics buffer's contents at the start of every dispatch.
 const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0 };
 
@@ -110,30 +111,90 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         Sampler::Sobol => SAMPLER_SOBOL,
     };
     FrameParams {
-        cam_origin: cam.position.extend(0.0).into(),
-        cam_forward: forward.extend(tan_half).into(),
-        cam_right: right.extend(aspect).into(),
-        cam_up: up.extend(0.0).into(),
-        env_color: data.env_color.extend(0.0).into(),
-        env_rotation: [rot.cos(), rot.sin(), data.env_selection_probability(), 0.0],
-        image: [scene.film.width, scene.film.height, seed, data.lights.len() as u32],
-        integrator: [i.rr_start, u32::from(i.nee), data.env_kind, i.max_bounces],
-        env_size: [data.env_size[0], data.env_size[1], data.acceleration.instances.len() as u32, data.acceleration.stats.nodes as u32],
-        roulette: [i.absorption.unwrap_or(-1.0), 0.05, 0.95, 0.0],
-        lens: [cam.aperture, cam.focus_distance, i.clamp.unwrap_or(0.0), f32::from_bits(filter)],
-        sampling: [sampler, 0, 0, 0],
-        lights: [data.light_distribution.total_power, 0.0, 0.0, 0.0],
+        cam_origin: cam.position.into(),
+        cam_forward: forward.into(),
+        tan_half_fov: tan_half,
+        cam_right: right.into(),
+        aspect,
+        cam_up: up.into(),
+        env_color: data.env_color.into(),
+        env_rotation: [rot.cos(), rot.sin()],
+        env_selection_probability: data.env_selection_probability(),
+        width: scene.film.width,
+        height: scene.film.height,
+        seed,
+        light_count: data.lights.len() as u32,
+        rr_start: i.rr_start,
+        nee: u32::from(i.nee),
+        env_kind: data.env_kind,
+        max_bounces: i.max_bounces,
+        env_width: data.env_size[0],
+        env_height: data.env_size[1],
+        instance_count: data.acceleration.instances.len() as u32,
+        node_count: data.acceleration.stats.nodes as u32,
+        rr_absorption: i.absorption.unwrap_or(-1.0),
+        rr_survival_min: 0.05,
+        rr_survival_max: 0.95,
+        lens_radius: cam.aperture,
+        focus_distance: cam.focus_distance,
+        radiance_clamp: i.clamp.unwrap_or(0.0),
+        pixel_filter: filter,
+        sampler_kind: sampler,
+        light_total_power: data.light_distribution.total_power,
+        ..FrameParams::zeroed()
     }
 }
 
-/// Hex BLAKE3 of the frame parameters (seed zeroed) and every scene buffer, in binding order. It covers
-/// what the scene file references (meshes, textures, probes) and the film size as they reach the
-/// kernel, so partial renders that hash alike rendered the same image.
-fn scene_hash(params_without_seed: &FrameParams, contents: &[(&str, BufferKind, &[u8])]) -> String {
+/// What a buffer holds when a render starts: data, or zeroes to accumulate into.
+enum Initial<'d> {
+    Data(&'d [u8]),
+    Zeroes(u64),
+}
+
+impl Initial<'_> {
+    fn bytes(&self) -> u64 {
+        match self {
+            Initial::Data(data) => data.len() as u64,
+            Initial::Zeroes(bytes) => *bytes,
+        }
+    }
+}
+
+/// What `buffer` starts as in a render of `data` with these parameters and image size.
+fn initial_contents<'d>(buffer: KernelBuffer, params: &'d FrameParams, data: &'d SceneData, image_bytes: u64) -> Initial<'d> {
+    use KernelBuffer::*;
+    let a = &data.acceleration;
+    Initial::Data(match buffer {
+        Frame => bytemuck::bytes_of(params),
+        Nodes => bytemuck::cast_slice(&a.nodes),
+        Primitives => bytemuck::cast_slice(&a.primitives),
+        Materials => bytemuck::cast_slice(&data.materials),
+        Lights => bytemuck::cast_slice(&data.lights),
+        EnvTexels => bytemuck::cast_slice(&data.env_texels),
+        Accum | AovAlbedoDepth | AovNormalHits => return Initial::Zeroes(image_bytes),
+        Stats => bytemuck::bytes_of(&CLEARED_STATS),
+        Instances => bytemuck::cast_slice(&a.instances),
+        MeshTriangles => bytemuck::cast_slice(&a.triangles),
+        TriangleMaterials => bytemuck::cast_slice(&a.triangle_materials),
+        VertexNormals => bytemuck::cast_slice(&a.normals),
+        VertexUvs => bytemuck::cast_slice(&a.uvs),
+        TextureInfos => bytemuck::cast_slice(&data.textures),
+        Texels => bytemuck::cast_slice(&data.texels),
+        EnvCdf => bytemuck::cast_slice(&data.env_cdf),
+        LightAlias => bytemuck::cast_slice(&data.light_distribution.table),
+    })
+}
+
+/// Hex BLAKE3 of the frame parameters (seed zeroed) and every scene buffer (the storage buffers the
+/// kernel only reads), in binding order. It covers what the scene file references (meshes,
+/// textures, probes) and the film size as they reach the kernel, so partial renders that hash
+/// alike rendered the same image.
+fn scene_hash(params_without_seed: &FrameParams, contents: &[(&BufferBinding, Initial)]) -> String {
     let mut hasher = blake3::Hasher::new();
     hasher.update(bytemuck::bytes_of(params_without_seed));
-    for (i, &(_, _, bytes)) in contents.iter().enumerate().skip(1) {
-        if i != ACCUM && i != STATS {
+    for (binding, contents) in contents {
+        let scene_data = !binding.is_written() && !matches!(binding.shape, Shape::UniformBlock(_));
+        if let (true, Initial::Data(bytes)) = (scene_data, contents) {
             // Length-prefixed so that bytes cannot move between neighbouring buffers unnoticed.
             hasher.update(&(bytes.len() as u64).to_le_bytes());
             hasher.update(bytes);
@@ -146,28 +207,30 @@ fn scene_hash(params_without_seed: &FrameParams, contents: &[(&str, BufferKind, 
 /// device: an array larger than its bindings can see, more storage bindings than the kernel may
 /// have, or more bytes than the device's memory. Checked before any upload; the message says how
 /// much is needed and how much there is.
-fn plan_bindings<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (u32, &'n str, u64)> + Clone) -> Result<[ChunkPlan; CHUNKED_ARRAYS.len()]> {
+fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (&'b BufferBinding, u64)> + Clone) -> Result<SplitPlans> {
     let mib = |b: u64| b as f64 / 1048576.0;
     let device = &ctx.info;
     let range = device.max_storage_buffer_range;
     let mut plans = UNSPLIT;
     let mut storage_bindings = 0;
-    for (binding, name, bytes) in sizes.clone() {
-        match chunked_array_at(binding) {
-            Some((k, array)) => {
-                plans[k] = chunks::plan(array, bytes, range, device.min_storage_buffer_offset_alignment).map_err(|e| {
+    for (binding, bytes) in sizes.clone() {
+        let name = binding.what;
+        match (binding.shape, binding.chunked_element()) {
+            (Shape::UniformBlock(_), _) => {}
+            (_, Some(element)) => {
+                let plan = &mut plans[binding.buffer];
+                *plan = chunks::plan(element.bytes, bytes, range, device.min_storage_buffer_offset_alignment).map_err(|e| {
                     anyhow::anyhow!("{scene}: the {name} need {:.1} MiB but {} allows {e}", mib(bytes), device.name)
                 })?;
-                storage_bindings += plans[k].chunks;
+                storage_bindings += plan.chunks;
             }
-            None if binding == 0 => {} // the uniform block
-            None if bytes > range => anyhow::bail!(
+            _ if bytes > range => anyhow::bail!(
                 "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
                 mib(bytes),
                 device.name,
                 mib(range)
             ),
-            None => storage_bindings += 1,
+            _ => storage_bindings += 1,
         }
     }
     if storage_bindings > device.max_storage_buffers_per_stage {
@@ -177,7 +240,7 @@ fn plan_bindings<'n>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = 
             device.max_storage_buffers_per_stage
         );
     }
-    let total: u64 = sizes.map(|(_, _, b)| b).sum();
+    let total: u64 = sizes.map(|(_, b)| b).sum();
     if device.device_local_bytes > 0 && total > device.device_local_bytes {
         anyhow::bail!("{scene}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB", mib(total), device.name, mib(device.device_local_bytes));
     }
@@ -194,8 +257,8 @@ impl<'a> Renderer<'a> {
     /// draw no random numbers.
     pub fn with_aovs(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet) -> Result<Self> {
         // One texel buffer holds every texture: it must fit the bindings it can be split across.
-        let texels = chunked_array_at(TEXELS).expect("texels are chunked").1;
-        let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texels, ctx.info.max_storage_buffer_range));
+        let texels = KernelBuffer::Texels.entry().chunked_element().expect("texels are chunked");
+        let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texels.bytes, ctx.info.max_storage_buffer_range));
         let data = SceneData::new(scene, texture_budget);
         if data.texture_bytes() < data.texture_bytes_requested {
             eprintln!(
@@ -206,75 +269,53 @@ impl<'a> Renderer<'a> {
             );
         }
         let (width, height) = (scene.film.width, scene.film.height);
-        let accum_bytes = width as u64 * height as u64 * 16;
+        let image_bytes = width as u64 * height as u64 * 16;
         let params = frame_params(scene, &data, seed);
-        let a = &data.acceleration;
-        // In binding order (shaders/layout.glsl); the accumulation image is zeroes, sized here.
-        let contents: [(&str, BufferKind, &[u8]); 17] = [
-            ("frame parameters", BufferKind::Uniform, bytemuck::bytes_of(&params)),
-            ("BVH nodes", BufferKind::Storage, bytemuck::cast_slice(&a.nodes)),
-            ("primitives", BufferKind::Storage, bytemuck::cast_slice(&a.primitives)),
-            ("materials", BufferKind::Storage, bytemuck::cast_slice(&data.materials)),
-            ("lights", BufferKind::Storage, bytemuck::cast_slice(&data.lights)),
-            ("environment map", BufferKind::Storage, bytemuck::cast_slice(&data.env_texels)),
-            ("accumulation image", BufferKind::Storage, &[]),
-            ("statistics", BufferKind::HostStorage, bytemuck::bytes_of(&CLEARED_STATS)),
-            ("instances", BufferKind::Storage, bytemuck::cast_slice(&a.instances)),
-            ("mesh triangles", BufferKind::Storage, bytemuck::cast_slice(&a.triangles)),
-            ("vertex positions", BufferKind::Storage, bytemuck::cast_slice(&a.positions)),
-            ("vertex normals", BufferKind::Storage, bytemuck::cast_slice(&a.normals)),
-            ("vertex texture coordinates", BufferKind::Storage, bytemuck::cast_slice(&a.uvs)),
-            ("texture descriptors", BufferKind::Storage, bytemuck::cast_slice(&data.textures)),
-            ("textures", BufferKind::Storage, bytemuck::cast_slice(&data.texels)),
-            ("environment distribution", BufferKind::Storage, bytemuck::cast_slice(&data.env_cdf)),
-            ("light alias table", BufferKind::Storage, bytemuck::cast_slice(&data.light_distribution.table)),
-        ];
-        let aov_names: &[&str] = if aovs.needs_kernel() { &["albedo and depth sums", "normal sums"] } else { &[] };
-        // Every buffer as (binding, name, bytes): the scene's in binding order, then the AOV sums.
-        let slots: Vec<(u32, &str, u64)> = contents
+        let loop_limit = ctx.loop_limit()?;
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some() };
+        // Every buffer this kernel variant binds, in binding order, with what it starts as.
+        let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
-            .enumerate()
-            .map(|(i, &(name, _, bytes))| (i as u32, name, if i == ACCUM { accum_bytes } else { bytes.len() as u64 }))
-            .chain(AOV_BINDINGS.iter().zip(aov_names).map(|(&binding, &name)| (binding, name, accum_bytes)))
+            .filter(|b| b.is_bound_in(variant))
+            .map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes)))
             .collect();
-        let plans = plan_bindings(ctx, &scene.name, slots.iter().copied())?;
+        let plans = plan_bindings(ctx, &scene.name, contents.iter().map(|(b, c)| (*b, c.bytes())))?;
         let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
-        for (i, &(name, kind, bytes)) in contents.iter().enumerate() {
-            let zeroes;
-            let bytes = if i == ACCUM {
-                zeroes = vec![0u8; accum_bytes as usize];
-                &zeroes[..]
-            } else {
-                bytes
+        for (binding, initial) in &contents {
+            let kind = match binding.shape {
+                Shape::UniformBlock(_) => BufferKind::Uniform,
+                // Cleared before and read after every dispatch: kept where the host sees it.
+                _ if binding.buffer == KernelBuffer::Stats => BufferKind::HostStorage,
+                _ => BufferKind::Storage,
             };
-            buffers.push(Buffer::with_data(ctx, name, kind, bytes).with_context(|| format!("uploading {}", scene.name))?);
+            let zeroes;
+            let bytes = match initial {
+                Initial::Data(data) => *data,
+                Initial::Zeroes(n) => {
+                    zeroes = vec![0u8; *n as usize];
+                    &zeroes[..]
+                }
+            };
+            let buffer = Buffer::with_data(ctx, binding.what, kind, bytes).with_context(|| format!("uploading {}", scene.name))?;
+            buffers.push((binding.buffer, buffer));
         }
-        let mut aov_buffers = Vec::new();
-        for name in aov_names {
-            aov_buffers.push(Buffer::with_data(ctx, name, BufferKind::Storage, &vec![0u8; accum_bytes as usize])?);
-        }
-        let mut bindings = Vec::new();
-        for (buffer, &(binding, _, bytes)) in buffers.iter().chain(&aov_buffers).zip(&slots) {
-            match chunked_array_at(binding) {
-                Some((k, array)) if plans[k].chunks > 1 => {
-                    for (c, (offset, range)) in plans[k].windows(array.element_bytes, bytes).into_iter().enumerate() {
-                        bindings.push(Binding { binding: chunks::window_binding(k, c as u32), buffer, offset, range });
+        let mut descriptors = Vec::new();
+        for ((binding, initial), (_, buffer)) in contents.iter().zip(&buffers) {
+            let plan = plans[binding.buffer];
+            match binding.chunked_element() {
+                Some(element) if plan.chunks > 1 => {
+                    for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
+                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range });
                     }
                 }
                 // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => bindings.push(Binding::whole(binding, buffer)),
+                _ => descriptors.push(Binding::whole(binding.binding, buffer)),
             }
         }
-        let split_arrays = slots
-            .iter()
-            .filter_map(|&(binding, name, _)| chunked_array_at(binding).map(|(k, _)| (name, plans[k].chunks)))
-            .filter(|&(_, windows)| windows > 1)
-            .collect();
-        let loop_limit = ctx.loop_limit()?;
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some() };
-        let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &bindings, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, aov_buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, geometry: GeometryReport {
+        let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
+        let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
+        Ok(Self { ctx, kernel: Some(kernel), buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -351,18 +392,20 @@ impl<'a> Renderer<'a> {
             self.width,
             self.height
         );
-        self.buffers[ACCUM].upload(self.ctx, bytemuck::cast_slice(accumulation))?;
+        self.buffer(KernelBuffer::Accum).expect("every kernel binds the accumulation").upload(self.ctx, bytemuck::cast_slice(accumulation))?;
         self.samples_done = samples;
         Ok(())
     }
 
     /// Takes over AOV sums (as from [`Self::aov_sums`]) of the samples given to [`Self::restore`].
     pub fn restore_aovs(&mut self, sums: &AovSums) -> Result<()> {
-        anyhow::ensure!(!self.aov_buffers.is_empty(), "this render has no albedo, normal or depth AOVs to restore");
+        let (Some(albedo_depth), Some(normal_hits)) = (self.buffer(KernelBuffer::AovAlbedoDepth), self.buffer(KernelBuffer::AovNormalHits)) else {
+            anyhow::bail!("this render has no albedo, normal or depth AOVs to restore");
+        };
         let pixels = self.width as usize * self.height as usize;
         anyhow::ensure!(sums.pixels() == pixels, "the AOV sums have {} pixels, the image {}x{}", sums.pixels(), self.width, self.height);
-        self.aov_buffers[0].upload(self.ctx, bytemuck::cast_slice(&sums.albedo_depth))?;
-        self.aov_buffers[1].upload(self.ctx, bytemuck::cast_slice(&sums.normal_hits))?;
+        albedo_depth.upload(self.ctx, bytemuck::cast_slice(&sums.albedo_depth))?;
+        normal_hits.upload(self.ctx, bytemuck::cast_slice(&sums.normal_hits))?;
         Ok(())
     }
 
@@ -473,15 +516,17 @@ impl<'a> Renderer<'a> {
     /// One dispatch: rows `row..row + rows` up to `target` samples per pixel, `samples` of them new
     /// for the pixels furthest behind. Returns the kernel's counters.
     fn dispatch(&mut self, row: u32, rows: u32, target: u32, samples: u32) -> Result<GpuStats> {
+        self.buffer_mut(KernelBuffer::Stats).expect("every kernel binds the statistics").write(bytemuck::bytes_of(&CLEARED_STATS))?;
         let kernel = self.kernel.as_ref().expect("kernel lives until drop");
-        self.buffers[STATS].write(bytemuck::bytes_of(&CLEARED_STATS))?;
         let groups = [self.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1];
         let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS };
         let start = Instant::now();
-        kernel.dispatch(self.ctx, bytemuck::bytes_of(&pass), groups)?;
+        let device_seconds = kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?;
         let elapsed = start.elapsed().as_secs_f64();
         self.seconds += elapsed;
-        let stats: GpuStats = bytemuck::pod_read_unaligned(&self.buffers[STATS].read()?[..std::mem::size_of::<GpuStats>()]);
+        self.gpu_seconds = self.gpu_seconds.zip(device_seconds).map(|(sum, s)| sum + s);
+        let stats_buffer = self.buffer(KernelBuffer::Stats).expect("every kernel binds the statistics");
+        let stats: GpuStats = bytemuck::pod_read_unaligned(&stats_buffer.read()?[..std::mem::size_of::<GpuStats>()]);
         self.rays_traced += stats.ray_count as u64;
         self.nonfinite_samples += stats.nonfinite_samples as u64;
         self.loop_iterations_per_sample = self.loop_iterations_per_sample.max(stats.max_loop_iterations as f64 / samples as f64);
@@ -496,16 +541,28 @@ impl<'a> Renderer<'a> {
 
     /// Raw accumulation: per pixel (sum of radiance, sample count), top row first.
     pub fn accumulation(&self) -> Result<Vec<[f32; 4]>> {
-        let bytes = self.buffers[ACCUM].download(self.ctx, self.width as u64 * self.height as u64 * 16)?;
+        let accum = self.buffer(KernelBuffer::Accum).expect("every kernel binds the accumulation");
+        let bytes = accum.download(self.ctx, self.width as u64 * self.height as u64 * 16)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 
     /// Raw AOV sums (`None` without albedo, normal or depth AOVs), top row first.
     pub fn aov_sums(&self) -> Result<Option<AovSums>> {
-        let [albedo_depth, normal_hits] = &self.aov_buffers[..] else { return Ok(None) };
+        let (Some(albedo_depth), Some(normal_hits)) = (self.buffer(KernelBuffer::AovAlbedoDepth), self.buffer(KernelBuffer::AovNormalHits)) else {
+            return Ok(None);
+        };
         let bytes = self.width as u64 * self.height as u64 * 16;
         let read = |b: &Buffer| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&b.download(self.ctx, bytes)?)) };
         Ok(Some(AovSums { albedo_depth: read(albedo_depth)?, normal_hits: read(normal_hits)? }))
+    }
+
+    /// The buffer the kernel binds as `which`, if this render's kernel binds it.
+    fn buffer(&self, which: KernelBuffer) -> Option<&Buffer> {
+        self.buffers.iter().find(|(b, _)| *b == which).map(|(_, buffer)| buffer)
+    }
+
+    fn buffer_mut(&mut self, which: KernelBuffer) -> Option<&mut Buffer> {
+        self.buffers.iter_mut().find(|(b, _)| *b == which).map(|(_, buffer)| buffer)
     }
 
     /// The mean radiance per pixel so far.
@@ -529,7 +586,7 @@ impl Drop for Renderer<'_> {
         if let Some(k) = self.kernel.take() {
             k.destroy(self.ctx);
         }
-        for b in self.buffers.drain(..).chain(self.aov_buffers.drain(..)) {
+        for (_, b) in self.buffers.drain(..) {
             b.destroy(self.ctx);
         }
     }

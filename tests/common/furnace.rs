@@ -48,14 +48,14 @@ pub fn coverage(scene: &Scene) -> Vec<Coverage> {
     let forward = Vec3::from_slice(&p.cam_forward);
     let right = Vec3::from_slice(&p.cam_right);
     let up = Vec3::from_slice(&p.cam_up);
-    let tan_half = p.cam_forward[3];
+    let tan_half = p.tan_half_fov;
     let to_center = (-eye).normalize();
     let silhouette = (1.0 / eye.length()).asin();
     let margin = 1.5 * 2.0 * tan_half / h as f32;
     let mut out = vec![];
     for y in 0..h {
         for x in 0..w {
-            let fx = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0) * tan_half * p.cam_right[3];
+            let fx = (2.0 * (x as f32 + 0.5) / w as f32 - 1.0) * tan_half * p.aspect;
             let fy = (1.0 - 2.0 * (y as f32 + 0.5) / h as f32) * tan_half;
             let d = (forward + fx * right + fy * up).normalize();
             let angle = d.dot(to_center).clamp(-1.0, 1.0).acos();

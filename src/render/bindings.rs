@@ -1,0 +1,345 @@
+//! Every buffer the kernel binds, declared once in [`BINDINGS`]: its binding number, its name and
+//! element type in GLSL, whether it may be split across bindings (chunks.rs), whether the kernel
+//! writes it, and which kernel variants bind it. The kernel's declarations are generated from the
+//! table ([`glsl`], the kernel's `interface.glsl`, which layout.glsl includes), and the renderer
+//! creates and binds its buffers from it, so no binding number is written anywhere else. The tests
+//! compile every variant and check the SPIR-V's bindings and block layouts against the table.
+
+use super::chunks::{self, SplitPlans, EXTRA_BINDING_BASE};
+use super::glsl_block::{glsl_members, GlslBlock, GlslMember, GlslType};
+use super::kernel::KernelVariant;
+use super::layout::{FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuStats, GpuTexture, PassParams};
+use crate::bvh::PairNode;
+
+/// Names a buffer of the kernel on the host: the key of [`BINDINGS`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum KernelBuffer {
+    Frame,
+    Nodes,
+    Primitives,
+    Materials,
+    Lights,
+    EnvTexels,
+    Accum,
+    Stats,
+    Instances,
+    MeshTriangles,
+    TriangleMaterials,
+    VertexNormals,
+    VertexUvs,
+    TextureInfos,
+    Texels,
+    EnvCdf,
+    LightAlias,
+    AovAlbedoDepth,
+    AovNormalHits,
+}
+
+impl KernelBuffer {
+    /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
+    /// place here).
+    pub const COUNT: usize = KernelBuffer::AovNormalHits as usize + 1;
+
+    /// The table's entry for this buffer.
+    pub fn entry(self) -> &'static BufferBinding {
+        &BINDINGS[self as usize]
+    }
+}
+
+/// How the kernel declares a binding.
+#[derive(Clone, Copy, Debug)]
+pub enum Shape {
+    /// `uniform <Block> { ... } <name>;` (std140), the members of a host struct.
+    UniformBlock(Block),
+    /// `buffer <Block> { ... } <name>;` (std430), the members of a host struct.
+    StorageBlock(Block),
+    /// `buffer { <element> <name>[]; }` (std430). A `chunked` array may span several bindings
+    /// (chunks.rs); the kernel reads it with `load_<name>(i)` and writes it with `store_<name>`.
+    Array { element: Element, chunked: bool },
+}
+
+/// A block's GLSL type name and members, from the host struct it is declared by.
+#[derive(Clone, Copy, Debug)]
+pub struct Block {
+    pub type_name: &'static str,
+    pub members: &'static [GlslMember],
+}
+
+impl Block {
+    const fn of<T: GlslBlock>() -> Self {
+        Block { type_name: T::NAME, members: T::MEMBERS }
+    }
+}
+
+/// An array element: its GLSL type and the bytes of the host type uploaded for it.
+#[derive(Clone, Copy, Debug)]
+pub struct Element {
+    pub glsl_type: &'static str,
+    pub bytes: u64,
+}
+
+impl Element {
+    const fn of<T: GlslType>() -> Self {
+        Element { glsl_type: T::NAME, bytes: size_of::<T>() as u64 }
+    }
+}
+
+/// Whether the kernel writes a buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// Scene data the kernel only reads (`readonly`).
+    Read,
+    /// What the kernel accumulates or counts.
+    ReadWrite,
+}
+
+/// Which kernel variants ([`KernelVariant`]) bind a buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoundIn {
+    EveryKernel,
+    /// Only kernels built with `AOVS` 1.
+    AovKernels,
+}
+
+/// One binding of the kernel's descriptor set 0.
+#[derive(Clone, Copy, Debug)]
+pub struct BufferBinding {
+    pub buffer: KernelBuffer,
+    pub binding: u32,
+    /// The name the kernel knows it by: the block's instance, or the array.
+    pub name: &'static str,
+    pub shape: Shape,
+    pub access: Access,
+    pub bound_in: BoundIn,
+    /// What the host's messages call it.
+    pub what: &'static str,
+}
+
+impl BufferBinding {
+    pub fn is_bound_in(&self, variant: KernelVariant) -> bool {
+        match self.bound_in {
+            BoundIn::EveryKernel => true,
+            BoundIn::AovKernels => variant.aovs,
+        }
+    }
+
+    pub fn is_written(&self) -> bool {
+        self.access == Access::ReadWrite
+    }
+
+    /// The element of an array that may span several bindings.
+    pub fn chunked_element(&self) -> Option<Element> {
+        match self.shape {
+            Shape::Array { element, chunked: true } => Some(element),
+            _ => None,
+        }
+    }
+}
+
+use Access::{Read, ReadWrite};
+use BoundIn::{AovKernels, EveryKernel};
+use KernelBuffer::*;
+
+/// An array of `T`s that always fits one binding.
+const fn array<T: GlslType>() -> Shape {
+    Shape::Array { element: Element::of::<T>(), chunked: false }
+}
+
+/// An array of `T`s that may outgrow one binding: split by chunks.rs, read by `load_<name>(i)`.
+const fn chunked<T: GlslType>() -> Shape {
+    Shape::Array { element: Element::of::<T>(), chunked: true }
+}
+
+/// Every buffer of the kernel, in [`KernelBuffer`] order (checked at compile time below).
+#[rustfmt::skip]
+pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
+    // The camera, film, integrator settings and scene counts (see FrameParams).
+    BufferBinding { buffer: Frame, binding: 0, name: "frame", shape: Shape::UniformBlock(Block::of::<FrameParams>()), access: Read, bound_in: EveryKernel, what: "frame parameters" },
+    // BVH pair nodes (src/bvh/pair_node.rs): the top level over instances, its root at node 0,
+    // then every bottom-level BVH.
+    BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: chunked::<PairNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
+    // The scene's own spheres, quads and triangles, in their BVH's leaf order.
+    BufferBinding { buffer: Primitives, binding: 2, name: "prims", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "primitives" },
+    BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: array::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },
+    // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
+    BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
+    // The environment map's texels, rgb, row-major, top row first (one texel for a constant sky).
+    BufferBinding { buffer: EnvTexels, binding: 5, name: "env_texels", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "environment map" },
+    // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
+    BufferBinding { buffer: Accum, binding: 6, name: "accum", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: EveryKernel, what: "accumulation image" },
+    // Per-dispatch counters, cleared and read by the host (see GpuStats).
+    BufferBinding { buffer: Stats, binding: 7, name: "stats", shape: Shape::StorageBlock(Block::of::<GpuStats>()), access: ReadWrite, bound_in: EveryKernel, what: "statistics" },
+    // Placements of bottom-level BVHs; the top-level BVH's leaves index them.
+    BufferBinding { buffer: Instances, binding: 8, name: "instances", shape: array::<GpuInstance>(), access: Read, bound_in: EveryKernel, what: "instances" },
+    // Every mesh's triangles by value (MeshTriangle) and their materials, in their BVH's leaf order.
+    BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: chunked::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },
+    BufferBinding { buffer: TriangleMaterials, binding: 10, name: "triangle_materials", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "triangle materials" },
+    // Vertex attributes of every mesh, indexed by global vertex index: normals octahedral
+    // snorm16x2, texture coordinates.
+    BufferBinding { buffer: VertexNormals, binding: 11, name: "vertex_normals", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "vertex normals" },
+    BufferBinding { buffer: VertexUvs, binding: 12, name: "vertex_uvs", shape: chunked::<[f32; 2]>(), access: Read, bound_in: EveryKernel, what: "vertex texture coordinates" },
+    // Where each texture's texels lie in `texels`, its size and TEXTURE_* flags.
+    BufferBinding { buffer: TextureInfos, binding: 13, name: "texture_infos", shape: array::<GpuTexture>(), access: Read, bound_in: EveryKernel, what: "texture descriptors" },
+    // Every texture's texels, RGBA8, one after another.
+    BufferBinding { buffer: Texels, binding: 14, name: "texels", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "textures" },
+    // The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
+    // one CDF per row (width + 1 values each); see env_sampling.rs. Empty when it is not sampled.
+    BufferBinding { buffer: EnvCdf, binding: 15, name: "env_cdf", shape: array::<f32>(), access: Read, bound_in: EveryKernel, what: "environment distribution" },
+    // Alias table over `lights` for picking them by power (light_selection.rs); empty when they
+    // are picked uniformly.
+    BufferBinding { buffer: LightAlias, binding: 16, name: "light_alias", shape: array::<GpuAliasEntry>(), access: Read, bound_in: EveryKernel, what: "light alias table" },
+    // Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
+    // xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
+    // first hit summed over the samples that hit something, w = how many those were.
+    BufferBinding { buffer: AovAlbedoDepth, binding: 20, name: "aov_albedo_depth", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: AovKernels, what: "albedo and depth sums" },
+    BufferBinding { buffer: AovNormalHits, binding: 21, name: "aov_normal_hits", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: AovKernels, what: "normal sums" },
+];
+
+// The table is in key order, its bindings are distinct and below the extra windows' bindings,
+// and only arrays may be split (a compile error otherwise).
+const _: () = {
+    let mut i = 0;
+    while i < BINDINGS.len() {
+        assert!(BINDINGS[i].buffer as usize == i, "BINDINGS is out of KernelBuffer order");
+        assert!(BINDINGS[i].binding < EXTRA_BINDING_BASE, "a binding collides with the windows of split arrays");
+        let mut j = 0;
+        while j < i {
+            assert!(BINDINGS[i].binding != BINDINGS[j].binding, "two buffers share a binding");
+            j += 1;
+        }
+        if let Shape::UniformBlock(_) = BINDINGS[i].shape {
+            assert!(matches!(BINDINGS[i].access, Access::Read), "uniform blocks are read-only");
+        }
+        i += 1;
+    }
+};
+
+/// The kernel's `interface.glsl` for this split of the arrays and variant: the pass's push
+/// constants (PassParams) and every buffer the variant binds, in binding order.
+pub fn glsl(plans: &SplitPlans, variant: KernelVariant) -> String {
+    let mut out = String::from("// Generated by src/render/bindings.rs for this kernel variant and split of the arrays.\n");
+    out += &format!("layout(push_constant) uniform {} {{\n{}}} pass;\n", PassParams::NAME, glsl_members(PassParams::MEMBERS));
+    for b in BINDINGS.iter().filter(|b| b.is_bound_in(variant)) {
+        let (binding, name) = (b.binding, b.name);
+        let access = if b.is_written() { "" } else { "readonly " };
+        out += &format!("// {}\n", b.what);
+        out += &match b.shape {
+            Shape::UniformBlock(block) => {
+                format!("layout(std140, set = 0, binding = {binding}) uniform {} {{\n{}}} {name};\n", block.type_name, glsl_members(block.members))
+            }
+            Shape::StorageBlock(block) => {
+                format!("layout(std430, set = 0, binding = {binding}) {access}buffer {} {{\n{}}} {name};\n", block.type_name, glsl_members(block.members))
+            }
+            Shape::Array { element, chunked: false } => {
+                format!("layout(std430, set = 0, binding = {binding}) {access}buffer {name}_buffer {{ {} {name}[]; }};\n", element.glsl_type)
+            }
+            Shape::Array { element, chunked: true } => chunks::glsl(b, element, plans[b.buffer]),
+        };
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::chunks::{window_binding, ChunkPlan, MAX_CHUNKS, UNSPLIT};
+    use crate::render::kernel::kernel_spirv;
+    use crate::render::spirv_reflect::{block_variables, StorageClass};
+    use std::collections::BTreeMap;
+
+    const VARIANTS: [KernelVariant; 4] = [
+        KernelVariant { aovs: false, count_loop_iterations: false },
+        KernelVariant { aovs: true, count_loop_iterations: false },
+        KernelVariant { aovs: false, count_loop_iterations: true },
+        KernelVariant { aovs: true, count_loop_iterations: true },
+    ];
+
+    /// A binding as a compiled kernel declares it: the storage class, the block's instance name
+    /// (or its array's name, for a block without one), whether it is readonly, and the array
+    /// stride in bytes.
+    type Declared = (StorageClass, String, bool, Option<u32>);
+
+    /// What the table says `variant` declares at each binding of set 0, arrays split by `plans`.
+    fn declared_by_table(plans: &SplitPlans, variant: KernelVariant) -> BTreeMap<u32, Declared> {
+        let mut declared = BTreeMap::new();
+        for b in BINDINGS.iter().filter(|b| b.is_bound_in(variant)) {
+            let readonly = !b.is_written();
+            match b.shape {
+                Shape::UniformBlock(_) => declared.insert(b.binding, (StorageClass::Uniform, b.name.to_owned(), readonly, None)),
+                Shape::StorageBlock(_) => declared.insert(b.binding, (StorageClass::StorageBuffer, b.name.to_owned(), readonly, None)),
+                Shape::Array { element, chunked: false } => {
+                    declared.insert(b.binding, (StorageClass::StorageBuffer, b.name.to_owned(), readonly, Some(element.bytes as u32)))
+                }
+                Shape::Array { element, chunked: true } => {
+                    for c in 0..plans[b.buffer].chunks {
+                        let window = (StorageClass::StorageBuffer, format!("{}_{c}", b.name), readonly, Some(element.bytes as u32));
+                        declared.insert(window_binding(b, c), window);
+                    }
+                    None
+                }
+            };
+        }
+        declared
+    }
+
+    /// What the compiled kernel declares at each binding of set 0.
+    fn declared_by_kernel(spirv: &[u32]) -> BTreeMap<u32, Declared> {
+        let mut declared = BTreeMap::new();
+        for v in block_variables(spirv) {
+            let Some(binding) = v.binding else { continue };
+            assert_eq!(v.set, Some(0), "binding {binding} is outside descriptor set 0");
+            // Uniform blocks are read-only without being marked so.
+            let readonly = v.storage_class == StorageClass::Uniform || v.is_readonly();
+            let (name, stride) = match (v.name.is_empty(), &v.members[..]) {
+                (true, [array]) => (array.name.clone(), array.array_stride),
+                _ => (v.name.clone(), None),
+            };
+            assert!(declared.insert(binding, (v.storage_class, name, readonly, stride)).is_none(), "binding {binding} is declared twice");
+        }
+        declared
+    }
+
+    /// Every kernel variant, with its arrays in one binding each and split as far as they go,
+    /// declares exactly the table's bindings: the same numbers, names, kinds, access and element
+    /// sizes. Whatever a shader file declares by hand, or the generator gets wrong, shows here.
+    #[test]
+    fn every_kernel_variant_declares_the_table_s_bindings() {
+        let split = SplitPlans([ChunkPlan { shift: 10, chunks: MAX_CHUNKS }; KernelBuffer::COUNT]);
+        for variant in VARIANTS {
+            for plans in [UNSPLIT, split] {
+                let spirv = kernel_spirv(&plans, variant).expect("the kernel compiles");
+                let (kernel, table) = (declared_by_kernel(spirv), declared_by_table(&plans, variant));
+                for (binding, declared) in &table {
+                    assert_eq!(kernel.get(binding), Some(declared), "{variant:?}, {} windows: binding {binding}", plans[KernelBuffer::Nodes].chunks);
+                }
+                for (binding, declared) in &kernel {
+                    assert!(table.contains_key(binding), "{variant:?}: the kernel declares binding {binding} ({declared:?}), which the table lacks");
+                }
+            }
+        }
+    }
+
+    /// The kernel's frame parameters, statistics and push constants sit where the host writes and
+    /// reads them: the compiler's std140/std430 offsets of every member are the host struct's.
+    #[test]
+    fn kernel_blocks_have_the_host_structs_offsets() {
+        let spirv = kernel_spirv(&UNSPLIT, KernelVariant::default()).expect("the kernel compiles");
+        let variables = block_variables(spirv);
+        for (block, members) in [(FrameParams::NAME, FrameParams::MEMBERS), (GpuStats::NAME, GpuStats::MEMBERS), (PassParams::NAME, PassParams::MEMBERS)] {
+            let variable = variables.iter().find(|v| v.block == block).unwrap_or_else(|| panic!("the kernel has no block {block}"));
+            let kernel: Vec<(&str, Option<u32>)> = variable.members.iter().map(|m| (m.name.as_str(), m.offset)).collect();
+            let host: Vec<(&str, Option<u32>)> = members.iter().map(|m| (m.name, Some(m.offset as u32))).collect();
+            assert_eq!(kernel, host, "{block}: the kernel's member offsets differ from the host struct's");
+        }
+    }
+
+    #[test]
+    fn the_generated_declarations_say_what_each_buffer_is() {
+        let src = glsl(&UNSPLIT, KernelVariant { aovs: true, count_loop_iterations: false });
+        let materials = format!("binding = {}) readonly buffer materials_buffer {{ Material materials[]; }};", KernelBuffer::Materials.entry().binding);
+        assert!(src.contains(&materials), "{src}");
+        assert!(src.contains("    // Number of area lights: the entries of `lights`.\n    uint light_count;\n"), "{src}");
+        assert!(src.contains("vec4 load_aov_normal_hits(uint i)"), "{src}");
+        assert!(!glsl(&UNSPLIT, KernelVariant::default()).contains("aov_normal_hits"), "a kernel without AOVs does not declare their sums");
+    }
+}

@@ -1,0 +1,114 @@
+//! Host structs whose GLSL block is written from their own field list, so that the two cannot
+//! drift: [`glsl_block!`] declares the `#[repr(C)]` struct and, from the same tokens, the list of
+//! its members with their GLSL types and byte offsets. Each field's doc comment becomes the
+//! member's comment in the generated GLSL. bindings.rs declares the blocks with these members; its
+//! tests read the compiled kernel's member offsets back and compare them with the host's.
+
+/// A host type with a GLSL twin of the same bytes: a scalar or vector, or a struct of
+/// shaders/layout.glsl.
+pub trait GlslType: bytemuck::Pod {
+    /// The type's name in GLSL.
+    const NAME: &'static str;
+}
+
+macro_rules! glsl_names {
+    ($($host:ty => $glsl:literal),* $(,)?) => {
+        $(impl GlslType for $host {
+            const NAME: &'static str = $glsl;
+        })*
+    };
+}
+
+glsl_names! {
+    f32 => "float",
+    u32 => "uint",
+    [f32; 2] => "vec2",
+    [f32; 3] => "vec3",
+    [f32; 4] => "vec4",
+    [u32; 2] => "uvec2",
+    [u32; 3] => "uvec3",
+    [u32; 4] => "uvec4",
+}
+
+/// One member of a block: name, GLSL type, byte offset in the host struct, and the doc comment.
+#[derive(Clone, Copy, Debug)]
+pub struct GlslMember {
+    pub name: &'static str,
+    pub glsl_type: &'static str,
+    pub offset: usize,
+    pub doc: &'static [&'static str],
+}
+
+/// A host struct that the kernel sees as a uniform, push-constant or storage block.
+pub trait GlslBlock: bytemuck::Pod {
+    /// The block's type name in GLSL (the host struct's name).
+    const NAME: &'static str;
+    /// Every field, in declaration order.
+    const MEMBERS: &'static [GlslMember];
+}
+
+/// `members` as GLSL block members, one a line, each after its doc comment.
+pub fn glsl_members(members: &[GlslMember]) -> String {
+    let mut out = String::new();
+    for member in members {
+        for line in member.doc {
+            out += &format!("    //{line}\n");
+        }
+        out += &format!("    {} {};\n", member.glsl_type, member.name);
+    }
+    out
+}
+
+/// Declares a `#[repr(C)]`, `Pod` struct whose fields are all [`GlslType`]s, and its
+/// [`GlslBlock`] member list. Fields take doc comments only (they are copied into the GLSL).
+macro_rules! glsl_block {
+    (
+        $(#[$attr:meta])*
+        pub struct $name:ident {
+            $($(#[doc = $doc:literal])* pub $field:ident: $ty:ty,)*
+        }
+    ) => {
+        $(#[$attr])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, PartialEq, ::bytemuck::Pod, ::bytemuck::Zeroable)]
+        pub struct $name {
+            $($(#[doc = $doc])* pub $field: $ty,)*
+        }
+
+        impl $crate::render::glsl_block::GlslBlock for $name {
+            const NAME: &'static str = stringify!($name);
+            const MEMBERS: &'static [$crate::render::glsl_block::GlslMember] = &[$(
+                $crate::render::glsl_block::GlslMember {
+                    name: stringify!($field),
+                    glsl_type: <$ty as $crate::render::glsl_block::GlslType>::NAME,
+                    offset: ::std::mem::offset_of!($name, $field),
+                    doc: &[$($doc),*],
+                },
+            )*];
+        }
+    };
+}
+pub(crate) use glsl_block;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    glsl_block! {
+        /// A block of every shape of member.
+        pub struct Example {
+            /// Where it is.
+            pub position: [f32; 3],
+            pub count: u32,
+        }
+    }
+
+    #[test]
+    fn members_carry_their_glsl_type_offset_and_comment() {
+        let m = Example::MEMBERS;
+        assert_eq!(Example::NAME, "Example");
+        assert_eq!((m[0].name, m[0].glsl_type, m[0].offset), ("position", "vec3", 0));
+        assert_eq!((m[1].name, m[1].glsl_type, m[1].offset), ("count", "uint", 12));
+        assert_eq!(glsl_members(m), "    // Where it is.\n    vec3 position;\n    uint count;\n");
+    }
+}
