@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """Renders one caustica scene with caustica and with Mitsuba 3, in one run: both renderers'
-samples per second and their ratio, and both images' error against one high-spp reference.
+samples per second and per CPU-second and their ratios, and both images' error against one
+high-spp reference. On a shared machine the per-CPU-second figures are the steadier (on lavapipe
+the device is caustica's own threads, and Dr.Jit's pool is Mitsuba's).
 
     python3 scripts/mitsuba_compare.py [SCENE.toml] [--width W] [--height H] [--spp N]
         [--reference REF.pfm | --reference-spp N] [--out DIR] [--json]
