@@ -116,39 +116,23 @@ fn placements(count: usize) -> Vec<Mat4> {
 
 #[test]
 fn instanced_meshes_and_shapes_match_brute_force_ray_casting() {
-    let mut scene = parse(
+    // Black emitters: a pixel's value is exactly the colour of what its rays see first.
+    let emitters = [("red", [1, 0, 0], true), ("green", [0, 1, 0], true), ("blue", [0, 0, 1], false), ("yellow", [1, 1, 0], true), ("cyan", [0, 1, 1], true), ("magenta", [1, 0, 1], true)];
+    let materials: String = emitters
+        .iter()
+        .map(|(name, [r, g, b], two_sided)| format!("[materials.{name}]\nalbedo = [0, 0, 0]\nemission = [{r}, {g}, {b}]\ntwo_sided = {two_sided}\n"))
+        .collect();
+    let mut scene = parse(&format!(
         r#"
-        camera = { position = [0, 0, 6], look_at = [0, 0, 0], fov = 40 }
-        film = { width = 96, height = 96, spp = 2 }
-        [materials.red]
-        albedo = [0, 0, 0]
-        emission = [1, 0, 0]
-        two_sided = true
-        [materials.green]
-        albedo = [0, 0, 0]
-        emission = [0, 1, 0]
-        two_sided = true
-        [materials.blue]
-        albedo = [0, 0, 0]
-        emission = [0, 0, 1]
-        [materials.yellow]
-        albedo = [0, 0, 0]
-        emission = [1, 1, 0]
-        two_sided = true
-        [materials.cyan]
-        albedo = [0, 0, 0]
-        emission = [0, 1, 1]
-        two_sided = true
-        [materials.magenta]
-        albedo = [0, 0, 0]
-        emission = [1, 0, 1]
-        two_sided = true
+        camera = {{ position = [0, 0, 6], look_at = [0, 0, 0], fov = 40 }}
+        film = {{ width = 96, height = 96, spp = 2 }}
+        {materials}
         [[spheres]]
         center = [0.3, -0.2, 0]
         radius = 0.5
         material = "blue"
-        "#,
-    );
+        "#
+    ));
     let index = |name: &str| scene.materials.iter().position(|m| m.name == name).expect("material") as u32;
     let soup = triangle_soup([index("yellow"), index("cyan"), index("magenta")], 150);
     scene.meshes = vec![tetrahedron(index("red")), folded_strip(index("green")), soup];

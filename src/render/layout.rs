@@ -292,16 +292,6 @@ mod tests {
     }
 
     #[test]
-    fn pair_node_matches_glsl_std430() {
-        use crate::bvh::ChildBox;
-        assert_eq!(size_of::<PairNode>(), 64);
-        assert_eq!(offset_of!(PairNode, children) + size_of::<ChildBox>(), 32);
-        assert_eq!(offset_of!(ChildBox, link), 12);
-        assert_eq!(offset_of!(ChildBox, max), 16);
-        assert_eq!(offset_of!(ChildBox, prim_count), 28);
-    }
-
-    #[test]
     fn mesh_triangle_matches_glsl_std430() {
         assert_eq!(size_of::<GpuMeshTriangle>(), 48);
         assert_eq!(offset_of!(GpuMeshTriangle, e1), 16);
