@@ -9,6 +9,7 @@ use super::{measure, Measurement};
 use crate::gpu::GpuContext;
 use crate::render::AovSet;
 use crate::scene::{check_film, Scene, DEFAULT_SCENE_TOML};
+use crate::input_file::{InputFiles, InputKind};
 use anyhow::{Context as _, Result};
 use std::path::{Path, PathBuf};
 
@@ -90,7 +91,8 @@ pub fn suite_entries(scenes_dir: &Path, data_dir: &Path) -> Result<Vec<SuiteEntr
     let data_missing = !data_dir.is_dir();
     for path in files {
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        // Read as any scene file is: regular files only, within the scene size cap.
+        let text = InputFiles::anywhere().read_to_string(&path, InputKind::Scene)?;
         if text == DEFAULT_SCENE_TOML {
             continue;
         }
