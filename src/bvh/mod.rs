@@ -1,10 +1,11 @@
-//! Bounding volume hierarchy over primitive bounds: built on the CPU with binned SAH (in parallel),
-//! laid out in the 32-byte `BvhNode` format the GLSL kernel walks, and walkable on the CPU by the
-//! same algorithm.
+//! Bounding volume hierarchy over primitive bounds: built on the CPU with binned SAH (in parallel)
+//! as binary 32-byte `BvhNode`s in depth-first order, walkable on the CPU, and turned into the
+//! 64-byte `PairNode`s the GLSL kernel walks (pair_node.rs).
 //!
 //! A BVH over zero primitives is the single node `BvhNode::EMPTY_ROOT`: an inverted box that the
-//! sign-ordered slab test of `ray_box` never hits. The kernel's min/max slab test would enter it, so
-//! the host passes a node count of 0 for an empty scene and the kernel then skips traversal.
+//! sign-ordered slab test of `ray_box` never hits. As pair nodes it is a root of two missing
+//! children, which the kernel never enters either; the host also passes a node count of 0 for an
+//! empty scene, and the kernel then skips traversal at once.
 
 mod aabb;
 mod binning;

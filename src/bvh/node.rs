@@ -1,7 +1,7 @@
 use super::Aabb;
 
-/// GPU node, std430-compatible: 32 bytes. Crosses to the GPU as-is and mirrors the GLSL
-/// `struct BvhNode { vec3 bmin; uint offset; vec3 bmax; uint meta; };`
+/// The builder's binary node, 32 bytes, in depth-first order. The kernel walks these as
+/// `PairNode`s (pair_node.rs), one per interior node.
 ///
 /// - interior (`prim_count() == 0`): the first child is the next node, `offset` is the second child,
 ///   `axis()` is the split axis (visit the second child first when `ray.dir[axis] < 0`);
@@ -17,7 +17,7 @@ pub struct BvhNode {
 
 impl BvhNode {
     /// Root of a BVH over no primitives: an inverted box with finite, huge planes. The sign-ordered
-    /// slab test in `ray_box` (the one the kernel runs) gets entry > exit on every axis for any finite
+    /// slab test in `ray_box` (the CPU traversal's) gets entry > exit on every axis for any finite
     /// ray, so traversal never looks at its (meaningless) interior encoding.
     pub const EMPTY_ROOT: BvhNode = BvhNode {
         min: [f32::MAX; 3],
