@@ -74,7 +74,7 @@ pub struct ContextOptions {
 }
 
 pub struct GpuContext {
-    pub(super) entry: ash::Entry,
+    _entry: ash::Entry,
     pub(super) instance: ash::Instance,
     pub(super) physical_device: vk::PhysicalDevice,
     /// The window surface and the loaders of the surface and swapchain extensions, when this
@@ -317,7 +317,7 @@ impl GpuContext {
             swapchain_loader: ash::khr::swapchain::Device::new(&instance, &device),
         });
         Ok(Self {
-            entry,
+            _entry: entry,
             instance,
             physical_device: physical,
             presentation,

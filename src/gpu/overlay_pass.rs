@@ -84,8 +84,10 @@ impl OverlayPass {
     /// Uploads the textures egui changed; before recording the frame that uses them.
     pub(super) fn update_textures(&mut self, ctx: &GpuContext, textures: &egui::TexturesDelta) -> Result<()> {
         let renderer = self.renderer.as_mut().expect("renderer lives until destroy");
-        for (id, delta) in &textures.set {
-            renderer.set_texture(ctx.queue, ctx.command_pool, *id, delta).map_err(|e| anyhow!("uploading an overlay texture: {e}"))?;
+        for (id, deltas) in &textures.set {
+            for delta in deltas {
+                renderer.set_texture(ctx.queue, ctx.command_pool, *id, delta).map_err(|e| anyhow!("uploading an overlay texture: {e}"))?;
+            }
         }
         Ok(())
     }
@@ -93,7 +95,10 @@ impl OverlayPass {
     /// Frees the textures egui let go of; after the frame that last used them has finished.
     pub(super) fn free_textures(&mut self, textures: &egui::TexturesDelta) -> Result<()> {
         let renderer = self.renderer.as_mut().expect("renderer lives until destroy");
-        renderer.free_textures(&textures.free).map_err(|e| anyhow!("freeing overlay textures: {e}"))
+        for id in &textures.free {
+            renderer.free_texture(*id).map_err(|e| anyhow!("freeing an overlay texture: {e}"))?;
+        }
+        Ok(())
     }
 
     /// Records the pass over swapchain image `index` (in TRANSFER_DST_OPTIMAL; left PRESENT_SRC_KHR).

@@ -139,7 +139,7 @@ impl<'a> Viewer<'a> {
             presenter: Some(presenter),
             display_spirv: display_spirv()?,
             session: None,
-            camera: loaded.scene.camera,
+            camera: loaded.scene.camera.clone(),
             scene: loaded.scene,
             watcher: FileWatcher::new(loaded.files),
             source: options.source,
@@ -209,7 +209,7 @@ impl<'a> Viewer<'a> {
         }
         let size = self.window.inner_size();
         let mut scene = self.scene.clone();
-        scene.camera = self.camera;
+        scene.camera = self.camera.clone();
         scene.film.width = size.width.clamp(1, 16384);
         scene.film.height = size.height.clamp(1, 16384);
         let aovs = if self.aovs { AovSet { albedo: true, normal: true, depth: true, samples: false } } else { AovSet::default() };
@@ -420,7 +420,7 @@ impl<'a> Viewer<'a> {
         match source.load() {
             Ok(loaded) => {
                 self.source = source;
-                self.camera = loaded.scene.camera;
+                self.camera = loaded.scene.camera.clone();
                 self.scene = loaded.scene;
                 self.watcher = FileWatcher::new(loaded.files);
                 match self.start_session() {
@@ -483,9 +483,9 @@ impl<'a> Viewer<'a> {
         }
         let paused = self.paused();
         if !paused && !self.done() {
+            let limit = self.limit().unwrap_or(u32::MAX);
             let session = self.session.as_mut().expect("checked above");
             let before = session.renderer.samples_done as f64 * session.renderer.size().0 as f64 * session.renderer.size().1 as f64;
-            let limit = self.limit().unwrap_or(u32::MAX);
             session.renderer.render_step(limit)?;
             let r = &session.renderer;
             let (w, h) = r.size();

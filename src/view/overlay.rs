@@ -1,20 +1,21 @@
 //! The overlay: what the viewer is doing (samples, speed, frame time, device, settings) and the
-//! keys, drawn with egui over the picture. It can be collapsed by clicking its title.
+//! keys, drawn with egui over the picture, at the top left and no wider than [`WIDTH`] points. It
+//! collapses (or its key list does) with a click on its title.
 
 /// The keys, as the overlay and the README list them.
 pub const KEYS: [(&str, &str); 14] = [
     ("left drag", "orbit around the pivot"),
-    ("middle drag, shift + left drag", "pan"),
-    ("wheel", "dolly towards / away from the pivot"),
+    ("middle drag", "pan (or shift + left drag)"),
+    ("wheel", "dolly to / from the pivot"),
     ("right drag", "look around (fly)"),
-    ("right drag + W A S D / Q E", "fly forward, left, back, right / down, up (shift: faster)"),
+    ("right + WASD QE", "fly (shift: faster)"),
     ("F", "frame the whole scene"),
-    ("+ / -", "exposure up / down half a stop"),
-    ("T", "next tonemapper (clamp, reinhard, aces)"),
-    ("1 2 3 4", "show beauty, albedo, normal, depth"),
-    ("P", "print the camera as a TOML [camera] block"),
-    ("S", "save the image: PNG, and EXR with the accumulation"),
-    ("R", "reload the scene (also automatic when its files change)"),
+    ("+ / -", "exposure, half a stop"),
+    ("T", "next tonemapper"),
+    ("1 2 3 4", "beauty, albedo, normal, depth"),
+    ("P", "print the camera as TOML"),
+    ("S", "save PNG and EXR"),
+    ("R", "reload (also on file change)"),
     ("drop a file", "open it"),
     ("Esc", "quit"),
 ];
@@ -36,8 +37,12 @@ pub struct Status<'a> {
     pub problem: Option<&'a str>,
 }
 
+/// Widest the overlay gets, in points: the picture stays visible beside it.
+pub const WIDTH: f32 = 250.0;
+
 pub fn draw(ctx: &egui::Context, status: &Status) {
-    egui::Window::new("caustica").default_pos([8.0, 8.0]).resizable(false).default_open(true).show(ctx, |ui| {
+    egui::Window::new("caustica").default_pos([8.0, 8.0]).max_width(WIDTH).resizable(false).show(ctx, |ui| {
+        ui.style_mut().override_text_style = Some(egui::TextStyle::Small);
         egui::Grid::new("status").num_columns(2).show(ui, |ui| {
             let mut row = |name: &str, value: String| {
                 ui.label(name);
@@ -61,13 +66,14 @@ pub fn draw(ctx: &egui::Context, status: &Status) {
         if let Some(problem) = status.problem {
             ui.colored_label(egui::Color32::from_rgb(255, 120, 100), problem);
         }
-        ui.separator();
-        egui::Grid::new("keys").num_columns(2).show(ui, |ui| {
-            for (key, what) in KEYS {
-                ui.strong(key);
-                ui.label(what);
-                ui.end_row();
-            }
+        egui::CollapsingHeader::new("keys").default_open(true).show(ui, |ui| {
+            egui::Grid::new("keys").num_columns(2).show(ui, |ui| {
+                for (key, what) in KEYS {
+                    ui.strong(key);
+                    ui.label(what);
+                    ui.end_row();
+                }
+            });
         });
     });
 }
