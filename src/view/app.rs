@@ -49,28 +49,42 @@ struct Session<'a> {
     display: Display,
 }
 
-/// Pixel samples over the last second, for samples per second.
+/// Pixel samples added over the last few seconds, for samples per second.
 #[derive(Default)]
 struct Speed {
+    /// (when, pixel samples added in all by then)
     history: VecDeque<(Instant, f64)>,
     total: f64,
 }
 
+/// Span the rate is measured over: several passes of a light scene at once.
+const SPEED_WINDOW: Duration = Duration::from_secs(3);
+
 impl Speed {
     fn add(&mut self, pixel_samples: f64) {
         let now = Instant::now();
+        if self.history.is_empty() {
+            self.history.push_back((now, self.total));
+        }
         self.total += pixel_samples;
         self.history.push_back((now, self.total));
-        while self.history.len() > 2 && now - self.history[0].0 > Duration::from_secs(1) {
+        // The oldest entry kept is the last one older than the window, so the span covers it.
+        while self.history.len() > 2 && now - self.history[1].0 > SPEED_WINDOW {
             self.history.pop_front();
         }
     }
 
+    /// Up to now, so that the rate falls to 0 once nothing is added (a heavy scene's pass in
+    /// progress, or accumulation done).
     fn per_second(&self) -> f64 {
-        match (self.history.front(), self.history.back()) {
-            (Some(first), Some(last)) if last.0 > first.0 && first.0.elapsed() < Duration::from_secs(2) => (last.1 - first.1) / (last.0 - first.0).as_secs_f64(),
+        match self.history.front() {
+            Some(&(since, total)) if since.elapsed() > Duration::ZERO => (self.total - total) / since.elapsed().as_secs_f64(),
             _ => 0.0,
         }
+    }
+
+    fn restart(&mut self) {
+        self.history.clear();
     }
 }
 
@@ -217,6 +231,7 @@ impl<'a> Viewer<'a> {
         renderer.set_dispatch_target(DISPATCH_TARGET_S);
         let display = Display::new(self.ctx, &self.display_spirv, &renderer)?;
         self.session = Some(Session { renderer, display });
+        self.speed.restart();
         self.camera_moved = false;
         self.redraw = true;
         Ok(())
@@ -479,6 +494,7 @@ impl<'a> Viewer<'a> {
         let Some(session) = &mut self.session else { return Ok(!self.quit) };
         if std::mem::take(&mut self.camera_moved) {
             session.renderer.set_camera(&self.camera)?;
+            self.speed.restart();
             self.redraw = true;
         }
         let paused = self.paused();
