@@ -87,7 +87,8 @@ void main() {
     } else {
         vec4 n = normal_hits[i];
         float depth = albedo_depth[i].a / max(n.w, 1.0);
-        rgb = n.w > 0.0 ? bytes_of(vec3(1.0 - clamp(depth / depth_far, 0.0, 1.0))) : uvec3(0u);
+        // sRGB-encoded, so that the near half of the scene is not all dark.
+        rgb = n.w > 0.0 ? bytes_of(vec3(srgb(1.0 - clamp(depth / depth_far, 0.0, 1.0)))) : uvec3(0u);
     }
     uvec3 ordered = bgra == 1u ? rgb.bgr : rgb;
     pixels[i] = ordered.x | (ordered.y << 8) | (ordered.z << 16) | (255u << 24);

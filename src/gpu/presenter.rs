@@ -9,7 +9,7 @@ use super::context::GpuContext;
 use super::failure::VulkanError;
 use super::overlay_pass::{OverlayDraw, OverlayPass};
 use super::swapchain::{ChannelOrder, Swapchain, COLOR_RANGE};
-use anyhow::{anyhow, ensure, Context as _, Result};
+use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -138,6 +138,7 @@ impl Presenter {
                 self.stale = true;
                 return Ok(Presented::NotShown);
             }
+            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => bail!("the window's surface is lost (did another program destroy the window?)"),
             Err(e) => return Err(anyhow!("acquiring a swapchain image: {e}")),
         };
         if let Some(draw) = &frame.overlay {
@@ -171,6 +172,7 @@ impl Presenter {
                 self.stale = true;
                 Ok(Presented::NotShown)
             }
+            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => bail!("the window's surface is lost (did another program destroy the window?)"),
             Err(e) => Err(anyhow!("presenting: {e}")),
         }
     }

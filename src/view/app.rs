@@ -183,10 +183,7 @@ impl<'a> Viewer<'a> {
             speed: Speed::default(),
             problem: None,
         };
-        if let Err(e) = viewer.start_session() {
-            viewer.destroy();
-            return Err(e);
-        }
+        viewer.start_session()?;
         Ok(viewer)
     }
 
@@ -241,7 +238,8 @@ impl<'a> Viewer<'a> {
         let consumed = self.egui_input.on_window_event(self.window, &event).consumed;
         self.redraw = true;
         match event {
-            WindowEvent::CloseRequested => self.quit = true,
+            // Destroyed: by another client; the window can no longer be asked anything.
+            WindowEvent::CloseRequested | WindowEvent::Destroyed => self.quit = true,
             WindowEvent::Resized(size) => {
                 if let Some(p) = &mut self.presenter {
                     p.resize([size.width, size.height]);
@@ -554,7 +552,8 @@ impl<'a> Viewer<'a> {
     fn update_title(&self) {
         let samples = self.session.as_ref().map_or(0, |s| s.renderer.samples_done);
         let limit = self.limit().map_or(String::new(), |l| format!("/{l}"));
-        self.window.set_title(&format!("caustica - {} - {samples}{limit} spp - {:.2} Msamples/s", self.source.title(), self.speed.per_second() / 1e6));
+        let fps = 1.0 / self.frame_seconds.max(1e-6);
+        self.window.set_title(&format!("caustica - {} - {samples}{limit} spp - {:.2} Msamples/s - {fps:.0} fps", self.source.title(), self.speed.per_second() / 1e6));
     }
 
     fn settings(&self) -> DisplaySettings {
@@ -616,8 +615,9 @@ impl<'a> Viewer<'a> {
         })
     }
 
-    /// Frees the GPU objects, before the context goes.
-    pub fn destroy(&mut self) {
+    /// Frees the GPU objects, before the context goes (also when unwinding from a panic, so that
+    /// the validation layer reports no leak on top of it).
+    fn destroy(&mut self) {
         self.ctx.wait_idle();
         if let Some(session) = self.session.take() {
             session.display.destroy(self.ctx);
@@ -625,6 +625,12 @@ impl<'a> Viewer<'a> {
         if let Some(presenter) = self.presenter.take() {
             presenter.destroy(self.ctx);
         }
+    }
+}
+
+impl Drop for Viewer<'_> {
+    fn drop(&mut self) {
+        self.destroy();
     }
 }
 

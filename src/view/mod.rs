@@ -65,7 +65,5 @@ pub fn run(options: ViewOptions) -> Result<()> {
     let (mut event_loop, window) = window::open(&format!("caustica - {}", options.source.title()), [film.width, film.height])?;
     let ctx = GpuContext::for_window(&options.context, &window)?;
     let mut viewer = app::Viewer::new(&ctx, &window, options, loaded)?;
-    let result = window::run(&mut event_loop, &mut viewer);
-    viewer.destroy();
-    result
+    window::run(&mut event_loop, &mut viewer)
 }
