@@ -409,3 +409,67 @@ fn bad_scenes_and_screenshot_names_fail_before_a_window_opens() {
     assert!(String::from_utf8_lossy(&out.stderr).contains(".png"), "{}", String::from_utf8_lossy(&out.stderr));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The renderer calls the viewer is built on, on the device alone (no window).
+mod viewer_renderer {
+    use super::common::gpu;
+    use caustica::render::Renderer;
+    use caustica::scene::{Camera, Scene};
+    use glam::Vec3;
+
+    fn small_box() -> Scene {
+        let mut scene = Scene::default_scene();
+        scene.film.width = 24;
+        scene.film.height = 20;
+        scene
+    }
+
+    #[test]
+    fn stepping_a_dispatch_at_a_time_gives_the_render_bit_for_bit() {
+        let (_lock, ctx) = gpu();
+        let scene = small_box();
+        let mut whole = Renderer::new(&ctx, &scene, 3).unwrap();
+        whole.render(3, |_| {}).unwrap();
+        let mut stepped = Renderer::new(&ctx, &scene, 3).unwrap();
+        // The viewer's dispatch size: passes cut into bands, one per step.
+        stepped.set_dispatch_target(1e-6);
+        let mut steps = 0;
+        while stepped.samples_done < 3 || stepped.pass_target().is_some() {
+            stepped.render_step(3).unwrap();
+            steps += 1;
+        }
+        assert!(steps > 3, "a step is a band of a pass, not a pass: {steps} steps");
+        assert_eq!(stepped.samples_done, 3);
+        assert!(!stepped.render_step(3).unwrap(), "nothing is added past the limit");
+        assert_eq!(stepped.accumulation().unwrap(), whole.accumulation().unwrap());
+    }
+
+    #[test]
+    fn a_camera_change_starts_over_from_the_new_camera_and_rehashes() {
+        let (_lock, ctx) = gpu();
+        let scene = small_box();
+        let moved = Camera::pinhole(Vec3::new(0.4, 1.2, 3.5), Vec3::new(0.0, 0.9, 0.0), Vec3::Y, 50.0);
+        let mut moved_scene = scene.clone();
+        moved_scene.camera = moved.clone();
+
+        let mut viewer = Renderer::new(&ctx, &scene, 5).unwrap();
+        let original_hash = viewer.scene_hash.clone();
+        viewer.render(2, |_| {}).unwrap();
+        viewer.set_camera(&moved).unwrap();
+        assert_eq!(viewer.samples_done, 0);
+        assert!(viewer.scene_hash.is_empty(), "no stale hash after a camera change");
+        assert!(caustica::farm::snapshot(&viewer).unwrap().is_none(), "nothing rendered since");
+        viewer.render(2, |_| {}).unwrap();
+        assert!(caustica::farm::snapshot(&viewer).is_err(), "no snapshot with an unknown hash");
+        viewer.refresh_scene_hash().unwrap();
+
+        let mut fresh = Renderer::new(&ctx, &moved_scene, 5).unwrap();
+        fresh.render(2, |_| {}).unwrap();
+        assert_eq!(viewer.accumulation().unwrap(), fresh.accumulation().unwrap(), "no sample of the first camera is left");
+        assert_eq!(viewer.scene_hash, fresh.scene_hash, "the hash a render from that camera has");
+
+        viewer.set_camera(&scene.camera).unwrap();
+        viewer.refresh_scene_hash().unwrap();
+        assert_eq!(viewer.scene_hash, original_hash);
+    }
+}
