@@ -145,7 +145,7 @@ fn spot_light_is_the_point_light_inside_its_falloff_zero_outside_and_linear_betw
     let between = expected.len() - inside - outside;
     eprintln!("spot: {inside} pixels inside falloff_start, {between} in the falloff or on its edges, {outside} outside cone_angle");
     assert!(inside >= 20 && between >= 100 && outside >= 100, "the view no longer holds all three zones");
-    for (i, e) in expected.iter().enumerate().filter(|(_, e)| e.0 == 0.0) {
+    for (i, _) in expected.iter().enumerate().filter(|(_, e)| e.0 == 0.0) {
         assert_eq!(luminance(image.pixels[i]), 0.0, "pixel {i} lies outside the cone but is lit");
     }
 }

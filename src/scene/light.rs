@@ -34,6 +34,21 @@ impl Light {
     }
 }
 
+impl Light {
+    /// The light placed by `m` (object to world): positions as points, directions as vectors.
+    /// None when `m` collapses a direction (a zero scale).
+    pub fn transformed(&self, m: glam::Mat4) -> Option<Light> {
+        let direction = |d: Vec3| Some(m.transform_vector3(d).normalize_or_zero()).filter(|d| *d != Vec3::ZERO);
+        Some(match *self {
+            Light::Point { position, intensity } => Light::Point { position: m.transform_point3(position), intensity },
+            Light::Spot { position, axis, intensity, cone_angle, falloff_start } => {
+                Light::Spot { position: m.transform_point3(position), axis: direction(axis)?, intensity, cone_angle, falloff_start }
+            }
+            Light::Directional { direction: d, irradiance, angular_diameter } => Light::Directional { direction: direction(d)?, irradiance, angular_diameter },
+        })
+    }
+}
+
 /// Every `[[lights]]` entry, validated; errors name the entry's key.
 pub(super) fn lights_from(lights: &[LightFile]) -> Result<Vec<Light>> {
     lights
