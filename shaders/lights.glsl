@@ -22,7 +22,7 @@ struct LightSample {
 // triangle (light_power in light_selection.rs).
 float light_power(Primitive p) {
     Material m = materials[prim_material(p)];
-    float sides = prim_kind(p) != PRIM_SPHERE && m.params.y > 0.5 ? 2.0 : 1.0;
+    float sides = primitive_is_flat(p) && m.params.y > 0.5 ? 2.0 : 1.0;
     return primitive_area(p) * PI * dot(m.emission_t.rgb, vec3(0.2126, 0.7152, 0.0722)) * sides;
 }
 
@@ -104,17 +104,26 @@ bool sphere_sampled_by_cone(float d2, float r2) {
 // angle where it can, otherwise by area).
 float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
     float pick = light_pick_probability(p);
-    SphericalTriangle s;
-    if (prim_kind(p) == PRIM_TRIANGLE && spherical_triangle(p, ref, s)) return pick / s.area;
-    if (prim_kind(p) == PRIM_SPHERE) {
-        vec3 to_center = p.a.xyz - ref;
-        float d2 = dot(to_center, to_center);
-        float r2 = p.a.w * p.a.w;
-        if (sphere_sampled_by_cone(d2, r2)) {
-            float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-            return pick / (2.0 * PI * (1.0 - cos_max));
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: {
+            vec3 to_center = p.a.xyz - ref;
+            float d2 = dot(to_center, to_center);
+            float r2 = p.a.w * p.a.w;
+            if (sphere_sampled_by_cone(d2, r2)) {
+                float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
+                return pick / (2.0 * PI * (1.0 - cos_max));
+            }
+            break;
         }
+        case PRIM_QUAD: break;
+        case PRIM_TRIANGLE: {
+            SphericalTriangle s;
+            if (spherical_triangle(p, ref, s)) return pick / s.area;
+            break;
+        }
+        default: return 0.0;
     }
+    // By area.
     vec3 point = ref + dist * dir;
     float cos_light = abs(dot(primitive_normal(p, point), dir));
     if (cos_light <= 0.0) return 0.0;
@@ -130,6 +139,48 @@ uint pick_light(uint count, inout Rng rng) {
     return index;
 }
 
+// A point on area light `p` seen from `ref`, drawn as light_pdf says: a sphere by the cone it
+// subtends (from outside) or by area, a quad by area, a triangle by solid angle where it can and
+// otherwise by area. False when no point is drawn (or the kind is unknown).
+bool sample_area_light_point(Primitive p, vec3 ref, vec2 u, out vec3 point) {
+    point = ref;
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: {
+            vec3 to_center = p.a.xyz - ref;
+            float d2 = dot(to_center, to_center);
+            float r2 = p.a.w * p.a.w;
+            if (sphere_sampled_by_cone(d2, r2)) {
+                float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
+                vec3 dir = sample_cone(u, to_center / sqrt(d2), cos_max);
+                float t = intersect_sphere(p.a.xyz, p.a.w, ref, dir, 1e30);
+                // Grazing directions can miss by rounding: use the tangent distance.
+                point = ref + dir * (t > 0.0 ? t : sqrt(max(0.0, d2 - r2)));
+            } else {
+                point = p.a.xyz + p.a.w * sample_uniform_sphere(u);
+            }
+            return true;
+        }
+        case PRIM_QUAD:
+            point = p.a.xyz + u.x * p.b.xyz + u.y * p.c.xyz;
+            return true;
+        case PRIM_TRIANGLE: {
+            SphericalTriangle s;
+            if (spherical_triangle(p, ref, s)) {
+                vec3 dir = sample_spherical_triangle(s, u);
+                vec3 n = cross(p.b.xyz, p.c.xyz);
+                float t = dot(p.a.xyz - ref, n) / dot(dir, n);
+                if (!(t > 0.0) || isinf(t)) return false;
+                point = ref + t * dir;
+            } else {
+                vec2 b = sample_triangle(u);
+                point = p.a.xyz + b.x * p.b.xyz + b.y * p.c.xyz;
+            }
+            return true;
+        }
+        default: return false;
+    }
+}
+
 bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     uint count = frame.light_count;
     ls.pdf = 0.0;
@@ -137,35 +188,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     Primitive p = lights[pick_light(count, rng)];
     vec2 u = rng_next2(rng);
     vec3 point;
-    uint kind = prim_kind(p);
-    if (kind == PRIM_SPHERE) {
-        vec3 to_center = p.a.xyz - ref;
-        float d2 = dot(to_center, to_center);
-        float r2 = p.a.w * p.a.w;
-        if (sphere_sampled_by_cone(d2, r2)) {
-            float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-            vec3 dir = sample_cone(u, to_center / sqrt(d2), cos_max);
-            float t = intersect_sphere(p.a.xyz, p.a.w, ref, dir, 1e30);
-            // Grazing directions can miss by rounding: use the tangent distance.
-            point = ref + dir * (t > 0.0 ? t : sqrt(max(0.0, d2 - r2)));
-        } else {
-            point = p.a.xyz + p.a.w * sample_uniform_sphere(u);
-        }
-    } else if (kind == PRIM_QUAD) {
-        point = p.a.xyz + u.x * p.b.xyz + u.y * p.c.xyz;
-    } else {
-        SphericalTriangle s;
-        if (spherical_triangle(p, ref, s)) {
-            vec3 dir = sample_spherical_triangle(s, u);
-            vec3 n = cross(p.b.xyz, p.c.xyz);
-            float t = dot(p.a.xyz - ref, n) / dot(dir, n);
-            if (!(t > 0.0) || isinf(t)) return false;
-            point = ref + t * dir;
-        } else {
-            vec2 b = sample_triangle(u);
-            point = p.a.xyz + b.x * p.b.xyz + b.y * p.c.xyz;
-        }
-    }
+    if (!sample_area_light_point(p, ref, u, point)) return false;
     vec3 to_point = point - ref;
     ls.dist = length(to_point);
     if (ls.dist <= 0.0) return false;

@@ -336,6 +336,35 @@ mod tests {
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 
+    /// Every kernel function that dispatches on a primitive's kind is a `switch` with a case for
+    /// each PRIM_* kind and a `default` (an unknown kind must not pass for another): a kind added
+    /// here and forgotten in one of them fails.
+    #[test]
+    fn every_primitive_kind_has_a_case_in_each_kernel_dispatch() {
+        let kinds = ["PRIM_SPHERE", "PRIM_QUAD", "PRIM_TRIANGLE"];
+        assert_eq!([PRIM_SPHERE, PRIM_QUAD, PRIM_TRIANGLE], [0, 1, 2], "a kind was added: list it above");
+        let mut switches = 0;
+        for (file, glsl) in [("intersect.glsl", include_str!("../../shaders/intersect.glsl")), ("lights.glsl", include_str!("../../shaders/lights.glsl"))] {
+            assert!(!glsl.contains("prim_kind(p) =="), "{file} compares a kind outside a switch");
+            for (start, _) in glsl.match_indices("switch (prim_kind(p)) {") {
+                // The switch's body: up to the brace that closes it.
+                let body = &glsl[start..];
+                let mut depth = 0;
+                let end = body.char_indices().find_map(|(i, c)| {
+                    depth += match c { '{' => 1, '}' => -1, _ => 0 };
+                    (c == '}' && depth == 0).then_some(i)
+                });
+                let body = &body[..end.expect("the switch closes")];
+                for kind in kinds {
+                    assert!(body.contains(&format!("case {kind}:")), "{file}: a switch at byte {start} has no case {kind}");
+                }
+                assert!(body.contains("default:"), "{file}: a switch at byte {start} has no default");
+                switches += 1;
+            }
+        }
+        assert!(switches >= 6, "found {switches} kind switches; the dispatches moved?");
+    }
+
     /// The GLSL side declares the same kinds; a renumbering on one side only must fail here.
     #[test]
     fn kind_constants_match_glsl() {

@@ -1,11 +1,11 @@
 //! Flattens a `Scene` into the arrays the kernel reads: the two-level acceleration structure,
 //! materials, textures, the emitter list and the environment texels.
 
-use super::acceleration::{gpu_primitive, triangle_primitive, Acceleration};
+use super::acceleration::{gpu_primitive, Acceleration};
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
-use super::light_selection::LightDistribution;
-use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, LightSelection, MapProjection, Material, Scene};
+use super::light_selection::{area_light_power, LightDistribution};
+use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, LightSelection, MapProjection, Material, Scene, Shape};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -33,9 +33,9 @@ pub struct SceneData {
 }
 
 /// Every emissive shape and every emissive triangle of every mesh instance, in world space.
-fn world_lights(scene: &Scene) -> Vec<GpuPrimitive> {
+fn world_lights(scene: &Scene) -> Vec<Shape> {
     let emissive = |m: u32| scene.materials[m as usize].is_emissive();
-    let mut lights: Vec<GpuPrimitive> = scene.shapes.iter().filter(|s| emissive(s.material())).map(gpu_primitive).collect();
+    let mut lights: Vec<Shape> = scene.shapes.iter().filter(|s| emissive(s.material())).copied().collect();
     for inst in &scene.instances {
         let mesh = &scene.meshes[inst.mesh as usize];
         // A mirroring placement flips the winding; swap two vertices to keep the front side.
@@ -45,7 +45,7 @@ fn world_lights(scene: &Scene) -> Vec<GpuPrimitive> {
             if mirrored {
                 v.swap(1, 2);
             }
-            lights.push(triangle_primitive(v, m));
+            lights.push(Shape::Triangle { v, material: m });
         }
     }
     lights
@@ -108,8 +108,10 @@ impl SceneData {
             Environment::Map(map) if scene.integrator.sample_environment => EnvDistribution::new(map).cdf,
             _ => Vec::new(),
         };
-        let lights = world_lights(scene);
-        let light_distribution = LightDistribution::new(&lights, &materials, scene.integrator.light_selection == LightSelection::Power);
+        let area_lights = world_lights(scene);
+        let powers: Vec<f64> = area_lights.iter().map(|l| area_light_power(l, &scene.materials[l.material() as usize])).collect();
+        let light_distribution = LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
+        let lights = area_lights.iter().map(gpu_primitive).collect();
         SceneData {
             env_cdf,
             lights,
