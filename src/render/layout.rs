@@ -21,6 +21,10 @@ pub const CONDUCTOR_MIRROR: u32 = 0;
 pub const CONDUCTOR_COMPLEX: u32 = 1;
 pub const CONDUCTOR_ALBEDO: u32 = 2;
 
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_SPOT: u32 = 1;
+pub const LIGHT_DIRECTIONAL: u32 = 2;
+
 pub const ENV_CONSTANT: u32 = 0;
 pub const ENV_ANGULAR: u32 = 1;
 pub const ENV_LATLONG: u32 = 2;
@@ -87,6 +91,20 @@ pub struct GpuTexture {
     pub height: u32,
     /// TEXTURE_* bits
     pub flags: u32,
+}
+
+/// `struct PunctualLight`: a point, spot or directional light (see layout.glsl for its members).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuPunctualLight {
+    /// Position (point, spot), LIGHT_* kind (u32 bits)
+    pub position_kind: [f32; 4],
+    /// Unit axis (spot) or direction of travel (directional), cos of the cone's half-angle
+    pub axis_cos: [f32; 4],
+    /// Intensity, irradiance or disk radiance; power for selection
+    pub value_power: [f32; 4],
+    /// Spot cone_angle and falloff_start (radians), 1 - cos of a disk's angular radius, unused
+    pub shape: [f32; 4],
 }
 
 /// `struct LightAlias`: one entry of the alias table that picks area lights by power
@@ -169,10 +187,12 @@ glsl_block! {
         pub pixel_filter: u32,
         /// The SAMPLER_* random sequence (shaders/rng.glsl).
         pub sampler_kind: u32,
-        pub pad5: u32,
+        /// Number of point, spot and directional lights: the entries of `punctual_lights`.
+        pub punctual_light_count: u32,
         pub pad6: u32,
         pub pad7: u32,
-        /// Total power of the area lights when they are picked by power (0: picked uniformly).
+        /// Total power of the lights (area and punctual) when they are picked by power (0: picked
+        /// uniformly).
         pub light_total_power: f32,
         pub pad8: f32,
         pub pad9: f32,
@@ -227,6 +247,9 @@ impl GlslType for GpuInstance {
 }
 impl GlslType for GpuTexture {
     const NAME: &'static str = "TextureInfo";
+}
+impl GlslType for GpuPunctualLight {
+    const NAME: &'static str = "PunctualLight";
 }
 impl GlslType for GpuAliasEntry {
     const NAME: &'static str = "LightAlias";
@@ -283,6 +306,17 @@ mod tests {
         let glsl = include_str!("../../shaders/layout.glsl");
         let members = "struct TextureInfo {\n    uint offset;\n    uint width;\n    uint height;\n    uint flags;\n};";
         assert!(glsl.contains(members), "struct TextureInfo members differ from GpuTexture");
+    }
+
+    #[test]
+    fn punctual_light_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuPunctualLight>(), 64);
+        assert_eq!(offset_of!(GpuPunctualLight, axis_cos), 16);
+        assert_eq!(offset_of!(GpuPunctualLight, value_power), 32);
+        assert_eq!(offset_of!(GpuPunctualLight, shape), 48);
+        let glsl = include_str!("../../shaders/layout.glsl");
+        let members = "struct PunctualLight {\n    vec4 position_kind;\n    vec4 axis_cos;\n    vec4 value_power;\n    vec4 shape;\n};";
+        assert!(glsl.contains(members), "struct PunctualLight members differ from GpuPunctualLight");
     }
 
     #[test]
@@ -382,6 +416,9 @@ mod tests {
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
             ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
             ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),
+            ("LIGHT_POINT", LIGHT_POINT),
+            ("LIGHT_SPOT", LIGHT_SPOT),
+            ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
             ("ENV_CONSTANT", ENV_CONSTANT),
             ("ENV_ANGULAR", ENV_ANGULAR),
             ("ENV_LATLONG", ENV_LATLONG),

@@ -1,12 +1,27 @@
-//! Which area light next-event estimation samples: each in proportion to its power (the flux it
+//! Which light next-event estimation samples: each in proportion to its power (the flux it
 //! emits), through a Walker/Vose alias table, so that a scene with thousands of dim emissive
-//! triangles and one bright lamp spends its shadow rays on the lamp. The kernel picks a table
-//! entry and keeps it or takes its alias in lights.glsl, and recomputes the same power formula
-//! there (`light_power`) for the pick probability of an emitter hit by BSDF sampling.
+//! triangles and one bright lamp spends its shadow rays on the lamp. The table covers the area
+//! lights and then the point, spot and directional lights. The kernel picks a table entry and
+//! keeps it or takes its alias in lights.glsl, and recomputes the area lights' power formula there
+//! (`light_power`) for the pick probability of an emitter hit by BSDF sampling; a punctual light
+//! carries its power to the kernel in its struct.
+//!
+//! The powers, in luminance (Rec. 709) of the light's colour:
+//! - area light: area x pi x radiance (a Lambertian emitter), twice for a two-sided flat one;
+//! - point: 4 pi x intensity;
+//! - spot: 2 pi x intensity x (1 - (sin c - sin f) / (c - f)), the integral of its falloff
+//!   (full to the angle f = falloff_start, linear in the angle to c = cone_angle) over the sphere;
+//!   2 pi x intensity x (1 - cos c) when f = c;
+//! - directional (delta or disk): irradiance x pi r^2, r the radius of the scene's bounding
+//!   sphere: what crosses a disk that covers the scene (as pbrt does). A scene with nothing in it
+//!   gives it no power.
+//!
+//! Any positive powers give unbiased images (the kernel divides by the probability it picked
+//! with); these make the noise of each light's contribution roughly even.
 
 use super::layout::GpuAliasEntry;
 use super::luminance;
-use crate::scene::{Material, Shape};
+use crate::scene::{Light, Material, Shape};
 use std::f64::consts::PI;
 
 /// What the kernel gets: the table (empty for uniform selection) and the total power it divides
@@ -26,6 +41,20 @@ pub fn area_light_power(shape: &Shape, material: &Material) -> f64 {
         Shape::Triangle { v, .. } => (0.5 * (v[1] - v[0]).as_dvec3().cross((v[2] - v[0]).as_dvec3()).length(), two_sided(material)),
     };
     area * PI * luminance(&material.emission.to_array()) * sides
+}
+
+/// Flux of a point, spot or directional light by the formulas above; `scene_radius` is the
+/// radius of the scene's bounding sphere.
+pub fn punctual_light_power(light: &Light, scene_radius: f64) -> f64 {
+    match *light {
+        Light::Point { intensity, .. } => 4.0 * PI * luminance(&intensity.to_array()),
+        Light::Spot { intensity, cone_angle, falloff_start, .. } => {
+            let (c, f) = (cone_angle as f64, falloff_start as f64);
+            let cone_fraction = if c - f > 1e-6 { 1.0 - (c.sin() - f.sin()) / (c - f) } else { 1.0 - c.cos() };
+            2.0 * PI * luminance(&intensity.to_array()) * cone_fraction
+        }
+        Light::Directional { irradiance, .. } => luminance(&irradiance.to_array()) * PI * scene_radius * scene_radius,
+    }
 }
 
 /// How many sides of a flat emitter radiate.
@@ -180,6 +209,26 @@ mod tests {
         assert!(close(area_light_power(&quad, &material([1.0, 1.0, 1.0], true)), 12.0 * PI));
         // Half the quad's area, two sides, luminance 2 x 0.7152.
         assert!(close(area_light_power(&triangle, &two_sided), 3.0 * PI * 2.0 * 2.0 * 0.7152));
+    }
+
+    /// The spot's power is its intensity integrated over the sphere: the closed form against a
+    /// midpoint sum of 2 pi I(theta) sin(theta), with and without a falloff band.
+    #[test]
+    fn spot_power_is_its_intensity_integrated_over_the_sphere() {
+        for (cone_deg, falloff_deg) in [(30.0f64, 20.0f64), (60.0, 0.0), (45.0, 45.0), (170.0, 100.0)] {
+            let (c, f) = (cone_deg.to_radians(), falloff_deg.to_radians());
+            let intensity = |t: f64| if t <= f { 1.0 } else if t >= c { 0.0 } else { (c - t) / (c - f) };
+            let steps = 200_000;
+            let dt = PI / steps as f64;
+            let numeric: f64 = (0..steps).map(|i| (i as f64 + 0.5) * dt).map(|t| 2.0 * PI * intensity(t) * t.sin() * dt).sum();
+            let spot = Light::Spot { position: Vec3::ZERO, axis: Vec3::Y, intensity: Vec3::ONE, cone_angle: c as f32, falloff_start: f as f32 };
+            let closed = punctual_light_power(&spot, 0.0);
+            assert!((closed / numeric - 1.0).abs() < 1e-5, "cone {cone_deg}, falloff {falloff_deg}: {closed} against {numeric}");
+        }
+        let point = Light::Point { position: Vec3::ZERO, intensity: Vec3::ONE };
+        assert!((punctual_light_power(&point, 0.0) - 4.0 * PI).abs() < 1e-9);
+        let sun = Light::Directional { direction: -Vec3::Y, irradiance: Vec3::splat(2.0), angular_diameter: 0.01 };
+        assert!((punctual_light_power(&sun, 3.0) - 2.0 * PI * 9.0).abs() < 1e-6);
     }
 
     #[test]

@@ -3,6 +3,7 @@
 mod asset;
 mod environment;
 mod format;
+mod light;
 mod mesh;
 mod optics;
 mod toml_error;
@@ -10,6 +11,7 @@ mod toml_error;
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, load_asset_from, Asset, AssetError};
 pub use format::{Filter, LightSelection, Sampler};
+pub use light::Light;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 pub use optics::{average_fresnel, metal, METALS};
 
@@ -148,6 +150,8 @@ pub struct Scene {
     pub instances: Vec<Instance>,
     pub textures: Vec<Texture>,
     pub environment: Environment,
+    /// Point, spot and directional lights (`[[lights]]`, glTF KHR_lights_punctual).
+    pub lights: Vec<Light>,
 }
 
 impl Scene {
@@ -189,6 +193,7 @@ impl Scene {
             instances: vec![],
             textures: vec![],
             environment: Environment::Constant(Vec3::ONE),
+            lights: vec![],
         };
         match MeshImporter::new(files).place(&mut scene, path, None, Mat4::IDENTITY)? {
             Some(c) => {
@@ -270,7 +275,8 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
         None => Environment::Constant(Vec3::ZERO),
         Some(e) => environment::from_file(e, base, files)?,
     };
-    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures: vec![], environment };
+    let lights = light::lights_from(&file.lights)?;
+    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures: vec![], environment, lights };
     place_meshes(&mut scene, &file.meshes, &material, base, files)?;
     Ok(scene)
 }
