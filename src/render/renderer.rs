@@ -166,6 +166,7 @@ fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> Fr
         pixel_filter: filter,
         sampler_kind: sampler,
         light_total_power: data.light_distribution.total_power,
+        punctual_light_count: data.punctual_lights.len() as u32,
         ..FrameParams::zeroed()
     }
 }
@@ -207,6 +208,7 @@ fn initial_contents<'d>(buffer: KernelBuffer, params: &'d FrameParams, data: &'d
         Texels => bytemuck::cast_slice(&data.texels),
         EnvCdf => bytemuck::cast_slice(&data.env_cdf),
         LightAlias => bytemuck::cast_slice(&data.light_distribution.table),
+        PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
     })
 }
 
