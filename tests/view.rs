@@ -41,11 +41,16 @@ struct XDisplay {
 
 impl Drop for XDisplay {
     fn drop(&mut self) {
-        if let Some(mut xvfb) = self.xvfb.take() {
-            let _ = xvfb.kill();
-            let _ = xvfb.wait();
+        if let Some(xvfb) = self.xvfb.take() {
+            stop(xvfb);
         }
     }
+}
+
+/// Ends Xvfb with SIGTERM, on which it removes its lock file and socket (SIGKILL would leave them).
+fn stop(mut xvfb: Child) {
+    unsafe { libc::kill(xvfb.id() as i32, libc::SIGTERM) };
+    let _ = xvfb.wait();
 }
 
 /// The display to test on, or `None` (having said SKIPPED) where the tools are missing.
@@ -64,29 +69,42 @@ fn x_display(test: &str) -> Option<XDisplay> {
         eprintln!("SKIPPED: {test}: no DISPLAY and Xvfb is not installed (apt-get install xvfb)");
         return None;
     }
-    for number in 90..190 {
-        if Path::new(&format!("/tmp/.X{number}-lock")).exists() || Path::new(&format!("/tmp/.X11-unix/X{number}")).exists() {
-            continue;
-        }
-        let mut cmd = Command::new("Xvfb");
-        cmd.args([&format!(":{number}"), "-screen", "0", "800x600x24", "-nolisten", "tcp"]).stdout(Stdio::null()).stderr(Stdio::null());
-        stop_with_this_process(&mut cmd);
-        let mut xvfb = cmd.spawn().expect("start Xvfb");
-        let socket = PathBuf::from(format!("/tmp/.X11-unix/X{number}"));
-        let started = Instant::now();
-        while started.elapsed() < Duration::from_secs(10) {
-            if socket.exists() {
-                return Some(XDisplay { name: format!(":{number}"), xvfb: Some(xvfb), _one_at_a_time: guard });
-            }
-            if xvfb.try_wait().ok().flatten().is_some() {
-                break; // taken meanwhile: try the next number
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        let _ = xvfb.kill();
-        let _ = xvfb.wait();
+    let (xvfb, number) = start_xvfb();
+    Some(XDisplay { name: format!(":{number}"), xvfb: Some(xvfb), _one_at_a_time: guard })
+}
+
+/// An Xvfb server on a display number it chooses, once it accepts connections: with -displayfd
+/// it writes the number to a pipe when ready, so neither a taken number nor a socket that exists
+/// before the server listens can make a test fail.
+fn start_xvfb() -> (Child, u32) {
+    use std::io::Read as _;
+    use std::os::fd::FromRawFd as _;
+    let mut fds = [0; 2];
+    assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0, "a pipe for Xvfb's display number");
+    let (read_end, write_end) = (fds[0], fds[1]);
+    unsafe { libc::fcntl(read_end, libc::F_SETFD, libc::FD_CLOEXEC) };
+    let mut cmd = Command::new("Xvfb");
+    // -noreset: by default the server resets whenever its last client leaves (an xdotool call), and a
+    // viewer connecting meanwhile is refused.
+    cmd.args(["-displayfd", &write_end.to_string(), "-noreset", "-screen", "0", "800x600x24", "-nolisten", "tcp"]).stdout(Stdio::null()).stderr(Stdio::null());
+    stop_with_this_process(&mut cmd);
+    let spawned = cmd.spawn();
+    unsafe { libc::close(write_end) };
+    let xvfb = spawned.expect("start Xvfb");
+    let mut number = String::new();
+    // Ends at the server's newline, or at end of file if it exited without one.
+    let mut pipe = unsafe { std::fs::File::from_raw_fd(read_end) };
+    let mut byte = [0u8; 1];
+    while pipe.read(&mut byte).unwrap_or(0) == 1 && byte[0] != b'\n' {
+        number.push(byte[0] as char);
     }
-    panic!("no free X display number for Xvfb between :90 and :189");
+    match number.trim().parse() {
+        Ok(n) => (xvfb, n),
+        Err(_) => {
+            stop(xvfb);
+            panic!("Xvfb did not start (it gave no display number)");
+        }
+    }
 }
 
 /// Xvfb ends with the test process even when that is killed, rather than outliving it.
