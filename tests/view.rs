@@ -367,6 +367,13 @@ fn window_has_the_size_and_title_and_input_moves_the_camera_and_restarts_accumul
     std::fs::write(&moved_scene, with_camera(&std::fs::read_to_string(&scene).unwrap(), &flown.text)).unwrap();
     let rendered = render_png(&dir, &moved_scene, &["--width", "400", "--height", "300", "--spp", &samples.to_string()], "moved.png");
     assert_same_pixels(&png, &rendered);
+
+    // A resized window gets an image of its new size (once the size has held for a moment).
+    viewer.xdotool(&["windowsize", &w, "320", "240"]);
+    wait_until("the image to follow the window's size", || {
+        viewer.print_camera();
+        viewer.stdout.lock().unwrap().iter().rev().find(|l| l.starts_with('#'))?.contains("(320x240)").then_some(())
+    });
     viewer.quit();
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -380,9 +380,9 @@ impl<'a> Viewer<'a> {
 
     /// Key P: the camera as a `[camera]` table of the scene format, on standard output.
     fn print_camera(&self) {
-        let samples = self.session.as_ref().map_or(0, |s| s.renderer.samples_done);
+        let (samples, (w, h)) = self.session.as_ref().map_or((0, (0, 0)), |s| (s.renderer.samples_done, s.renderer.size()));
         let mut out = std::io::stdout().lock();
-        let _ = write!(out, "# {} at {samples} spp: paste into the scene file\n{}\n", self.source.title(), camera_toml(&self.camera));
+        let _ = write!(out, "# {} ({w}x{h}) at {samples} spp: paste into the scene file\n{}\n", self.source.title(), camera_toml(&self.camera));
         let _ = out.flush();
     }
 
