@@ -55,7 +55,9 @@ vec3 direct_light(Lobe lobe, vec3 d, Surface surface, inout Rng rng, inout uint 
     }
     // Stop short of the light so its own surface does not count as a blocker.
     if (occluded(shadow_origin, shadow_dir, shadow_dist * (1.0 - 1e-4))) return vec3(0.0);
-    return f_cos * ls.radiance * (power_heuristic(ls.pdf, lobe_pdf) / ls.pdf);
+    // A delta light cannot be hit by BSDF sampling: this is its only strategy.
+    float weight = ls.delta ? 1.0 : power_heuristic(ls.pdf, lobe_pdf);
+    return f_cos * ls.radiance * (weight / ls.pdf);
 }
 
 // Denoiser features of one path (AOVs): albedo and camera-facing shading normal of the first vertex
@@ -106,6 +108,7 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
         }
         vec3 env = environment_radiance(path.dir);
         path.radiance += path.throughput * env * weight;
+        path.radiance += path.throughput * light_disks_radiance(path.dir, nee ? path.bsdf_pdf : 0.0);
         if (AOVS == 1 && first.open) {
             first.albedo = clamp(env, 0.0, 1.0);
             first.normal = vec3(0.0);

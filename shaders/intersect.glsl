@@ -48,23 +48,46 @@ float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max,
     return (t > 0.0 && t < t_max) ? t : NO_HIT;
 }
 
+// Every function that switches on a primitive's kind names each PRIM_* kind of layout.glsl, and
+// an unknown kind has no surface (no hit, no normal, no area) rather than passing for another
+// kind; a new kind is a case in each (src/render/layout.rs tests that every kind has one).
+
 float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
-    uint kind = prim_kind(p);
-    if (kind == PRIM_SPHERE) return intersect_sphere(p.a.xyz, p.a.w, o, d, t_max);
-    if (kind == PRIM_QUAD) return intersect_quad(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max);
     vec2 unused_bary;
-    return intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max, unused_bary);
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: return intersect_sphere(p.a.xyz, p.a.w, o, d, t_max);
+        case PRIM_QUAD: return intersect_quad(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max);
+        case PRIM_TRIANGLE: return intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max, unused_bary);
+        default: return NO_HIT;
+    }
 }
 
 // Outward (sphere) or front-side (quad, triangle) unit normal at a point on the primitive.
 vec3 primitive_normal(Primitive p, vec3 point) {
-    if (prim_kind(p) == PRIM_SPHERE) return (point - p.a.xyz) / p.a.w;
-    return normalize(cross(p.b.xyz, p.c.xyz));
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: return (point - p.a.xyz) / p.a.w;
+        case PRIM_QUAD:
+        case PRIM_TRIANGLE: return normalize(cross(p.b.xyz, p.c.xyz));
+        default: return vec3(0.0);
+    }
 }
 
 float primitive_area(Primitive p) {
-    uint kind = prim_kind(p);
-    if (kind == PRIM_SPHERE) return 4.0 * PI * p.a.w * p.a.w;
-    float parallelogram = length(cross(p.b.xyz, p.c.xyz));
-    return kind == PRIM_QUAD ? parallelogram : 0.5 * parallelogram;
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: return 4.0 * PI * p.a.w * p.a.w;
+        case PRIM_QUAD: return length(cross(p.b.xyz, p.c.xyz));
+        case PRIM_TRIANGLE: return 0.5 * length(cross(p.b.xyz, p.c.xyz));
+        default: return 0.0;
+    }
+}
+
+// Whether the primitive radiates from both sides when its material is two-sided: flat ones do,
+// a sphere shows only its outside.
+bool primitive_is_flat(Primitive p) {
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: return false;
+        case PRIM_QUAD:
+        case PRIM_TRIANGLE: return true;
+        default: return false;
+    }
 }

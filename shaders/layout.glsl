@@ -38,6 +38,25 @@ struct Material {
     vec4 metallic_roughness;
 };
 
+// Lights without a surface (LIGHT_* must match layout.rs; src/scene/light.rs).
+const uint LIGHT_POINT = 0u;
+const uint LIGHT_SPOT = 1u;
+const uint LIGHT_DIRECTIONAL = 2u;
+
+// position_kind.xyz = position (point, spot), .w = LIGHT_* kind (uint bits). axis_cos.xyz = the
+// spot's unit axis, or the unit direction a directional light travels; axis_cos.w = cos of the
+// angular radius of a directional light's disk (1 for a delta light). value_power.rgb = radiant
+// intensity W/sr (point; spot on its axis), irradiance W/m^2 (delta directional) or radiance (a
+// disk); value_power.w = the power light selection weighs it by (light_selection.rs).
+// shape.x / .y = the spot's cone_angle / falloff_start in radians; shape.z = 1 - cos of a disk's
+// angular radius, to full precision for sun-sized disks (0: a delta light).
+struct PunctualLight {
+    vec4 position_kind;
+    vec4 axis_cos;
+    vec4 value_power;
+    vec4 shape;
+};
+
 // One entry of the alias table that picks area lights by power (src/render/light_selection.rs):
 // keep this entry's light with probability `threshold`, otherwise take `alias`.
 struct LightAlias {
@@ -112,3 +131,4 @@ const uint FILTER_GAUSSIAN = 2u;
 
 uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
 uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }
+uint punctual_kind(PunctualLight l) { return floatBitsToUint(l.position_kind.w); }

@@ -1,9 +1,12 @@
 // Direct lighting: the environment map (when importance sampled) with probability
-// frame.env_selection_probability, otherwise an area light: every emissive primitive and mesh
-// triangle, in world space (the `lights` buffer). An area light is picked in proportion to its power through
-// an alias table (or uniformly: integrator.light_selection), then a point (or, for spheres, a
-// direction in the cone they subtend; for triangles, in their spherical triangle) is sampled on it. Pdfs are per unit solid angle at `ref`
-// and include the probability of the pick.
+// frame.env_selection_probability, otherwise a light: an area light (every emissive primitive and
+// mesh triangle, in world space: the `lights` buffer) or a point, spot or directional light
+// (`punctual_lights`). A light is picked in proportion to its power through an alias table (or
+// uniformly: integrator.light_selection), then a point on an area light (or, for spheres, a
+// direction in the cone they subtend; for triangles, in their spherical triangle), or a direction
+// in a sun disk, is sampled. Pdfs are per unit solid angle at `ref` and include the probability of
+// the pick. Point, spot and delta directional lights are delta lights: only next-event estimation
+// reaches them, and it needs no MIS weight.
 //
 // The pick probability is a function of the light alone (light_pick_probability): its power by
 // the host's formula (src/render/light_selection.rs) over the host's total. Next-event estimation
@@ -14,23 +17,30 @@
 struct LightSample {
     vec3 dir;
     float dist;
-    float pdf;      // solid angle, including the probability of the pick
-    vec3 radiance;
+    float pdf;      // solid angle, including the probability of the pick; a delta light's: the pick
+    vec3 radiance;  // a delta light's: what arrives at `ref` (intensity / d^2, or irradiance)
+    bool delta;     // no other strategy can sample this light (no MIS weight)
 };
 
 // Flux of an emitter: area x pi x luminance of its radiance, twice for a two-sided quad or
 // triangle (light_power in light_selection.rs).
 float light_power(Primitive p) {
     Material m = materials[prim_material(p)];
-    float sides = prim_kind(p) != PRIM_SPHERE && m.params.y > 0.5 ? 2.0 : 1.0;
+    float sides = primitive_is_flat(p) && m.params.y > 0.5 ? 2.0 : 1.0;
     return primitive_area(p) * PI * dot(m.emission_t.rgb, vec3(0.2126, 0.7152, 0.0722)) * sides;
 }
 
-// Probability that next-event estimation picks area light `p` (the map's share taken out).
-float light_pick_probability(Primitive p) {
+// Probability that next-event estimation picks a light of power `power` (the map's share taken
+// out): by power, or uniformly among the area and punctual lights.
+float pick_probability(float power) {
     float share = 1.0 - frame.env_selection_probability;
     float total_power = frame.light_total_power;
-    return total_power > 0.0 ? share * light_power(p) / total_power : share / float(frame.light_count);
+    return total_power > 0.0 ? share * power / total_power : share / float(frame.light_count + frame.punctual_light_count);
+}
+
+// Probability that next-event estimation picks area light `p`.
+float light_pick_probability(Primitive p) {
+    return pick_probability(light_power(p));
 }
 
 // Spherical triangles (Arvo 1995): a triangle light that subtends a solid angle large enough for
@@ -104,17 +114,26 @@ bool sphere_sampled_by_cone(float d2, float r2) {
 // angle where it can, otherwise by area).
 float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
     float pick = light_pick_probability(p);
-    SphericalTriangle s;
-    if (prim_kind(p) == PRIM_TRIANGLE && spherical_triangle(p, ref, s)) return pick / s.area;
-    if (prim_kind(p) == PRIM_SPHERE) {
-        vec3 to_center = p.a.xyz - ref;
-        float d2 = dot(to_center, to_center);
-        float r2 = p.a.w * p.a.w;
-        if (sphere_sampled_by_cone(d2, r2)) {
-            float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-            return pick / (2.0 * PI * (1.0 - cos_max));
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: {
+            vec3 to_center = p.a.xyz - ref;
+            float d2 = dot(to_center, to_center);
+            float r2 = p.a.w * p.a.w;
+            if (sphere_sampled_by_cone(d2, r2)) {
+                float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
+                return pick / (2.0 * PI * (1.0 - cos_max));
+            }
+            break;
         }
+        case PRIM_QUAD: break;
+        case PRIM_TRIANGLE: {
+            SphericalTriangle s;
+            if (spherical_triangle(p, ref, s)) return pick / s.area;
+            break;
+        }
+        default: return 0.0;
     }
+    // By area.
     vec3 point = ref + dist * dir;
     float cos_light = abs(dot(primitive_normal(p, point), dir));
     if (cos_light <= 0.0) return 0.0;
@@ -130,42 +149,143 @@ uint pick_light(uint count, inout Rng rng) {
     return index;
 }
 
-bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
-    uint count = frame.light_count;
-    ls.pdf = 0.0;
-    if (count == 0u) return false;
-    Primitive p = lights[pick_light(count, rng)];
-    vec2 u = rng_next2(rng);
-    vec3 point;
-    uint kind = prim_kind(p);
-    if (kind == PRIM_SPHERE) {
-        vec3 to_center = p.a.xyz - ref;
-        float d2 = dot(to_center, to_center);
-        float r2 = p.a.w * p.a.w;
-        if (sphere_sampled_by_cone(d2, r2)) {
-            float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-            vec3 dir = sample_cone(u, to_center / sqrt(d2), cos_max);
-            float t = intersect_sphere(p.a.xyz, p.a.w, ref, dir, 1e30);
-            // Grazing directions can miss by rounding: use the tangent distance.
-            point = ref + dir * (t > 0.0 ? t : sqrt(max(0.0, d2 - r2)));
-        } else {
-            point = p.a.xyz + p.a.w * sample_uniform_sphere(u);
+// A point on area light `p` seen from `ref`, drawn as light_pdf says: a sphere by the cone it
+// subtends (from outside) or by area, a quad by area, a triangle by solid angle where it can and
+// otherwise by area. False when no point is drawn (or the kind is unknown).
+bool sample_area_light_point(Primitive p, vec3 ref, vec2 u, out vec3 point) {
+    point = ref;
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: {
+            vec3 to_center = p.a.xyz - ref;
+            float d2 = dot(to_center, to_center);
+            float r2 = p.a.w * p.a.w;
+            if (sphere_sampled_by_cone(d2, r2)) {
+                float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
+                vec3 dir = sample_cone(u, to_center / sqrt(d2), cos_max);
+                float t = intersect_sphere(p.a.xyz, p.a.w, ref, dir, 1e30);
+                // Grazing directions can miss by rounding: use the tangent distance.
+                point = ref + dir * (t > 0.0 ? t : sqrt(max(0.0, d2 - r2)));
+            } else {
+                point = p.a.xyz + p.a.w * sample_uniform_sphere(u);
+            }
+            return true;
         }
-    } else if (kind == PRIM_QUAD) {
-        point = p.a.xyz + u.x * p.b.xyz + u.y * p.c.xyz;
-    } else {
-        SphericalTriangle s;
-        if (spherical_triangle(p, ref, s)) {
-            vec3 dir = sample_spherical_triangle(s, u);
-            vec3 n = cross(p.b.xyz, p.c.xyz);
-            float t = dot(p.a.xyz - ref, n) / dot(dir, n);
-            if (!(t > 0.0) || isinf(t)) return false;
-            point = ref + t * dir;
-        } else {
-            vec2 b = sample_triangle(u);
-            point = p.a.xyz + b.x * p.b.xyz + b.y * p.c.xyz;
+        case PRIM_QUAD:
+            point = p.a.xyz + u.x * p.b.xyz + u.y * p.c.xyz;
+            return true;
+        case PRIM_TRIANGLE: {
+            SphericalTriangle s;
+            if (spherical_triangle(p, ref, s)) {
+                vec3 dir = sample_spherical_triangle(s, u);
+                vec3 n = cross(p.b.xyz, p.c.xyz);
+                float t = dot(p.a.xyz - ref, n) / dot(dir, n);
+                if (!(t > 0.0) || isinf(t)) return false;
+                point = ref + t * dir;
+            } else {
+                vec2 b = sample_triangle(u);
+                point = p.a.xyz + b.x * p.b.xyz + b.y * p.c.xyz;
+            }
+            return true;
         }
+        default: return false;
     }
+}
+
+// Spot falloff at unit direction `from_light` (from the light outwards): 1 within falloff_start
+// of the axis, 0 beyond cone_angle, linear in the angle between (Mitsuba 3's spot). The angle
+// comes from atan of sine and cosine: Mesa's acos is a polynomial good to about 1e-4.
+float spot_falloff(PunctualLight l, vec3 from_light) {
+    vec3 axis = l.axis_cos.xyz;
+    float theta = atan(length(cross(from_light, axis)), dot(from_light, axis));
+    float cone_angle = l.shape.x, falloff_start = l.shape.y;
+    if (theta >= cone_angle) return 0.0;
+    if (theta <= falloff_start) return 1.0;
+    return (cone_angle - theta) / (cone_angle - falloff_start);
+}
+
+// A direction uniform in the cone around unit `axis` whose half-angle has 1 - cos =
+// `one_minus_cos` (pdf 1 / (2 pi one_minus_cos)); exact for cones as narrow as the sun's, where
+// sample_cone's 1 - cos_t^2 would cancel.
+vec3 sample_narrow_cone(vec2 u, vec3 axis, float one_minus_cos) {
+    float x = u.x * one_minus_cos;
+    float sin_t = sqrt(max(0.0, x * (2.0 - x)));
+    float phi = 2.0 * PI * u.y;
+    return to_world(vec3(sin_t * cos(phi), sin_t * sin(phi), 1.0 - x), axis);
+}
+
+// Whether unit `dir` lies in the disk of directional light `l` (one with shape.z > 0): 1 - cos of
+// its angle to the disk's centre, as half the squared chord, within the disk's.
+bool in_light_disk(PunctualLight l, vec3 dir) {
+    vec3 chord = dir + l.axis_cos.xyz;
+    return 0.5 * dot(chord, chord) <= l.shape.z;
+}
+
+// Samples punctual light `l` from `ref`; ls.pdf is left without the pick probability.
+bool sample_punctual_light(PunctualLight l, vec3 ref, vec2 u, inout LightSample ls) {
+    ls.delta = true;
+    ls.pdf = 1.0;
+    switch (punctual_kind(l)) {
+        case LIGHT_POINT:
+        case LIGHT_SPOT: {
+            vec3 to_light = l.position_kind.xyz - ref;
+            float d2 = dot(to_light, to_light);
+            if (!(d2 > 0.0)) return false;
+            ls.dist = sqrt(d2);
+            ls.dir = to_light / ls.dist;
+            float falloff = punctual_kind(l) == LIGHT_SPOT ? spot_falloff(l, -ls.dir) : 1.0;
+            ls.radiance = l.value_power.rgb * (falloff / d2);
+            return true;
+        }
+        case LIGHT_DIRECTIONAL: {
+            ls.dist = 1e30;
+            ls.radiance = l.value_power.rgb;
+            if (l.shape.z <= 0.0) {
+                ls.dir = -l.axis_cos.xyz;
+                return true;
+            }
+            // A disk: a direction uniform in its cone, weighed against BSDF sampling.
+            ls.delta = false;
+            ls.dir = sample_narrow_cone(u, -l.axis_cos.xyz, l.shape.z);
+            ls.pdf = 1.0 / (2.0 * PI * l.shape.z);
+            return true;
+        }
+        default: return false;
+    }
+}
+
+// Radiance of the light disks (sun-like directional lights) along a ray `dir` that left the scene,
+// MIS-weighted against their sampling by next-event estimation when the ray was drawn by a BSDF
+// with solid-angle pdf `bsdf_pdf` (0: a camera ray, a delta lobe's or no next-event estimation:
+// weight 1).
+vec3 light_disks_radiance(vec3 dir, float bsdf_pdf) {
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < frame.punctual_light_count; ++i) {
+        LOOP_ITERATION();
+        PunctualLight l = punctual_lights[i];
+        if (punctual_kind(l) != LIGHT_DIRECTIONAL || l.shape.z <= 0.0 || !in_light_disk(l, dir)) continue;
+        float light_pdf = pick_probability(l.value_power.w) / (2.0 * PI * l.shape.z);
+        sum += l.value_power.rgb * (bsdf_pdf > 0.0 ? power_heuristic(bsdf_pdf, light_pdf) : 1.0);
+    }
+    return sum;
+}
+
+bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
+    uint area_count = frame.light_count;
+    uint count = area_count + frame.punctual_light_count;
+    ls.pdf = 0.0;
+    ls.delta = false;
+    if (count == 0u) return false;
+    uint index = pick_light(count, rng);
+    vec2 u = rng_next2(rng);
+    if (index >= area_count) {
+        PunctualLight l = punctual_lights[index - area_count];
+        if (!sample_punctual_light(l, ref, u, ls)) return false;
+        ls.pdf *= pick_probability(l.value_power.w);
+        return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
+    }
+    Primitive p = lights[index];
+    vec3 point;
+    if (!sample_area_light_point(p, ref, u, point)) return false;
     vec3 to_point = point - ref;
     ls.dist = length(to_point);
     if (ls.dist <= 0.0) return false;
@@ -184,6 +304,7 @@ bool sample_direct(vec3 ref, inout Rng rng, out LightSample ls) {
         float pdf;
         if (!sample_environment(rng_next2(rng), ls.dir, pdf)) return false;
         ls.dist = 1e30;
+        ls.delta = false;
         ls.pdf = p_env * pdf;
         ls.radiance = environment_radiance(ls.dir);
         return max3(ls.radiance) > 0.0;

@@ -106,37 +106,93 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
     return l;
 }
 
-// The coated base: light refracts into the coat (1 - F(wi)), scatters diffusely and leaves
-// through it (1 - F(wo)). Dividing by 1 - the average of F over the cosine-weighted hemisphere
-// makes the exit factor integrate to 1, so a white base under a smooth coat reflects exactly
-// 1 - F(wo) beside the coat's F(wo): no energy is created. The coat's internal reflections and
-// the eta^2 spreading are not modelled; under a rough coat the sum stays at or below 1 (it is
-// E_spec(wo) + 1 - F(wo), and GGX reflects E_spec <= F up to ~1e-3 at low roughness).
+// Each lobe is a pair below: sample_<lobe> (given s.delta, the rest of s to fill) draws a direction for a ray arriving along `d` (false
+// when it yields none: the path ends) with its weight f cos / pdf times the lobe's scale and its
+// solid-angle pdf; eval_<lobe> gives f cos times the scale for light arriving from `wi` (world)
+// and leaving along -d, and the pdf with which sample_<lobe> draws wi. sample_lobe and eval_lobe
+// dispatch on the kind; a new lobe is a LOBE_* kind, its pair and a case in each (and its cases
+// in tests/bsdf_sampling.rs, which checks every kind listed here has some).
+
+// Diffuse: albedo / pi, cosine-weighted sampling.
+bool sample_diffuse(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
+    s.dir = sample_cosine_hemisphere(rng_next2(rng), l.n);
+    s.pdf = max(0.0, dot(s.dir, l.n)) * INV_PI;
+    s.weight = l.color * l.scale;
+    return s.pdf > 0.0;
+}
+
+vec3 eval_diffuse(Lobe l, vec3 d, vec3 wi, out float pdf) {
+    float cos_i = dot(wi, l.n);
+    pdf = 0.0;
+    if (cos_i <= 0.0) return vec3(0.0);
+    pdf = cos_i * INV_PI;
+    return l.color * (INV_PI * cos_i * l.scale);
+}
+
+// The coated base of a plastic: light refracts into the coat (1 - F(wi)), scatters diffusely and
+// leaves through it (1 - F(wo)). Dividing by 1 - the average of F over the cosine-weighted
+// hemisphere makes the exit factor integrate to 1, so a white base under a smooth coat reflects
+// exactly 1 - F(wo) beside the coat's F(wo): no energy is created. The coat's internal
+// reflections and the eta^2 spreading are not modelled; under a rough coat the sum stays at or
+// below 1 (it is E_spec(wo) + 1 - F(wo), and GGX reflects E_spec <= F up to ~1e-3 at low
+// roughness). Sampled like the diffuse lobe.
 vec3 coated_diffuse(Lobe l, float cos_o, float cos_i) {
     float through = (1.0 - fresnel_dielectric(cos_o, l.eta)) * (1.0 - fresnel_dielectric(cos_i, l.eta));
     return l.color * (INV_PI * through * l.coat_norm);
 }
 
-// Samples the lobe for a ray arriving along `d`. False when it yields no direction (the path ends).
-bool sample_lobe(Lobe l, vec3 d, inout Rng rng, out BsdfSample s) {
-    s.delta = lobe_is_delta(l);
-    s.pdf = 0.0;
-    if (l.kind == LOBE_DIFFUSE || l.kind == LOBE_COATED_DIFFUSE) {
-        s.dir = sample_cosine_hemisphere(rng_next2(rng), l.n);
-        float cos_i = max(0.0, dot(s.dir, l.n));
-        s.pdf = cos_i * INV_PI;
-        s.weight = l.kind == LOBE_DIFFUSE ? l.color : coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i) * PI;
-        s.weight *= l.scale;
-        return s.pdf > 0.0;
-    }
-    float cos_o = -dot(d, l.n);
+bool sample_coated_diffuse(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
+    s.dir = sample_cosine_hemisphere(rng_next2(rng), l.n);
+    float cos_i = max(0.0, dot(s.dir, l.n));
+    s.pdf = cos_i * INV_PI;
+    s.weight = coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i) * (PI * l.scale);
+    return s.pdf > 0.0;
+}
+
+vec3 eval_coated_diffuse(Lobe l, vec3 d, vec3 wi, out float pdf) {
+    float cos_i = dot(wi, l.n);
+    pdf = 0.0;
+    if (cos_i <= 0.0) return vec3(0.0);
+    pdf = cos_i * INV_PI;
+    return coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i) * (cos_i * l.scale);
+}
+
+// Reflector: a mirror (smooth) or GGX reflection, with the lobe's Fresnel.
+bool sample_reflect(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
     if (s.delta) {
-        if (l.kind == LOBE_REFLECT) {
-            s.dir = reflect(d, l.n);
-            s.weight = lobe_fresnel(l, cos_o) * l.scale;
-            return true;
-        }
-        float f = fresnel_dielectric(cos_o, l.eta);
+        s.dir = reflect(d, l.n);
+        s.weight = lobe_fresnel(l, -dot(d, l.n)) * l.scale;
+        return true;
+    }
+    vec3 wo = to_local(l, -d);
+    if (wo.z <= 0.0) return false;
+    vec3 m = sample_vndf(wo, l.alpha, rng_next2(rng));
+    vec3 wi = reflect(-wo, m);
+    if (wi.z <= 0.0) return false;
+    s.pdf = reflection_pdf(wo, m, l.alpha);
+    // G2 / G1(wo): what remains of f cos / pdf once D and the Jacobians cancel.
+    s.weight = lobe_fresnel(l, dot(wo, m)) * (ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha) * l.scale);
+    s.dir = from_local(l, wi);
+    return s.pdf > 0.0;
+}
+
+vec3 eval_reflect(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
+    pdf = 0.0;
+    vec3 wo = to_local(l, -d);
+    vec3 wi = to_local(l, wi_world);
+    if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
+    vec3 h = normalize(wo + wi);
+    float cos_h = dot(wo, h);
+    if (cos_h <= 0.0) return vec3(0.0);
+    pdf = reflection_pdf(wo, h, l.alpha);
+    return lobe_fresnel(l, cos_h) * (ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) / (4.0 * wo.z) * l.scale);
+}
+
+// Dielectric: smooth or GGX reflection and refraction (Walter et al. 2007), each picked with its
+// Fresnel weight.
+bool sample_dielectric(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
+    if (s.delta) {
+        float f = fresnel_dielectric(-dot(d, l.n), l.eta);
         vec3 refracted = refract(d, l.n, l.eta);
         // refract() returns 0 at total internal reflection; rounding can put that just below f = 1.
         bool reflects = rng_next(rng) < f || dot(refracted, refracted) == 0.0;
@@ -147,45 +203,25 @@ bool sample_lobe(Lobe l, vec3 d, inout Rng rng, out BsdfSample s) {
     vec3 wo = to_local(l, -d);
     if (wo.z <= 0.0) return false;
     vec3 m = sample_vndf(wo, l.alpha, rng_next2(rng));
-    float cos_m = dot(wo, m);
-    // G2 / G1(wo): what remains of f cos / pdf once D and the Jacobians cancel.
+    float f = fresnel_dielectric(dot(wo, m), l.eta);
+    vec3 refracted = refract(-wo, m, l.eta);
     vec3 wi;
-    if (l.kind == LOBE_REFLECT) {
+    if (rng_next(rng) < f || dot(refracted, refracted) == 0.0) {
         wi = reflect(-wo, m);
         if (wi.z <= 0.0) return false;
-        s.pdf = reflection_pdf(wo, m, l.alpha);
-        s.weight = lobe_fresnel(l, cos_m) * (ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha));
+        s.pdf = f * reflection_pdf(wo, m, l.alpha);
     } else {
-        float f = fresnel_dielectric(cos_m, l.eta);
-        vec3 refracted = refract(-wo, m, l.eta);
-        if (rng_next(rng) < f || dot(refracted, refracted) == 0.0) {
-            wi = reflect(-wo, m);
-            if (wi.z <= 0.0) return false;
-            s.pdf = f * reflection_pdf(wo, m, l.alpha);
-        } else {
-            wi = refracted;
-            if (wi.z >= 0.0) return false;
-            s.pdf = (1.0 - f) * refraction_pdf(wo, wi, m, l.alpha, l.eta);
-        }
-        s.weight = vec3(ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha));
+        wi = refracted;
+        if (wi.z >= 0.0) return false;
+        s.pdf = (1.0 - f) * refraction_pdf(wo, wi, m, l.alpha, l.eta);
     }
+    s.weight = vec3(ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha) * l.scale);
     s.dir = from_local(l, wi);
-    s.weight *= l.scale;
     return s.pdf > 0.0;
 }
 
-// f cos for light arriving from `wi` (world) and leaving along -d, times the lobe's scale, and the
-// solid-angle pdf with which sample_lobe picks wi. Delta lobes have neither (both 0).
-vec3 eval_lobe(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
+vec3 eval_dielectric(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
     pdf = 0.0;
-    if (lobe_is_delta(l)) return vec3(0.0);
-    float cos_i = dot(wi_world, l.n);
-    if (l.kind == LOBE_DIFFUSE || l.kind == LOBE_COATED_DIFFUSE) {
-        if (cos_i <= 0.0) return vec3(0.0);
-        pdf = cos_i * INV_PI;
-        vec3 f = l.kind == LOBE_DIFFUSE ? l.color * INV_PI : coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i);
-        return f * (cos_i * l.scale);
-    }
     vec3 wo = to_local(l, -d);
     vec3 wi = to_local(l, wi_world);
     if (wo.z <= 0.0 || wi.z == 0.0) return vec3(0.0);
@@ -193,12 +229,10 @@ vec3 eval_lobe(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
         vec3 h = normalize(wo + wi);
         float cos_h = dot(wo, h);
         if (cos_h <= 0.0) return vec3(0.0);
-        vec3 f = l.kind == LOBE_REFLECT ? lobe_fresnel(l, cos_h) : vec3(fresnel_dielectric(cos_h, l.eta));
-        pdf = reflection_pdf(wo, h, l.alpha);
-        if (l.kind == LOBE_DIELECTRIC) pdf *= f.x;
-        return f * (ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) / (4.0 * wo.z) * l.scale);
+        float f = fresnel_dielectric(cos_h, l.eta);
+        pdf = f * reflection_pdf(wo, h, l.alpha);
+        return vec3(f * ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) / (4.0 * wo.z) * l.scale);
     }
-    if (l.kind != LOBE_DIELECTRIC) return vec3(0.0);
     // Refraction: the generalised half vector, turned to the +z side.
     vec3 h = -(l.eta * wo + wi);
     if (dot(h, h) <= 0.0) return vec3(0.0);
@@ -214,6 +248,35 @@ vec3 eval_lobe(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
     // dielectric above: the factors cancel for a camera outside a closed object).
     float fcos = (1.0 - f) * ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) * cos_o * abs(cos_t) / (wo.z * denom * denom);
     return vec3(fcos * l.scale);
+}
+
+// Samples the lobe for a ray arriving along `d`. False when it yields no direction (the path ends).
+bool sample_lobe(Lobe l, vec3 d, inout Rng rng, out BsdfSample s) {
+    s.delta = lobe_is_delta(l);
+    s.pdf = 0.0;
+    s.dir = vec3(0.0);
+    s.weight = vec3(0.0);
+    switch (l.kind) {
+        case LOBE_DIFFUSE: return sample_diffuse(l, d, rng, s);
+        case LOBE_COATED_DIFFUSE: return sample_coated_diffuse(l, d, rng, s);
+        case LOBE_REFLECT: return sample_reflect(l, d, rng, s);
+        case LOBE_DIELECTRIC: return sample_dielectric(l, d, rng, s);
+        default: return false;
+    }
+}
+
+// f cos for light arriving from `wi` (world) and leaving along -d, times the lobe's scale, and the
+// solid-angle pdf with which sample_lobe picks wi. Delta lobes have neither (both 0).
+vec3 eval_lobe(Lobe l, vec3 d, vec3 wi, out float pdf) {
+    pdf = 0.0;
+    if (lobe_is_delta(l)) return vec3(0.0);
+    switch (l.kind) {
+        case LOBE_DIFFUSE: return eval_diffuse(l, d, wi, pdf);
+        case LOBE_COATED_DIFFUSE: return eval_coated_diffuse(l, d, wi, pdf);
+        case LOBE_REFLECT: return eval_reflect(l, d, wi, pdf);
+        case LOBE_DIELECTRIC: return eval_dielectric(l, d, wi, pdf);
+        default: return vec3(0.0);
+    }
 }
 
 // Radiance emitted towards a viewer on the front side (or either side when two-sided).

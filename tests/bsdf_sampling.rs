@@ -17,7 +17,7 @@ mod common;
 
 use bytemuck::Zeroable;
 use caustica::gpu::{compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
-use caustica::render::assemble_with_kernel_files;
+use caustica::render::{assemble_with_kernel_files, shader_file};
 use caustica::render::bindings::KernelBuffer;
 use caustica::render::layout::{GpuMaterial, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, NO_TEXTURE};
 use caustica::scene::average_fresnel;
@@ -317,8 +317,10 @@ fn rel(a: f32, b: f32, floor: f32) -> f32 {
 
 /// The per-sample consistency checks, then the chi-square test of every lobe the case's material
 /// picks; returns what failed.
-fn check_case(kernel: &mut Kernel, weights: &[f64], case: &Case) -> Vec<String> {
+fn check_case(kernel: &mut Kernel, weights: &[f64], case: &Case, kind: u32) -> Vec<String> {
     let samples = kernel.samples(case);
+    // A lobe's code is kind * 4 + fresnel.
+    assert!(samples.iter().any(|s| s.lobe / 4 == kind), "{}: never picks the lobe of kind {kind} it is a case of", case.name);
     // Consistency: sample_lobe's pdf is eval_lobe's for the same direction, and its weight is
     // eval_lobe's f cos over that pdf. Float rounding (the half vector recomputed from wo + wi)
     // leaves a few samples near the horizon off by more; allow 1 in 10^4 beyond 1e-3.
@@ -389,17 +391,32 @@ fn gold(alpha: f32) -> GpuMaterial {
     m
 }
 
-fn run_cases(cases: &[Case]) {
+/// Runs every case; each must pick the lobe of kind `kind` for some of its samples.
+fn run_cases(cases: &[Case], kind: u32) {
     let (_lock, ctx) = gpu();
     let mut kernel = Kernel::new(&ctx);
     let (_, weights) = quadrature();
-    let failures: Vec<String> = cases.iter().flat_map(|case| check_case(&mut kernel, &weights, case)).collect();
+    let failures: Vec<String> = cases.iter().flat_map(|case| check_case(&mut kernel, &weights, case, kind)).collect();
     kernel.destroy();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-#[test]
-fn rough_conductor_samples_follow_its_pdf() {
+/// The lobes of shaders/materials.glsl, by the name of their LOBE_* kind, each with the cases that
+/// pick it: a lobe added to the kernel without cases here fails
+/// `every_lobe_of_the_kernel_has_chi_square_cases`.
+const LOBES: [(&str, fn() -> Vec<Case>); 4] = [
+    ("LOBE_DIFFUSE", diffuse_cases),
+    ("LOBE_REFLECT", reflector_cases),
+    ("LOBE_DIELECTRIC", dielectric_cases),
+    ("LOBE_COATED_DIFFUSE", coated_diffuse_cases),
+];
+
+fn diffuse_cases() -> Vec<Case> {
+    vec![Case { name: "diffuse (cos 0.6)".into(), material: material(0.7, 0.0, 0.0, 1.5, 0.0), cos_o: 0.6, entering: true }]
+}
+
+/// Rough conductors (the plastic's coat reflects by this lobe too, tested with the plastic).
+fn reflector_cases() -> Vec<Case> {
     let mut cases = Vec::new();
     for alpha in [0.05, 0.3, 1.0] {
         for (cos_o, incidence) in [(0.9, "near-normal"), (0.2, "grazing")] {
@@ -408,11 +425,10 @@ fn rough_conductor_samples_follow_its_pdf() {
             cases.push(Case { name, material, cos_o, entering: true });
         }
     }
-    run_cases(&cases);
+    cases
 }
 
-#[test]
-fn rough_dielectric_samples_follow_its_pdf() {
+fn dielectric_cases() -> Vec<Case> {
     let mut cases = Vec::new();
     for alpha in [0.3, 0.8] {
         for (entering, side) in [(true, "from outside"), (false, "from inside")] {
@@ -420,17 +436,67 @@ fn rough_dielectric_samples_follow_its_pdf() {
             cases.push(Case { name, material: material(1.0, 0.0, 1.0, 1.5, alpha), cos_o: 0.7, entering });
         }
     }
-    run_cases(&cases);
+    cases
+}
+
+/// A plastic: its coated base, and its coat (a reflector lobe with the coat's Fresnel).
+fn coated_diffuse_cases() -> Vec<Case> {
+    let mut plastic = material(0.5, 0.0, 0.0, 1.5, 0.2 * 0.2);
+    plastic.conductor_k[3] = 1.0 / (1.0 - average_fresnel(1.5));
+    vec![Case { name: "plastic ior 1.5, roughness 0.2 (cos 0.6)".into(), material: plastic, cos_o: 0.6, entering: true }]
+}
+
+/// The kernel's lobe kinds: every `const uint LOBE_<NAME> = <n>u;` of materials.glsl (as the
+/// kernel reads it, so a mutant's list too).
+fn kernel_lobes() -> Vec<(String, u32)> {
+    let glsl = shader_file("materials.glsl").expect("materials.glsl");
+    glsl.lines()
+        .filter_map(|line| line.strip_prefix("const uint LOBE_"))
+        .map(|rest| {
+            let (name, value) = rest.split_once(" = ").expect("const uint LOBE_X = Nu;");
+            let value = value.split_once("u;").expect("a uint literal").0.parse().expect("a number");
+            (format!("LOBE_{name}"), value)
+        })
+        .collect()
 }
 
 #[test]
-fn plastic_and_diffuse_samples_follow_their_pdfs() {
-    let mut plastic = material(0.5, 0.0, 0.0, 1.5, 0.2 * 0.2);
-    plastic.conductor_k[3] = 1.0 / (1.0 - average_fresnel(1.5));
-    run_cases(&[
-        Case { name: "plastic ior 1.5, roughness 0.2 (cos 0.6)".into(), material: plastic, cos_o: 0.6, entering: true },
-        Case { name: "diffuse (cos 0.6)".into(), material: material(0.7, 0.0, 0.0, 1.5, 0.0), cos_o: 0.6, entering: true },
-    ]);
+fn every_lobe_of_the_kernel_has_chi_square_cases() {
+    let mut kernel: Vec<String> = kernel_lobes().into_iter().map(|(name, _)| name).collect();
+    let mut tested: Vec<String> = LOBES.iter().map(|(name, _)| name.to_string()).collect();
+    kernel.sort();
+    tested.sort();
+    assert_eq!(kernel, tested, "the lobes of materials.glsl and the lobes with chi-square cases here differ");
+    let cases: usize = LOBES.iter().map(|(_, cases)| cases().len()).sum();
+    // The plastic case tests two lobes (its coat and its base).
+    assert_eq!(cases as f64 + 1.0, TESTS, "TESTS (the Bonferroni correction) counts the lobes tested");
+}
+
+/// Runs the cases of `lobe` (a LOBE_* name); each must pick that lobe among those it tests.
+fn run_lobe(lobe: &str) {
+    let kind = kernel_lobes().into_iter().find(|(name, _)| name == lobe).unwrap_or_else(|| panic!("materials.glsl has no {lobe}")).1;
+    let cases = LOBES.iter().find(|(name, _)| *name == lobe).expect("listed in LOBES").1();
+    run_cases(&cases, kind);
+}
+
+#[test]
+fn diffuse_samples_follow_its_pdf() {
+    run_lobe("LOBE_DIFFUSE");
+}
+
+#[test]
+fn rough_conductor_samples_follow_its_pdf() {
+    run_lobe("LOBE_REFLECT");
+}
+
+#[test]
+fn rough_dielectric_samples_follow_its_pdf() {
+    run_lobe("LOBE_DIELECTRIC");
+}
+
+#[test]
+fn plastic_samples_follow_its_pdfs() {
+    run_lobe("LOBE_COATED_DIFFUSE");
 }
 
 /// The p-value routine itself, against known chi-square quantiles.

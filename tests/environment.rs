@@ -25,6 +25,7 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
         instances: vec![],
         textures: vec![],
         environment: environment.clone(),
+        lights: vec![],
     };
     render(ctx, &scene, 1).pixels[0]
 }

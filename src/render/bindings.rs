@@ -8,7 +8,7 @@
 use super::chunks::{self, SplitPlans, EXTRA_BINDING_BASE};
 use super::glsl_block::{glsl_members, GlslBlock, GlslMember, GlslType};
 use super::kernel::KernelVariant;
-use super::layout::{FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuStats, GpuTexture, PassParams};
+use super::layout::{FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuPunctualLight, GpuStats, GpuTexture, PassParams};
 use crate::bvh::PairNode;
 
 /// Names a buffer of the kernel on the host: the key of [`BINDINGS`].
@@ -31,6 +31,7 @@ pub enum KernelBuffer {
     Texels,
     EnvCdf,
     LightAlias,
+    PunctualLights,
     AovAlbedoDepth,
     AovNormalHits,
 }
@@ -185,9 +186,12 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
     // one CDF per row (width + 1 values each); see env_sampling.rs. Empty when it is not sampled.
     BufferBinding { buffer: EnvCdf, binding: 15, name: "env_cdf", shape: array::<f32>(), access: Read, bound_in: EveryKernel, what: "environment distribution" },
-    // Alias table over `lights` for picking them by power (light_selection.rs); empty when they
+    // Alias table over `lights` and then `punctual_lights` for picking them by power (light_selection.rs); empty when they
     // are picked uniformly.
     BufferBinding { buffer: LightAlias, binding: 16, name: "light_alias", shape: array::<GpuAliasEntry>(), access: Read, bound_in: EveryKernel, what: "light alias table" },
+    // Point, spot and directional lights (src/scene/light.rs), picked after the area lights: entry
+    // light_count + i of the alias table is punctual light i.
+    BufferBinding { buffer: PunctualLights, binding: 17, name: "punctual_lights", shape: array::<GpuPunctualLight>(), access: Read, bound_in: EveryKernel, what: "point, spot and directional lights" },
     // Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
     // xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
     // first hit summed over the samples that hit something, w = how many those were.

@@ -21,6 +21,10 @@ pub const CONDUCTOR_MIRROR: u32 = 0;
 pub const CONDUCTOR_COMPLEX: u32 = 1;
 pub const CONDUCTOR_ALBEDO: u32 = 2;
 
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_SPOT: u32 = 1;
+pub const LIGHT_DIRECTIONAL: u32 = 2;
+
 pub const ENV_CONSTANT: u32 = 0;
 pub const ENV_ANGULAR: u32 = 1;
 pub const ENV_LATLONG: u32 = 2;
@@ -87,6 +91,20 @@ pub struct GpuTexture {
     pub height: u32,
     /// TEXTURE_* bits
     pub flags: u32,
+}
+
+/// `struct PunctualLight`: a point, spot or directional light (see layout.glsl for its members).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuPunctualLight {
+    /// Position (point, spot), LIGHT_* kind (u32 bits)
+    pub position_kind: [f32; 4],
+    /// Unit axis (spot) or direction of travel (directional), cos of the cone's half-angle
+    pub axis_cos: [f32; 4],
+    /// Intensity, irradiance or disk radiance; power for selection
+    pub value_power: [f32; 4],
+    /// Spot cone_angle and falloff_start (radians), 1 - cos of a disk's angular radius, unused
+    pub shape: [f32; 4],
 }
 
 /// `struct LightAlias`: one entry of the alias table that picks area lights by power
@@ -169,10 +187,12 @@ glsl_block! {
         pub pixel_filter: u32,
         /// The SAMPLER_* random sequence (shaders/rng.glsl).
         pub sampler_kind: u32,
-        pub pad5: u32,
+        /// Number of point, spot and directional lights: the entries of `punctual_lights`.
+        pub punctual_light_count: u32,
         pub pad6: u32,
         pub pad7: u32,
-        /// Total power of the area lights when they are picked by power (0: picked uniformly).
+        /// Total power of the lights (area and punctual) when they are picked by power (0: picked
+        /// uniformly).
         pub light_total_power: f32,
         pub pad8: f32,
         pub pad9: f32,
@@ -227,6 +247,9 @@ impl GlslType for GpuInstance {
 }
 impl GlslType for GpuTexture {
     const NAME: &'static str = "TextureInfo";
+}
+impl GlslType for GpuPunctualLight {
+    const NAME: &'static str = "PunctualLight";
 }
 impl GlslType for GpuAliasEntry {
     const NAME: &'static str = "LightAlias";
@@ -286,6 +309,17 @@ mod tests {
     }
 
     #[test]
+    fn punctual_light_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuPunctualLight>(), 64);
+        assert_eq!(offset_of!(GpuPunctualLight, axis_cos), 16);
+        assert_eq!(offset_of!(GpuPunctualLight, value_power), 32);
+        assert_eq!(offset_of!(GpuPunctualLight, shape), 48);
+        let glsl = include_str!("../../shaders/layout.glsl");
+        let members = "struct PunctualLight {\n    vec4 position_kind;\n    vec4 axis_cos;\n    vec4 value_power;\n    vec4 shape;\n};";
+        assert!(glsl.contains(members), "struct PunctualLight members differ from GpuPunctualLight");
+    }
+
+    #[test]
     fn alias_entry_matches_glsl_std430() {
         assert_eq!(size_of::<GpuAliasEntry>(), 8);
         assert_eq!(offset_of!(GpuAliasEntry, alias), 4);
@@ -336,6 +370,35 @@ mod tests {
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 
+    /// Every kernel function that dispatches on a primitive's kind is a `switch` with a case for
+    /// each PRIM_* kind and a `default` (an unknown kind must not pass for another): a kind added
+    /// here and forgotten in one of them fails.
+    #[test]
+    fn every_primitive_kind_has_a_case_in_each_kernel_dispatch() {
+        let kinds = ["PRIM_SPHERE", "PRIM_QUAD", "PRIM_TRIANGLE"];
+        assert_eq!([PRIM_SPHERE, PRIM_QUAD, PRIM_TRIANGLE], [0, 1, 2], "a kind was added: list it above");
+        let mut switches = 0;
+        for (file, glsl) in [("intersect.glsl", include_str!("../../shaders/intersect.glsl")), ("lights.glsl", include_str!("../../shaders/lights.glsl"))] {
+            assert!(!glsl.contains("prim_kind(p) =="), "{file} compares a kind outside a switch");
+            for (start, _) in glsl.match_indices("switch (prim_kind(p)) {") {
+                // The switch's body: up to the brace that closes it.
+                let body = &glsl[start..];
+                let mut depth = 0;
+                let end = body.char_indices().find_map(|(i, c)| {
+                    depth += match c { '{' => 1, '}' => -1, _ => 0 };
+                    (c == '}' && depth == 0).then_some(i)
+                });
+                let body = &body[..end.expect("the switch closes")];
+                for kind in kinds {
+                    assert!(body.contains(&format!("case {kind}:")), "{file}: a switch at byte {start} has no case {kind}");
+                }
+                assert!(body.contains("default:"), "{file}: a switch at byte {start} has no default");
+                switches += 1;
+            }
+        }
+        assert!(switches >= 6, "found {switches} kind switches; the dispatches moved?");
+    }
+
     /// The GLSL side declares the same kinds; a renumbering on one side only must fail here.
     #[test]
     fn kind_constants_match_glsl() {
@@ -353,6 +416,9 @@ mod tests {
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
             ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
             ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),
+            ("LIGHT_POINT", LIGHT_POINT),
+            ("LIGHT_SPOT", LIGHT_SPOT),
+            ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
             ("ENV_CONSTANT", ENV_CONSTANT),
             ("ENV_ANGULAR", ENV_ANGULAR),
             ("ENV_LATLONG", ENV_LATLONG),

@@ -1,12 +1,27 @@
-//! Which area light next-event estimation samples: each in proportion to its power (the flux it
+//! Which light next-event estimation samples: each in proportion to its power (the flux it
 //! emits), through a Walker/Vose alias table, so that a scene with thousands of dim emissive
-//! triangles and one bright lamp spends its shadow rays on the lamp. The kernel picks a table
-//! entry and keeps it or takes its alias in lights.glsl, and recomputes the same power formula
-//! there (`light_power`) for the pick probability of an emitter hit by BSDF sampling.
+//! triangles and one bright lamp spends its shadow rays on the lamp. The table covers the area
+//! lights and then the point, spot and directional lights. The kernel picks a table entry and
+//! keeps it or takes its alias in lights.glsl, and recomputes the area lights' power formula there
+//! (`light_power`) for the pick probability of an emitter hit by BSDF sampling; a punctual light
+//! carries its power to the kernel in its struct.
+//!
+//! The powers, in luminance (Rec. 709) of the light's colour:
+//! - area light: area x pi x radiance (a Lambertian emitter), twice for a two-sided flat one;
+//! - point: 4 pi x intensity;
+//! - spot: 2 pi x intensity x (1 - (sin c - sin f) / (c - f)), the integral of its falloff
+//!   (full to the angle f = falloff_start, linear in the angle to c = cone_angle) over the sphere;
+//!   2 pi x intensity x (1 - cos c) when f = c;
+//! - directional (delta or disk): irradiance x pi r^2, r the radius of the scene's bounding
+//!   sphere: what crosses a disk that covers the scene (as pbrt does). A scene with nothing in it
+//!   gives it no power.
+//!
+//! Any positive powers give unbiased images (the kernel divides by the probability it picked
+//! with); these make the noise of each light's contribution roughly even.
 
+use super::layout::GpuAliasEntry;
 use super::luminance;
-use super::layout::{GpuAliasEntry, GpuMaterial, GpuPrimitive, PRIM_QUAD, PRIM_SPHERE};
-use glam::Vec3;
+use crate::scene::{Light, Material, Shape};
 use std::f64::consts::PI;
 
 /// What the kernel gets: the table (empty for uniform selection) and the total power it divides
@@ -17,35 +32,54 @@ pub struct LightDistribution {
 }
 
 /// Flux of a world-space emitter: area x pi x luminance of its radiance (a Lambertian emitter),
-/// twice for a two-sided quad or triangle. The kernel's `light_power` is the same formula.
-pub fn light_power(light: &GpuPrimitive, materials: &[GpuMaterial]) -> f64 {
-    let kind = light.b[3].to_bits();
-    let material = &materials[light.c[3].to_bits() as usize];
-    let area = if kind == PRIM_SPHERE {
-        4.0 * PI * (light.a[3] as f64).powi(2)
-    } else {
-        let (b, c) = (Vec3::from_slice(&light.b[..3]).as_dvec3(), Vec3::from_slice(&light.c[..3]).as_dvec3());
-        let parallelogram = b.cross(c).length();
-        if kind == PRIM_QUAD { parallelogram } else { 0.5 * parallelogram }
+/// twice for a two-sided quad or triangle (a sphere shows only its outside). The kernel's
+/// `light_power` in lights.glsl is the same formula on the GPU form of the shape.
+pub fn area_light_power(shape: &Shape, material: &Material) -> f64 {
+    let (area, sides) = match *shape {
+        Shape::Sphere { radius, .. } => (4.0 * PI * (radius as f64).powi(2), 1.0),
+        Shape::Quad { u, v, .. } => (u.as_dvec3().cross(v.as_dvec3()).length(), two_sided(material)),
+        Shape::Triangle { v, .. } => (0.5 * (v[1] - v[0]).as_dvec3().cross((v[2] - v[0]).as_dvec3()).length(), two_sided(material)),
     };
-    let sides = if kind != PRIM_SPHERE && material.params[1] > 0.5 { 2.0 } else { 1.0 };
-    area * PI * luminance(&material.emission_t) * sides
+    area * PI * luminance(&material.emission.to_array()) * sides
+}
+
+/// Flux of a point, spot or directional light by the formulas above; `scene_radius` is the
+/// radius of the scene's bounding sphere.
+pub fn punctual_light_power(light: &Light, scene_radius: f64) -> f64 {
+    match *light {
+        Light::Point { intensity, .. } => 4.0 * PI * luminance(&intensity.to_array()),
+        Light::Spot { intensity, cone_angle, falloff_start, .. } => {
+            let (c, f) = (cone_angle as f64, falloff_start as f64);
+            let cone_fraction = if c - f > 1e-6 { 1.0 - (c.sin() - f.sin()) / (c - f) } else { 1.0 - c.cos() };
+            2.0 * PI * luminance(&intensity.to_array()) * cone_fraction
+        }
+        Light::Directional { irradiance, .. } => luminance(&irradiance.to_array()) * PI * scene_radius * scene_radius,
+    }
+}
+
+/// How many sides of a flat emitter radiate.
+fn two_sided(material: &Material) -> f64 {
+    if material.two_sided {
+        2.0
+    } else {
+        1.0
+    }
 }
 
 impl LightDistribution {
-    /// Power selection over `lights`; uniform when `by_power` is false or no light has power.
-    pub fn new(lights: &[GpuPrimitive], materials: &[GpuMaterial], by_power: bool) -> LightDistribution {
+    /// Selection in proportion to `powers` (one per light, in the kernel's light order); uniform
+    /// when `by_power` is false or no light has power.
+    pub fn new(powers: &[f64], by_power: bool) -> LightDistribution {
         let uniform = LightDistribution { table: Vec::new(), total_power: 0.0 };
         if !by_power {
             return uniform;
         }
-        let powers: Vec<f64> = lights.iter().map(|l| light_power(l, materials)).collect();
         let total: f64 = powers.iter().sum();
         // Non-finite or all-zero powers leave nothing to be proportional to.
         if !(total > 0.0 && total.is_finite() && (total as f32).is_normal()) {
             return uniform;
         }
-        LightDistribution { table: alias_table(&powers), total_power: total as f32 }
+        LightDistribution { table: alias_table(powers), total_power: total as f32 }
     }
 }
 
@@ -80,8 +114,8 @@ pub fn alias_table(weights: &[f64]) -> Vec<GpuAliasEntry> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::layout::PRIM_TRIANGLE;
-    use bytemuck::Zeroable;
+    use crate::scene::Conductor;
+    use glam::Vec3;
 
     /// The probability of each index that the table gives: (its kept share + the shares others
     /// hand it) / n.
@@ -144,36 +178,65 @@ mod tests {
         assert_reproduces(&weights);
     }
 
-    fn material(emission: [f32; 3], two_sided: bool) -> GpuMaterial {
-        GpuMaterial { albedo_r: [0.0; 4], emission_t: [emission[0], emission[1], emission[2], 0.0], params: [1.5, if two_sided { 1.0 } else { 0.0 }, 0.0, 0.0], ..GpuMaterial::zeroed() }
-    }
-
-    fn tagged(a: [f32; 4], b: [f32; 3], c: [f32; 3], kind: u32, material: u32) -> GpuPrimitive {
-        GpuPrimitive { a, b: [b[0], b[1], b[2], f32::from_bits(kind)], c: [c[0], c[1], c[2], f32::from_bits(material)] }
+    fn material(emission: [f32; 3], two_sided: bool) -> Material {
+        Material {
+            name: "lamp".into(),
+            albedo: Vec3::ZERO,
+            reflectivity: 0.0,
+            transparency: 0.0,
+            ior: 1.5,
+            emission: Vec3::from(emission),
+            two_sided,
+            albedo_texture: None,
+            roughness: 0.0,
+            conductor: Conductor::Mirror,
+            coat: false,
+            metallic_roughness: None,
+        }
     }
 
     #[test]
     fn power_is_area_times_pi_times_luminance() {
-        let materials = [material([1.0, 1.0, 1.0], false), material([0.0, 2.0, 0.0], true)];
-        let sphere = tagged([0.0, 0.0, 0.0, 0.5], [0.0; 3], [0.0; 3], PRIM_SPHERE, 0);
-        let quad = tagged([0.0; 4], [2.0, 0.0, 0.0], [0.0, 0.0, 3.0], PRIM_QUAD, 0);
-        let triangle = tagged([0.0; 4], [2.0, 0.0, 0.0], [0.0, 0.0, 3.0], PRIM_TRIANGLE, 1);
+        let (one_sided, two_sided) = (material([1.0, 1.0, 1.0], false), material([0.0, 2.0, 0.0], true));
+        let sphere = Shape::Sphere { center: Vec3::ZERO, radius: 0.5, material: 0 };
+        let quad = Shape::Quad { origin: Vec3::ZERO, u: Vec3::new(2.0, 0.0, 0.0), v: Vec3::new(0.0, 0.0, 3.0), material: 0 };
+        let triangle = Shape::Triangle { v: [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 3.0)], material: 1 };
         let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b;
-        assert!(close(light_power(&sphere, &materials), PI * PI));
-        assert!(close(light_power(&quad, &materials), 6.0 * PI));
+        assert!(close(area_light_power(&sphere, &one_sided), PI * PI));
+        // A two-sided sphere still shows only its outside.
+        assert!(close(area_light_power(&sphere, &material([1.0, 1.0, 1.0], true)), PI * PI));
+        assert!(close(area_light_power(&quad, &one_sided), 6.0 * PI));
+        assert!(close(area_light_power(&quad, &material([1.0, 1.0, 1.0], true)), 12.0 * PI));
         // Half the quad's area, two sides, luminance 2 x 0.7152.
-        assert!(close(light_power(&triangle, &materials), 3.0 * PI * 2.0 * 2.0 * 0.7152));
+        assert!(close(area_light_power(&triangle, &two_sided), 3.0 * PI * 2.0 * 2.0 * 0.7152));
+    }
+
+    /// The spot's power is its intensity integrated over the sphere: the closed form against a
+    /// midpoint sum of 2 pi I(theta) sin(theta), with and without a falloff band.
+    #[test]
+    fn spot_power_is_its_intensity_integrated_over_the_sphere() {
+        for (cone_deg, falloff_deg) in [(30.0f64, 20.0f64), (60.0, 0.0), (45.0, 45.0), (170.0, 100.0)] {
+            let (c, f) = (cone_deg.to_radians(), falloff_deg.to_radians());
+            let intensity = |t: f64| if t <= f { 1.0 } else if t >= c { 0.0 } else { (c - t) / (c - f) };
+            let steps = 200_000;
+            let dt = PI / steps as f64;
+            let numeric: f64 = (0..steps).map(|i| (i as f64 + 0.5) * dt).map(|t| 2.0 * PI * intensity(t) * t.sin() * dt).sum();
+            let spot = Light::Spot { position: Vec3::ZERO, axis: Vec3::Y, intensity: Vec3::ONE, cone_angle: c as f32, falloff_start: f as f32 };
+            let closed = punctual_light_power(&spot, 0.0);
+            assert!((closed / numeric - 1.0).abs() < 1e-5, "cone {cone_deg}, falloff {falloff_deg}: {closed} against {numeric}");
+        }
+        let point = Light::Point { position: Vec3::ZERO, intensity: Vec3::ONE };
+        assert!((punctual_light_power(&point, 0.0) - 4.0 * PI).abs() < 1e-9);
+        let sun = Light::Directional { direction: -Vec3::Y, irradiance: Vec3::splat(2.0), angular_diameter: 0.01 };
+        assert!((punctual_light_power(&sun, 3.0) - 2.0 * PI * 9.0).abs() < 1e-6);
     }
 
     #[test]
     fn uniform_selection_and_powerless_scenes_upload_no_table() {
-        let materials = [material([1.0, 1.0, 1.0], false)];
-        let quad = tagged([0.0; 4], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], PRIM_QUAD, 0);
-        let by_power = LightDistribution::new(&[quad, quad], &materials, true);
+        let by_power = LightDistribution::new(&[PI, PI], true);
         assert_eq!((by_power.table.len(), by_power.total_power), (2, 2.0 * std::f32::consts::PI));
-        assert!(LightDistribution::new(&[quad, quad], &materials, false).table.is_empty());
-        let flat = tagged([0.0; 4], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], PRIM_QUAD, 0);
-        let none = LightDistribution::new(&[flat], &materials, true);
+        assert!(LightDistribution::new(&[PI, PI], false).table.is_empty());
+        let none = LightDistribution::new(&[0.0], true);
         assert!(none.table.is_empty() && none.total_power == 0.0);
     }
 }

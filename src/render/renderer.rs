@@ -154,6 +154,7 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         pixel_filter: filter,
         sampler_kind: sampler,
         light_total_power: data.light_distribution.total_power,
+        punctual_light_count: data.punctual_lights.len() as u32,
         ..FrameParams::zeroed()
     }
 }
@@ -195,6 +196,7 @@ fn initial_contents<'d>(buffer: KernelBuffer, params: &'d FrameParams, data: &'d
         Texels => bytemuck::cast_slice(&data.texels),
         EnvCdf => bytemuck::cast_slice(&data.env_cdf),
         LightAlias => bytemuck::cast_slice(&data.light_distribution.table),
+        PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
     })
 }
 

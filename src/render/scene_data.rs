@@ -1,11 +1,11 @@
 //! Flattens a `Scene` into the arrays the kernel reads: the two-level acceleration structure,
 //! materials, textures, the emitter list and the environment texels.
 
-use super::acceleration::{gpu_primitive, triangle_primitive, Acceleration};
+use super::acceleration::{gpu_primitive, Acceleration};
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
-use super::light_selection::LightDistribution;
-use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, LightSelection, MapProjection, Material, Scene};
+use super::light_selection::{area_light_power, punctual_light_power, LightDistribution};
+use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -13,7 +13,10 @@ pub struct SceneData {
     pub materials: Vec<GpuMaterial>,
     /// Every emitter in world space.
     pub lights: Vec<GpuPrimitive>,
-    /// How next-event estimation picks among `lights` (light_selection.rs).
+    /// Point, spot and directional lights.
+    pub punctual_lights: Vec<GpuPunctualLight>,
+    /// How next-event estimation picks among `lights` and then `punctual_lights`
+    /// (light_selection.rs).
     pub light_distribution: LightDistribution,
     pub textures: Vec<GpuTexture>,
     /// RGBA8 texels of every texture, packed little-endian (red in the low byte).
@@ -33,9 +36,9 @@ pub struct SceneData {
 }
 
 /// Every emissive shape and every emissive triangle of every mesh instance, in world space.
-fn world_lights(scene: &Scene) -> Vec<GpuPrimitive> {
+fn world_lights(scene: &Scene) -> Vec<Shape> {
     let emissive = |m: u32| scene.materials[m as usize].is_emissive();
-    let mut lights: Vec<GpuPrimitive> = scene.shapes.iter().filter(|s| emissive(s.material())).map(gpu_primitive).collect();
+    let mut lights: Vec<Shape> = scene.shapes.iter().filter(|s| emissive(s.material())).copied().collect();
     for inst in &scene.instances {
         let mesh = &scene.meshes[inst.mesh as usize];
         // A mirroring placement flips the winding; swap two vertices to keep the front side.
@@ -45,10 +48,41 @@ fn world_lights(scene: &Scene) -> Vec<GpuPrimitive> {
             if mirrored {
                 v.swap(1, 2);
             }
-            lights.push(triangle_primitive(v, m));
+            lights.push(Shape::Triangle { v, material: m });
         }
     }
     lights
+}
+
+/// A point, spot or directional light in the kernel's form (layout.glsl), with its power.
+fn gpu_punctual_light(light: &Light, power: f64) -> GpuPunctualLight {
+    let kind = |k: u32| f32::from_bits(k);
+    let power = power as f32;
+    match *light {
+        Light::Point { position, intensity } => GpuPunctualLight {
+            position_kind: position.extend(kind(LIGHT_POINT)).into(),
+            axis_cos: [0.0, 0.0, 0.0, 1.0],
+            value_power: intensity.extend(power).into(),
+            shape: [0.0; 4],
+        },
+        Light::Spot { position, axis, intensity, cone_angle, falloff_start } => GpuPunctualLight {
+            position_kind: position.extend(kind(LIGHT_SPOT)).into(),
+            axis_cos: axis.extend(cone_angle.cos()).into(),
+            value_power: intensity.extend(power).into(),
+            shape: [cone_angle, falloff_start, 0.0, 0.0],
+        },
+        Light::Directional { direction, irradiance, angular_diameter } => {
+            let half = 0.5 * angular_diameter as f64;
+            // 1 - cos as 2 sin^2(half / 2): no cancellation for a sun-sized disk.
+            let one_minus_cos = 2.0 * (0.5 * half).sin().powi(2);
+            GpuPunctualLight {
+                position_kind: [0.0, 0.0, 0.0, kind(LIGHT_DIRECTIONAL)],
+                axis_cos: direction.extend(half.cos() as f32).into(),
+                value_power: light.disk_radiance().unwrap_or(irradiance).extend(power).into(),
+                shape: [0.0, 0.0, one_minus_cos as f32, 0.0],
+            }
+        }
+    }
 }
 
 fn gpu_material(m: &Material) -> GpuMaterial {
@@ -108,11 +142,23 @@ impl SceneData {
             Environment::Map(map) if scene.integrator.sample_environment => EnvDistribution::new(map).cdf,
             _ => Vec::new(),
         };
-        let lights = world_lights(scene);
-        let light_distribution = LightDistribution::new(&lights, &materials, scene.integrator.light_selection == LightSelection::Power);
+        let area_lights = world_lights(scene);
+        let mut powers: Vec<f64> = area_lights.iter().map(|l| area_light_power(l, &scene.materials[l.material() as usize])).collect();
+        let scene_radius = acceleration.nodes.first().map_or(0.0, |root| {
+            let bounds = root.bounds();
+            0.5 * (bounds.max - bounds.min).as_dvec3().length()
+        });
+        // An empty scene's root has empty (infinite) bounds.
+        let scene_radius = if scene_radius.is_finite() { scene_radius } else { 0.0 };
+        let punctual_powers: Vec<f64> = scene.lights.iter().map(|l| punctual_light_power(l, scene_radius)).collect();
+        let punctual_lights = scene.lights.iter().zip(&punctual_powers).map(|(l, &p)| gpu_punctual_light(l, p)).collect();
+        powers.extend(&punctual_powers);
+        let light_distribution = LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
+        let lights = area_lights.iter().map(gpu_primitive).collect();
         SceneData {
             env_cdf,
             lights,
+            punctual_lights,
             light_distribution,
             acceleration,
             materials,
@@ -133,6 +179,7 @@ impl SceneData {
             + self.texture_bytes()
             + (std::mem::size_of_val(&self.materials[..])
             + std::mem::size_of_val(&self.lights[..])
+            + std::mem::size_of_val(&self.punctual_lights[..])
             + std::mem::size_of_val(&self.light_distribution.table[..])
             + std::mem::size_of_val(&self.env_texels[..])
             + std::mem::size_of_val(&self.env_cdf[..])) as u64
@@ -141,7 +188,7 @@ impl SceneData {
     /// Probability that next-event estimation samples the environment map rather than an emitter:
     /// a map with radiance shares it evenly with the emitters, and is not sampled without one.
     pub fn env_selection_probability(&self) -> f32 {
-        match (self.env_cdf.is_empty(), self.lights.is_empty()) {
+        match (self.env_cdf.is_empty(), self.lights.is_empty() && self.punctual_lights.is_empty()) {
             (true, _) => 0.0,
             (false, true) => 1.0,
             (false, false) => 0.5,

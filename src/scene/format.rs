@@ -76,6 +76,9 @@ pub struct SceneFile {
     #[serde(default)]
     pub meshes: Vec<MeshFile>,
     pub environment: Option<EnvironmentFile>,
+    /// Lights without a surface: point, spot and directional (radiometric units).
+    #[serde(default)]
+    pub lights: Vec<LightFile>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -332,4 +335,48 @@ pub struct EnvironmentFile {
 
 fn one() -> f32 {
     1.0
+}
+
+/// A `[[lights]]` entry, told apart by its `type`.
+#[derive(Deserialize, Debug)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum LightFile {
+    Point(PointLightFile),
+    Spot(SpotLightFile),
+    Directional(DirectionalLightFile),
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct PointLightFile {
+    pub position: Triple,
+    /// Radiant intensity, W/sr: a surface at distance d facing it receives intensity / d^2.
+    pub intensity: Triple,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SpotLightFile {
+    pub position: Triple,
+    /// A point on the axis.
+    pub look_at: Triple,
+    /// Radiant intensity on the axis, W/sr.
+    pub intensity: Triple,
+    /// Degrees from the axis where the light ends.
+    pub cone_angle: f32,
+    /// Degrees from the axis where the falloff begins (full intensity inside); between the two the
+    /// intensity falls linearly in the angle, as Mitsuba 3's spot.
+    pub falloff_start: f32,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionalLightFile {
+    /// The direction the light travels.
+    pub direction: Triple,
+    /// W/m^2 on a surface facing the light.
+    pub irradiance: Triple,
+    /// Degrees; > 0 makes it a disk of uniform radiance filling that cone (the sun is 0.53).
+    #[serde(default)]
+    pub angular_diameter: f32,
 }

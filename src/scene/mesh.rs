@@ -2,9 +2,9 @@
 //! mesh files (OBJ + MTL, PLY, glTF) into the scene's materials, meshes and textures.
 
 use super::asset::{self, Asset, AssetMaterial};
-use super::{Material, MetallicRoughness, Scene};
+use super::{Light, Material, MetallicRoughness, Scene};
 use crate::input_file::InputFiles;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -40,6 +40,8 @@ pub struct Instance {
 struct LoadedFile {
     placements: Vec<(u32, Mat4)>,
     camera: Option<AssetCamera>,
+    /// The file's own lights (glTF KHR_lights_punctual), in its world space.
+    lights: Vec<Light>,
 }
 
 /// Loads each (file, material override) once: later placements of the same file share its
@@ -66,9 +68,9 @@ impl<'a> MeshImporter<'a> {
             if asset.dropped_triangles > 0 {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }
-            let camera = asset.camera;
+            let (camera, lights) = (asset.camera, asset.lights.clone());
             let placements = add_asset(scene, path, asset, material)?;
-            self.loaded.insert(key.clone(), LoadedFile { placements, camera });
+            self.loaded.insert(key.clone(), LoadedFile { placements, camera, lights });
         }
         let file = &self.loaded[&key];
         for &(mesh, local) in &file.placements {
@@ -77,6 +79,10 @@ impl<'a> MeshImporter<'a> {
                 bail!("{}: a placement of its mesh {mesh} is not invertible (zero scale?)", path.display());
             }
             scene.instances.push(Instance { mesh, transform: world });
+        }
+        for (k, light) in file.lights.iter().enumerate() {
+            let placed = light.transformed(transform).with_context(|| format!("{}: a placement of its light {k} collapses its direction (zero scale?)", path.display()))?;
+            scene.lights.push(placed);
         }
         Ok(file.camera)
     }

@@ -3,6 +3,7 @@
 mod asset;
 mod environment;
 mod format;
+mod light;
 mod mesh;
 mod optics;
 mod toml_error;
@@ -10,14 +11,15 @@ mod toml_error;
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, load_asset, load_asset_from, Asset, AssetError};
 pub use format::{Filter, LightSelection, Sampler};
+pub use light::Light;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
 pub use optics::{average_fresnel, metal, METALS};
 
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{bail, Context as _, Result};
-use format::{Array, FilmFile, IntegratorFile, MaterialFile, Placement, Scale, SceneFile, Triple};
+use format::{Array, CameraFile, FilmFile, IntegratorFile, MaterialFile, MeshFile, Placement, Scale, SceneFile, Triple};
 use glam::{Mat4, Quat, Vec3};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 /// The built-in default scene: the Cornell box with a mirror sphere, a glass sphere and a small light.
@@ -148,6 +150,8 @@ pub struct Scene {
     pub instances: Vec<Instance>,
     pub textures: Vec<Texture>,
     pub environment: Environment,
+    /// Point, spot and directional lights (`[[lights]]`, glTF KHR_lights_punctual).
+    pub lights: Vec<Light>,
 }
 
 impl Scene {
@@ -189,6 +193,7 @@ impl Scene {
             instances: vec![],
             textures: vec![],
             environment: Environment::Constant(Vec3::ONE),
+            lights: vec![],
         };
         match MeshImporter::new(files).place(&mut scene, path, None, Mat4::IDENTITY)? {
             Some(c) => {
@@ -249,8 +254,37 @@ fn non_negative3(key: &str, v: Triple) -> Result<Vec3> {
     Ok(v)
 }
 
+/// The validated scene of a parsed file: one validator per section, in the file's order of
+/// dependence (shapes and meshes name materials).
 fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result<Scene> {
-    let c = &file.camera;
+    let camera = camera_from(&file.camera)?;
+    let film = Film { width: file.film.width, height: file.film.height, spp: file.film.spp, filter: file.film.filter };
+    check_film(&film)?;
+    let integrator = integrator_from(&file.integrator)?;
+    let materials = materials_from(&file.materials)?;
+    // Materials are numbered in name order, as materials_from lists them.
+    let by_name: HashMap<&str, u32> = file.materials.keys().enumerate().map(|(i, name)| (name.as_str(), i as u32)).collect();
+    let material = |key: String, mname: &str| -> Result<u32> {
+        by_name.get(mname).copied().with_context(|| {
+            let known: Vec<_> = file.materials.keys().map(String::as_str).collect();
+            format!("{key}: unknown material '{mname}' (defined: {})", known.join(", "))
+        })
+    };
+    let shapes = shapes_from(&file, &material)?;
+    let environment = match &file.environment {
+        None => Environment::Constant(Vec3::ZERO),
+        Some(e) => environment::from_file(e, base, files)?,
+    };
+    let lights = light::lights_from(&file.lights)?;
+    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures: vec![], environment, lights };
+    place_meshes(&mut scene, &file.meshes, &material, base, files)?;
+    Ok(scene)
+}
+
+/// A name's material index, or an error naming the key and the materials defined.
+type MaterialLookup<'a> = dyn Fn(String, &str) -> Result<u32> + 'a;
+
+fn camera_from(c: &CameraFile) -> Result<Camera> {
     let mut camera = Camera::pinhole(
         vec3("camera.position", c.position)?,
         vec3("camera.look_at", c.look_at)?,
@@ -277,57 +311,53 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
             bail!("camera.focus_distance must be > 0, got {f}");
         }
     }
-    let film = Film { width: file.film.width, height: file.film.height, spp: file.film.spp, filter: file.film.filter };
-    check_film(&film)?;
-    let i = &file.integrator;
-    let integrator = integrator_from(i)?;
+    Ok(camera)
+}
 
-    let mut materials = Vec::new();
-    let mut by_name = HashMap::new();
-    for (mname, m) in &file.materials {
-        let key = |field: &str| format!("materials.{mname}.{field}");
-        let conductor = conductor_from(m, &key)?;
-        let default_r = if conductor == Conductor::Mirror { 0.0 } else { 1.0 };
-        let material = Material {
-            name: mname.clone(),
-            albedo: non_negative3(&key("albedo"), m.albedo)?,
-            reflectivity: finite(&key("reflectivity"), m.reflectivity.unwrap_or(default_r))?,
-            transparency: finite(&key("transparency"), m.transparency)?,
-            ior: finite(&key("ior"), m.ior)?,
-            emission: non_negative3(&key("emission"), m.emission)?,
-            two_sided: m.two_sided,
-            albedo_texture: None,
-            roughness: finite(&key("roughness"), m.roughness)?,
-            conductor,
-            coat: m.coat,
-            metallic_roughness: None,
-        };
-        if !(0.0..=1.0).contains(&material.roughness) {
-            bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);
-        }
-        if material.albedo.max_element() > 1.0 {
-            bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);
-        }
-        if material.reflectivity < 0.0 || material.transparency < 0.0 || material.reflectivity + material.transparency > 1.0 + 1e-6 {
-            bail!(
-                "materials.{mname}: reflectivity and transparency must be >= 0 with R + T <= 1, got R = {}, T = {}",
-                material.reflectivity,
-                material.transparency
-            );
-        }
-        if material.ior <= 0.0 {
-            bail!("{} must be > 0, got {}", key("ior"), material.ior);
-        }
-        by_name.insert(mname.clone(), materials.len() as u32);
-        materials.push(material);
-    }
-    let material = |key: String, mname: &str| -> Result<u32> {
-        by_name.get(mname).copied().with_context(|| {
-            let known: Vec<_> = file.materials.keys().map(String::as_str).collect();
-            format!("{key}: unknown material '{mname}' (defined: {})", known.join(", "))
-        })
+/// Every `[materials.NAME]`, in name order (their indices).
+fn materials_from(file: &BTreeMap<String, MaterialFile>) -> Result<Vec<Material>> {
+    file.iter().map(|(mname, m)| material_from(mname, m)).collect()
+}
+
+fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
+    let key = |field: &str| format!("materials.{mname}.{field}");
+    let conductor = conductor_from(m, &key)?;
+    let default_r = if conductor == Conductor::Mirror { 0.0 } else { 1.0 };
+    let material = Material {
+        name: mname.to_owned(),
+        albedo: non_negative3(&key("albedo"), m.albedo)?,
+        reflectivity: finite(&key("reflectivity"), m.reflectivity.unwrap_or(default_r))?,
+        transparency: finite(&key("transparency"), m.transparency)?,
+        ior: finite(&key("ior"), m.ior)?,
+        emission: non_negative3(&key("emission"), m.emission)?,
+        two_sided: m.two_sided,
+        albedo_texture: None,
+        roughness: finite(&key("roughness"), m.roughness)?,
+        conductor,
+        coat: m.coat,
+        metallic_roughness: None,
     };
+    if !(0.0..=1.0).contains(&material.roughness) {
+        bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);
+    }
+    if material.albedo.max_element() > 1.0 {
+        bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);
+    }
+    if material.reflectivity < 0.0 || material.transparency < 0.0 || material.reflectivity + material.transparency > 1.0 + 1e-6 {
+        bail!(
+            "materials.{mname}: reflectivity and transparency must be >= 0 with R + T <= 1, got R = {}, T = {}",
+            material.reflectivity,
+            material.transparency
+        );
+    }
+    if material.ior <= 0.0 {
+        bail!("{} must be > 0, got {}", key("ior"), material.ior);
+    }
+    Ok(material)
+}
 
+/// `[[spheres]]`, `[[quads]]` and `[[triangles]]`, in that order.
+fn shapes_from(file: &SceneFile, material: &MaterialLookup) -> Result<Vec<Shape>> {
     let mut shapes = Vec::new();
     for (k, s) in file.spheres.iter().enumerate() {
         let radius = finite(&format!("spheres[{k}].radius"), s.radius)?;
@@ -362,25 +392,25 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
         }
         shapes.push(Shape::Triangle { v, material: material(format!("triangles[{k}].material"), &t.material)? });
     }
-    let environment = match &file.environment {
-        None => Environment::Constant(Vec3::ZERO),
-        Some(e) => environment::from_file(e, base, files)?,
-    };
-    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures: vec![], environment };
+    Ok(shapes)
+}
+
+/// Loads every `[[meshes]]` file and places it once, or at each of its instances.
+fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, files: &InputFiles) -> Result<()> {
     let mut importer = MeshImporter::new(files);
-    for (k, m) in file.meshes.iter().enumerate() {
+    for (k, m) in meshes.iter().enumerate() {
         let key = format!("meshes[{k}]");
         let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;
         let outer = placement(&key, &m.placement())?;
         let path = resolve(base, &m.file);
         if m.instances.is_empty() {
-            importer.place(&mut scene, &path, override_material, outer)?;
+            importer.place(scene, &path, override_material, outer)?;
         }
         for (j, p) in m.instances.iter().enumerate() {
-            importer.place(&mut scene, &path, override_material, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
+            importer.place(scene, &path, override_material, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
         }
     }
-    Ok(scene)
+    Ok(())
 }
 
 /// The R lobe's Fresnel from `metal` or `eta` + `k` (absent: a perfect mirror).

@@ -19,6 +19,15 @@
 //! - The rest (1 − R − T) is a plastic: the base colour under a dielectric coat of that ior.
 //! - Primitives without a material get [`AssetMaterial::default_grey`].
 //!
+//! `KHR_lights_punctual` lights become [`Light`]s, converted from glTF's photometric units to
+//! caustica's radiometric ones at 683 lm/W (the luminous efficacy that defines the candela):
+//! a point's or spot's intensity in candela (lm/sr) / 683 → W/sr, a directional light's in lux
+//! (lm/m^2) / 683 → W/m^2, each times its linear `color`. They shine down their node's −Z. A spot's
+//! `innerConeAngle` becomes `falloff_start` and `outerConeAngle` `cone_angle`: between the two
+//! caustica falls off linearly in the angle (Mitsuba 3's spot), where glTF suggests a curve in
+//! the cosine; the ends agree. `range` is ignored (a note on stderr): the light falls off by the
+//! inverse square without a cut-off, which the extension allows as the physical limit.
+//!
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
 
@@ -35,10 +44,14 @@ use gltf::{Document, Semantic};
 
 use super::gltf_accessors::AccessorLimits;
 use super::{
-    texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, MeshData,
-    MetallicRoughness,
+    texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
+    MeshData, MetallicRoughness,
 };
 use crate::input_file::{InputFiles, InputKind};
+
+/// Lumens per watt of radiant flux at 555 nm, the constant of the candela's definition: glTF's
+/// photometric light units over this are radiometric.
+const LUMENS_PER_WATT: f32 = 683.0;
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
 const MAX_NODE_DEPTH: usize = 1000;
@@ -135,6 +148,12 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     for root in root_nodes(&document) {
         walk.visit(root, Mat4::IDENTITY)
             .map_err(|m| AssetError::invalid(path, m))?;
+    }
+    if document.lights().into_iter().flatten().any(|l| l.range().is_some()) {
+        eprintln!(
+            "caustica: {}: KHR_lights_punctual range ignored (lights fall off by the inverse square)",
+            path.display()
+        );
     }
     Ok(asset)
 }
@@ -579,6 +598,9 @@ impl Walk<'_> {
                 self.asset.camera = Some(world_camera(index, world, &perspective)?);
             }
         }
+        if let Some(light) = node.light() {
+            self.asset.lights.push(world_light(index, world, &light)?);
+        }
         self.ancestors.push(index);
         for child in node.children() {
             self.visit(child, world)?;
@@ -586,6 +608,35 @@ impl Walk<'_> {
         self.ancestors.pop();
         Ok(())
     }
+}
+
+/// A `KHR_lights_punctual` light of node `node` in caustica's units (see the module's notes); it
+/// shines down the node's −Z.
+fn world_light(node: usize, world: Mat4, light: &gltf::khr_lights_punctual::Light) -> Result<Light, String> {
+    let what = format!("node {node}: KHR_lights_punctual light {}", light.index());
+    let color = Vec3::from(light.color());
+    if !color.is_finite() || color.min_element() < 0.0 {
+        return Err(format!("{what}: color must be finite and >= 0, got {color:?}"));
+    }
+    let intensity = light.intensity();
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        return Err(format!("{what}: intensity must be finite and >= 0, got {intensity}"));
+    }
+    let value = color * (intensity / LUMENS_PER_WATT);
+    let local = match light.kind() {
+        gltf::khr_lights_punctual::Kind::Point => Light::Point { position: Vec3::ZERO, intensity: value },
+        gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+            let quarter = std::f32::consts::FRAC_PI_2;
+            if !(outer_cone_angle > 0.0 && outer_cone_angle <= quarter && (0.0..outer_cone_angle).contains(&inner_cone_angle)) {
+                return Err(format!(
+                    "{what}: spot angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2, got {inner_cone_angle} and {outer_cone_angle}"
+                ));
+            }
+            Light::Spot { position: Vec3::ZERO, axis: Vec3::NEG_Z, intensity: value, cone_angle: outer_cone_angle, falloff_start: inner_cone_angle }
+        }
+        gltf::khr_lights_punctual::Kind::Directional => Light::Directional { direction: Vec3::NEG_Z, irradiance: value, angular_diameter: 0.0 },
+    };
+    local.transformed(world).ok_or_else(|| format!("{what}: the node's transform collapses its direction"))
 }
 
 /// A glTF camera looks down its node's −Z with +Y up.
@@ -772,6 +823,61 @@ mod tests {
         let path = test_dir(tag).join(name);
         std::fs::write(&path, bytes).unwrap();
         path
+    }
+
+    /// The test document with three KHR_lights_punctual lights on nodes of their own.
+    fn document_with_lights(lights: &str) -> String {
+        let bin = triangle_bin();
+        let json = document(&format!(r#"{{"uri": "data:application/octet-stream;base64,{}", "byteLength": {}}}"#, base64::engine::general_purpose::STANDARD.encode(&bin), bin.len()), r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#);
+        let down = r#""rotation": [-0.70710678, 0, 0, 0.70710678]"#;
+        json.replacen(r#""asset": {"version": "2.0"},"#, &format!(r#""asset": {{"version": "2.0"}}, "extensions": {{"KHR_lights_punctual": {{"lights": {lights}}}}},"#), 1)
+            .replacen(r#""scenes": [{"nodes": [0, 2]}],"#, r#""scenes": [{"nodes": [0, 2, 3, 4, 5]}],"#, 1)
+            .replacen(
+                r#"{"translation": [0, 0, 5], "camera": 0}"#,
+                &format!(
+                    r#"{{"translation": [0, 0, 5], "camera": 0}},
+    {{"translation": [1, 2, 3], "extensions": {{"KHR_lights_punctual": {{"light": 0}}}}}},
+    {{"translation": [0, 3, 0], {down}, "extensions": {{"KHR_lights_punctual": {{"light": 1}}}}}},
+    {{{down}, "scale": [4, 4, 4], "extensions": {{"KHR_lights_punctual": {{"light": 2}}}}}}"#
+                ),
+                1,
+            )
+    }
+
+    /// Candela and lux over 683 lm/W, times the colour; placed and aimed down the node's -Z.
+    #[test]
+    fn khr_lights_punctual_become_radiometric_lights() {
+        let lights = r#"[
+          {"type": "point", "color": [1, 0.5, 0.25], "intensity": 683, "range": 10},
+          {"type": "spot", "intensity": 1366, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.4}},
+          {"type": "directional", "intensity": 6830}
+        ]"#;
+        let json = document_with_lights(lights);
+        let path = write("gltf-lights", "lights.gltf", json.as_bytes());
+        let asset = match load_asset(&path) {
+            Ok(asset) => asset,
+            Err(e) => panic!("{e}\n{json}"),
+        };
+        assert_eq!(asset.lights.len(), 3);
+        assert_eq!(asset.lights[0], Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(1.0, 0.5, 0.25) });
+        let Light::Spot { position, axis, intensity, cone_angle, falloff_start } = asset.lights[1] else { panic!("{:?}", asset.lights[1]) };
+        assert_eq!((position, intensity, cone_angle, falloff_start), (Vec3::new(0.0, 3.0, 0.0), Vec3::splat(2.0), 0.4, 0.2));
+        assert!((axis - Vec3::NEG_Y).length() < 1e-6, "{axis}");
+        let Light::Directional { direction, irradiance, angular_diameter } = asset.lights[2] else { panic!("{:?}", asset.lights[2]) };
+        assert!((direction - Vec3::NEG_Y).length() < 1e-6, "{direction}: a scaled node still gives a unit direction");
+        assert_eq!((irradiance, angular_diameter), (Vec3::splat(10.0), 0.0));
+        // A scene's placement moves them too, twice for two instances.
+        let toml = format!("camera = {{ position = [0, 0, 3], look_at = [0, 0, 0] }}\n[[meshes]]\nfile = {:?}\ntranslate = [0, 0, 10]\ninstances = [{{}}, {{ translate = [5, 0, 0] }}]", path.display().to_string());
+        let scene = crate::scene::Scene::parse(&toml, "placed.toml", Path::new(".")).unwrap();
+        assert_eq!(scene.lights.len(), 6);
+        assert_eq!(scene.lights[3], Light::Point { position: Vec3::new(6.0, 2.0, 13.0), intensity: Vec3::new(1.0, 0.5, 0.25) });
+
+        let negative = document_with_lights(r#"[{"type": "point", "intensity": -1}, {"type": "point"}, {"type": "point"}]"#);
+        let err = load_asset(&write("gltf-lights", "negative.gltf", negative.as_bytes())).unwrap_err().to_string();
+        assert!(err.contains("negative.gltf") && err.contains("KHR_lights_punctual light 0: intensity must be finite and >= 0"), "{err}");
+        let wide = document_with_lights(r#"[{"type": "point"}, {"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.4}}, {"type": "point"}]"#);
+        let err = load_asset(&write("gltf-lights", "wide.gltf", wide.as_bytes())).unwrap_err().to_string();
+        assert!(err.contains("KHR_lights_punctual light 1: spot angles"), "{err}");
     }
 
     #[test]

@@ -10,7 +10,7 @@ mod texture;
 
 pub use texture::downsample_to_fit;
 
-use super::{Conductor, MetallicRoughness};
+use super::{Conductor, Light, MetallicRoughness};
 use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::{Path, PathBuf};
@@ -27,6 +27,8 @@ pub struct Asset {
     pub instances: Vec<(usize, Mat4)>,
     /// glTF only: the first camera found in the node hierarchy, in world space.
     pub camera: Option<AssetCamera>,
+    /// glTF only: the `KHR_lights_punctual` lights of the node hierarchy, in world space.
+    pub lights: Vec<Light>,
     /// Zero-area or degenerate triangles dropped while loading (for a note on stderr by the caller).
     pub dropped_triangles: usize,
 }
@@ -185,6 +187,7 @@ fn single_mesh_asset(
         textures,
         instances: vec![(0, Mat4::IDENTITY)],
         camera: None,
+        lights: Vec::new(),
         dropped_triangles,
     }
 }
