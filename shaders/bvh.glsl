@@ -65,7 +65,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     uint instance_kind = INSTANCE_PRIMITIVES;
     uint instance_sp = 0u;     // stack height when it was entered
     // Start at the top-level root, or with a single instance, in that instance right away.
-    stack[sp++] = frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
+    stack[sp++] = SCENE_TOP_LEVEL == 0 || frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
     while (true) {
         LOOP_ITERATION();
         // Next entry: leave the instance once its part of the stack is used up.
@@ -83,7 +83,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
         if ((entry & INSTANCE_ENTRY) != 0u) {
             instance = entry & ~INSTANCE_ENTRY;
             uvec4 info = instances[instance].info;
-            instance_kind = info.x;
+            instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_PRIMITIVES == 0 ? INSTANCE_MESH : info.x;
             instance_sp = sp;
             // The scene's own shapes are placed by the identity: keep the world ray (loads are
             // what costs, on lavapipe most of all).
@@ -108,6 +108,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 uvec2 c = a; a = b; b = c;
                 float t = t_a; t_a = t_b; t_b = t;
             }
+#if SCENE_TOP_LEVEL
             if (instance == NO_INDEX) {
                 // Top level: every leaf is one instance (the host builds it so). Leave the farther
                 // child, then the nearer, on the stack and take the nearer from there: entering an
@@ -116,6 +117,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 if (t_a <= hit.t) stack[sp++] = a.y == 0u ? a.x : INSTANCE_ENTRY | a.x;
                 break;
             }
+#endif
             uint next = NO_INDEX;
             for (uint k = 0u; k < 2u; ++k) {
                 LOOP_ITERATION();
@@ -127,7 +129,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 uint count = child.y;
                 if (count == 0u) {
                     if (next == NO_INDEX) next = first; else stack[sp++] = first;
-                } else if (instance_kind == INSTANCE_MESH) {
+                } else if (SCENE_MESHES == 1 && (SCENE_PRIMITIVES == 0 || instance_kind == INSTANCE_MESH)) {
                     for (uint i = first; i < first + count; ++i) {
                         LOOP_ITERATION();
                         MeshTriangle tri = load_mesh_triangles(i);
@@ -138,7 +140,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                             if (any_hit) return true;
                         }
                     }
-                } else {
+                } else if (SCENE_PRIMITIVES == 1) {
                     for (uint i = first; i < first + count; ++i) {
                         LOOP_ITERATION();
                         float t = intersect_primitive(prims[i], ro, rd, hit.t);

@@ -65,7 +65,7 @@ vec2 map_position(vec3 r) {
 
 vec3 environment_radiance(vec3 d) {
     uint kind = frame.env_kind;
-    if (kind == ENV_CONSTANT) return frame.env_color;
+    if (SCENE_ENV_MAP == 0 || kind == ENV_CONSTANT) return frame.env_color;
     vec2 texel = map_position(world_to_map(d)) * vec2(frame.env_width, frame.env_height);
     return frame.env_color * env_bilinear(texel, kind == ENV_LATLONG);
 }
@@ -77,7 +77,7 @@ vec3 environment_radiance(vec3 d) {
 // (angular, r the distance from the centre in [-1, 1]^2 units).
 
 bool environment_sampled() {
-    return frame.env_selection_probability > 0.0;
+    return SCENE_ENV_MAP == 1 && frame.env_selection_probability > 0.0;
 }
 
 // Index i in [0, count) with cdf[offset + i] <= u < cdf[offset + i + 1].

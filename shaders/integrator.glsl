@@ -73,86 +73,98 @@ struct FirstHit {
     bool open;
 };
 
-vec3 trace_path(vec3 origin, vec3 dir, inout Rng rng, inout uint rays, inout FirstHit first) {
-    vec3 radiance = vec3(0.0);
-    vec3 throughput = vec3(1.0);
-    bool nee = frame.nee != 0u;
-    uint rr_start = frame.rr_start;
-    // The previous bounce, for the MIS weight of emitters hit by BSDF sampling: the pdf of its
+// A path in flight: what one sample's walk keeps from vertex to vertex, so that a path advances
+// one vertex at a time and a lane whose path has ended starts its next sample at once (path
+// regeneration, pathtrace.comp) instead of idling until the longest path of its subgroup ends.
+struct Path {
+    vec3 origin;
+    vec3 dir;
+    vec3 radiance;
+    vec3 throughput;
+    // The previous vertex, for the MIS weight of emitters hit by BSDF sampling: the pdf of its
     // direction, 0 after the camera or a delta lobe (which light sampling cannot reproduce).
-    float bsdf_pdf = 0.0;
-    vec3 prev_point = origin;
+    float bsdf_pdf;
+    vec3 prev_point;
+    uint depth;
+};
 
-    uint max_bounces = frame.max_bounces;
-    for (uint depth = 0u; depth < max_bounces; ++depth) {
-        LOOP_ITERATION();
-        bounce_dimensions(rng, depth, 0u, DIMS_SCATTER);
-        Hit hit;
-        rays += 1u;
-        if (!trace_ray(origin, dir, 1e30, false, hit)) {
-            float weight = 1.0;
-            if (nee && bsdf_pdf > 0.0 && environment_sampled()) {
-                weight = power_heuristic(bsdf_pdf, frame.env_selection_probability * environment_pdf(dir));
-            }
-            vec3 env = environment_radiance(dir);
-            radiance += throughput * env * weight;
-            radiance += throughput * light_disks_radiance(dir, nee ? bsdf_pdf : 0.0);
-            if (AOVS == 1 && first.open) {
-                first.albedo = clamp(env, 0.0, 1.0);
-                first.normal = vec3(0.0);
-            }
-            break;
+Path path_start(vec3 origin, vec3 dir) {
+    return Path(origin, dir, vec3(0.0), vec3(1.0), 0.0, origin, 0u);
+}
+
+// Takes the path through its next vertex. False once the path has ended: path.radiance is then
+// the sample's estimate.
+bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first) {
+    uint depth = path.depth;
+    if (depth >= frame.max_bounces) return false;
+    bool nee = frame.nee != 0u;
+    bounce_dimensions(rng, depth, 0u, DIMS_SCATTER);
+    Hit hit;
+    rays += 1u;
+    if (!trace_ray(path.origin, path.dir, 1e30, false, hit)) {
+        float weight = 1.0;
+        if (nee && path.bsdf_pdf > 0.0 && environment_sampled()) {
+            weight = power_heuristic(path.bsdf_pdf, frame.env_selection_probability * environment_pdf(path.dir));
         }
-        Surface surface = surface_at(hit, origin, dir);
-        Material m = surface_material(surface);
-        vec3 point = surface.point;
-        vec3 n = surface.ng;
-        bool front = dot(n, dir) < 0.0;
+        vec3 env = environment_radiance(path.dir);
+        path.radiance += path.throughput * env * weight;
+        path.radiance += path.throughput * light_disks_radiance(path.dir, nee ? path.bsdf_pdf : 0.0);
         if (AOVS == 1 && first.open) {
-            // Written at every vertex while open, so a path that ends on a specular chain keeps
-            // its last surface.
-            if (depth == 0u) {
-                first.depth = hit.t;
-                first.hit = true;
-            }
-            first.albedo = m.albedo_r.rgb;
-            first.normal = front ? surface.ns : -surface.ns;
+            first.albedo = clamp(env, 0.0, 1.0);
+            first.normal = vec3(0.0);
         }
-
-        vec3 le = emitted_radiance(m, front);
-        if (max3(le) > 0.0) {
-            float weight = 1.0;
-            if (nee && bsdf_pdf > 0.0) {
-                weight = power_heuristic(bsdf_pdf, light_pdf(world_primitive(hit), prev_point, dir, hit.t));
-            }
-            radiance += throughput * le * weight;
-        }
-
-        if (depth >= rr_start) {
-            float q = survival_probability(throughput);
-            if (rng_next(rng) >= q) break;
-            throughput /= q;
-        }
-
-        Lobe lobe = pick_lobe(m, dir, surface.ns, front, rng);
-        if (!lobe_is_delta(lobe)) first.open = false;
-        BsdfSample s;
-        bool sampled = sample_lobe(lobe, dir, rng, s);
-        // Even when the sample fails (a rough lobe's can point below the surface): the direct
-        // light must not be dropped with it.
-        if (nee && !lobe_is_delta(lobe)) {
-            bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
-            radiance += throughput * direct_light(lobe, dir, surface, rng, rays);
-        }
-        if (!sampled) break;
-        // Shading normals can send a ray through the geometric surface; such paths end here.
-        if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) break;
-        throughput *= s.weight;
-        bsdf_pdf = s.delta ? 0.0 : s.pdf;
-        prev_point = point;
-        if (max3(throughput) <= 0.0) break;
-        origin = offset_origin(point, n, s.dir);
-        dir = s.dir;
+        return false;
     }
-    return radiance;
+    Surface surface = surface_at(hit, path.origin, path.dir);
+    Material m = surface_material(surface);
+    vec3 point = surface.point;
+    vec3 n = surface.ng;
+    bool front = dot(n, path.dir) < 0.0;
+    if (AOVS == 1 && first.open) {
+        // Written at every vertex while open, so a path that ends on a specular chain keeps
+        // its last surface.
+        if (depth == 0u) {
+            first.depth = hit.t;
+            first.hit = true;
+        }
+        first.albedo = m.albedo_r.rgb;
+        first.normal = front ? surface.ns : -surface.ns;
+    }
+
+    vec3 le = emitted_radiance(m, front);
+    if (max3(le) > 0.0) {
+        float weight = 1.0;
+        if (nee && path.bsdf_pdf > 0.0) {
+            weight = power_heuristic(path.bsdf_pdf, light_pdf(world_primitive(hit), path.prev_point, path.dir, hit.t));
+        }
+        path.radiance += path.throughput * le * weight;
+    }
+
+    if (depth >= frame.rr_start) {
+        float q = survival_probability(path.throughput);
+        if (rng_next(rng) >= q) return false;
+        path.throughput /= q;
+    }
+
+    Lobe lobe = pick_lobe(m, path.dir, surface.ns, front, rng);
+    if (!lobe_is_delta(lobe)) first.open = false;
+    BsdfSample s;
+    bool sampled = sample_lobe(lobe, path.dir, rng, s);
+    // Even when the sample fails (a rough lobe's can point below the surface): the direct
+    // light must not be dropped with it.
+    if (nee && !lobe_is_delta(lobe)) {
+        bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
+        path.radiance += path.throughput * direct_light(lobe, path.dir, surface, rng, rays);
+    }
+    if (!sampled) return false;
+    // Shading normals can send a ray through the geometric surface; such paths end here.
+    if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) return false;
+    path.throughput *= s.weight;
+    path.bsdf_pdf = s.delta ? 0.0 : s.pdf;
+    path.prev_point = point;
+    if (max3(path.throughput) <= 0.0) return false;
+    path.origin = offset_origin(point, n, s.dir);
+    path.dir = s.dir;
+    path.depth = depth + 1u;
+    return true;
 }

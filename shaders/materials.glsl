@@ -62,7 +62,9 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
     Lobe l;
     l.n = entering ? ns : -ns;
     onb(l.n, l.t, l.b);
-    l.alpha = m.params.w;
+    // A scene without rough lobes (SCENE_ROUGH_LOBES, src/render/features.rs) has every R and T lobe
+    // smooth: the constant lets the compiler drop the GGX code.
+    l.alpha = SCENE_ROUGH_LOBES == 1 ? m.params.w : 0.0;
     l.eta = 1.0;
     l.color = m.albedo_r.rgb;
     l.k = vec3(0.0);
@@ -82,7 +84,7 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
     } else if (xi < r + t) {
         l.kind = LOBE_DIELECTRIC;
         l.eta = entering ? 1.0 / m.params.x : m.params.x;
-    } else if (m.conductor_k.w > 0.0) {
+    } else if (SCENE_COATED == 1 && m.conductor_k.w > 0.0) {
         // A plastic is coated on both sides. Its coat reflects F(wo) and passes the rest to the
         // base; pick by the share each carries, so that a dark base is rarely sampled.
         l.eta = 1.0 / m.params.x;

@@ -3,9 +3,10 @@
 // pixel's running sum up to `pass.target_samples` samples. Each pixel continues from the count it
 // holds, so a dispatch repeated after it was cut short (see loop_limit.glsl) adds exactly the
 // samples that are missing, and the sums are bit for bit those of one uninterrupted render.
-// The host prepends `#define BVH_MAX_DEPTH` and `BVH_MAX_LEAF_SIZE` (the BVH builder's bounds),
-// `AOVS` (1: also accumulate the denoiser features, the AOV sums; 0: a kernel without them)
-// and `COUNT_LOOP_ITERATIONS` (1 on devices that end loops early).
+// The host prepends `#define BVH_MAX_DEPTH` (the BVH builder's bound), `AOVS` (1: also
+// accumulate the denoiser features, the AOV sums; 0: a kernel without them),
+// `COUNT_LOOP_ITERATIONS` (1 on devices that end loops early) and the `SCENE_*` features the
+// scene uses (src/render/features.rs: what is 0 is compiled out).
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
@@ -25,6 +26,16 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "camera.glsl"
 #include "integrator.glsl"
 
+// Sample `s` of the pixel: its random numbers, its camera ray, its path at the camera.
+void start_sample(uvec2 pixel, uint index, uint s, out Rng rng, out Path path, out FirstHit first_hit) {
+    rng = rng_for_sample(frame.seed, index, pass.stream_offset + s, frame.sampler_kind);
+    rng_set_dimensions(rng, 0u, DIMS_CAMERA);
+    vec3 origin, dir;
+    camera_ray(pixel, rng, origin, dir);
+    first_hit = FirstHit(vec3(0.0), vec3(0.0), 0.0, false, AOVS == 1);
+    path = path_start(origin, dir);
+}
+
 void main() {
     uvec2 pixel = uvec2(gl_GlobalInvocationID.x, gl_GlobalInvocationID.y + pass.row_offset);
     uint width = frame.width;
@@ -41,14 +52,20 @@ void main() {
     vec4 albedo_depth = inside ? load_aov_albedo_depth(index) : vec4(0.0);
     vec4 normal_hits = inside ? load_aov_normal_hits(index) : vec4(0.0);
 #endif
-    for (uint s = first; s < target; ++s) {
+    // One vertex an iteration; a lane whose path ends adds its sample and starts the next at once,
+    // so the lanes of a subgroup stay busy until each has done all its samples, rather than each
+    // sample waiting for the subgroup's longest path. The sums are added in sample order as before.
+    uint s = first;
+    Rng rng;
+    Path path;
+    FirstHit first_hit;
+    bool starting = true;
+    while (s < target) {
         LOOP_ITERATION();
-        Rng rng = rng_for_sample(frame.seed, index, pass.stream_offset + s, frame.sampler_kind);
-        rng_set_dimensions(rng, 0u, DIMS_CAMERA);
-        vec3 origin, dir;
-        camera_ray(pixel, rng, origin, dir);
-        FirstHit first_hit = FirstHit(vec3(0.0), vec3(0.0), 0.0, false, AOVS == 1);
-        vec3 radiance = trace_path(origin, dir, rng, rays, first_hit);
+        if (starting) start_sample(pixel, index, s, rng, path, first_hit);
+        starting = false;
+        if (path_step(path, rng, rays, first_hit)) continue;
+        vec3 radiance = path.radiance;
         // Optional firefly clamp (biased): scale down, keeping the sample's colour.
         float peak = max3(radiance);
         if (clamp_max > 0.0 && peak > clamp_max) radiance *= clamp_max / peak;
@@ -64,6 +81,8 @@ void main() {
         albedo_depth += vec4(first_hit.albedo, first_hit.depth);
         normal_hits += vec4(first_hit.normal, first_hit.hit ? 1.0 : 0.0);
 #endif
+        ++s;
+        starting = true;
     }
     report_loop_iterations();
     if (!inside) return;

@@ -28,7 +28,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     Surface s;
     s.point = o + hit.t * d;
     uvec4 info = instances[hit.instance].info;
-    if (info.x == INSTANCE_PRIMITIVES) {
+    if (SCENE_MESHES == 0 || (SCENE_PRIMITIVES == 1 && info.x == INSTANCE_PRIMITIVES)) {
         Primitive p = prims[hit.prim];
         s.ng = primitive_normal(p, s.point);
         s.ns = s.ng;
@@ -51,7 +51,8 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
         }
     }
     s.uv = vec2(0.0);
-    if ((info.z & INSTANCE_HAS_UVS) != 0u) {
+    // Texture coordinates serve textures alone.
+    if (SCENE_TEXTURES == 1 && (info.z & INSTANCE_HAS_UVS) != 0u) {
         s.uv = w.x * load_vertex_uvs(tri.x) + w.y * load_vertex_uvs(tri.y) + w.z * load_vertex_uvs(tri.z);
     }
     s.material = load_triangle_materials(hit.prim);
@@ -60,7 +61,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 
 // The hit emitter as a world-space primitive, for its light-sampling pdf.
 Primitive world_primitive(Hit hit) {
-    if (instances[hit.instance].info.x == INSTANCE_PRIMITIVES) return prims[hit.prim];
+    if (SCENE_MESHES == 0 || (SCENE_PRIMITIVES == 1 && instances[hit.instance].info.x == INSTANCE_PRIMITIVES)) return prims[hit.prim];
     vec4 object_to_world[3] = instances[hit.instance].object_to_world;
     MeshTriangle tri = load_mesh_triangles(hit.prim);
     Primitive p;
@@ -74,6 +75,7 @@ Primitive world_primitive(Hit hit) {
 // texture (G = roughness, B = metallic) turned into R, T and alpha as the loader does factors.
 Material surface_material(Surface s) {
     Material m = materials[s.material];
+#if SCENE_TEXTURES
     uint texture_index = floatBitsToUint(m.params.z);
     if (texture_index != NO_TEXTURE) m.albedo_r.rgb *= texture_rgb(texture_index, s.uv);
     uint mr_index = floatBitsToUint(m.metallic_roughness.x);
@@ -85,5 +87,6 @@ Material surface_material(Surface s) {
         m.emission_t.w = (1.0 - metallic) * m.metallic_roughness.w;
         m.params.w = roughness * roughness;
     }
+#endif
     return m;
 }

@@ -5,7 +5,7 @@ use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Ou
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
 use caustica::bench::{self, FilmOverrides};
-use caustica::render::{AovSet, Renderer};
+use caustica::render::{AovSet, KernelChoice, Renderer};
 use caustica::scene::{check_film, Film, Filter, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -237,6 +237,10 @@ enum Command {
         /// Print the results as JSON (with --suite, one document: the device and a row per scene).
         #[arg(long)]
         json: bool,
+        /// Measure the general kernel, compiled with every scene feature, instead of the kernel
+        /// compiled for the scene: what specialization gains (the image is the same).
+        #[arg(long)]
+        general_kernel: bool,
         #[command(flatten)]
         scene_files: SceneFileArgs,
         #[command(flatten)]
@@ -458,10 +462,10 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
 
 /// `bench SCENE`: one scene, by default at 256x256 and 64 spp (not the scene's own film, so that
 /// figures of different scenes compare).
-fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, json: bool, gpu: &DeviceArgs) -> Result<()> {
+fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, kernel: KernelChoice, json: bool, gpu: &DeviceArgs) -> Result<()> {
     apply_overrides(&mut scene, Some(film.width.unwrap_or(256)), Some(film.height.unwrap_or(256)), Some(film.spp.unwrap_or(64)))?;
     let ctx = gpu.context()?;
-    let measured = bench::measure(&ctx, &scene, aovs)?;
+    let measured = bench::measure(&ctx, &scene, aovs, kernel)?;
     if json {
         println!("{}", measured.json_with_device(&ctx.info));
     } else {
@@ -472,13 +476,13 @@ fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, json: bool, gpu: &
 
 /// `bench --suite`: every scene of the suite on one device; fails (after the table) when a scene
 /// that should have run did not.
-fn bench_suite(scenes: &Path, overrides: FilmOverrides, aovs: AovSet, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
+fn bench_suite(scenes: &Path, overrides: FilmOverrides, aovs: AovSet, kernel: KernelChoice, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
     // A bad override is refused once, before any work, rather than by every scene in turn.
     let (w, h, spp) = (overrides.width.unwrap_or(1), overrides.height.unwrap_or(1), overrides.spp.unwrap_or(1));
     check_film(&Film { width: w, height: h, spp, filter: Filter::Box }).context("command-line film settings")?;
     let entries = bench::suite_entries(scenes, &caustica::scene::data_dir())?;
     let ctx = gpu.context()?;
-    let outcome = bench::run_suite(&ctx, &entries, overrides, aovs, |path| scene_files.load_scene(Some(&path.to_path_buf())));
+    let outcome = bench::run_suite(&ctx, &entries, overrides, aovs, kernel, |path| scene_files.load_scene(Some(&path.to_path_buf())));
     if json {
         println!("{}", bench::suite_json(&outcome, &ctx.info));
         bench::print_left_out(&outcome);
@@ -555,13 +559,14 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, suite, scenes, aov, json, scene_files, gpu } => {
+        Command::Bench { width, height, spp, scene, suite, scenes, aov, json, general_kernel, scene_files, gpu } => {
             let (aovs, film) = (aov.unwrap_or_default(), FilmOverrides { width, height, spp });
+            let kernel = if general_kernel { KernelChoice::General } else { KernelChoice::ForScene };
             if suite {
                 let scenes = scenes.unwrap_or_else(|| PathBuf::from("scenes"));
-                return bench_suite(&scenes, film, aovs, json, &scene_files, &gpu);
+                return bench_suite(&scenes, film, aovs, kernel, json, &scene_files, &gpu);
             }
-            bench(scene_files.load_scene(scene.as_ref())?, film, aovs, json, &gpu)
+            bench(scene_files.load_scene(scene.as_ref())?, film, aovs, kernel, json, &gpu)
         }
     }
 }

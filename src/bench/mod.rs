@@ -15,7 +15,7 @@ pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcom
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext};
 use crate::process_time::cpu_seconds;
-use crate::render::{AovSet, GeometryReport, Renderer};
+use crate::render::{AovSet, GeometryReport, KernelChoice, Renderer, SceneFeatures};
 use crate::scene::Scene;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -30,6 +30,10 @@ pub struct Measurement {
     /// Samples per pixel timed (the warm-up sample excluded).
     pub spp: u32,
     pub aovs: AovSet,
+    /// The kernel measured: compiled for the scene, or the general one (`--general-kernel`).
+    pub kernel: KernelChoice,
+    /// The scene features that kernel was compiled with.
+    pub features: SceneFeatures,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
     pub setup_seconds: f64,
     /// Wall time of the timed dispatches, fences included.
@@ -51,11 +55,12 @@ pub struct Measurement {
     pub geometry: GeometryReport,
 }
 
-/// Renders `scene` at its film's size and sample count (seed 1) and times it.
-pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet) -> Result<Measurement> {
+/// Renders `scene` at its film's size and sample count (seed 1) with the `kernel` chosen and times
+/// it.
+pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, kernel: KernelChoice) -> Result<Measurement> {
     let (width, height, spp) = (scene.film.width, scene.film.height, scene.film.spp);
     let setup = Instant::now();
-    let mut renderer = Renderer::with_aovs(ctx, scene, 1, aovs)?;
+    let mut renderer = Renderer::with_kernel(ctx, scene, 1, aovs, kernel)?;
     let setup_seconds = setup.elapsed().as_secs_f64();
     renderer.render(1, |_| {})?;
     let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
@@ -72,6 +77,8 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet) -> Result<Measurem
         height,
         spp,
         aovs,
+        kernel,
+        features: renderer.features,
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
@@ -109,6 +116,11 @@ impl Measurement {
             "height": self.height,
             "samples": self.spp,
             "aovs": self.aovs.to_string(),
+            "kernel": match self.kernel {
+                KernelChoice::ForScene => "scene",
+                KernelChoice::General => "general",
+            },
+            "kernel_features": self.features.names(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,

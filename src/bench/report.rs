@@ -3,7 +3,7 @@
 
 use super::{device_json, Measurement, SuiteOutcome};
 use crate::gpu::DeviceInfo;
-use crate::render::GeometryReport;
+use crate::render::{GeometryReport, KernelChoice};
 use serde_json::{json, Value};
 
 /// `value / scale` to `digits` decimals, or "-" when nothing was timed (a render too quick to
@@ -28,6 +28,11 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
     println!("scene:        {}", m.scene);
     println!("device:       {}", device_line(device));
     println!("image:        {}x{}, {} spp, AOVs: {}", m.width, m.height, m.spp, m.aovs);
+    let kernel = match m.kernel {
+        KernelChoice::ForScene => "compiled for the scene",
+        KernelChoice::General => "general (--general-kernel)",
+    };
+    println!("kernel:       {kernel}: {}", m.features.names().join(", "));
     print_geometry(&m.geometry);
     println!("setup:        {:.3} s (load excluded: BVH, upload, kernel compile)", m.setup_seconds);
     let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));

@@ -7,7 +7,7 @@
 
 use super::{measure, Measurement};
 use crate::gpu::GpuContext;
-use crate::render::AovSet;
+use crate::render::{AovSet, KernelChoice};
 use crate::scene::{check_film, Scene, DEFAULT_SCENE_TOML};
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{Context as _, Result};
@@ -127,6 +127,7 @@ pub fn run_suite(
     entries: &[SuiteEntry],
     overrides: FilmOverrides,
     aovs: AovSet,
+    kernel: KernelChoice,
     load: impl Fn(&Path) -> Result<Scene>,
 ) -> SuiteOutcome {
     let mut outcome = SuiteOutcome::default();
@@ -149,7 +150,7 @@ pub fn run_suite(
             scene.name = name.clone();
             (scene.film.width, scene.film.height, scene.film.spp) = (film.width, film.height, film.spp);
             check_film(&scene.film).context("command-line film settings")?;
-            measure(ctx, &scene, aovs)
+            measure(ctx, &scene, aovs, kernel)
         })();
         match measured {
             Ok(row) => outcome.rows.push(row),

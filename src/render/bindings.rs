@@ -247,15 +247,16 @@ pub fn glsl(plans: &SplitPlans, variant: KernelVariant) -> String {
 mod tests {
     use super::*;
     use crate::render::chunks::{window_binding, ChunkPlan, MAX_CHUNKS, UNSPLIT};
+    use crate::render::features::SceneFeatures;
     use crate::render::kernel::kernel_spirv;
     use crate::render::spirv_reflect::{block_variables, StorageClass};
     use std::collections::BTreeMap;
 
     const VARIANTS: [KernelVariant; 4] = [
-        KernelVariant { aovs: false, count_loop_iterations: false },
-        KernelVariant { aovs: true, count_loop_iterations: false },
-        KernelVariant { aovs: false, count_loop_iterations: true },
-        KernelVariant { aovs: true, count_loop_iterations: true },
+        KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL },
+        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures::ALL },
+        KernelVariant { aovs: false, count_loop_iterations: true, features: SceneFeatures::ALL },
+        KernelVariant { aovs: true, count_loop_iterations: true, features: SceneFeatures::ALL },
     ];
 
     /// A binding as a compiled kernel declares it: the storage class, the block's instance name
@@ -339,7 +340,7 @@ mod tests {
 
     #[test]
     fn the_generated_declarations_say_what_each_buffer_is() {
-        let src = glsl(&UNSPLIT, KernelVariant { aovs: true, count_loop_iterations: false });
+        let src = glsl(&UNSPLIT, KernelVariant { aovs: true, ..Default::default() });
         let materials = format!("binding = {}) readonly buffer materials_buffer {{ Material materials[]; }};", KernelBuffer::Materials.entry().binding);
         assert!(src.contains(&materials), "{src}");
         assert!(src.contains("    // Number of area lights: the entries of `lights`.\n    uint light_count;\n"), "{src}");

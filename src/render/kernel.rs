@@ -4,6 +4,7 @@
 
 use super::bindings;
 use super::chunks::{SplitPlans, UNSPLIT};
+use super::features::SceneFeatures;
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{anyhow, Context as _, Result};
@@ -65,9 +66,10 @@ const INTERFACE_FILE: &str = "interface.glsl";
 /// A compute shader of `main` (GLSL whose `#include`s name the kernel's shader files) with those
 /// files as [`shader_file`] reads them: test kernels run the kernel's own code, mutations included.
 /// layout.glsl declares the inputs of a kernel without AOVs whose arrays are each in one binding.
+/// Its code is the general kernel's: every scene feature compiled in.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
     let interface = bindings::glsl(&UNSPLIT, KernelVariant::default());
-    assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &[])
+    assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &SceneFeatures::ALL.defines())
 }
 
 /// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
@@ -81,16 +83,20 @@ pub struct KernelVariant {
     pub aovs: bool,
     /// Count loop iterations per subgroup, for devices that end loops early (loop_limit.glsl).
     pub count_loop_iterations: bool,
+    /// What of the kernel the scene uses (features.rs); the default is the general kernel.
+    pub features: SceneFeatures,
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.
 pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<String> {
     let interface = bindings::glsl(plans, variant);
-    assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &[
-            ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
-            ("AOVS", u32::from(variant.aovs).to_string()),
-            ("COUNT_LOOP_ITERATIONS", u32::from(variant.count_loop_iterations).to_string()),
-        ],)
+    let mut defines = vec![
+        ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
+        ("AOVS", u32::from(variant.aovs).to_string()),
+        ("COUNT_LOOP_ITERATIONS", u32::from(variant.count_loop_iterations).to_string()),
+    ];
+    defines.extend(variant.features.defines());
+    assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)
 }
 
 /// SPIR-V of the kernel for this split of the arrays and variant; compiled on first use (glslang
@@ -117,7 +123,8 @@ mod tests {
     fn kernel_compiles_to_spirv() {
         for aovs in [false, true] {
             for count_loop_iterations in [false, true] {
-                let spirv = kernel_spirv(&UNSPLIT, KernelVariant { aovs, count_loop_iterations }).expect("pathtrace.comp compiles");
+                let variant = KernelVariant { aovs, count_loop_iterations, ..Default::default() };
+                let spirv = kernel_spirv(&UNSPLIT, variant).expect("pathtrace.comp compiles");
                 assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
             }
         }
@@ -126,7 +133,7 @@ mod tests {
     #[test]
     fn kernel_compiles_with_every_array_split() {
         let split = SplitPlans([ChunkPlan { shift: 10, chunks: MAX_CHUNKS }; crate::render::bindings::KernelBuffer::COUNT]);
-        let spirv = kernel_spirv(&split, KernelVariant { aovs: true, count_loop_iterations: true }).expect("pathtrace.comp compiles split");
+        let spirv = kernel_spirv(&split, KernelVariant { aovs: true, count_loop_iterations: true, ..Default::default() }).expect("pathtrace.comp compiles split");
         assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
     }
 }

@@ -6,6 +6,7 @@ mod aov;
 pub mod bindings;
 mod chunks;
 mod env_sampling;
+mod features;
 mod glsl_block;
 mod kernel;
 pub mod layout;
@@ -19,8 +20,9 @@ pub use chunks::UNSPLIT;
 pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
-pub use renderer::{frame_params, mean_image, GeometryReport, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};
+pub use renderer::{frame_params, mean_image, GeometryReport, KernelChoice, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};
 pub use scene_data::SceneData;
+pub use features::SceneFeatures;
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling
 /// make their distributions proportional to (lights.glsl evaluates the same weights in the kernel).

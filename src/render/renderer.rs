@@ -11,6 +11,7 @@ use super::kernel::{kernel_spirv, KernelVariant, WORKGROUP};
 use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
+use super::features::SceneFeatures;
 use super::scene_data::SceneData;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
@@ -32,6 +33,8 @@ const LOOP_LIMIT_SHARE: f64 = 0.5;
 pub struct Renderer<'a> {
     ctx: &'a GpuContext,
     kernel: Option<ComputeKernel>,
+    /// What the kernel was compiled for.
+    pub features: SceneFeatures,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
     buffers: Vec<(KernelBuffer, Buffer)>,
     aovs: AovSet,
@@ -87,6 +90,16 @@ struct PassInProgress {
     target: u32,
     band: u32,
     next_row: u32,
+}
+
+/// Which kernel a renderer compiles (features.rs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum KernelChoice {
+    /// Compiled for what the scene uses: the default.
+    #[default]
+    ForScene,
+    /// Every feature compiled in: what specialization is measured against.
+    General,
 }
 
 /// What was uploaded, for logs and `caustica bench`.
@@ -287,6 +300,12 @@ impl<'a> Renderer<'a> {
     /// A renderer that also produces `aovs`. The beauty is the same bit for bit: the features
     /// draw no random numbers.
     pub fn with_aovs(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet) -> Result<Self> {
+        Self::with_kernel(ctx, scene, seed, aovs, KernelChoice::ForScene)
+    }
+
+    /// A renderer whose kernel is compiled as `choice` says. The image is the same bit for bit
+    /// either way (tests/specialization.rs); only the speed differs.
+    pub fn with_kernel(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet, choice: KernelChoice) -> Result<Self> {
         // One texel buffer holds every texture: it must fit the bindings it can be split across.
         let texels = KernelBuffer::Texels.entry().chunked_element().expect("texels are chunked");
         let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texels.bytes, ctx.info.max_storage_buffer_range));
@@ -303,7 +322,11 @@ impl<'a> Renderer<'a> {
         let image_bytes = width as u64 * height as u64 * 16;
         let params = frame_params(scene, &data, seed);
         let loop_limit = ctx.loop_limit()?;
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some() };
+        let features = match choice {
+            KernelChoice::ForScene => SceneFeatures::of(&data),
+            KernelChoice::General => SceneFeatures::ALL,
+        };
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
         let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
@@ -347,7 +370,7 @@ impl<'a> Renderer<'a> {
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        Ok(Self { ctx, kernel: Some(kernel), features, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),

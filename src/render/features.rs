@@ -1,0 +1,104 @@
+//! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
+//! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
+//! textures, an environment map, rough lobes, coated bases) is left out by `#if` and by constants
+//! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
+//! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
+//! checked-in scene with both kernels and requires the same sums bit for bit.
+
+use super::layout::{INSTANCE_MESH, INSTANCE_PRIMITIVES, NO_TEXTURE};
+use super::scene_data::SceneData;
+use super::layout::ENV_CONSTANT;
+
+/// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl).
+pub const ALPHA_DELTA: f32 = 1e-3;
+
+/// The kernel features a scene needs; each is one `SCENE_*` define (0 or 1) of the kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SceneFeatures {
+    /// More than one instance: the kernel walks the top-level BVH (bvh.glsl).
+    pub top_level: bool,
+    /// Triangle meshes (mesh instances).
+    pub meshes: bool,
+    /// The scene's own spheres, quads and triangles.
+    pub primitives: bool,
+    /// Albedo or metallic-roughness textures (and the texture coordinates they read).
+    pub textures: bool,
+    /// An environment map (else the sky is one colour, never importance sampled).
+    pub environment_map: bool,
+    /// GGX lobes: a material with a roughness at or above ALPHA_DELTA, or a metallic-roughness
+    /// texture (which sets roughness per texel).
+    pub rough_lobes: bool,
+    /// Plastics: a diffuse base under a dielectric coat.
+    pub coated: bool,
+}
+
+impl SceneFeatures {
+    /// Every feature: the general kernel, which renders any scene (and is what specialization is
+    /// measured against: `caustica bench --general-kernel`).
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, environment_map: true, rough_lobes: true, coated: true };
+
+    /// What `data` uses.
+    pub fn of(data: &SceneData) -> Self {
+        let instances = &data.acceleration.instances;
+        let has_instance = |kind| instances.iter().any(|i| i.info[0] == kind);
+        let has_mr_texture = data.materials.iter().any(|m| m.metallic_roughness[0].to_bits() != NO_TEXTURE);
+        Self {
+            top_level: instances.len() > 1,
+            meshes: has_instance(INSTANCE_MESH),
+            primitives: has_instance(INSTANCE_PRIMITIVES),
+            textures: !data.textures.is_empty(),
+            environment_map: data.env_kind != ENV_CONSTANT,
+            rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA),
+            coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
+        }
+    }
+
+    /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
+    fn table(&self) -> [(&'static str, &'static str, bool); 7] {
+        [
+            ("top_level", "SCENE_TOP_LEVEL", self.top_level),
+            ("meshes", "SCENE_MESHES", self.meshes),
+            ("primitives", "SCENE_PRIMITIVES", self.primitives),
+            ("textures", "SCENE_TEXTURES", self.textures),
+            ("environment_map", "SCENE_ENV_MAP", self.environment_map),
+            ("rough_lobes", "SCENE_ROUGH_LOBES", self.rough_lobes),
+            ("coated", "SCENE_COATED", self.coated),
+        ]
+    }
+
+    /// The `#define`s that compile the kernel for these features.
+    pub fn defines(&self) -> Vec<(&'static str, String)> {
+        self.table().into_iter().map(|(_, define, on)| (define, u32::from(on).to_string())).collect()
+    }
+
+    /// The names of the features that are on.
+    pub fn names(&self) -> Vec<&'static str> {
+        self.table().into_iter().filter(|&(_, _, on)| on).map(|(name, _, _)| name).collect()
+    }
+}
+
+impl Default for SceneFeatures {
+    fn default() -> Self {
+        Self::ALL
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alpha_delta_matches_glsl() {
+        let glsl = include_str!("../../shaders/microfacet.glsl");
+        assert!(glsl.contains(&format!("const float ALPHA_DELTA = {ALPHA_DELTA:e};")), "ALPHA_DELTA = {ALPHA_DELTA:e} not found in microfacet.glsl");
+    }
+
+    #[test]
+    fn every_feature_is_one_define_used_by_the_kernel() {
+        let kernel: String = crate::render::kernel::SHADERS.iter().map(|(_, text)| *text).collect();
+        for (name, value) in SceneFeatures::ALL.defines() {
+            assert_eq!(value, "1");
+            assert!(kernel.contains(name), "{name} is defined for the kernel but no shader file uses it");
+        }
+    }
+}

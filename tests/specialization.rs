@@ -1,0 +1,107 @@
+//! The kernel compiled for a scene (src/render/features.rs) renders the same sums, bit for bit, as
+//! the general kernel: every checked-in scene (those of the shared data folder when present) and a
+//! scene that uses every feature. A feature wrongly detected as absent drops its code and changes
+//! the image (the mutations `features-*` of tests/mutations.toml remove each detection in turn).
+
+mod common;
+
+use caustica::bench::{suite_entries, SuiteEntry};
+use caustica::render::{AovSet, KernelChoice, Renderer, SceneFeatures};
+use caustica::scene::{Instance, Mesh, Scene, Texture};
+use common::{gpu, parse};
+use glam::{Mat4, Vec2, Vec3};
+use std::path::Path;
+
+/// The accumulated sums of `scene` (seed 3, its own spp), as bits, and the features its kernel had.
+fn sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice) -> (Vec<[u32; 4]>, SceneFeatures) {
+    let mut renderer = Renderer::with_kernel(ctx, scene, 3, AovSet::default(), choice).expect("scene uploads");
+    renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
+    let bits = renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect();
+    (bits, renderer.features)
+}
+
+/// Renders `scene` small with both kernels; returns the features the scene's kernel was compiled with.
+fn assert_specialized_kernel_agrees(ctx: &caustica::gpu::GpuContext, mut scene: Scene) -> SceneFeatures {
+    (scene.film.width, scene.film.height, scene.film.spp) = (40, 30, 2);
+    let (specialized, features) = sums(ctx, &scene, KernelChoice::ForScene);
+    let (general, all) = sums(ctx, &scene, KernelChoice::General);
+    assert_eq!(all, SceneFeatures::ALL);
+    let differing = specialized.iter().zip(&general).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{}: {differing} of {} pixels differ between the kernel compiled for {:?} and the general kernel", scene.name, general.len(), features.names());
+    features
+}
+
+#[test]
+fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
+    let (_lock, ctx) = gpu();
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut specialized = 0;
+    for entry in suite_entries(&scenes, &caustica::scene::data_dir()).expect("the scenes folder lists") {
+        let (name, path) = match entry {
+            SuiteEntry::Skip { name, reason } => {
+                eprintln!("SKIPPED {name}: {reason}");
+                continue;
+            }
+            SuiteEntry::Run { name, path, .. } => (name, path),
+        };
+        let scene = match path {
+            Some(path) => Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e:#}")),
+            None => Scene::default_scene(),
+        };
+        if assert_specialized_kernel_agrees(&ctx, scene) != SceneFeatures::ALL {
+            specialized += 1;
+        }
+    }
+    // Otherwise the comparison above compared the general kernel with itself.
+    assert!(specialized >= 3, "only {specialized} scenes got a kernel of their own");
+}
+
+/// A textured, instanced mesh with a rough metal, a plastic and a sphere under an environment map:
+/// every feature on, which the checked-in scenes without the shared data lack (textures, several
+/// instances).
+#[test]
+fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
+    let mut scene = parse(
+        r#"
+        camera = { position = [0, 0.5, 3], look_at = [0, 0, 0], fov = 40 }
+        film = { width = 40, height = 30, spp = 2 }
+        environment = { probe = "scenes/probes/sky_probe.pfm" }
+        [materials.textured]
+        albedo = [1, 1, 1]
+        [materials.metal]
+        albedo = [0.9, 0.6, 0.3]
+        reflectivity = 1.0
+        roughness = 0.3
+        [materials.plastic]
+        albedo = [0.2, 0.5, 0.8]
+        coat = true
+        [[spheres]]
+        center = [0.8, 0.3, 0.0]
+        radius = 0.3
+        material = "metal"
+        [[spheres]]
+        center = [-0.8, 0.3, 0.0]
+        radius = 0.3
+        material = "plastic"
+        "#,
+    );
+    let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
+    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true }];
+    scene.materials[0].albedo_texture = Some(0);
+    let corners = [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)];
+    scene.meshes = vec![Mesh {
+        name: "floor".into(),
+        positions: corners.to_vec(),
+        normals: vec![Vec3::Y; 4],
+        uvs: corners.iter().map(|p| Vec2::new(p.x, p.z)).collect(),
+        triangles: vec![[0, 2, 1], [0, 3, 2]],
+        triangle_materials: vec![0, 0],
+    }];
+    scene.instances = vec![
+        Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, 0.0)) },
+        Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, -2.0)) },
+    ];
+    let (_lock, ctx) = gpu();
+    let features = assert_specialized_kernel_agrees(&ctx, scene);
+    assert_eq!(features, SceneFeatures::ALL, "the scene was meant to use every feature");
+}
