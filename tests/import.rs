@@ -355,3 +355,22 @@ fn max_depth_one_shows_only_what_emits() {
     assert_eq!(floor(&one), 0.0, "max_depth 1 lights nothing");
     assert!(floor(&two) > 0.0, "max_depth 2 lights the floor");
 }
+
+#[test]
+fn the_command_line_converts_and_fails_with_file_and_line() {
+    let caustica = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_caustica")).args(args).output().unwrap();
+    let sphere = "<default name=\"r\" value=\"1\"/>\n<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></shape>";
+    let path = write_scene("cli", &[("scene.xml", &xml(&format!("{SENSOR}\n{sphere}")))]);
+    let out = path.with_file_name("scene.toml");
+    let o = caustica(&["convert", path.to_str().unwrap(), "-o", out.to_str().unwrap(), "-D", "r=2.5"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = Scene::load(&out).unwrap();
+    assert!(matches!(s.shapes[..], [Shape::Sphere { radius: 2.5, .. }]), "{:?}", s.shapes);
+    let bad = write_scene("cli-bad", &[("scene.xml", &xml(&format!("{SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>")))]);
+    for args in [vec!["render", bad.to_str().unwrap(), "-o", "/tmp/never.png"], vec!["convert", bad.to_str().unwrap(), "-o", "/tmp/never.toml"], vec!["render", "-D", "x"]] {
+        let o = caustica(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains("scene.xml:8:") || stderr.contains("NAME=VALUE"), "{args:?}: {stderr}");
+    }
+}
