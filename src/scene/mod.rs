@@ -4,6 +4,7 @@ mod asset;
 mod camera_toml;
 mod environment;
 mod format;
+pub mod import;
 mod light;
 mod mesh;
 mod optics;
@@ -166,6 +167,22 @@ impl Scene {
     /// file it names (meshes, textures, environment maps) too; relative paths inside it are
     /// relative to the file. [`confinement`] gives the `files` of `render --confine`.
     pub fn load_from(files: &InputFiles, path: &Path) -> Result<Scene> {
+        Scene::load_with(files, path, &[])
+    }
+
+    /// As [`Scene::load_from`], reading Mitsuba 3 XML too (`import`), with `defines` setting its
+    /// `<default>` parameters (`-D name=value`); the import's warnings go to stderr.
+    pub fn load_with(files: &InputFiles, path: &Path, defines: &[(String, String)]) -> Result<Scene> {
+        if import::is_foreign_scene(path) {
+            let imported = import::import(files, path, defines)?;
+            for warning in &imported.warnings {
+                eprintln!("caustica: warning: {warning}");
+            }
+            return imported.into_scene(files);
+        }
+        if let Some((name, _)) = defines.first() {
+            bail!("-D {name}=...: parameters are for Mitsuba XML scenes, not {}", path.display());
+        }
         let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         if matches!(extension.as_str(), "gltf" | "glb" | "obj" | "ply") {
             return Scene::model_from(files, path);

@@ -12,6 +12,8 @@ pub struct SceneSource {
     pub path: Option<PathBuf>,
     /// Read only files inside the scene's folder and the shared data folder (`--confine`).
     pub confine: bool,
+    /// `-D NAME=VALUE`: parameters of a Mitsuba XML scene.
+    pub defines: Vec<(String, String)>,
 }
 
 /// A scene with every file it was read from: the scene file, meshes, textures, environment maps.
@@ -23,10 +25,11 @@ pub struct LoadedScene {
 impl SceneSource {
     pub fn load(&self) -> Result<LoadedScene> {
         let Some(path) = &self.path else {
+            anyhow::ensure!(self.defines.is_empty(), "-D sets parameters of a Mitsuba XML scene; the built-in scene has none");
             return Ok(LoadedScene { scene: Scene::default_scene(), files: vec![] });
         };
         let files = if self.confine { confinement(path) } else { InputFiles::anywhere() }.recording();
-        let scene = Scene::load_from(&files, path)?;
+        let scene = Scene::load_with(&files, path, &self.defines)?;
         Ok(LoadedScene { scene, files: files.opened() })
     }
 
@@ -38,8 +41,8 @@ impl SceneSource {
         }
     }
 
-    /// A source for another file, with the same confinement.
+    /// A source for another file, with the same confinement and parameters.
     pub fn with_path(&self, path: &Path) -> Self {
-        Self { path: Some(path.to_owned()), confine: self.confine }
+        Self { path: Some(path.to_owned()), ..self.clone() }
     }
 }
