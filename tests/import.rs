@@ -234,6 +234,8 @@ fn unsupported_or_bad_input_is_an_error_naming_file_line_and_element() {
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"conductor\"><string name=\"material\" value=\"Cr\"/></bsdf></shape>"), vec!["scene.xml:8:", "'Cr'", "Au"]),
         (format!("{SENSOR}\n<shape type=\"serialized\"/>"), vec!["scene.xml:8:", "<shape type=\"serialized\">"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"/></bsdf></shape>"), vec!["scene.xml:8:", "textures"]),
+        (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"1.2, 0.5, 0.5\"/></bsdf></shape>"), vec!["scene.xml:8:", "reflectance must be in [0, 1]"]),
+        (format!("{SENSOR}\n<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"10\"/><float name=\"beam_width\" value=\"20\"/></emitter>"), vec!["scene.xml:8:", "beam_width"]),
         (format!("{SENSOR}\n<integrator type=\"volpath\"/>"), vec!["scene.xml:8:", "<integrator type=\"volpath\">"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"></shapee>"), vec!["scene.xml", "not well-formed"]),
         ("<shape type=\"sphere\"/>".to_owned(), vec!["scene.xml", "no <sensor>"]),
@@ -367,6 +369,10 @@ fn the_command_line_converts_and_fails_with_file_and_line() {
     let s = Scene::load(&out).unwrap();
     assert!(matches!(s.shapes[..], [Shape::Sphere { radius: 2.5, .. }]), "{:?}", s.shapes);
     let bad = write_scene("cli-bad", &[("scene.xml", &xml(&format!("{SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>")))]);
+    let pbrt = write_scene("pbrt", &[("scene.pbrt", "Camera \"perspective\"\n")]);
+    let o = caustica(&["render", pbrt.to_str().unwrap(), "-o", "/tmp/never.png"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("pbrt-v4 scenes are not supported yet"), "{}", String::from_utf8_lossy(&o.stderr));
     for args in [vec!["render", bad.to_str().unwrap(), "-o", "/tmp/never.png"], vec!["convert", bad.to_str().unwrap(), "-o", "/tmp/never.toml"], vec!["render", "-D", "x"]] {
         let o = caustica(&args);
         let stderr = String::from_utf8_lossy(&o.stderr);

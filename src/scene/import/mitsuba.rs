@@ -145,6 +145,15 @@ impl Mapper<'_> {
         Ok(c.unwrap_or(DVec3::splat(default)))
     }
 
+    /// A reflectance: a colour each channel of which lies in [0, 1] (errors name its line).
+    fn reflectance(&mut self, o: &Object, name: &str, default: f64) -> Result<DVec3> {
+        let c = self.color(o, name, default)?;
+        if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
+            return Err(o.error(format!("{name} must be in [0, 1] per channel (energy conservation), got {c}")));
+        }
+        Ok(c)
+    }
+
     fn sensor(&mut self, s: &Object) -> Result<(CameraFile, FilmFile, Sampler)> {
         let thin_lens = match s.plugin.as_str() {
             "perspective" => false,
@@ -447,7 +456,7 @@ impl Mapper<'_> {
                 if !two_sided {
                     self.warn("one-sided", one_sided);
                 }
-                MaterialFile { albedo: f32x3(self.color(b, "reflectance", 0.5)?), ..defaults }
+                MaterialFile { albedo: f32x3(self.reflectance(b, "reflectance", 0.5)?), ..defaults }
             }
             "conductor" | "roughconductor" => {
                 if !two_sided {
@@ -490,7 +499,7 @@ impl Mapper<'_> {
                 if b.boolean("nonlinear", false)? {
                     return Err(b.error("nonlinear is not supported"));
                 }
-                let albedo = f32x3(self.color(b, "diffuse_reflectance", 0.5)?);
+                let albedo = f32x3(self.reflectance(b, "diffuse_reflectance", 0.5)?);
                 MaterialFile { albedo, coat: true, ior: relative_ior(b, "polypropylene")?, roughness, ..defaults }
             }
             _ => return Err(b.error("this BSDF is not supported (diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, twosided)")),
@@ -547,6 +556,9 @@ impl Mapper<'_> {
                 let m = m.unwrap_or(DMat4::IDENTITY);
                 let cutoff = e.float("cutoff_angle", 20.0)?;
                 let beam = e.float("beam_width", cutoff * 0.75)?;
+                if !(cutoff > 0.0 && cutoff <= 180.0 && (0.0..=cutoff).contains(&beam)) {
+                    return Err(e.error(format!("needs 0 < cutoff_angle <= 180 and 0 <= beam_width <= cutoff_angle, got {cutoff} and {beam}")));
+                }
                 Some(LightFile::Spot(SpotLightFile {
                     position: f32x3(point(m, DVec3::ZERO)),
                     look_at: f32x3(point(m, DVec3::Z)),
