@@ -225,6 +225,31 @@ fn meshes_are_placed_by_their_to_world_and_shears_are_refused() {
 }
 
 #[test]
+fn shapegroup_instances_share_their_meshes() {
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let body = xml(&format!(
+        r#"{SENSOR}
+        <shape type="shapegroup" id="group">
+            <shape type="obj"><string name="filename" value="tri.obj"/><transform name="to_world"><scale value="2"/></transform></shape>
+            <shape type="sphere"><float name="radius" value="0.5"/></shape>
+        </shape>
+        <shape type="instance"><ref id="group"/><transform name="to_world"><translate x="1"/></transform></shape>
+        <shape type="instance"><ref id="group"/><transform name="to_world"><translate x="-3"/></transform></shape>"#
+    ));
+    let path = write_scene("instances", &[("scene.xml", &body), ("tri.obj", obj)]);
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
+    assert_eq!((s.meshes.len(), s.instances.len()), (1, 2), "the mesh is stored once and placed twice");
+    let placed = |k: usize| s.instances[k].transform;
+    assert!(placed(0).abs_diff_eq(Mat4::from_translation(Vec3::X) * Mat4::from_scale(Vec3::splat(2.0)), 1e-6), "{:?}", placed(0));
+    assert!(placed(1).abs_diff_eq(Mat4::from_translation(-3.0 * Vec3::X) * Mat4::from_scale(Vec3::splat(2.0)), 1e-6));
+    let centers: Vec<Vec3> = s.shapes.iter().map(|sh| match *sh {
+        Shape::Sphere { center, radius: 0.5, .. } => center,
+        _ => panic!("a sphere of radius 0.5"),
+    }).collect();
+    assert_eq!(centers, vec![Vec3::X, -3.0 * Vec3::X]);
+}
+
+#[test]
 fn unsupported_or_bad_input_is_an_error_naming_file_line_and_element() {
     for (body, needles) in [
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"principled\"/></shape>"), vec!["scene.xml:8:", "<bsdf type=\"principled\">", "not supported"]),

@@ -112,7 +112,12 @@ impl Mapper<'_> {
             lights: vec![],
         });
         for shape in of("shape") {
-            self.shape(&shape)?;
+            match shape.plugin.as_str() {
+                // A definition, placed by the instances that <ref> it.
+                "shapegroup" => {}
+                "instance" => self.instance(&shape)?,
+                _ => self.shape(&shape, DMat4::IDENTITY)?,
+            }
         }
         for emitter in of("emitter") {
             // Area emitters at the top level are definitions for shapes to <ref>.
@@ -317,8 +322,29 @@ impl Mapper<'_> {
         self.file.as_mut().expect("the scene file exists while shapes are mapped")
     }
 
-    fn shape(&mut self, s: &Rc<Object>) -> Result<()> {
-        let m = s.transform("to_world")?.unwrap_or(DMat4::IDENTITY);
+    /// An `instance` of a `shapegroup`: each shape of the group placed by the instance's
+    /// `to_world` after its own. Meshes placed again are stored once (caustica shares every
+    /// `[[meshes]]` entry of the same file and material); other shapes are copied.
+    fn instance(&mut self, i: &Object) -> Result<()> {
+        let m = i.transform("to_world")?.unwrap_or(DMat4::IDENTITY);
+        let groups = i.children_tagged("shape")?;
+        let [group] = groups.as_slice() else { return Err(i.error("an instance needs exactly one <ref> to a shapegroup")) };
+        if group.plugin != "shapegroup" {
+            return Err(i.error(format!("instances place a shapegroup, not {}", group.describe())));
+        }
+        i.check_all_used()?;
+        for shape in group.children_tagged("shape")? {
+            if matches!(shape.plugin.as_str(), "shapegroup" | "instance") {
+                return Err(shape.error("a shapegroup inside a shapegroup is not supported"));
+            }
+            self.shape(&shape, m)?;
+        }
+        group.check_all_used()
+    }
+
+    /// A shape, placed by `parent` (an instance's transform) after its own `to_world`.
+    fn shape(&mut self, s: &Rc<Object>, parent: DMat4) -> Result<()> {
+        let m = parent * s.transform("to_world")?.unwrap_or(DMat4::IDENTITY);
         let flip = s.boolean("flip_normals", false)?;
         let material = self.shape_material(s)?;
         // A mirroring transform turns the winding, so Mitsuba's normals (transformed as normals)
@@ -387,7 +413,7 @@ impl Mapper<'_> {
                     self.out().triangles.push(TriangleFile { vertices, material: material.clone() });
                 }
             }
-            _ => return Err(s.error("this shape is not supported (obj, ply, sphere, rectangle, cube, disk)")),
+            _ => return Err(s.error("this shape is not supported (obj, ply, sphere, rectangle, cube, disk, shapegroup, instance)")),
         }
         s.check_all_used()
     }
