@@ -293,7 +293,8 @@ impl Mapper<'_> {
 
     /// Mitsuba's `max_depth` counts path segments, the camera ray included, and so does caustica's
     /// `max_bounces`: 1 shows the emitters seen directly, 2 adds direct lighting, -1 is unbounded.
-    /// Both start roulette at the vertex `rr_depth` counts to.
+    /// `rr_depth` becomes `rr_start`: roulette first plays on reaching that vertex (Mitsuba
+    /// before counting its emission, caustica after; both unbiased).
     fn integrator(&mut self, integrators: &[Rc<Object>]) -> Result<IntegratorFile> {
         let mut file = IntegratorFile { rr_start: 5, max_bounces: UNBOUNDED_DEPTH, ..IntegratorFile::default() };
         let i = match integrators {
