@@ -65,14 +65,15 @@ Primitive world_primitive(Hit hit) {
     vec4 object_to_world[3] = instances[hit.instance].object_to_world;
     MeshTriangle tri = load_mesh_triangles(hit.prim);
     Primitive p;
-    p.a = vec4(affine_point(object_to_world, tri.v0.xyz), 0.0);
+    p.a = vec4(affine_point(object_to_world, tri.v0.xyz), uintBitsToFloat(hit.prim));
     p.b = vec4(affine_vector(object_to_world, tri.e1.xyz), uintBitsToFloat(PRIM_TRIANGLE));
     p.c = vec4(affine_vector(object_to_world, tri.e2.xyz), uintBitsToFloat(load_triangle_materials(hit.prim)));
     return p;
 }
 
-// Material at the surface, with the albedo texture applied, and the glTF metallic-roughness
-// texture (G = roughness, B = metallic) turned into R, T and alpha as the loader does factors.
+// Material at the surface, with the albedo and emission textures applied, and the glTF
+// metallic-roughness texture (G = roughness, B = metallic) turned into R, T and alpha as the loader
+// does factors.
 Material surface_material(Surface s) {
     Material m = materials[s.material];
 #if SCENE_TEXTURES
@@ -87,6 +88,10 @@ Material surface_material(Surface s) {
         m.emission_t.w = (1.0 - metallic) * m.metallic_roughness.w;
         m.params.w = roughness * roughness;
     }
+#endif
+#if SCENE_EMISSIVE_TEXTURES
+    uint emission_index = floatBitsToUint(m.maps.x);
+    if (emission_index != NO_TEXTURE) m.emission_t.rgb *= texture_rgb(emission_index, s.uv);
 #endif
     return m;
 }

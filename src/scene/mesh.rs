@@ -133,5 +133,6 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         conductor: m.conductor,
         coat: m.coat,
         metallic_roughness: m.metallic_roughness.map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
+        maps: m.maps.rebased(texture_base),
     })
 }

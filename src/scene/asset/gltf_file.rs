@@ -6,10 +6,9 @@
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
 //! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
 //!   sets, the sampler and alpha are ignored).
-//! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission, for materials without an
-//!   emissive texture. With one, the material does not emit (with a note on stderr): the renderer
-//!   has no textured emission, and the factor alone would make the whole surface glow (as it
-//!   would DamagedHelmet, whose factor is 1 and whose texture lights only small details).
+//! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission; `emissiveTexture`
+//!   (texCoord 0, sRGB) multiplies it per texel. Its triangles are lights for next-event
+//!   estimation, picked by their texture-weighted power (src/render/textured_emission.rs).
 //! - `metallicFactor` → reflectivity R, a conductor with the base colour as F0 (Schlick);
 //!   `roughnessFactor` → roughness (both perceptual) of every lobe.
 //! - `KHR_materials_transmission` factor → transparency T = (1 − metallic) × transmission, a
@@ -45,7 +44,7 @@ use gltf::{Document, Semantic};
 use super::gltf_accessors::AccessorLimits;
 use super::{
     texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
-    MeshData, MetallicRoughness,
+    MeshData, MetallicRoughness, TextureMaps,
 };
 use crate::input_file::{InputFiles, InputKind};
 
@@ -331,15 +330,21 @@ fn convert_material(
         )?),
         _ => None,
     };
-    let mut emission =
+    let emission =
         Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
-    if material.emissive_texture().is_some() && emission.max_element() > 0.0 {
-        eprintln!(
-            "caustica: glTF material {index} ('{}') has an emissive texture, which caustica cannot render; it does not emit",
-            material.name().unwrap_or("unnamed")
-        );
-        emission = Vec3::ZERO;
-    }
+    // Decoded only when it can show: glTF's default factor is black, and black times the texture
+    // is nothing to render.
+    let emission_texture = match material.emissive_texture() {
+        Some(info) if info.tex_coord() == 0 && emission.max_element() > 0.0 => Some(image_texture(
+            info.texture().source(),
+            true,
+            buffers,
+            sources,
+            decoded_images,
+            asset,
+        )? as u32),
+        _ => None,
+    };
     if !emission.is_finite() {
         return Err(format!("material {index}: emission overflows"));
     }
@@ -385,6 +390,7 @@ fn convert_material(
         conductor: Conductor::Albedo,
         coat: true,
         metallic_roughness,
+        maps: TextureMaps { emission: emission_texture },
     })
 }
 
@@ -722,6 +728,7 @@ mod tests {
     "name": "glowing glass",
     "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
     "emissiveFactor": [1, 0.5, 0.25],
+    "emissiveTexture": {{"index": 0}},
     "extensions": {{
       "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
       "KHR_materials_transmission": {{"transmissionFactor": 0.5}},
@@ -790,6 +797,7 @@ mod tests {
         assert_eq!((glass.conductor, glass.coat), (Conductor::Albedo, true));
         assert_eq!(asset.materials[1], AssetMaterial::default_grey());
         assert_eq!(glass.albedo_texture, Some(0));
+        assert_eq!(glass.maps.emission, Some(0), "the emissive texture is image 0 as colour, decoded once for both");
         assert_eq!(
             glass.metallic_roughness,
             Some(MetallicRoughness {
@@ -803,7 +811,7 @@ mod tests {
         assert_eq!(
             asset.textures.len(),
             2,
-            "image 0 is decoded once as colour and once as data; the emissive image never"
+            "image 0 is decoded once as colour (base colour and emission) and once as data; image 1 never"
         );
         for (texture, srgb) in asset.textures.iter().zip([true, false]) {
             assert_eq!(texture.texels, vec![[10, 20, 30, 255]]);
@@ -992,9 +1000,11 @@ mod tests {
         );
         assert_eq!(
             asset.textures.len(),
-            2,
-            "only the base colour and metallic-roughness textures are decoded"
+            3,
+            "the base colour, metallic-roughness and emission textures are decoded (not occlusion)"
         );
+        let emission = asset.materials[0].maps.emission.expect("the helmet glows through a texture");
+        assert!(asset.textures[emission as usize].srgb);
         for texture in &asset.textures {
             assert_eq!((texture.width, texture.height), (2048, 2048));
         }

@@ -8,9 +8,9 @@ mod obj;
 mod ply;
 mod texture;
 
-pub use texture::downsample_to_fit;
+pub use texture::{downsample_to_fit, srgb_to_linear};
 
-use super::{Conductor, Light, MetallicRoughness};
+use super::{Conductor, Light, MetallicRoughness, TextureMaps};
 use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::{Path, PathBuf};
@@ -73,6 +73,8 @@ pub struct AssetMaterial {
     pub coat: bool,
     /// glTF: R, T and roughness per texel from a texture (its index into [`Asset::textures`]).
     pub metallic_roughness: Option<MetallicRoughness>,
+    /// Emission, normal and alpha textures (indices into [`Asset::textures`]).
+    pub maps: TextureMaps,
 }
 
 impl AssetMaterial {
@@ -90,6 +92,7 @@ impl AssetMaterial {
             conductor: Conductor::Mirror,
             coat: false,
             metallic_roughness: None,
+            maps: TextureMaps::default(),
         }
     }
 }

@@ -3,7 +3,7 @@
 //! MTL → [`AssetMaterial`] mapping:
 //! - `Kd` → albedo (0.8 grey when missing), clamped to [0, 1]; `map_Kd` → albedo texture, a path
 //!   relative to the OBJ's directory (options such as `-bm 1` before the name are skipped).
-//! - `Ke` → emission. Older files (Embree's `cornell_box.mtl`) mark lights with an ambient colour
+//! - `Ke` → emission; `map_Ke` (sRGB) multiplies it per texel. Older files (Embree's `cornell_box.mtl`) mark lights with an ambient colour
 //!   above 1 instead (`Ka 20 20 20`), so without `Ke` a `Ka` with a channel > 1 is the emission.
 //! - `illum 3` or `5` → mirror: reflectivity = largest channel of `Ks`, or 1 when `Ks` is zero.
 //! - Glass: transparency = 1 - `d` when `d` < 1, else `Tr` when > 0, else 1 for `illum 7`;
@@ -23,7 +23,7 @@ use glam::{Vec2, Vec3};
 
 use super::{
     single_mesh_asset, texture, unit_normals, Asset, AssetError, AssetMaterial, MeshData,
-    TextureImage,
+    TextureImage, TextureMaps,
 };
 use crate::input_file::{InputError, InputFiles, InputKind};
 
@@ -180,7 +180,7 @@ impl MaterialLibraries<'_> {
     }
 }
 
-/// Decodes each `map_Kd` image once, however many materials share it.
+/// Decodes each `map_Kd` or `map_Ke` image once, however many materials share it.
 struct Textures<'a> {
     files: &'a InputFiles,
     directory: &'a Path,
@@ -266,6 +266,12 @@ fn convert_material(
         .as_deref()
         .map(|map| textures.get(map))
         .transpose()?;
+    // tobj keeps `map_Ke` among the keys it does not know. Like glTF's, the texture is read only
+    // where it can show: black `Ke` times it is nothing.
+    let emission_texture = match m.unknown_param.get("map_Ke") {
+        Some(map) if emission.max_element() > 0.0 => Some(textures.get(map)? as u32),
+        _ => None,
+    };
     Ok(AssetMaterial {
         name: m.name.clone(),
         albedo: vec3(m.diffuse)
@@ -276,6 +282,7 @@ fn convert_material(
         reflectivity: reflectivity.clamp(0.0, 1.0 - transparency),
         transparency,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(1.5),
+        maps: TextureMaps { emission: emission_texture },
         ..AssetMaterial::default_grey()
     })
 }
