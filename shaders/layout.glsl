@@ -35,7 +35,8 @@ const uint CONDUCTOR_ALBEDO = 2u;
 // metallic-roughness texture index (uint bits; NO_TEXTURE for none), .y/.z/.w = the metallic,
 // roughness and transmission factors that surface_material() turns into R, T and alpha per texel.
 // maps.x = emission texture index (uint bits; NO_TEXTURE for none), which multiplies emission_t.rgb
-// per texel; maps.yzw unused.
+// per texel; maps.y = tangent-space normal map index (uint bits; NO_TEXTURE for none), maps.z its
+// scale (of the normal's x and y); maps.w unused.
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;
@@ -87,9 +88,11 @@ struct PairNode {
 // (one group, identity transform), or a placed triangle mesh.
 const uint INSTANCE_PRIMITIVES = 0u;
 const uint INSTANCE_MESH = 1u;
-// Instance flags: the mesh has per-vertex normals / texture coordinates.
+// Instance flags: the mesh has per-vertex normals / texture coordinates / tangents (for normal
+// maps; a mesh with tangents has the other two).
 const uint INSTANCE_HAS_NORMALS = 1u;
 const uint INSTANCE_HAS_UVS = 2u;
+const uint INSTANCE_HAS_TANGENTS = 4u;
 const uint NO_TEXTURE = 0xffffffffu;
 // Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored).
 const uint TEXTURE_SRGB = 1u;

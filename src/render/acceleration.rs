@@ -29,6 +29,9 @@ pub struct Acceleration {
     /// every mesh ((0, 0) for those without), so that a textured emitter's light sample can read
     /// them without knowing its mesh.
     pub uvs: Vec<[f32; 2]>,
+    /// Tangent and bitangent sign, one a vertex of meshes with tangents (see `Mesh::tangents`;
+    /// others have zeros where a later mesh needs entries).
+    pub tangents: Vec<[f32; 4]>,
     pub stats: AccelerationStats,
 }
 
@@ -191,7 +194,7 @@ impl Acceleration {
         }
 
         let (mut triangles, mut triangle_materials) = (Vec::new(), Vec::new());
-        let (mut vertex_count, mut normals, mut uvs) = (0u32, Vec::new(), Vec::new());
+        let (mut vertex_count, mut normals, mut uvs, mut tangents) = (0u32, Vec::new(), Vec::new(), Vec::new());
         let mut mesh_roots = Vec::with_capacity(meshes.len());
         let mut triangle_slots = Vec::with_capacity(meshes.len());
         let mut mesh_flags = Vec::with_capacity(meshes.len());
@@ -218,6 +221,11 @@ impl Acceleration {
                 uvs.resize(vertex_base as usize, [0.0; 2]);
                 uvs.extend(mesh.uvs.iter().map(|uv| uv.to_array()));
                 flags |= INSTANCE_HAS_UVS;
+            }
+            if !mesh.tangents.is_empty() {
+                tangents.resize(vertex_base as usize, [0.0; 4]);
+                tangents.extend(mesh.tangents.iter().map(|t| t.to_array()));
+                flags |= INSTANCE_HAS_TANGENTS;
             }
             mesh_flags.push(flags);
         }
@@ -248,7 +256,7 @@ impl Acceleration {
             top: (!instances.is_empty()).then(|| top.stats()),
             largest_mesh: meshes.iter().max_by_key(|m| m.bvh.prim_order.len()).map(|m| m.bvh.stats()),
         };
-        Acceleration { nodes, instances, primitives, triangles, triangle_materials, triangle_slots, normals, uvs, stats }
+        Acceleration { nodes, instances, primitives, triangles, triangle_materials, triangle_slots, normals, uvs, tangents, stats }
     }
 
     pub fn gpu_bytes(&self) -> u64 {
@@ -258,7 +266,8 @@ impl Acceleration {
             + std::mem::size_of_val(&self.triangles[..])
             + std::mem::size_of_val(&self.triangle_materials[..])
             + std::mem::size_of_val(&self.normals[..])
-            + std::mem::size_of_val(&self.uvs[..])) as u64
+            + std::mem::size_of_val(&self.uvs[..])
+            + std::mem::size_of_val(&self.tangents[..])) as u64
     }
 }
 

@@ -33,6 +33,7 @@ pub enum KernelBuffer {
     LightAlias,
     PunctualLights,
     TriangleEmission,
+    VertexTangents,
     AovAlbedoDepth,
     AovNormalHits,
 }
@@ -197,6 +198,9 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // triangle (src/render/textured_emission.rs), which light selection weighs it by; 0 for other
     // triangles, and empty when no material has an emission texture.
     BufferBinding { buffer: TriangleEmission, binding: 18, name: "triangle_emission", shape: chunked::<f32>(), access: Read, bound_in: EveryKernel, what: "textured emitters' mean luminance" },
+    // Tangents of the vertices of meshes with a normal-mapped material, by global vertex index:
+    // xyz = unit tangent (along growing u), w = the bitangent's sign.
+    BufferBinding { buffer: VertexTangents, binding: 19, name: "vertex_tangents", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "vertex tangents" },
     // Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
     // xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
     // first hit summed over the samples that hit something, w = how many those were.

@@ -16,6 +16,7 @@ pub const INSTANCE_PRIMITIVES: u32 = 0;
 pub const INSTANCE_MESH: u32 = 1;
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
+pub const INSTANCE_HAS_TANGENTS: u32 = 4;
 pub const NO_TEXTURE: u32 = u32::MAX;
 pub const TEXTURE_SRGB: u32 = 1;
 
@@ -61,7 +62,7 @@ pub struct GpuMaterial {
     pub conductor_k: [f32; 4],
     /// metallic-roughness texture (u32 bits), metallic, roughness and transmission factors
     pub metallic_roughness: [f32; 4],
-    /// emission texture (u32 bits), the rest unused
+    /// emission texture (u32 bits), normal map (u32 bits), normal map scale, unused
     pub maps: [f32; 4],
 }
 
@@ -417,6 +418,7 @@ mod tests {
             ("INSTANCE_MESH", INSTANCE_MESH),
             ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
             ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
+            ("INSTANCE_HAS_TANGENTS", INSTANCE_HAS_TANGENTS),
             ("NO_TEXTURE", NO_TEXTURE),
             ("TEXTURE_SRGB", TEXTURE_SRGB),
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),

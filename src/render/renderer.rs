@@ -198,6 +198,7 @@ fn initial_contents<'d>(buffer: KernelBuffer, params: &'d FrameParams, data: &'d
         LightAlias => bytemuck::cast_slice(&data.light_distribution.table),
         PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
         TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
+        VertexTangents => bytemuck::cast_slice(&a.tangents),
     })
 }
 

@@ -166,7 +166,7 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         conductor_eta: eta.extend(f32::from_bits(kind)).into(),
         conductor_k: k.extend(coat_norm).into(),
         metallic_roughness,
-        maps: [texture_bits(m.maps.emission), 0.0, 0.0, 0.0],
+        maps: [texture_bits(m.maps.emission), texture_bits(m.maps.normal.map(|n| n.texture)), m.maps.normal.map_or(0.0, |n| n.scale), 0.0],
     }
 }
 

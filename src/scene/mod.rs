@@ -98,13 +98,27 @@ pub struct Material {
 pub struct TextureMaps {
     /// sRGB colour that multiplies `emission` per texel (glTF `emissiveTexture`, MTL `map_Ke`).
     pub emission: Option<u32>,
+    /// A tangent-space normal map (glTF `normalTexture`, MTL `norm` / `map_Bump`).
+    pub normal: Option<NormalMap>,
+}
+
+/// A tangent-space normal map (linear RGB = (normal + 1) / 2 in the frame of the tangent, the
+/// bitangent and the interpolated normal, glTF's convention) and glTF's `scale`, which multiplies
+/// the normal's x and y before it is normalised.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalMap {
+    pub texture: u32,
+    pub scale: f32,
 }
 
 impl TextureMaps {
     /// The same maps with their texture indices moved up by `base` (an asset's textures appended
     /// after the scene's).
     pub fn rebased(self, base: u32) -> TextureMaps {
-        TextureMaps { emission: self.emission.map(|t| t + base) }
+        TextureMaps {
+            emission: self.emission.map(|t| t + base),
+            normal: self.normal.map(|n| NormalMap { texture: n.texture + base, ..n }),
+        }
     }
 }
 

@@ -9,6 +9,8 @@
 //! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission; `emissiveTexture`
 //!   (texCoord 0, sRGB) multiplies it per texel. Its triangles are lights for next-event
 //!   estimation, picked by their texture-weighted power (src/render/textured_emission.rs).
+//! - `normalTexture` (texCoord 0, linear) with its `scale` → a tangent-space normal map, read along
+//!   the file's TANGENTs when every primitive of the mesh has them, else MikkTSpace's.
 //! - `metallicFactor` → reflectivity R, a conductor with the base colour as F0 (Schlick);
 //!   `roughnessFactor` → roughness (both perceptual) of every lobe.
 //! - `KHR_materials_transmission` factor → transparency T = (1 − metallic) × transmission, a
@@ -36,7 +38,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use base64::Engine as _;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
@@ -44,7 +46,7 @@ use gltf::{Document, Semantic};
 use super::gltf_accessors::AccessorLimits;
 use super::{
     texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
-    MeshData, MetallicRoughness, TextureMaps,
+    MeshData, MetallicRoughness, NormalMap, TextureMaps,
 };
 use crate::input_file::{InputFiles, InputKind};
 
@@ -345,6 +347,16 @@ fn convert_material(
         )? as u32),
         _ => None,
     };
+    let normal = match material.normal_texture() {
+        Some(info) if info.tex_coord() == 0 => Some(NormalMap {
+            texture: image_texture(info.texture().source(), false, buffers, sources, decoded_images, asset)? as u32,
+            scale: info.scale(),
+        }),
+        _ => None,
+    };
+    if normal.is_some_and(|n| !n.scale.is_finite()) {
+        return Err(format!("material {index}: normalTexture.scale is not finite"));
+    }
     if !emission.is_finite() {
         return Err(format!("material {index}: emission overflows"));
     }
@@ -390,7 +402,7 @@ fn convert_material(
         conductor: Conductor::Albedo,
         coat: true,
         metallic_roughness,
-        maps: TextureMaps { emission: emission_texture },
+        maps: TextureMaps { emission: emission_texture, normal },
     })
 }
 
@@ -404,8 +416,8 @@ fn convert_mesh(
     skipped_primitives: &mut usize,
 ) -> Result<MeshData, String> {
     let mut out = MeshData::default();
-    let (mut all_normals, mut all_uvs) = (true, true);
-    let mut normals = Vec::new();
+    let (mut all_normals, mut all_uvs, mut all_tangents) = (true, true, true);
+    let (mut normals, mut tangents) = (Vec::new(), Vec::new());
     for primitive in mesh.primitives() {
         let p = primitive.index();
         if matches!(
@@ -452,6 +464,20 @@ fn convert_mesh(
                 all_normals = normals.len() == out.positions.len() + positions.len();
             }
             _ => all_normals = false,
+        }
+        match primitive.get(&Semantic::Tangents) {
+            Some(accessor) if all_tangents => {
+                limits.admit(&accessor, Dimensions::Vec4, &[DataType::F32])
+                    .map_err(|m| format!("primitive {p}: TANGENT {m}"))?;
+                tangents.extend(
+                    reader
+                        .read_tangents()
+                        .ok_or_else(|| outside("TANGENT"))?
+                        .map(Vec4::from),
+                );
+                all_tangents = tangents.len() == out.positions.len() + positions.len();
+            }
+            _ => all_tangents = false,
         }
         match primitive.get(&Semantic::TexCoords(0)) {
             Some(accessor) if all_uvs => {
@@ -516,6 +542,18 @@ fn convert_mesh(
     };
     if !all_uvs || out.uvs.iter().any(|uv| !uv.is_finite()) {
         out.uvs.clear();
+    }
+    // The file's tangents serve only with the normals and coordinates they were made for, and
+    // only when every one has a direction (else MikkTSpace builds them all: tangents.rs).
+    if all_tangents && !out.normals.is_empty() && !out.uvs.is_empty() {
+        let unit: Option<Vec<Vec4>> = tangents
+            .iter()
+            .map(|t| {
+                let direction = t.truncate().normalize_or_zero();
+                (direction != Vec3::ZERO && t.w.is_finite()).then(|| direction.extend(if t.w < 0.0 { -1.0 } else { 1.0 }))
+            })
+            .collect();
+        out.tangents = unit.unwrap_or_default();
     }
     Ok(out)
 }
@@ -729,6 +767,7 @@ mod tests {
     "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
     "emissiveFactor": [1, 0.5, 0.25],
     "emissiveTexture": {{"index": 0}},
+    "normalTexture": {{"index": 0, "scale": 0.75}},
     "extensions": {{
       "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
       "KHR_materials_transmission": {{"transmissionFactor": 0.5}},
@@ -798,6 +837,7 @@ mod tests {
         assert_eq!(asset.materials[1], AssetMaterial::default_grey());
         assert_eq!(glass.albedo_texture, Some(0));
         assert_eq!(glass.maps.emission, Some(0), "the emissive texture is image 0 as colour, decoded once for both");
+        assert_eq!(glass.maps.normal, Some(NormalMap { texture: 1, scale: 0.75 }), "the normal map is image 0 as data, shared with metallic-roughness");
         assert_eq!(
             glass.metallic_roughness,
             Some(MetallicRoughness {
@@ -811,7 +851,7 @@ mod tests {
         assert_eq!(
             asset.textures.len(),
             2,
-            "image 0 is decoded once as colour (base colour and emission) and once as data; image 1 never"
+            "image 0 is decoded once as colour (base colour, emission) and once as data (metallic-roughness, normals); image 1 never"
         );
         for (texture, srgb) in asset.textures.iter().zip([true, false]) {
             assert_eq!(texture.texels, vec![[10, 20, 30, 255]]);
