@@ -212,15 +212,14 @@ def mitsuba_scene(scene_path, width, height, spp):
         raise Unmapped("integrator.nee = false: Mitsuba's path integrator always samples the lights")
     if "clamp" in integ:
         raise Unmapped("integrator.clamp: Mitsuba's path integrator has no clamp (it changes the image)")
-    # caustica traces at most max_bounces rays a path (the camera's included) and samples a light
-    # at each vertex it reaches; Mitsuba's max_depth counts segments, the one to a sampled light
-    # included, so max_bounces + 1 holds every path caustica can complete. Only a cap that
-    # roulette does not reach first (the default, 1024, is never reached) tells them apart.
+    # caustica's max_bounces and Mitsuba's max_depth both count a path's segments, the camera ray
+    # and the one to a sampled light included (integrator.glsl samples no light at the last
+    # vertex the cap allows): the same number.
     # Roulette: caustica's rr_start counts bounces traced before it starts, Mitsuba's rr_depth the
     # vertices: the same number.
     scene = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": int(integ.get("max_bounces", 1024)) + 1, "rr_depth": int(integ.get("rr_start", 4))},
+        "integrator": {"type": "path", "max_depth": int(integ.get("max_bounces", 1024)), "rr_depth": int(integ.get("rr_start", 4))},
         "sensor": sensor,
     }
     materials = {name: (material_bsdf(name, m), emitter(name, m)) for name, m in doc.get("materials", {}).items()}

@@ -151,8 +151,10 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
     BsdfSample s;
     bool sampled = sample_lobe(lobe, path.dir, rng, s);
     // Even when the sample fails (a rough lobe's can point below the surface): the direct
-    // light must not be dropped with it.
-    if (nee && !lobe_is_delta(lobe)) {
+    // light must not be dropped with it. Not at the last vertex max_bounces allows: a light
+    // sampled there would make a path one segment longer than any the BSDF can continue to, so
+    // max_bounces is the longest path in segments, as Mitsuba's max_depth (and MIS stays whole).
+    if (nee && !lobe_is_delta(lobe) && depth + 1u < frame.max_bounces) {
         bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
         path.radiance += path.throughput * direct_light(lobe, path.dir, surface, rng, rays);
     }

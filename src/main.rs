@@ -6,6 +6,7 @@ use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
 use caustica::bench::{self, FilmOverrides};
 use caustica::render::{AovSet, KernelChoice, Renderer};
+use caustica::input_file::InputFiles;
 use caustica::scene::{check_film, Film, Filter, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -169,6 +170,17 @@ enum Command {
     },
     /// List the Vulkan devices.
     Devices,
+    /// Write a Mitsuba 3 XML scene as the equivalent caustica TOML scene (meshes referenced by path).
+    Convert {
+        /// The scene to convert (.xml).
+        input: PathBuf,
+        /// The TOML scene to write.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Set a `<default>` parameter, e.g. -D spp=64 (repeatable).
+        #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = define)]
+        define: Vec<(String, String)>,
+    },
     /// Compare an image with a reference (PFM or EXR): relative MSE, mean absolute error and the
     /// ratio of their means.
     Compare {
@@ -223,14 +235,26 @@ struct SceneFileArgs {
     /// resolving `..` and symbolic links: for scenes someone else wrote (docs/farm.md).
     #[arg(long)]
     confine: bool,
+    /// Set a Mitsuba XML scene's `<default>` parameter, e.g. -D spp=64 (repeatable).
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = define)]
+    define: Vec<(String, String)>,
+}
+
+/// `name=value` of `-D`.
+fn define(text: &str) -> Result<(String, String), String> {
+    match text.split_once('=') {
+        Some((name, value)) if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') => Ok((name.to_owned(), value.to_owned())),
+        _ => Err(format!("'{text}' is not NAME=VALUE (a parameter name of letters, digits and _)")),
+    }
 }
 
 impl SceneFileArgs {
     /// The scene at `path` (the built-in Cornell box without one).
     fn load_scene(&self, path: Option<&PathBuf>) -> Result<Scene> {
         match path {
-            Some(p) if self.confine => Scene::load_from(&caustica::scene::confinement(p), p),
-            Some(p) => Scene::load(p),
+            Some(p) if self.confine => Scene::load_with(&caustica::scene::confinement(p), p, &self.define),
+            Some(p) => Scene::load_with(&InputFiles::anywhere(), p, &self.define),
+            None if !self.define.is_empty() => anyhow::bail!("-D sets parameters of a Mitsuba XML scene; the built-in scene has none"),
             None => Ok(Scene::default_scene()),
         }
     }
@@ -428,6 +452,28 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
     Ok(())
 }
 
+/// `convert IN -o OUT.toml`: the imported scene as TOML, checked to load before it is written.
+fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<()> {
+    use caustica::scene::import;
+    if !import::is_foreign_scene(input) {
+        anyhow::bail!("{}: convert reads Mitsuba 3 XML scenes (.xml)", input.display());
+    }
+    if output.extension().and_then(|e| e.to_str()) != Some("toml") {
+        anyhow::bail!("{}: convert writes a caustica scene, so the output must be .toml", output.display());
+    }
+    let imported = import::import(&InputFiles::anywhere(), input, defines)?;
+    for warning in &imported.warnings {
+        eprintln!("caustica: warning: {warning}");
+    }
+    let folder = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let text = imported.to_toml(folder)?;
+    // The TOML must stand on its own before it replaces anything.
+    Scene::parse(&text, &output.display().to_string(), folder).context("the converted scene does not load (a bug in convert)")?;
+    std::fs::write(output, text).with_context(|| format!("writing {}", output.display()))?;
+    eprintln!("wrote {}", output.display());
+    Ok(())
+}
+
 /// `bench SCENE`: one scene, by default at 256x256 and 64 spp (not the scene's own film, so that
 /// figures of different scenes compare).
 fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, kernel: KernelChoice, json: bool, gpu: &DeviceArgs) -> Result<()> {
@@ -494,6 +540,7 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
+        Command::Convert { input, output, define } => convert(&input, &output, &define),
         Command::Devices => {
             let devices = list_devices()?;
             if devices.is_empty() {

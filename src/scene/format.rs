@@ -2,7 +2,7 @@
 //! the wrong length. `scene::load` turns them into a validated `Scene`.
 
 use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize, Serializer};
 use std::fmt;
 use std::marker::PhantomData;
 
@@ -26,6 +26,13 @@ pub type Triple = Array<f32, 3>;
 impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Array<T, N> {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         deserializer.deserialize_seq(ArrayVisitor(PhantomData))
+    }
+}
+
+/// Written as a plain TOML array (for `caustica convert`).
+impl<T: Serialize, const N: usize> Serialize for Array<T, N> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        self.0.as_slice().serialize(serializer)
     }
 }
 
@@ -57,7 +64,7 @@ impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for ArrayVisitor<T, 
     }
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
     pub camera: CameraFile,
@@ -81,7 +88,7 @@ pub struct SceneFile {
     pub lights: Vec<LightFile>,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct CameraFile {
     pub position: Triple,
@@ -105,7 +112,7 @@ fn default_fov() -> f32 {
     40.0
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields, default)]
 pub struct FilmFile {
     pub width: u32,
@@ -121,7 +128,7 @@ impl Default for FilmFile {
 }
 
 /// How next-event estimation picks which area light to sample.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum LightSelection {
     /// In proportion to each light's power (an alias table).
@@ -131,7 +138,7 @@ pub enum LightSelection {
 }
 
 /// Pixel reconstruction filter, importance sampled: each sample's film position is drawn from it.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Filter {
     /// Uniform over the pixel.
@@ -142,7 +149,7 @@ pub enum Filter {
     Gaussian,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields, default)]
 pub struct IntegratorFile {
     /// Bounces always traced before Russian roulette starts.
@@ -171,7 +178,7 @@ impl Default for IntegratorFile {
 }
 
 /// The random numbers behind each sample's decisions (shaders/rng.glsl).
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum Sampler {
     /// Padded Owen-scrambled Sobol: each decision stratified across a pixel's samples.
@@ -180,7 +187,7 @@ pub enum Sampler {
     Independent,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialFile {
     pub albedo: Triple,
@@ -220,7 +227,7 @@ impl Default for MaterialFile {
     }
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SphereFile {
     pub center: Triple,
@@ -228,7 +235,7 @@ pub struct SphereFile {
     pub material: String,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct QuadFile {
     pub origin: Triple,
@@ -237,14 +244,14 @@ pub struct QuadFile {
     pub material: String,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct TriangleFile {
     pub vertices: Array<Triple, 3>,
     pub material: String,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct MeshFile {
     /// OBJ (with its MTL), PLY, glTF or GLB.
@@ -271,7 +278,7 @@ impl MeshFile {
     }
 }
 
-#[derive(Deserialize, Debug, Default, Clone, Copy)]
+#[derive(Deserialize, Serialize, Debug, Default, Clone, Copy)]
 #[serde(deny_unknown_fields)]
 pub struct Placement {
     #[serde(default)]
@@ -288,6 +295,15 @@ pub struct Placement {
 pub enum Scale {
     Uniform(f32),
     PerAxis(Triple),
+}
+
+impl Serialize for Scale {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Scale::Uniform(s) => s.serialize(serializer),
+            Scale::PerAxis(s) => s.serialize(serializer),
+        }
+    }
 }
 
 /// A number or three. Written out rather than `#[serde(untagged)]`, whose only error is "did not
@@ -317,7 +333,7 @@ impl<'de> Deserialize<'de> for Scale {
     }
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentFile {
     /// Constant sky radiance (when no map is given).
@@ -338,7 +354,7 @@ fn one() -> f32 {
 }
 
 /// A `[[lights]]` entry, told apart by its `type`.
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(tag = "type", rename_all = "lowercase")]
 pub enum LightFile {
     Point(PointLightFile),
@@ -346,7 +362,7 @@ pub enum LightFile {
     Directional(DirectionalLightFile),
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct PointLightFile {
     pub position: Triple,
@@ -354,7 +370,7 @@ pub struct PointLightFile {
     pub intensity: Triple,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SpotLightFile {
     pub position: Triple,
@@ -369,7 +385,7 @@ pub struct SpotLightFile {
     pub falloff_start: f32,
 }
 
-#[derive(Deserialize, Debug)]
+#[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct DirectionalLightFile {
     /// The direction the light travels.

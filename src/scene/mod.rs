@@ -3,6 +3,7 @@
 mod asset;
 mod environment;
 mod format;
+pub mod import;
 mod light;
 mod mesh;
 mod optics;
@@ -197,6 +198,25 @@ impl Scene {
     /// file it names (meshes, textures, environment maps) too; relative paths inside it are
     /// relative to the file. [`confinement`] gives the `files` of `render --confine`.
     pub fn load_from(files: &InputFiles, path: &Path) -> Result<Scene> {
+        Scene::load_with(files, path, &[])
+    }
+
+    /// As [`Scene::load_from`], reading Mitsuba 3 XML too (`import`), with `defines` setting its
+    /// `<default>` parameters (`-D name=value`); the import's warnings go to stderr.
+    pub fn load_with(files: &InputFiles, path: &Path, defines: &[(String, String)]) -> Result<Scene> {
+        if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("pbrt")) {
+            bail!("{}: pbrt-v4 scenes are not supported yet (Mitsuba 3 .xml scenes are)", path.display());
+        }
+        if import::is_foreign_scene(path) {
+            let imported = import::import(files, path, defines)?;
+            for warning in &imported.warnings {
+                eprintln!("caustica: warning: {warning}");
+            }
+            return imported.into_scene(files);
+        }
+        if let Some((name, _)) = defines.first() {
+            bail!("-D {name}=...: parameters are for Mitsuba XML scenes, not {}", path.display());
+        }
         let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         if matches!(extension.as_str(), "gltf" | "glb" | "obj" | "ply") {
             return Scene::model_from(files, path);
