@@ -1040,9 +1040,11 @@ mod tests {
         );
         assert_eq!(
             asset.textures.len(),
-            3,
-            "the base colour, metallic-roughness and emission textures are decoded (not occlusion)"
+            4,
+            "the base colour, metallic-roughness, emission and normal textures are decoded (not occlusion)"
         );
+        assert!(asset.materials[0].maps.normal.is_some());
+        assert_eq!(asset.meshes[0].tangents.len(), asset.meshes[0].positions.len(), "tangents for its normal map");
         let emission = asset.materials[0].maps.emission.expect("the helmet glows through a texture");
         assert!(asset.textures[emission as usize].srgb);
         for texture in &asset.textures {
