@@ -130,12 +130,25 @@ fn list(folders: &[PathBuf]) -> String {
 pub struct InputFiles {
     /// Canonical folders a file must resolve into; `None`: anywhere.
     allowed: Option<Vec<PathBuf>>,
+    /// Every file opened, when recording ([`InputFiles::recording`]); shared by clones.
+    opened: Option<std::sync::Arc<std::sync::Mutex<Vec<PathBuf>>>>,
 }
 
 impl InputFiles {
     /// Files from anywhere: the user's own scenes.
     pub fn anywhere() -> Self {
-        InputFiles { allowed: None }
+        InputFiles { allowed: None, opened: None }
+    }
+
+    /// These files, also noting every file opened (see [`InputFiles::opened`]): what a scene read,
+    /// so that a viewer can watch them for changes.
+    pub fn recording(self) -> Self {
+        InputFiles { opened: Some(Default::default()), ..self }
+    }
+
+    /// The files opened so far, each once, in the order first opened (empty unless recording).
+    pub fn opened(&self) -> Vec<PathBuf> {
+        self.opened.as_ref().map(|o| o.lock().unwrap_or_else(|e| e.into_inner()).clone()).unwrap_or_default()
     }
 
     /// Only files that resolve, after `..` and symbolic links, inside one of `folders`. A folder
@@ -143,7 +156,7 @@ impl InputFiles {
     pub fn confined_to<'a>(folders: impl IntoIterator<Item = &'a Path>) -> Self {
         let mut allowed: Vec<PathBuf> = folders.into_iter().filter_map(|f| f.canonicalize().ok()).collect();
         allowed.dedup();
-        InputFiles { allowed: Some(allowed) }
+        InputFiles { allowed: Some(allowed), opened: None }
     }
 
     /// Reads the whole file.
@@ -186,6 +199,12 @@ impl InputFiles {
                 resolved
             }
         };
+        if let Some(opened) = &self.opened {
+            let mut opened = opened.lock().unwrap_or_else(|e| e.into_inner());
+            if !opened.contains(&target) {
+                opened.push(target.clone());
+            }
+        }
         // Checked before opening: opening a FIFO for reading blocks until a writer comes.
         let metadata = std::fs::metadata(&target).map_err(|e| fail(Problem::Io(e)))?;
         check_metadata(&metadata, kind).map_err(fail)?;

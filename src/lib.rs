@@ -4,7 +4,7 @@
 //! `image` (PFM/EXR/PNG), `input_file` (how every input file is read: regular files only, size
 //! caps, `--confine`), `gpu` (all Vulkan), `render` (the kernel and progressive passes), `farm`
 //! (time budgets, checkpoints, partial renders and merging them), `bench` (throughput of one scene
-//! or of the suite of checked-in scenes).
+//! or of the suite of checked-in scenes), `view` (the interactive viewer's window, input and frames).
 
 pub mod bench;
 pub mod bvh;
@@ -15,5 +15,6 @@ pub mod input_file;
 pub mod process_time;
 pub mod render;
 pub mod scene;
+pub mod view;
 #[cfg(test)]
 mod test_files;

@@ -153,6 +153,38 @@ enum Command {
         #[command(flatten)]
         gpu: DeviceArgs,
     },
+    /// Open a window that shows the image as samples accumulate, with a camera to move (see the
+    /// keys in the window's overlay or README "Viewer"). Needs a display (X11 or Wayland).
+    View {
+        /// Scene file (TOML) or mesh file, as `render` takes. Omit for the built-in Cornell box.
+        scene: Option<PathBuf>,
+        /// Samples per pixel to stop at (default: the scene's film.spp).
+        #[arg(long)]
+        spp: Option<u32>,
+        /// Window width in pixels (default: film.width); the image follows the window's size.
+        #[arg(long)]
+        width: Option<u32>,
+        /// Window height in pixels (default: film.height).
+        #[arg(long)]
+        height: Option<u32>,
+        /// Random seed: the same seed gives the same image as `render --seed`.
+        #[arg(long, default_value_t = 1)]
+        seed: u32,
+        /// Exposure in stops (keys + and -), as `render --exposure` for PNG output.
+        #[arg(long, default_value_t = 0.0, value_parser = exposure, allow_hyphen_values = true)]
+        exposure: f32,
+        /// Tone curve (key T), as `render --tonemap` for PNG output.
+        #[arg(long, value_enum, default_value_t = Tonemap::Clamp)]
+        tonemap: Tonemap,
+        /// Render to --spp, save what the window shows as this PNG and quit: the same pixels as
+        /// `render SCENE --spp N -o FILE.png` with the same size, seed, exposure and tonemap.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        #[command(flatten)]
+        scene_files: SceneFileArgs,
+        #[command(flatten)]
+        gpu: DeviceArgs,
+    },
     /// Add up partial renders (EXR files from `render --sample-offset`, checkpoints, earlier merges)
     /// of one scene and seed with disjoint sample ranges.
     Merge {
@@ -527,6 +559,21 @@ fn run() -> Result<()> {
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
             render(s, RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json }, &output_args, &farm, &gpu)
+        }
+        Command::View { scene, spp, width, height, seed, exposure, tonemap, screenshot, scene_files, gpu } => {
+            handle_signals(true)?;
+            caustica::view::run(caustica::view::ViewOptions {
+                source: caustica::view::SceneSource { path: scene, confine: scene_files.confine, defines: scene_files.define },
+                spp,
+                width,
+                height,
+                seed,
+                exposure,
+                tonemap,
+                screenshot,
+                context: ContextOptions { device: gpu.device, validation: gpu.validation, storage_binding_limit: None },
+                stop: &STOP,
+            })
         }
         Command::Merge { inputs, output, output_args, quiet } => merge(&inputs, &output, &output_args, quiet),
         Command::Compare { image, reference } => {

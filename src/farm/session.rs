@@ -41,6 +41,8 @@ pub fn snapshot(renderer: &Renderer) -> Result<Option<PartialRender>> {
     if renderer.samples_done == 0 {
         return Ok(None);
     }
+    // Empty after a camera change until recomputed: a file must never carry a hash of another view.
+    anyhow::ensure!(!renderer.scene_hash.is_empty(), "the scene hash is unknown after a camera change (Renderer::refresh_scene_hash)");
     let (width, height) = renderer.size();
     let start = renderer.sample_offset();
     Ok(Some(PartialRender {

@@ -27,7 +27,7 @@ pub struct Buffer {
 const MIN_SIZE: u64 = 16;
 
 impl Buffer {
-    fn create(ctx: &GpuContext, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation, kind: BufferKind) -> Result<Self> {
+    pub(super) fn create(ctx: &GpuContext, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation, kind: BufferKind) -> Result<Self> {
         let size = size.max(MIN_SIZE);
         let device = &ctx.device;
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);

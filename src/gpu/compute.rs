@@ -116,6 +116,18 @@ impl ComputeKernel {
         Ok(Self { set_layout, layout, pipeline, pool, set, push_size, timestamps })
     }
 
+    /// Records one dispatch of `groups` workgroups into `cb`, for work submitted with other
+    /// commands (the viewer's frames); the caller orders it with barriers.
+    pub(super) fn record(&self, device: &ash::Device, cb: vk::CommandBuffer, push: &[u8], groups: [u32; 3]) {
+        assert_eq!(push.len() as u32, self.push_size, "push-constant block size");
+        unsafe {
+            device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            device.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
+            device.cmd_push_constants(cb, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            device.cmd_dispatch(cb, groups[0], groups[1], groups[2]);
+        }
+    }
+
     /// Runs one dispatch of `groups` workgroups and waits for it.
     pub fn dispatch(&self, ctx: &GpuContext, push: &[u8], groups: [u32; 3]) -> Result<()> {
         self.dispatch_timed(ctx, push, groups).map(|_| ())

@@ -5,6 +5,7 @@ use super::validation::{self, ValidationLog};
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle, RawDisplayHandle, RawWindowHandle};
 use std::mem::ManuallyDrop;
 use std::sync::{Mutex, OnceLock};
 
@@ -75,6 +76,10 @@ pub struct ContextOptions {
 pub struct GpuContext {
     _entry: ash::Entry,
     pub(super) instance: ash::Instance,
+    pub(super) physical_device: vk::PhysicalDevice,
+    /// The window surface and the loaders of the surface and swapchain extensions, when this
+    /// context was made for a window ([`GpuContext::for_window`]).
+    pub(super) presentation: Option<Presentation>,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     // Boxed so the pointer handed to the validation callback stays put.
     validation_log: Box<ValidationLog>,
@@ -89,6 +94,20 @@ pub struct GpuContext {
     loop_limit: OnceLock<Option<u32>>,
 }
 
+/// What presenting to a window needs beside the device: its surface and the extensions' loaders.
+pub(super) struct Presentation {
+    pub(super) surface_loader: ash::khr::surface::Instance,
+    pub(super) surface: vk::SurfaceKHR,
+    pub(super) swapchain_loader: ash::khr::swapchain::Device,
+}
+
+/// A window's raw handles, taken from a winit (or any raw-window-handle) window.
+#[derive(Clone, Copy)]
+struct WindowHandles {
+    display: RawDisplayHandle,
+    window: RawWindowHandle,
+}
+
 fn load_entry() -> Result<ash::Entry> {
     unsafe { ash::Entry::load() }.map_err(|e| {
         anyhow!(
@@ -97,7 +116,7 @@ fn load_entry() -> Result<ash::Entry> {
     })
 }
 
-fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instance, bool)> {
+fn create_instance(entry: &ash::Entry, validation: bool, window_extensions: &[*const std::ffi::c_char]) -> Result<(ash::Instance, bool)> {
     let app = vk::ApplicationInfo::default()
         .application_name(c"caustica")
         .engine_name(c"caustica")
@@ -111,7 +130,10 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<(ash::Instanc
         eprintln!("caustica: validation requested but {:?} is not installed; running without it", validation::LAYER_NAME);
     }
     let layers = if layer_available { vec![validation::LAYER_NAME.as_ptr()] } else { vec![] };
-    let extensions = if layer_available { vec![ash::ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+    let mut extensions = window_extensions.to_vec();
+    if layer_available {
+        extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
     let info = vk::InstanceCreateInfo::default()
         .application_info(&app)
         .enabled_layer_names(&layers)
@@ -170,7 +192,7 @@ fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, Device
 /// Every Vulkan device the loader sees, in the loader's order.
 pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     let entry = load_entry()?;
-    let (instance, _) = create_instance(&entry, false)?;
+    let (instance, _) = create_instance(&entry, false, &[])?;
     let devices = enumerate(&instance);
     unsafe { instance.destroy_instance(None) };
     Ok(devices?.into_iter().map(|(_, info)| info).collect())
@@ -194,10 +216,46 @@ fn choose(devices: Vec<(vk::PhysicalDevice, DeviceInfo)>, wanted: Option<&str>) 
     }
 }
 
+/// A queue family of `pd` that can compute, draw (the viewer's overlay) and present to `surface`.
+fn presenting_family(instance: &ash::Instance, loader: &ash::khr::surface::Instance, pd: vk::PhysicalDevice, surface: vk::SurfaceKHR) -> Option<u32> {
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let wanted = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+    (0..families.len() as u32).find(|&f| {
+        families[f as usize].queue_flags.contains(wanted) && unsafe { loader.get_physical_device_surface_support(pd, f, surface) }.unwrap_or(false)
+    })
+}
+
 impl GpuContext {
     pub fn new(options: &ContextOptions) -> Result<Self> {
+        Self::create(options, None)
+    }
+
+    /// A context whose device can also present to `window` (through a swapchain, see
+    /// [`super::Presenter`]): the device chosen as [`Self::new`] chooses among those that can.
+    /// The window must outlive the context, which holds a surface of it.
+    pub fn for_window(options: &ContextOptions, window: &(impl HasDisplayHandle + HasWindowHandle)) -> Result<Self> {
+        let display = window.display_handle().map_err(|e| anyhow!("the window's display handle: {e}"))?.as_raw();
+        let window = window.window_handle().map_err(|e| anyhow!("the window's handle: {e}"))?.as_raw();
+        Self::create(options, Some(WindowHandles { display, window }))
+    }
+
+    fn create(options: &ContextOptions, window: Option<WindowHandles>) -> Result<Self> {
         let entry = load_entry()?;
-        let (instance, validating) = create_instance(&entry, options.validation)?;
+        let window_extensions = match window {
+            Some(w) => ash_window::enumerate_required_extensions(w.display).context("the Vulkan extensions this kind of window needs")?.to_vec(),
+            None => vec![],
+        };
+        let (instance, validating) = create_instance(&entry, options.validation, &window_extensions)?;
+        let surface = match window {
+            Some(w) => match unsafe { ash_window::create_surface(&entry, &instance, w.display, w.window, None) } {
+                Ok(surface) => Some((ash::khr::surface::Instance::new(&entry, &instance), surface)),
+                Err(e) => {
+                    unsafe { instance.destroy_instance(None) };
+                    bail!("creating a Vulkan surface for the window: {e}");
+                }
+            },
+            None => None,
+        };
         let validation_log = Box::<ValidationLog>::default();
         let debug = if validating {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
@@ -207,20 +265,32 @@ impl GpuContext {
         } else {
             None
         };
-        let (physical, mut info) = choose(enumerate(&instance)?, options.device.as_deref())?;
+        let mut devices = enumerate(&instance)?;
+        if let Some((loader, surface)) = &surface {
+            let all = devices.iter().map(|(_, d)| d.name.clone()).collect::<Vec<_>>().join(", ");
+            devices.retain(|(pd, _)| presenting_family(&instance, loader, *pd, *surface).is_some());
+            if devices.is_empty() {
+                bail!("no Vulkan device can present to the window (devices: [{all}])");
+            }
+        }
+        let (physical, mut info) = choose(devices, options.device.as_deref())?;
         if let Some(limit) = options.storage_binding_limit {
             info.max_storage_buffer_range = info.max_storage_buffer_range.min(limit);
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-        let family = families
-            .iter()
-            .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            .ok_or_else(|| anyhow!("{} has no compute queue", info.name))? as u32;
+        let family = match &surface {
+            Some((loader, surface)) => presenting_family(&instance, loader, physical, *surface).expect("devices that cannot present were left out"),
+            None => families
+                .iter()
+                .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
+                .ok_or_else(|| anyhow!("{} has no compute queue", info.name))? as u32,
+        };
         let timestamp_period = unsafe { instance.get_physical_device_properties(physical) }.limits.timestamp_period;
         let timestamp_period_ns = (families[family as usize].timestamp_valid_bits > 0 && timestamp_period > 0.0).then_some(timestamp_period as f64);
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info);
+        let device_extensions = if surface.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { vec![] };
+        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
         let device = unsafe { instance.create_device(physical, &device_info, None) }
             .with_context(|| format!("creating a logical device on {}", info.name))?;
         let queue = unsafe { device.get_device_queue(family, 0) };
@@ -241,9 +311,16 @@ impl GpuContext {
             allocation_sizes: Default::default(),
         })
         .context("creating the GPU memory allocator")?;
+        let presentation = surface.map(|(surface_loader, surface)| Presentation {
+            surface_loader,
+            surface,
+            swapchain_loader: ash::khr::swapchain::Device::new(&instance, &device),
+        });
         Ok(Self {
             _entry: entry,
             instance,
+            physical_device: physical,
+            presentation,
             debug,
             validation_log,
             device,
@@ -265,6 +342,11 @@ impl GpuContext {
         }
         let limit = super::loop_limit::probe_loop_limit(self).with_context(|| format!("probing {} for a loop limit", self.info.name))?;
         Ok(*self.loop_limit.get_or_init(|| limit))
+    }
+
+    /// Waits until the device has finished everything submitted (before freeing what it uses).
+    pub fn wait_idle(&self) {
+        let _ = unsafe { self.device.device_wait_idle() };
     }
 
     /// Validation messages recorded since the last call (empty when validation is off).
@@ -325,6 +407,9 @@ impl Drop for GpuContext {
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_command_pool(self.command_pool, None);
             self.device.destroy_device(None);
+            if let Some(p) = self.presentation.take() {
+                p.surface_loader.destroy_surface(p.surface, None);
+            }
             if let Some((loader, messenger)) = self.debug.take() {
                 loader.destroy_debug_utils_messenger(messenger, None);
             }

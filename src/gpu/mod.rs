@@ -1,16 +1,22 @@
 //! All Vulkan lives here: instance and device selection, buffers, the compute pipeline and shader
-//! compilation. Nothing outside this module touches `ash` types.
+//! compilation, and the window's swapchain with the viewer's frames. Nothing outside this module touches `ash` types.
 
 mod buffer;
 mod compute;
 mod context;
 mod failure;
 mod loop_limit;
+mod overlay_pass;
+mod presenter;
 mod shader;
+mod swapchain;
 mod validation;
 
 pub use buffer::{Buffer, BufferKind};
 pub use compute::{Binding, ComputeKernel};
 pub use context::{list_devices, ContextOptions, DeviceInfo, DeviceType, GpuContext};
 pub use failure::{DeviceFailure, VulkanError};
+pub use overlay_pass::OverlayDraw;
+pub use presenter::{Frame, Picture, Presented, Presenter, Screen};
 pub use shader::{assemble_source, compile_compute, ShaderSources};
+pub use swapchain::ChannelOrder;

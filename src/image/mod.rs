@@ -4,6 +4,7 @@
 
 mod atomic;
 pub mod compare;
+pub mod display_codes;
 pub mod exr;
 pub mod exr_layers;
 pub mod pfm;

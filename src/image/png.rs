@@ -61,27 +61,50 @@ pub fn encode(
         tonemap,
         png_depth,
     } = *options;
-    let mut encoder = ::png::Encoder::new(out, img.width, img.height);
+    let data = match png_depth {
+        PngDepth::Eight => tonemap_srgb8(img, exposure, tonemap),
+        // PNG stores 16-bit samples big-endian, and the png crate takes
+        // them as they are stored.
+        PngDepth::Sixteen => tonemap_srgb16(img, exposure, tonemap)
+            .into_iter()
+            .flat_map(u16::to_be_bytes)
+            .collect(),
+    };
+    encode_srgb(out, img.width, img.height, png_depth, &data)
+}
+
+/// Encodes display-ready sRGB samples (RGB rows, top to bottom, as PNG
+/// stores them) with the sRGB chunk.
+fn encode_srgb(
+    out: impl Write,
+    width: u32,
+    height: u32,
+    depth: PngDepth,
+    samples: &[u8],
+) -> Result<(), ::png::EncodingError> {
+    let mut encoder = ::png::Encoder::new(out, width, height);
     encoder.set_color(::png::ColorType::Rgb);
     encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
-    let data = match png_depth {
-        PngDepth::Eight => {
-            encoder.set_depth(::png::BitDepth::Eight);
-            tonemap_srgb8(img, exposure, tonemap)
-        }
-        PngDepth::Sixteen => {
-            encoder.set_depth(::png::BitDepth::Sixteen);
-            // PNG stores 16-bit samples big-endian, and the png crate takes
-            // them as they are stored.
-            tonemap_srgb16(img, exposure, tonemap)
-                .into_iter()
-                .flat_map(u16::to_be_bytes)
-                .collect()
-        }
-    };
+    encoder.set_depth(match depth {
+        PngDepth::Eight => ::png::BitDepth::Eight,
+        PngDepth::Sixteen => ::png::BitDepth::Sixteen,
+    });
     let mut writer = encoder.write_header()?;
-    writer.write_image_data(&data)?;
+    writer.write_image_data(samples)?;
     writer.finish()
+}
+
+/// Writes 8-bit sRGB samples tonemapped elsewhere (tightly packed RGB rows,
+/// top to bottom: the viewer's screen) atomically, as [`write`] writes a
+/// tonemapped image.
+pub fn write_srgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
+    assert_eq!(rgb.len(), width as usize * height as usize * 3, "RGB samples of {width}x{height}");
+    write_atomically(path, |out| {
+        encode_srgb(out, width, height, PngDepth::Eight, rgb).map_err(|cause| ImageError::Png {
+            file: file_name(path),
+            cause,
+        })
+    })
 }
 
 #[cfg(test)]

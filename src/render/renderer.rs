@@ -15,7 +15,7 @@ use super::features::SceneFeatures;
 use super::scene_data::SceneData;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
-use crate::scene::{Filter, Sampler, Scene};
+use crate::scene::{Camera, Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
 use bytemuck::Zeroable;
 use std::time::Instant;
@@ -72,6 +72,24 @@ pub struct Renderer<'a> {
     plan_for_loop_limit: bool,
     /// Dispatches repeated in smaller steps because the device's loop limit cut them short.
     pub repeated_dispatches: u32,
+    /// Wall time one dispatch aims for (`DISPATCH_TARGET_S` unless [`Self::set_dispatch_target`]).
+    dispatch_target_s: f64,
+    /// The frame parameters uploaded, kept so that [`Self::set_camera`] can change the camera alone.
+    params: FrameParams,
+    /// Bytes of scene data in each buffer of `buffers` that [`scene_hash`] covers (`None`: not
+    /// covered), so that the hash can be recomputed from the device after a camera change.
+    hashed_bytes: Vec<Option<u64>>,
+    /// The pass whose bands [`Self::render_step`] is dispatching, between calls.
+    pass_in_progress: Option<PassInProgress>,
+}
+
+/// A pass cut into bands and dispatched a band per [`Renderer::render_step`]: rows before
+/// `next_row` hold `target` samples per pixel, the rest `samples_done`.
+#[derive(Clone, Copy, Debug)]
+struct PassInProgress {
+    target: u32,
+    band: u32,
+    next_row: u32,
 }
 
 /// Which kernel a renderer compiles (features.rs).
@@ -106,12 +124,27 @@ pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0 };
 
 pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
-    let cam = &scene.camera;
+    let mut params = frame_params_without_camera(scene, data, seed);
+    set_camera_params(&mut params, &scene.camera);
+    params
+}
+
+/// Writes the camera's fields of `params` (the film size must already be there).
+fn set_camera_params(params: &mut FrameParams, cam: &Camera) {
     let forward = (cam.look_at - cam.position).normalize();
     let right = forward.cross(cam.up).normalize();
     let up = right.cross(forward);
-    let aspect = scene.film.width as f32 / scene.film.height as f32;
-    let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
+    params.cam_origin = cam.position.into();
+    params.cam_forward = forward.into();
+    params.tan_half_fov = (cam.fov_deg.to_radians() * 0.5).tan();
+    params.cam_right = right.into();
+    params.aspect = params.width as f32 / params.height as f32;
+    params.cam_up = up.into();
+    params.lens_radius = cam.aperture;
+    params.focus_distance = cam.focus_distance;
+}
+
+fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     let rot = data.env_rotation_deg.to_radians();
     let i = &scene.integrator;
     let filter = match scene.film.filter {
@@ -124,12 +157,6 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         Sampler::Sobol => SAMPLER_SOBOL,
     };
     FrameParams {
-        cam_origin: cam.position.into(),
-        cam_forward: forward.into(),
-        tan_half_fov: tan_half,
-        cam_right: right.into(),
-        aspect,
-        cam_up: up.into(),
         env_color: data.env_color.into(),
         env_rotation: [rot.cos(), rot.sin()],
         env_selection_probability: data.env_selection_probability(),
@@ -148,8 +175,6 @@ pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
         rr_absorption: i.absorption.unwrap_or(-1.0),
         rr_survival_min: 0.05,
         rr_survival_max: 0.95,
-        lens_radius: cam.aperture,
-        focus_distance: cam.focus_distance,
         radiance_clamp: i.clamp.unwrap_or(0.0),
         pixel_filter: filter,
         sampler_kind: sampler,
@@ -210,14 +235,18 @@ fn scene_hash(params_without_seed: &FrameParams, contents: &[(&BufferBinding, In
     let mut hasher = blake3::Hasher::new();
     hasher.update(bytemuck::bytes_of(params_without_seed));
     for (binding, contents) in contents {
-        let scene_data = !binding.is_written() && !matches!(binding.shape, Shape::UniformBlock(_));
-        if let (true, Initial::Data(bytes)) = (scene_data, contents) {
+        if let (true, Initial::Data(bytes)) = (is_hashed(binding), contents) {
             // Length-prefixed so that bytes cannot move between neighbouring buffers unnoticed.
             hasher.update(&(bytes.len() as u64).to_le_bytes());
             hasher.update(bytes);
         }
     }
     hasher.finalize().to_hex().to_string()
+}
+
+/// Whether [`scene_hash`] covers the buffer: the scene data the kernel only reads.
+fn is_hashed(binding: &BufferBinding) -> bool {
+    !binding.is_written() && !matches!(binding.shape, Shape::UniformBlock(_))
 }
 
 /// How each large array is split across bindings (see chunks.rs), or why the scene cannot fit the
@@ -340,6 +369,7 @@ impl<'a> Renderer<'a> {
                 _ => descriptors.push(Binding::whole(binding.binding, buffer)),
             }
         }
+        let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
         Ok(Self { ctx, kernel: Some(kernel), features, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
@@ -350,7 +380,7 @@ impl<'a> Renderer<'a> {
             lights: data.lights.len(),
             gpu_bytes: data.gpu_bytes(),
             split_arrays,
-        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0 })
+        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0, dispatch_target_s: DISPATCH_TARGET_S, params, hashed_bytes, pass_in_progress: None })
     }
 
     /// Dispatches `samples` samples per pixel over the whole image at a time (at least 1; fewer
@@ -465,6 +495,106 @@ impl<'a> Renderer<'a> {
         self.ctx.check_validation()
     }
 
+    /// Adds at most one dispatch towards `spp` samples per pixel in all (a band of a pass, or a
+    /// whole pass where one dispatch holds it), for callers that must keep control between
+    /// dispatches, such as an interactive viewer. Returns whether a pass was completed, after
+    /// which every pixel holds [`Self::samples_done`] samples.
+    pub fn render_step(&mut self, spp: u32) -> Result<bool> {
+        let pass = match self.pass_in_progress {
+            Some(pass) => pass,
+            None => {
+                let target = spp.min(self.samples_done + self.samples_left());
+                if self.samples_done >= target {
+                    return Ok(false);
+                }
+                let (samples, band) = self.plan_pass(target - self.samples_done);
+                PassInProgress { target: self.samples_done + samples, band, next_row: 0 }
+            }
+        };
+        let rows = pass.band.min(self.height - pass.next_row);
+        self.fill_band(pass.next_row, rows, pass.target)?;
+        let next_row = pass.next_row + rows;
+        let completed = next_row == self.height;
+        self.pass_in_progress = (!completed).then_some(PassInProgress { next_row, ..pass });
+        if completed {
+            self.samples_done = pass.target;
+        }
+        self.ctx.check_validation()?;
+        Ok(completed)
+    }
+
+    /// Dispatches the rest of a pass [`Self::render_step`] began, so that every pixel holds the same
+    /// number of samples (as [`Self::accumulation`] must for a snapshot).
+    pub fn finish_pass(&mut self) -> Result<()> {
+        while self.pass_in_progress.is_some() {
+            self.render_step(u32::MAX)?;
+        }
+        Ok(())
+    }
+
+    /// The samples per pixel that the pixels of the pass in progress reach (`None` between
+    /// passes): while a pass is cut into bands, pixels hold either this or [`Self::samples_done`].
+    pub fn pass_target(&self) -> Option<u32> {
+        self.pass_in_progress.map(|p| p.target)
+    }
+
+    /// Sizes dispatches to take about `seconds` of wall time instead of `DISPATCH_TARGET_S`: an
+    /// interactive viewer needs shorter ones to keep drawing its window.
+    pub fn set_dispatch_target(&mut self, seconds: f64) {
+        self.dispatch_target_s = seconds;
+    }
+
+    /// Moves the camera and starts the image over: the accumulation (and AOV sums) are cleared and
+    /// the sample stream restarts at its offset. The scene stays on the device, and the speed
+    /// measurements that size dispatches are kept. The scene hash depends on the camera: it reads
+    /// empty until [`Self::refresh_scene_hash`].
+    pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+        set_camera_params(&mut self.params, camera);
+        let params = self.params;
+        self.buffer(KernelBuffer::Frame).expect("every kernel binds the frame parameters").upload(self.ctx, bytemuck::bytes_of(&params))?;
+        let zeroes = vec![0u8; self.width as usize * self.height as usize * 16];
+        for which in [KernelBuffer::Accum, KernelBuffer::AovAlbedoDepth, KernelBuffer::AovNormalHits] {
+            if let Some(buffer) = self.buffer(which) {
+                buffer.upload(self.ctx, &zeroes)?;
+            }
+        }
+        self.samples_done = 0;
+        self.pass_in_progress = None;
+        self.rays_traced = 0;
+        self.nonfinite_samples = 0;
+        self.seconds = 0.0;
+        self.gpu_seconds = self.gpu_seconds.map(|_| 0.0);
+        self.scene_hash.clear();
+        Ok(())
+    }
+
+    /// Recomputes [`Self::scene_hash`] for the current camera from the scene data on the device
+    /// (read back, as the host keeps no copy): after [`Self::set_camera`], before a snapshot.
+    pub fn refresh_scene_hash(&mut self) -> Result<()> {
+        if !self.scene_hash.is_empty() {
+            return Ok(());
+        }
+        let mut contents = Vec::new();
+        for ((which, buffer), hashed) in self.buffers.iter().zip(&self.hashed_bytes) {
+            let binding = which.entry();
+            contents.push(match *hashed {
+                Some(0) => (binding, vec![]),
+                Some(bytes) => (binding, buffer.download(self.ctx, bytes)?),
+                None => continue,
+            });
+        }
+        let contents: Vec<(&BufferBinding, Initial)> = contents.iter().map(|(b, bytes)| (*b, Initial::Data(bytes))).collect();
+        self.scene_hash = scene_hash(&FrameParams { seed: 0, ..self.params }, &contents);
+        Ok(())
+    }
+
+    /// The buffers a display of the image reads: the accumulation (per pixel: radiance sum and
+    /// sample count), and the AOV sums (albedo and depth, normal and hits) where the kernel keeps them.
+    pub fn image_buffers(&self) -> (&Buffer, Option<(&Buffer, &Buffer)>) {
+        let accumulation = self.buffer(KernelBuffer::Accum).expect("every kernel binds the accumulation");
+        (accumulation, self.buffer(KernelBuffer::AovAlbedoDepth).zip(self.buffer(KernelBuffer::AovNormalHits)))
+    }
+
     /// Samples per pixel and rows per dispatch for the next pass.
     fn plan_pass(&self, remaining: u32) -> (u32, u32) {
         if let Some(samples) = self.fixed_samples_per_dispatch {
@@ -474,7 +604,7 @@ impl<'a> Renderer<'a> {
             // First dispatch: one sample over a band small enough for any device.
             return (1, self.height.min(32));
         };
-        let budget_row_samples = (DISPATCH_TARGET_S / cost.max(1e-12)).max(1.0);
+        let budget_row_samples = (self.dispatch_target_s / cost.max(1e-12)).max(1.0);
         let max_samples = (MAX_PIXEL_SAMPLES_PER_DISPATCH / (self.width as u64 * self.height as u64)).max(1) as f64;
         if budget_row_samples >= self.height as f64 {
             let samples = (budget_row_samples / self.height as f64).min(max_samples).min(self.loop_safe_samples() as f64).min(remaining as f64).max(1.0);

@@ -1,6 +1,7 @@
 //! Scenes: the TOML format (`format`), validation into a `Scene`, meshes and environment maps.
 
 mod asset;
+mod camera_toml;
 mod environment;
 mod format;
 pub mod import;
@@ -11,6 +12,7 @@ mod toml_error;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError};
+pub use camera_toml::camera_toml;
 pub use format::{Filter, LightSelection, Sampler};
 pub use light::Light;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
@@ -275,6 +277,32 @@ impl Scene {
     pub fn parse_from(files: &InputFiles, text: &str, name: &str, base: &Path) -> Result<Scene> {
         let file: SceneFile = toml::from_str(text).map_err(|e| anyhow::anyhow!("{name}: {}", toml_error::describe(&e, text)))?;
         build(file, name, base, files).with_context(|| name.to_string())
+    }
+
+    /// The smallest box holding every shape and every placed mesh vertex, as (min, max) corners;
+    /// `None` for an empty scene.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        let mut add = |p: Vec3| {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        };
+        for shape in &self.shapes {
+            match *shape {
+                Shape::Sphere { center, radius, .. } => {
+                    add(center - Vec3::splat(radius.abs()));
+                    add(center + Vec3::splat(radius.abs()));
+                }
+                Shape::Quad { origin, u, v, .. } => [origin, origin + u, origin + v, origin + u + v].into_iter().for_each(&mut add),
+                Shape::Triangle { v, .. } => v.into_iter().for_each(&mut add),
+            }
+        }
+        for inst in &self.instances {
+            for p in &self.meshes[inst.mesh as usize].positions {
+                add(inst.transform.transform_point3(*p));
+            }
+        }
+        (lo.x <= hi.x).then_some((lo, hi))
     }
 
     /// Emissive shapes plus emissive mesh triangles, each instance counted.
