@@ -8,7 +8,12 @@ const uint PRIM_TRIANGLE = 2u;
 // Sphere:   a.xyz = center, a.w = radius.
 // Quad:     a.xyz = origin, b.xyz = edge u, c.xyz = edge v; the emitting side faces cross(u, v).
 // Triangle: a.xyz = v0, b.xyz = v1 - v0, c.xyz = v2 - v0; the front side faces cross(e1, e2).
-// b.w holds the kind and c.w the material index, as raw uint bits.
+// b.w holds the kind and c.w the material index, as raw uint bits. A light made of a mesh triangle
+// (in `lights`, or built at a hit by world_primitive) has in a.w its place in `mesh_triangles`
+// (uint bits), with TRIANGLE_LIGHT_MIRRORED set where its placement mirrors it and vertices 1 and
+// 2 were swapped to keep its front side: a textured emitter's texture coordinates and mean
+// luminance are found through it.
+const uint TRIANGLE_LIGHT_MIRRORED = 0x80000000u;
 struct Primitive {
     vec4 a;
     vec4 b;
@@ -29,6 +34,9 @@ const uint CONDUCTOR_ALBEDO = 2u;
 // plastic (a coated base), 0 for a plain diffuse base. metallic_roughness.x = glTF
 // metallic-roughness texture index (uint bits; NO_TEXTURE for none), .y/.z/.w = the metallic,
 // roughness and transmission factors that surface_material() turns into R, T and alpha per texel.
+// maps.x = emission texture index (uint bits; NO_TEXTURE for none), which multiplies emission_t.rgb
+// per texel; maps.y = tangent-space normal map index (uint bits; NO_TEXTURE for none), maps.z its
+// scale (of the normal's x and y); maps.w unused.
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;
@@ -36,6 +44,7 @@ struct Material {
     vec4 conductor_eta;
     vec4 conductor_k;
     vec4 metallic_roughness;
+    vec4 maps;
 };
 
 // Lights without a surface (LIGHT_* must match layout.rs; src/scene/light.rs).
@@ -79,9 +88,11 @@ struct PairNode {
 // (one group, identity transform), or a placed triangle mesh.
 const uint INSTANCE_PRIMITIVES = 0u;
 const uint INSTANCE_MESH = 1u;
-// Instance flags: the mesh has per-vertex normals / texture coordinates.
+// Instance flags: the mesh has per-vertex normals / texture coordinates / tangents (for normal
+// maps; a mesh with tangents has the other two).
 const uint INSTANCE_HAS_NORMALS = 1u;
 const uint INSTANCE_HAS_UVS = 2u;
+const uint INSTANCE_HAS_TANGENTS = 4u;
 const uint NO_TEXTURE = 0xffffffffu;
 // Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored).
 const uint TEXTURE_SRGB = 1u;
@@ -131,4 +142,5 @@ const uint FILTER_GAUSSIAN = 2u;
 
 uint prim_kind(Primitive p) { return floatBitsToUint(p.b.w); }
 uint prim_material(Primitive p) { return floatBitsToUint(p.c.w); }
+uint light_mesh_triangle(Primitive p) { return floatBitsToUint(p.a.w) & ~TRIANGLE_LIGHT_MIRRORED; }
 uint punctual_kind(PunctualLight l) { return floatBitsToUint(l.position_kind.w); }

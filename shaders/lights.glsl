@@ -23,12 +23,33 @@ struct LightSample {
 };
 
 // Flux of an emitter: area x pi x luminance of its radiance, twice for a two-sided quad or
-// triangle (light_power in light_selection.rs).
+// triangle (area_light_power in light_selection.rs). A textured emitter's luminance is its mean
+// over the triangle, from the host (textured_emission.rs).
 float light_power(Primitive p) {
     Material m = materials[prim_material(p)];
     float sides = primitive_is_flat(p) && m.params.y > 0.5 ? 2.0 : 1.0;
-    return primitive_area(p) * PI * dot(m.emission_t.rgb, vec3(0.2126, 0.7152, 0.0722)) * sides;
+    float luminance = dot(m.emission_t.rgb, vec3(0.2126, 0.7152, 0.0722));
+#if SCENE_EMISSIVE_TEXTURES
+    if (floatBitsToUint(m.maps.x) != NO_TEXTURE) luminance = load_triangle_emission(light_mesh_triangle(p));
+#endif
+    return primitive_area(p) * PI * luminance * sides;
 }
+
+#if SCENE_EMISSIVE_TEXTURES
+// Texture coordinates at `point` on the mesh-triangle light `p`: its barycentric coordinates in
+// the world-space triangle, applied to the corners' coordinates in the order the light keeps.
+vec2 light_uv(Primitive p, vec3 point) {
+    vec3 e1 = p.b.xyz, e2 = p.c.xyz, v = point - p.a.xyz;
+    float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
+    float v1 = dot(v, e1), v2 = dot(v, e2);
+    float inv = 1.0 / (d11 * d22 - d12 * d12);
+    float b1 = (d22 * v1 - d12 * v2) * inv, b2 = (d11 * v2 - d12 * v1) * inv;
+    MeshTriangle triangle = load_mesh_triangles(light_mesh_triangle(p));
+    uvec3 corner = floatBitsToUint(vec3(triangle.v0.w, triangle.e1.w, triangle.e2.w));
+    if ((floatBitsToUint(p.a.w) & TRIANGLE_LIGHT_MIRRORED) != 0u) corner.yz = corner.zy;
+    return (1.0 - b1 - b2) * load_vertex_uvs(corner.x) + b1 * load_vertex_uvs(corner.y) + b2 * load_vertex_uvs(corner.z);
+}
+#endif
 
 // Probability that next-event estimation picks a light of power `power` (the map's share taken
 // out): by power, or uniformly among the area and punctual lights.
@@ -291,7 +312,12 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     if (ls.dist <= 0.0) return false;
     ls.dir = to_point / ls.dist;
     bool front = dot(primitive_normal(p, point), ls.dir) < 0.0;
-    ls.radiance = emitted_radiance(materials[prim_material(p)], front);
+    Material m = materials[prim_material(p)];
+    ls.radiance = emitted_radiance(m, front);
+#if SCENE_EMISSIVE_TEXTURES
+    uint emission_index = floatBitsToUint(m.maps.x);
+    if (emission_index != NO_TEXTURE) ls.radiance *= texture_rgb(emission_index, light_uv(p, point));
+#endif
     ls.pdf = light_pdf(p, ref, ls.dir, ls.dist);
     return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
 }

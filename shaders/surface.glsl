@@ -4,7 +4,8 @@
 struct Surface {
     vec3 point;
     vec3 ng;        // unit geometric normal on the front side (outward, or by winding)
-    vec3 ns;        // unit shading normal: interpolated vertex normals, turned to ng's side
+    vec3 ns;        // unit shading normal: interpolated vertex normals, turned to ng's side (and
+                    // bent by a normal map)
     vec2 uv;
     uint material;
 };
@@ -24,6 +25,25 @@ vec3 normal_to_world(vec4 world_to_object[3], vec3 n) {
     return normalize(world_to_object[0].xyz * n.x + world_to_object[1].xyz * n.y + world_to_object[2].xyz * n.z);
 }
 
+#if SCENE_NORMAL_MAPS
+// The world-space shading normal `ns` bent by a tangent-space normal map, glTF's way: the texel
+// (linear, (normal + 1) / 2) has x along the tangent, y along the bitangent cross(n, t) x sign and
+// z along the normal, x and y times `scale`. `n` and `t` are the interpolated object-space normal
+// and tangent (w: the bitangent's sign, the same at a triangle's corners). The tangent and
+// bitangent are built in object space and carried to the world as directions, so a mirroring
+// placement turns the bitangent with the surface.
+vec3 normal_mapped(uint map, float scale, vec2 uv, vec3 n, vec4 t, vec4 object_to_world[3], vec3 ns) {
+    vec3 tangent = t.xyz - dot(t.xyz, n) * n;
+    if (dot(tangent, tangent) <= 1e-12) return ns;
+    tangent = normalize(tangent);
+    vec3 bitangent = cross(n, tangent) * (t.w < 0.0 ? -1.0 : 1.0);
+    vec3 texel = texture_rgb(map, uv) * 2.0 - 1.0;
+    vec3 bent = scale * texel.x * normalize(affine_vector(object_to_world, tangent))
+              + scale * texel.y * normalize(affine_vector(object_to_world, bitangent)) + texel.z * ns;
+    return dot(bent, bent) > 1e-12 ? normalize(bent) : ns;
+}
+#endif
+
 Surface surface_at(Hit hit, vec3 o, vec3 d) {
     Surface s;
     s.point = o + hit.t * d;
@@ -42,20 +62,29 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     vec3 w = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
     s.ng = normal_to_world(world_to_object, cross(triangle.e1.xyz, triangle.e2.xyz));
     s.ns = s.ng;
-    if ((info.z & INSTANCE_HAS_NORMALS) != 0u) {
-        vec3 n = w.x * unpack_normal(load_vertex_normals(tri.x)) + w.y * unpack_normal(load_vertex_normals(tri.y))
-               + w.z * unpack_normal(load_vertex_normals(tri.z));
-        if (dot(n, n) > 1e-12) {
-            vec3 ns = normal_to_world(world_to_object, n);
-            s.ns = dot(ns, s.ng) < 0.0 ? -ns : ns;
-        }
-    }
     s.uv = vec2(0.0);
     // Texture coordinates serve textures alone.
     if (SCENE_TEXTURES == 1 && (info.z & INSTANCE_HAS_UVS) != 0u) {
         s.uv = w.x * load_vertex_uvs(tri.x) + w.y * load_vertex_uvs(tri.y) + w.z * load_vertex_uvs(tri.z);
     }
     s.material = load_triangle_materials(hit.prim);
+    if ((info.z & INSTANCE_HAS_NORMALS) != 0u) {
+        vec3 n = w.x * unpack_normal(load_vertex_normals(tri.x)) + w.y * unpack_normal(load_vertex_normals(tri.y))
+               + w.z * unpack_normal(load_vertex_normals(tri.z));
+        if (dot(n, n) > 1e-12) {
+            vec3 ns = normal_to_world(world_to_object, n);
+            // The interpolated normal decides the side; a normal map only bends it.
+            float side = dot(ns, s.ng) < 0.0 ? -1.0 : 1.0;
+#if SCENE_NORMAL_MAPS
+            uint normal_map = floatBitsToUint(materials[s.material].maps.y);
+            if (normal_map != NO_TEXTURE && (info.z & INSTANCE_HAS_TANGENTS) != 0u) {
+                vec4 t = w.x * load_vertex_tangents(tri.x) + w.y * load_vertex_tangents(tri.y) + w.z * load_vertex_tangents(tri.z);
+                ns = normal_mapped(normal_map, materials[s.material].maps.z, s.uv, normalize(n), t, instances[hit.instance].object_to_world, ns);
+            }
+#endif
+            s.ns = side * ns;
+        }
+    }
     return s;
 }
 
@@ -65,14 +94,15 @@ Primitive world_primitive(Hit hit) {
     vec4 object_to_world[3] = instances[hit.instance].object_to_world;
     MeshTriangle tri = load_mesh_triangles(hit.prim);
     Primitive p;
-    p.a = vec4(affine_point(object_to_world, tri.v0.xyz), 0.0);
+    p.a = vec4(affine_point(object_to_world, tri.v0.xyz), uintBitsToFloat(hit.prim));
     p.b = vec4(affine_vector(object_to_world, tri.e1.xyz), uintBitsToFloat(PRIM_TRIANGLE));
     p.c = vec4(affine_vector(object_to_world, tri.e2.xyz), uintBitsToFloat(load_triangle_materials(hit.prim)));
     return p;
 }
 
-// Material at the surface, with the albedo texture applied, and the glTF metallic-roughness
-// texture (G = roughness, B = metallic) turned into R, T and alpha as the loader does factors.
+// Material at the surface, with the albedo and emission textures applied, and the glTF
+// metallic-roughness texture (G = roughness, B = metallic) turned into R, T and alpha as the loader
+// does factors.
 Material surface_material(Surface s) {
     Material m = materials[s.material];
 #if SCENE_TEXTURES
@@ -87,6 +117,10 @@ Material surface_material(Surface s) {
         m.emission_t.w = (1.0 - metallic) * m.metallic_roughness.w;
         m.params.w = roughness * roughness;
     }
+#endif
+#if SCENE_EMISSIVE_TEXTURES
+    uint emission_index = floatBitsToUint(m.maps.x);
+    if (emission_index != NO_TEXTURE) m.emission_t.rgb *= texture_rgb(emission_index, s.uv);
 #endif
     return m;
 }

@@ -190,6 +190,7 @@ fn textured_mesh_gives_material_albedo_times_texture() {
         uvs: corners.iter().map(|p| Vec2::new(p.x + 0.5, 0.5 - p.y)).collect(),
         triangles: vec![[0, 3, 2], [0, 2, 1]],
         triangle_materials: vec![0, 0],
+        tangents: Vec::new(),
     }];
     scene.instances = vec![Instance { mesh: 0, transform: Mat4::IDENTITY }];
     let expected = [0.5 * srgb_to_linear(texel[0]), srgb_to_linear(texel[1]), 0.8 * srgb_to_linear(texel[2])];

@@ -380,6 +380,7 @@ fn material(albedo: f32, r: f32, t: f32, ior: f32, alpha: f32) -> GpuMaterial {
         conductor_eta: [0.0, 0.0, 0.0, f32::from_bits(CONDUCTOR_ALBEDO)],
         conductor_k: [0.0; 4],
         metallic_roughness: [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
+        maps: [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
     }
 }
 

@@ -244,6 +244,7 @@ fn textured_albedo_is_sampled_bilinearly_with_wrapping() {
         uvs: corners.iter().map(|&p| uv_of(p)).collect(),
         triangles: vec![[0, 3, 2], [0, 2, 1]],
         triangle_materials: vec![0, 0],
+        tangents: Vec::new(),
     }];
     scene.instances = vec![Instance { mesh: 0, transform: Mat4::IDENTITY }];
 
@@ -465,7 +466,7 @@ fn sphere_scene() -> Scene {
         "#,
     );
     let (rings, segments) = (12u32, 16u32);
-    let mut mesh = Mesh { name: "uv sphere".into(), positions: vec![], normals: vec![], uvs: vec![], triangles: vec![], triangle_materials: vec![] };
+    let mut mesh = Mesh { name: "uv sphere".into(), positions: vec![], normals: vec![], uvs: vec![], tangents: vec![], triangles: vec![], triangle_materials: vec![] };
     for r in 0..=rings {
         for s in 0..=segments {
             let (theta, phi) = (std::f32::consts::PI * r as f32 / rings as f32, std::f32::consts::TAU * s as f32 / segments as f32);

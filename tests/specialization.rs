@@ -7,9 +7,9 @@ mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
 use caustica::render::{AovSet, KernelChoice, Renderer, SceneFeatures};
-use caustica::scene::{Instance, Mesh, Scene, Texture};
+use caustica::scene::{Instance, Mesh, NormalMap, Scene, Texture};
 use common::{gpu, parse};
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::Path;
 
 /// The accumulated sums of `scene` (seed 3, its own spp), as bits, and the features its kernel had.
@@ -56,9 +56,10 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
     assert!(specialized >= 3, "only {specialized} scenes got a kernel of their own");
 }
 
-/// A textured, instanced mesh with a rough metal, a plastic and a sphere under an environment map:
-/// every feature on, which the checked-in scenes without the shared data lack (textures, several
-/// instances).
+/// A textured, instanced mesh with a rough metal, a plastic and a sphere under an environment map,
+/// lit by a mesh lamp with an emission texture, the floor normal-mapped: every feature on, which
+/// the checked-in scenes without the shared data lack (textures, several instances, textured
+/// emitters, normal maps).
 #[test]
 fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     let mut scene = parse(
@@ -75,6 +76,9 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         [materials.plastic]
         albedo = [0.2, 0.5, 0.8]
         coat = true
+        [materials.glow]
+        albedo = [0, 0, 0]
+        emission = [4, 3, 2]
         [[spheres]]
         center = [0.8, 0.3, 0.0]
         radius = 0.3
@@ -88,18 +92,28 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
     scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true }];
     scene.materials[0].albedo_texture = Some(0);
+    // A bumpy normal map: each texel tilts the normal its own way.
+    let bumps: Vec<[u8; 4]> = (0..16u32).map(|i| [(96 + i * 37 % 64) as u8, (96 + i * 23 % 64) as u8, 230, 255]).collect();
+    scene.textures.push(Texture { name: "bumps".into(), width: 4, height: 4, texels: bumps, srgb: false });
+    scene.materials[0].maps.normal = Some(NormalMap { texture: 1, scale: 0.8 });
+    let glow = scene.materials.iter().position(|m| m.name == "glow").unwrap() as u32;
+    scene.materials[glow as usize].maps.emission = Some(0);
     let corners = [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)];
-    scene.meshes = vec![Mesh {
-        name: "floor".into(),
+    let quad = |material: u32, triangles: [[u32; 3]; 2]| Mesh {
+        name: "quad".into(),
         positions: corners.to_vec(),
         normals: vec![Vec3::Y; 4],
         uvs: corners.iter().map(|p| Vec2::new(p.x, p.z)).collect(),
-        triangles: vec![[0, 2, 1], [0, 3, 2]],
-        triangle_materials: vec![0, 0],
-    }];
+        triangles: triangles.to_vec(),
+        triangle_materials: vec![material; 2],
+        tangents: vec![Vec4::new(1.0, 0.0, 0.0, 1.0); 4],
+    };
+    // The floor faces up; the lamp above it faces down.
+    scene.meshes = vec![quad(0, [[0, 2, 1], [0, 3, 2]]), quad(glow, [[0, 1, 2], [0, 2, 3]])];
     scene.instances = vec![
         Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, 0.0)) },
         Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, -2.0)) },
+        Instance { mesh: 1, transform: Mat4::from_translation(Vec3::new(0.0, 1.5, 0.0)) * Mat4::from_scale(Vec3::splat(0.3)) },
     ];
     let (_lock, ctx) = gpu();
     let features = assert_specialized_kernel_agrees(&ctx, scene);

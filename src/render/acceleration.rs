@@ -21,9 +21,17 @@ pub struct Acceleration {
     /// [`GpuMeshTriangle`]), and their materials in the same order.
     pub triangles: Vec<GpuMeshTriangle>,
     pub triangle_materials: Vec<u32>,
+    /// Per mesh, per triangle of `Mesh::triangles`: where it lies in `triangles`.
+    pub triangle_slots: Vec<Vec<u32>>,
     /// Octahedral snorm16x2, one a vertex of meshes with normals (others have no entries).
     pub normals: Vec<u32>,
+    /// One a vertex of meshes with texture coordinates; in a scene with textures, one a vertex of
+    /// every mesh ((0, 0) for those without), so that a textured emitter's light sample can read
+    /// them without knowing its mesh.
     pub uvs: Vec<[f32; 2]>,
+    /// Tangent and bitangent sign, one a vertex of meshes with tangents (see `Mesh::tangents`;
+    /// others have zeros where a later mesh needs entries).
+    pub tangents: Vec<[f32; 4]>,
     pub stats: AccelerationStats,
 }
 
@@ -186,8 +194,9 @@ impl Acceleration {
         }
 
         let (mut triangles, mut triangle_materials) = (Vec::new(), Vec::new());
-        let (mut vertex_count, mut normals, mut uvs) = (0u32, Vec::new(), Vec::new());
+        let (mut vertex_count, mut normals, mut uvs, mut tangents) = (0u32, Vec::new(), Vec::new(), Vec::new());
         let mut mesh_roots = Vec::with_capacity(meshes.len());
+        let mut triangle_slots = Vec::with_capacity(meshes.len());
         let mut mesh_flags = Vec::with_capacity(meshes.len());
         for (mesh, bottom) in scene.meshes.iter().zip(&meshes) {
             mesh_roots.push(append_nodes(&mut nodes, &bottom.bvh, triangles.len() as u32));
@@ -195,6 +204,11 @@ impl Acceleration {
             vertex_count += mesh.positions.len() as u32;
             triangles.extend(bottom.bvh.prim_order.iter().map(|&t| mesh_triangle(mesh, t as usize, vertex_base)));
             triangle_materials.extend(bottom.bvh.prim_order.iter().map(|&t| mesh.triangle_materials[t as usize]));
+            let mut slots = vec![0; mesh.triangles.len()];
+            for (slot, &t) in (triangles.len() as u32 - mesh.triangles.len() as u32..).zip(&bottom.bvh.prim_order) {
+                slots[t as usize] = slot;
+            }
+            triangle_slots.push(slots);
             // Attribute arrays are indexed by global vertex index, so a mesh without normals
             // still needs placeholders when a later mesh has them.
             let mut flags = 0;
@@ -208,7 +222,15 @@ impl Acceleration {
                 uvs.extend(mesh.uvs.iter().map(|uv| uv.to_array()));
                 flags |= INSTANCE_HAS_UVS;
             }
+            if !mesh.tangents.is_empty() {
+                tangents.resize(vertex_base as usize, [0.0; 4]);
+                tangents.extend(mesh.tangents.iter().map(|t| t.to_array()));
+                flags |= INSTANCE_HAS_TANGENTS;
+            }
             mesh_flags.push(flags);
+        }
+        if !scene.textures.is_empty() {
+            uvs.resize(vertex_count as usize, [0.0; 2]);
         }
 
         let instances = top
@@ -234,7 +256,7 @@ impl Acceleration {
             top: (!instances.is_empty()).then(|| top.stats()),
             largest_mesh: meshes.iter().max_by_key(|m| m.bvh.prim_order.len()).map(|m| m.bvh.stats()),
         };
-        Acceleration { nodes, instances, primitives, triangles, triangle_materials, normals, uvs, stats }
+        Acceleration { nodes, instances, primitives, triangles, triangle_materials, triangle_slots, normals, uvs, tangents, stats }
     }
 
     pub fn gpu_bytes(&self) -> u64 {
@@ -244,7 +266,8 @@ impl Acceleration {
             + std::mem::size_of_val(&self.triangles[..])
             + std::mem::size_of_val(&self.triangle_materials[..])
             + std::mem::size_of_val(&self.normals[..])
-            + std::mem::size_of_val(&self.uvs[..])) as u64
+            + std::mem::size_of_val(&self.uvs[..])
+            + std::mem::size_of_val(&self.tangents[..])) as u64
     }
 }
 

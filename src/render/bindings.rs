@@ -32,6 +32,8 @@ pub enum KernelBuffer {
     EnvCdf,
     LightAlias,
     PunctualLights,
+    TriangleEmission,
+    VertexTangents,
     AovAlbedoDepth,
     AovNormalHits,
 }
@@ -192,6 +194,13 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Point, spot and directional lights (src/scene/light.rs), picked after the area lights: entry
     // light_count + i of the alias table is punctual light i.
     BufferBinding { buffer: PunctualLights, binding: 17, name: "punctual_lights", shape: array::<GpuPunctualLight>(), access: Read, bound_in: EveryKernel, what: "point, spot and directional lights" },
+    // Per entry of `mesh_triangles`: the mean luminance of a textured emitter's emission over the
+    // triangle (src/render/textured_emission.rs), which light selection weighs it by; 0 for other
+    // triangles, and empty when no material has an emission texture.
+    BufferBinding { buffer: TriangleEmission, binding: 18, name: "triangle_emission", shape: chunked::<f32>(), access: Read, bound_in: EveryKernel, what: "textured emitters' mean luminance" },
+    // Tangents of the vertices of meshes with a normal-mapped material, by global vertex index:
+    // xyz = unit tangent (along growing u), w = the bitangent's sign.
+    BufferBinding { buffer: VertexTangents, binding: 19, name: "vertex_tangents", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "vertex tangents" },
     // Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
     // xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
     // first hit summed over the samples that hit something, w = how many those were.

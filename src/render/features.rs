@@ -1,6 +1,6 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
-//! textures, an environment map, rough lobes, coated bases) is left out by `#if` and by constants
+//! textures, emission textures, normal maps, an environment map, rough lobes, coated bases) is left out by `#if` and by constants
 //! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
@@ -21,8 +21,14 @@ pub struct SceneFeatures {
     pub meshes: bool,
     /// The scene's own spheres, quads and triangles.
     pub primitives: bool,
-    /// Albedo or metallic-roughness textures (and the texture coordinates they read).
+    /// Any texture: albedo and metallic-roughness lookups, and the texture coordinates every
+    /// texture reads.
     pub textures: bool,
+    /// Emission textures (emissive materials with one): texture lookups for emitters hit and
+    /// sampled, and their per-triangle mean luminance for light selection.
+    pub emissive_textures: bool,
+    /// Tangent-space normal maps on meshes with tangents: the shading normal bent per texel.
+    pub normal_maps: bool,
     /// An environment map (else the sky is one colour, never importance sampled).
     pub environment_map: bool,
     /// GGX lobes: a material with a roughness at or above ALPHA_DELTA, or a metallic-roughness
@@ -35,7 +41,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, environment_map: true, rough_lobes: true, coated: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, environment_map: true, rough_lobes: true, coated: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -47,6 +53,8 @@ impl SceneFeatures {
             meshes: has_instance(INSTANCE_MESH),
             primitives: has_instance(INSTANCE_PRIMITIVES),
             textures: !data.textures.is_empty(),
+            emissive_textures: data.materials.iter().any(|m| m.maps[0].to_bits() != NO_TEXTURE && m.emission_t[..3].iter().any(|&e| e > 0.0)),
+            normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
             environment_map: data.env_kind != ENV_CONSTANT,
             rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA),
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
@@ -54,12 +62,14 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 7] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 9] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
             ("primitives", "SCENE_PRIMITIVES", self.primitives),
             ("textures", "SCENE_TEXTURES", self.textures),
+            ("emissive_textures", "SCENE_EMISSIVE_TEXTURES", self.emissive_textures),
+            ("normal_maps", "SCENE_NORMAL_MAPS", self.normal_maps),
             ("environment_map", "SCENE_ENV_MAP", self.environment_map),
             ("rough_lobes", "SCENE_ROUGH_LOBES", self.rough_lobes),
             ("coated", "SCENE_COATED", self.coated),

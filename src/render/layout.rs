@@ -9,11 +9,14 @@ use bytemuck::{Pod, Zeroable};
 pub const PRIM_SPHERE: u32 = 0;
 pub const PRIM_QUAD: u32 = 1;
 pub const PRIM_TRIANGLE: u32 = 2;
+/// Set in a triangle light's a.w (its place in `mesh_triangles`) when vertices 1 and 2 were swapped.
+pub const TRIANGLE_LIGHT_MIRRORED: u32 = 0x8000_0000;
 
 pub const INSTANCE_PRIMITIVES: u32 = 0;
 pub const INSTANCE_MESH: u32 = 1;
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
+pub const INSTANCE_HAS_TANGENTS: u32 = 4;
 pub const NO_TEXTURE: u32 = u32::MAX;
 pub const TEXTURE_SRGB: u32 = 1;
 
@@ -59,6 +62,8 @@ pub struct GpuMaterial {
     pub conductor_k: [f32; 4],
     /// metallic-roughness texture (u32 bits), metallic, roughness and transmission factors
     pub metallic_roughness: [f32; 4],
+    /// emission texture (u32 bits), normal map (u32 bits), normal map scale, unused
+    pub maps: [f32; 4],
 }
 
 /// `struct Instance`: rows of the two 3x4 affine maps, then kind, BVH root node and flags.
@@ -279,14 +284,15 @@ mod tests {
 
     #[test]
     fn material_matches_glsl_std430() {
-        assert_eq!(size_of::<GpuMaterial>(), 96);
+        assert_eq!(size_of::<GpuMaterial>(), 112);
         assert_eq!(offset_of!(GpuMaterial, emission_t), 16);
         assert_eq!(offset_of!(GpuMaterial, params), 32);
         assert_eq!(offset_of!(GpuMaterial, conductor_eta), 48);
         assert_eq!(offset_of!(GpuMaterial, conductor_k), 64);
         assert_eq!(offset_of!(GpuMaterial, metallic_roughness), 80);
+        assert_eq!(offset_of!(GpuMaterial, maps), 96);
         let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n};";
+        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n    vec4 maps;\n};";
         assert!(glsl.contains(members), "struct Material members differ from GpuMaterial");
     }
 
@@ -407,10 +413,12 @@ mod tests {
             ("PRIM_SPHERE", PRIM_SPHERE),
             ("PRIM_QUAD", PRIM_QUAD),
             ("PRIM_TRIANGLE", PRIM_TRIANGLE),
+            ("TRIANGLE_LIGHT_MIRRORED", TRIANGLE_LIGHT_MIRRORED),
             ("INSTANCE_PRIMITIVES", INSTANCE_PRIMITIVES),
             ("INSTANCE_MESH", INSTANCE_MESH),
             ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
             ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
+            ("INSTANCE_HAS_TANGENTS", INSTANCE_HAS_TANGENTS),
             ("NO_TEXTURE", NO_TEXTURE),
             ("TEXTURE_SRGB", TEXTURE_SRGB),
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
@@ -428,7 +436,7 @@ mod tests {
             ("SAMPLER_INDEPENDENT", SAMPLER_INDEPENDENT),
             ("SAMPLER_SOBOL", SAMPLER_SOBOL),
         ] {
-            let literal = if value == u32::MAX { "0xffffffffu".to_string() } else { format!("{value}u") };
+            let literal = if value >= 1 << 31 { format!("{value:#x}u") } else { format!("{value}u") };
             assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl or rng.glsl");
         }
     }

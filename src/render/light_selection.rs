@@ -31,16 +31,22 @@ pub struct LightDistribution {
     pub total_power: f32,
 }
 
-/// Flux of a world-space emitter: area x pi x luminance of its radiance (a Lambertian emitter),
-/// twice for a two-sided quad or triangle (a sphere shows only its outside). The kernel's
-/// `light_power` in lights.glsl is the same formula on the GPU form of the shape.
-pub fn area_light_power(shape: &Shape, material: &Material) -> f64 {
+/// Flux of a world-space emitter whose radiance has luminance `luminance` (its emission's, or for
+/// a textured emitter its texture-weighted mean: textured_emission.rs): area x pi x luminance (a
+/// Lambertian emitter), twice for a two-sided quad or triangle (a sphere shows only its outside).
+/// The kernel's `light_power` in lights.glsl is the same formula on the GPU form of the shape.
+pub fn area_light_power(shape: &Shape, material: &Material, luminance: f64) -> f64 {
     let (area, sides) = match *shape {
         Shape::Sphere { radius, .. } => (4.0 * PI * (radius as f64).powi(2), 1.0),
         Shape::Quad { u, v, .. } => (u.as_dvec3().cross(v.as_dvec3()).length(), two_sided(material)),
         Shape::Triangle { v, .. } => (0.5 * (v[1] - v[0]).as_dvec3().cross((v[2] - v[0]).as_dvec3()).length(), two_sided(material)),
     };
-    area * PI * luminance(&material.emission.to_array()) * sides
+    area * PI * luminance * sides
+}
+
+/// Luminance of a material's (untextured) emission.
+pub fn emission_luminance(material: &Material) -> f64 {
+    luminance(&material.emission.to_array())
 }
 
 /// Flux of a point, spot or directional light by the formulas above; `scene_radius` is the
@@ -192,6 +198,7 @@ mod tests {
             conductor: Conductor::Mirror,
             coat: false,
             metallic_roughness: None,
+            maps: Default::default(),
         }
     }
 
@@ -202,13 +209,14 @@ mod tests {
         let quad = Shape::Quad { origin: Vec3::ZERO, u: Vec3::new(2.0, 0.0, 0.0), v: Vec3::new(0.0, 0.0, 3.0), material: 0 };
         let triangle = Shape::Triangle { v: [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 3.0)], material: 1 };
         let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b;
-        assert!(close(area_light_power(&sphere, &one_sided), PI * PI));
+        let power = |shape: &Shape, m: &Material| area_light_power(shape, m, emission_luminance(m));
+        assert!(close(power(&sphere, &one_sided), PI * PI));
         // A two-sided sphere still shows only its outside.
-        assert!(close(area_light_power(&sphere, &material([1.0, 1.0, 1.0], true)), PI * PI));
-        assert!(close(area_light_power(&quad, &one_sided), 6.0 * PI));
-        assert!(close(area_light_power(&quad, &material([1.0, 1.0, 1.0], true)), 12.0 * PI));
+        assert!(close(power(&sphere, &material([1.0, 1.0, 1.0], true)), PI * PI));
+        assert!(close(power(&quad, &one_sided), 6.0 * PI));
+        assert!(close(power(&quad, &material([1.0, 1.0, 1.0], true)), 12.0 * PI));
         // Half the quad's area, two sides, luminance 2 x 0.7152.
-        assert!(close(area_light_power(&triangle, &two_sided), 3.0 * PI * 2.0 * 2.0 * 0.7152));
+        assert!(close(power(&triangle, &two_sided), 3.0 * PI * 2.0 * 2.0 * 0.7152));
     }
 
     /// The spot's power is its intensity integrated over the sphere: the closed form against a

@@ -15,6 +15,7 @@ mod renderer;
 mod scene_data;
 #[cfg(test)]
 mod spirv_reflect;
+mod textured_emission;
 
 pub use chunks::UNSPLIT;
 pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};

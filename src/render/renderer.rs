@@ -222,6 +222,8 @@ fn initial_contents<'d>(buffer: KernelBuffer, params: &'d FrameParams, data: &'d
         EnvCdf => bytemuck::cast_slice(&data.env_cdf),
         LightAlias => bytemuck::cast_slice(&data.light_distribution.table),
         PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
+        TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
+        VertexTangents => bytemuck::cast_slice(&a.tangents),
     })
 }
 

@@ -2,10 +2,11 @@
 //! materials, textures, the emitter list and the environment texels.
 
 use super::acceleration::{gpu_primitive, Acceleration};
+use super::textured_emission::mean_triangle_luminance;
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
-use super::light_selection::{area_light_power, punctual_light_power, LightDistribution};
-use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape};
+use super::light_selection::{area_light_power, emission_luminance, punctual_light_power, LightDistribution};
+use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape, Texture};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -18,6 +19,9 @@ pub struct SceneData {
     /// How next-event estimation picks among `lights` and then `punctual_lights`
     /// (light_selection.rs).
     pub light_distribution: LightDistribution,
+    /// Per entry of `acceleration.triangles`: a textured emitter's mean luminance (see
+    /// `triangle_emission`); empty when no material has an emission texture.
+    pub triangle_emission: Vec<f32>,
     pub textures: Vec<GpuTexture>,
     /// RGBA8 texels of every texture, packed little-endian (red in the low byte).
     pub texels: Vec<u32>,
@@ -35,23 +39,81 @@ pub struct SceneData {
     pub env_cdf: Vec<f32>,
 }
 
+/// An emitter in world space, with the luminance of its radiance that light selection weighs it by.
+struct AreaLight {
+    shape: Shape,
+    luminance: f64,
+    /// A mesh triangle's place in `mesh_triangles`, with TRIANGLE_LIGHT_MIRRORED when its placement
+    /// mirrors it (and its vertices 1 and 2 were swapped to keep its front side): where a textured
+    /// emitter's light sample finds its texture coordinates and mean luminance.
+    mesh_triangle: Option<u32>,
+}
+
+impl AreaLight {
+    /// The kernel's form (layout.glsl): the shape, a mesh triangle's place in a.w.
+    fn gpu(&self) -> GpuPrimitive {
+        let mut p = gpu_primitive(&self.shape);
+        if let Some(bits) = self.mesh_triangle {
+            p.a[3] = f32::from_bits(bits);
+        }
+        p
+    }
+}
+
 /// Every emissive shape and every emissive triangle of every mesh instance, in world space.
-fn world_lights(scene: &Scene) -> Vec<Shape> {
+/// `triangle_emission`: a textured emitter's mean luminance per entry of `mesh_triangles`.
+fn world_lights(scene: &Scene, acceleration: &Acceleration, triangle_emission: &[f32]) -> Vec<AreaLight> {
     let emissive = |m: u32| scene.materials[m as usize].is_emissive();
-    let mut lights: Vec<Shape> = scene.shapes.iter().filter(|s| emissive(s.material())).copied().collect();
+    let mut lights: Vec<AreaLight> = scene
+        .shapes
+        .iter()
+        .filter(|s| emissive(s.material()))
+        .map(|&shape| AreaLight { shape, luminance: emission_luminance(&scene.materials[shape.material() as usize]), mesh_triangle: None })
+        .collect();
     for inst in &scene.instances {
         let mesh = &scene.meshes[inst.mesh as usize];
+        let slots = &acceleration.triangle_slots[inst.mesh as usize];
         // A mirroring placement flips the winding; swap two vertices to keep the front side.
         let mirrored = inst.transform.determinant() < 0.0;
-        for (t, &m) in mesh.triangles.iter().zip(&mesh.triangle_materials).filter(|(_, &m)| emissive(m)) {
-            let mut v = t.map(|i| inst.transform.transform_point3(mesh.positions[i as usize]));
+        for (t, (triangle, &m)) in mesh.triangles.iter().zip(&mesh.triangle_materials).enumerate().filter(|(_, (_, &m))| emissive(m)) {
+            let mut v = triangle.map(|i| inst.transform.transform_point3(mesh.positions[i as usize]));
             if mirrored {
                 v.swap(1, 2);
             }
-            lights.push(Shape::Triangle { v, material: m });
+            let material = &scene.materials[m as usize];
+            let slot = slots[t];
+            let luminance = match material.maps.emission {
+                Some(_) => triangle_emission[slot as usize] as f64,
+                None => emission_luminance(material),
+            };
+            let mesh_triangle = Some(if mirrored { slot | TRIANGLE_LIGHT_MIRRORED } else { slot });
+            lights.push(AreaLight { shape: Shape::Triangle { v, material: m }, luminance, mesh_triangle });
         }
     }
     lights
+}
+
+/// Per entry of `mesh_triangles`, for triangles of emissive materials with an emission texture:
+/// the mean luminance of their textured emission (textured_emission.rs; 0 for other triangles).
+/// Empty when no material has one. `textures` are the scene's as uploaded.
+fn triangle_emission(scene: &Scene, acceleration: &Acceleration, textures: &[Texture]) -> Vec<f32> {
+    let textured = |m: u32| {
+        let material = &scene.materials[m as usize];
+        material.maps.emission.filter(|_| material.is_emissive()).map(|t| (material.emission, &textures[t as usize]))
+    };
+    if !scene.materials.iter().enumerate().any(|(m, _)| textured(m as u32).is_some()) {
+        return Vec::new();
+    }
+    let mut emission = vec![0.0; acceleration.triangles.len()];
+    for (mesh, slots) in scene.meshes.iter().zip(&acceleration.triangle_slots) {
+        for ((triangle, &m), &slot) in mesh.triangles.iter().zip(&mesh.triangle_materials).zip(slots) {
+            if let Some((factor, texture)) = textured(m) {
+                let uv = triangle.map(|i| mesh.uvs.get(i as usize).copied().unwrap_or_default());
+                emission[slot as usize] = mean_triangle_luminance(texture, factor, uv) as f32;
+            }
+        }
+    }
+    emission
 }
 
 /// A point, spot or directional light in the kernel's form (layout.glsl), with its power.
@@ -92,6 +154,7 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         Conductor::Albedo => (CONDUCTOR_ALBEDO, Vec3::ZERO, Vec3::ZERO),
     };
     let coat_norm = if m.coat { 1.0 / (1.0 - average_fresnel(m.ior)) } else { 0.0 };
+    let texture_bits = |t: Option<u32>| f32::from_bits(t.unwrap_or(NO_TEXTURE));
     let metallic_roughness = match m.metallic_roughness {
         Some(mr) => [f32::from_bits(mr.texture), mr.metallic, mr.roughness, mr.transmission],
         None => [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
@@ -103,6 +166,7 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         conductor_eta: eta.extend(f32::from_bits(kind)).into(),
         conductor_k: k.extend(coat_norm).into(),
         metallic_roughness,
+        maps: [texture_bits(m.maps.emission), texture_bits(m.maps.normal.map(|n| n.texture)), m.maps.normal.map_or(0.0, |n| n.scale), 0.0],
     }
 }
 
@@ -120,7 +184,7 @@ impl SceneData {
         let mut texels = Vec::new();
         let mut fitted = scene.textures.clone();
         downsample_to_fit(&mut fitted, texture_budget);
-        for t in fitted {
+        for t in &fitted {
             let flags = if t.srgb { TEXTURE_SRGB } else { 0 };
             textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, flags });
             texels.extend(t.texels.iter().map(|&p| u32::from_le_bytes(p)));
@@ -142,8 +206,9 @@ impl SceneData {
             Environment::Map(map) if scene.integrator.sample_environment => EnvDistribution::new(map).cdf,
             _ => Vec::new(),
         };
-        let area_lights = world_lights(scene);
-        let mut powers: Vec<f64> = area_lights.iter().map(|l| area_light_power(l, &scene.materials[l.material() as usize])).collect();
+        let triangle_emission = triangle_emission(scene, &acceleration, &fitted);
+        let area_lights = world_lights(scene, &acceleration, &triangle_emission);
+        let mut powers: Vec<f64> = area_lights.iter().map(|l| area_light_power(&l.shape, &scene.materials[l.shape.material() as usize], l.luminance)).collect();
         let scene_radius = acceleration.nodes.first().map_or(0.0, |root| {
             let bounds = root.bounds();
             0.5 * (bounds.max - bounds.min).as_dvec3().length()
@@ -154,12 +219,13 @@ impl SceneData {
         let punctual_lights = scene.lights.iter().zip(&punctual_powers).map(|(l, &p)| gpu_punctual_light(l, p)).collect();
         powers.extend(&punctual_powers);
         let light_distribution = LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
-        let lights = area_lights.iter().map(gpu_primitive).collect();
+        let lights = area_lights.iter().map(AreaLight::gpu).collect();
         SceneData {
             env_cdf,
             lights,
             punctual_lights,
             light_distribution,
+            triangle_emission,
             acceleration,
             materials,
             textures,
@@ -181,6 +247,7 @@ impl SceneData {
             + std::mem::size_of_val(&self.lights[..])
             + std::mem::size_of_val(&self.punctual_lights[..])
             + std::mem::size_of_val(&self.light_distribution.table[..])
+            + std::mem::size_of_val(&self.triangle_emission[..])
             + std::mem::size_of_val(&self.env_texels[..])
             + std::mem::size_of_val(&self.env_cdf[..])) as u64
     }

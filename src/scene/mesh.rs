@@ -5,7 +5,7 @@ use super::asset::{self, Asset, AssetMaterial};
 use super::{Light, Material, MetallicRoughness, Scene};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Context as _, Result};
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -22,6 +22,10 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Empty, or one a vertex; (0, 0) is the texture's top-left corner.
     pub uvs: Vec<Vec2>,
+    /// Empty, or one a vertex (with normals and texture coordinates) where a material has a normal
+    /// map: the unit tangent along which u grows, and in w the sign (+-1) that makes
+    /// cross(normal, tangent) x w the bitangent (glTF's TANGENT).
+    pub tangents: Vec<Vec4>,
     /// Front side faces (v1 - v0) x (v2 - v0).
     pub triangles: Vec<[u32; 3]>,
     /// One a triangle: index into `Scene::materials`.
@@ -107,6 +111,7 @@ fn add_asset(scene: &mut Scene, path: &Path, asset: Asset, material: Option<u32>
             positions: m.positions,
             normals: m.normals,
             uvs: m.uvs,
+            tangents: m.tangents,
             triangles: m.triangles,
         });
     }
@@ -133,5 +138,6 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         conductor: m.conductor,
         coat: m.coat,
         metallic_roughness: m.metallic_roughness.map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
+        maps: m.maps.rebased(texture_base),
     })
 }

@@ -11,7 +11,7 @@ mod optics;
 mod toml_error;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
-pub use asset::{downsample_to_fit, load_asset, load_asset_from, Asset, AssetError};
+pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError};
 pub use camera_toml::camera_toml;
 pub use format::{Filter, LightSelection, Sampler};
 pub use light::Light;
@@ -90,6 +90,39 @@ pub struct Material {
     pub coat: bool,
     /// glTF: `reflectivity`, `transparency` and `roughness` come per texel from a texture.
     pub metallic_roughness: Option<MetallicRoughness>,
+    /// Emission, normal and alpha textures (mesh files only).
+    pub maps: TextureMaps,
+}
+
+/// The textures of a material beyond albedo and metallic-roughness, each an index into the
+/// scene's (or, in an asset, the asset's) textures. Each costs the kernel only in scenes that use
+/// it (a `SceneFeatures` flag of its own).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TextureMaps {
+    /// sRGB colour that multiplies `emission` per texel (glTF `emissiveTexture`, MTL `map_Ke`).
+    pub emission: Option<u32>,
+    /// A tangent-space normal map (glTF `normalTexture`, MTL `norm` / `map_Bump`).
+    pub normal: Option<NormalMap>,
+}
+
+/// A tangent-space normal map (linear RGB = (normal + 1) / 2 in the frame of the tangent, the
+/// bitangent and the interpolated normal, glTF's convention) and glTF's `scale`, which multiplies
+/// the normal's x and y before it is normalised.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalMap {
+    pub texture: u32,
+    pub scale: f32,
+}
+
+impl TextureMaps {
+    /// The same maps with their texture indices moved up by `base` (an asset's textures appended
+    /// after the scene's).
+    pub fn rebased(self, base: u32) -> TextureMaps {
+        TextureMaps {
+            emission: self.emission.map(|t| t + base),
+            normal: self.normal.map(|n| NormalMap { texture: n.texture + base, ..n }),
+        }
+    }
 }
 
 /// A glTF metallic-roughness texture (linear; G = roughness, B = metallic) and the factors it
@@ -384,6 +417,7 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         conductor,
         coat: m.coat,
         metallic_roughness: None,
+        maps: TextureMaps::default(),
     };
     if !(0.0..=1.0).contains(&material.roughness) {
         bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);

@@ -6,10 +6,11 @@
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
 //! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
 //!   sets, the sampler and alpha are ignored).
-//! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission, for materials without an
-//!   emissive texture. With one, the material does not emit (with a note on stderr): the renderer
-//!   has no textured emission, and the factor alone would make the whole surface glow (as it
-//!   would DamagedHelmet, whose factor is 1 and whose texture lights only small details).
+//! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission; `emissiveTexture`
+//!   (texCoord 0, sRGB) multiplies it per texel. Its triangles are lights for next-event
+//!   estimation, picked by their texture-weighted power (src/render/textured_emission.rs).
+//! - `normalTexture` (texCoord 0, linear) with its `scale` → a tangent-space normal map, read along
+//!   the file's TANGENTs when every primitive of the mesh has them, else MikkTSpace's.
 //! - `metallicFactor` → reflectivity R, a conductor with the base colour as F0 (Schlick);
 //!   `roughnessFactor` → roughness (both perceptual) of every lobe.
 //! - `KHR_materials_transmission` factor → transparency T = (1 − metallic) × transmission, a
@@ -37,7 +38,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use base64::Engine as _;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
@@ -45,7 +46,7 @@ use gltf::{Document, Semantic};
 use super::gltf_accessors::AccessorLimits;
 use super::{
     texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
-    MeshData, MetallicRoughness,
+    MeshData, MetallicRoughness, NormalMap, TextureMaps,
 };
 use crate::input_file::{InputFiles, InputKind};
 
@@ -331,14 +332,30 @@ fn convert_material(
         )?),
         _ => None,
     };
-    let mut emission =
+    let emission =
         Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
-    if material.emissive_texture().is_some() && emission.max_element() > 0.0 {
-        eprintln!(
-            "caustica: glTF material {index} ('{}') has an emissive texture, which caustica cannot render; it does not emit",
-            material.name().unwrap_or("unnamed")
-        );
-        emission = Vec3::ZERO;
+    // Decoded only when it can show: glTF's default factor is black, and black times the texture
+    // is nothing to render.
+    let emission_texture = match material.emissive_texture() {
+        Some(info) if info.tex_coord() == 0 && emission.max_element() > 0.0 => Some(image_texture(
+            info.texture().source(),
+            true,
+            buffers,
+            sources,
+            decoded_images,
+            asset,
+        )? as u32),
+        _ => None,
+    };
+    let normal = match material.normal_texture() {
+        Some(info) if info.tex_coord() == 0 => Some(NormalMap {
+            texture: image_texture(info.texture().source(), false, buffers, sources, decoded_images, asset)? as u32,
+            scale: info.scale(),
+        }),
+        _ => None,
+    };
+    if normal.is_some_and(|n| !n.scale.is_finite()) {
+        return Err(format!("material {index}: normalTexture.scale is not finite"));
     }
     if !emission.is_finite() {
         return Err(format!("material {index}: emission overflows"));
@@ -385,6 +402,7 @@ fn convert_material(
         conductor: Conductor::Albedo,
         coat: true,
         metallic_roughness,
+        maps: TextureMaps { emission: emission_texture, normal },
     })
 }
 
@@ -398,8 +416,8 @@ fn convert_mesh(
     skipped_primitives: &mut usize,
 ) -> Result<MeshData, String> {
     let mut out = MeshData::default();
-    let (mut all_normals, mut all_uvs) = (true, true);
-    let mut normals = Vec::new();
+    let (mut all_normals, mut all_uvs, mut all_tangents) = (true, true, true);
+    let (mut normals, mut tangents) = (Vec::new(), Vec::new());
     for primitive in mesh.primitives() {
         let p = primitive.index();
         if matches!(
@@ -446,6 +464,20 @@ fn convert_mesh(
                 all_normals = normals.len() == out.positions.len() + positions.len();
             }
             _ => all_normals = false,
+        }
+        match primitive.get(&Semantic::Tangents) {
+            Some(accessor) if all_tangents => {
+                limits.admit(&accessor, Dimensions::Vec4, &[DataType::F32])
+                    .map_err(|m| format!("primitive {p}: TANGENT {m}"))?;
+                tangents.extend(
+                    reader
+                        .read_tangents()
+                        .ok_or_else(|| outside("TANGENT"))?
+                        .map(Vec4::from),
+                );
+                all_tangents = tangents.len() == out.positions.len() + positions.len();
+            }
+            _ => all_tangents = false,
         }
         match primitive.get(&Semantic::TexCoords(0)) {
             Some(accessor) if all_uvs => {
@@ -510,6 +542,18 @@ fn convert_mesh(
     };
     if !all_uvs || out.uvs.iter().any(|uv| !uv.is_finite()) {
         out.uvs.clear();
+    }
+    // The file's tangents serve only with the normals and coordinates they were made for, and
+    // only when every one has a direction (else MikkTSpace builds them all: tangents.rs).
+    if all_tangents && !out.normals.is_empty() && !out.uvs.is_empty() {
+        let unit: Option<Vec<Vec4>> = tangents
+            .iter()
+            .map(|t| {
+                let direction = t.truncate().normalize_or_zero();
+                (direction != Vec3::ZERO && t.w.is_finite()).then(|| direction.extend(if t.w < 0.0 { -1.0 } else { 1.0 }))
+            })
+            .collect();
+        out.tangents = unit.unwrap_or_default();
     }
     Ok(out)
 }
@@ -722,6 +766,8 @@ mod tests {
     "name": "glowing glass",
     "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
     "emissiveFactor": [1, 0.5, 0.25],
+    "emissiveTexture": {{"index": 0}},
+    "normalTexture": {{"index": 0, "scale": 0.75}},
     "extensions": {{
       "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
       "KHR_materials_transmission": {{"transmissionFactor": 0.5}},
@@ -790,6 +836,8 @@ mod tests {
         assert_eq!((glass.conductor, glass.coat), (Conductor::Albedo, true));
         assert_eq!(asset.materials[1], AssetMaterial::default_grey());
         assert_eq!(glass.albedo_texture, Some(0));
+        assert_eq!(glass.maps.emission, Some(0), "the emissive texture is image 0 as colour, decoded once for both");
+        assert_eq!(glass.maps.normal, Some(NormalMap { texture: 1, scale: 0.75 }), "the normal map is image 0 as data, shared with metallic-roughness");
         assert_eq!(
             glass.metallic_roughness,
             Some(MetallicRoughness {
@@ -803,7 +851,7 @@ mod tests {
         assert_eq!(
             asset.textures.len(),
             2,
-            "image 0 is decoded once as colour and once as data; the emissive image never"
+            "image 0 is decoded once as colour (base colour, emission) and once as data (metallic-roughness, normals); image 1 never"
         );
         for (texture, srgb) in asset.textures.iter().zip([true, false]) {
             assert_eq!(texture.texels, vec![[10, 20, 30, 255]]);
@@ -992,9 +1040,13 @@ mod tests {
         );
         assert_eq!(
             asset.textures.len(),
-            2,
-            "only the base colour and metallic-roughness textures are decoded"
+            4,
+            "the base colour, metallic-roughness, emission and normal textures are decoded (not occlusion)"
         );
+        assert!(asset.materials[0].maps.normal.is_some());
+        assert_eq!(asset.meshes[0].tangents.len(), asset.meshes[0].positions.len(), "tangents for its normal map");
+        let emission = asset.materials[0].maps.emission.expect("the helmet glows through a texture");
+        assert!(asset.textures[emission as usize].srgb);
         for texture in &asset.textures {
             assert_eq!((texture.width, texture.height), (2048, 2048));
         }

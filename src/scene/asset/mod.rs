@@ -6,13 +6,14 @@ mod gltf_accessors;
 mod gltf_file;
 mod obj;
 mod ply;
+mod tangents;
 mod texture;
 
-pub use texture::downsample_to_fit;
+pub use texture::{downsample_to_fit, srgb_to_linear};
 
-use super::{Conductor, Light, MetallicRoughness};
+use super::{Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
 use crate::input_file::{InputError, InputFiles};
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::{Path, PathBuf};
 
 /// Everything a mesh file contributes to a scene.
@@ -42,6 +43,10 @@ pub struct MeshData {
     /// Empty, or exactly one per position. (0, 0) is the top-left corner of a texture (the glTF
     /// convention); OBJ and PLY store v upwards, so their v is flipped to 1 - v on load.
     pub uvs: Vec<Vec2>,
+    /// Empty, or exactly one per position: the unit tangent (along growing u) and the bitangent's
+    /// sign in w, as glTF's TANGENT; from the file, or MikkTSpace (tangents.rs) for meshes with a
+    /// normal-mapped material.
+    pub tangents: Vec<Vec4>,
     /// Indices into positions, counter-clockwise = front.
     pub triangles: Vec<[u32; 3]>,
     /// One per triangle: index into [`Asset::materials`].
@@ -73,6 +78,8 @@ pub struct AssetMaterial {
     pub coat: bool,
     /// glTF: R, T and roughness per texel from a texture (its index into [`Asset::textures`]).
     pub metallic_roughness: Option<MetallicRoughness>,
+    /// Emission, normal and alpha textures (indices into [`Asset::textures`]).
+    pub maps: TextureMaps,
 }
 
 impl AssetMaterial {
@@ -90,6 +97,7 @@ impl AssetMaterial {
             conductor: Conductor::Mirror,
             coat: false,
             metallic_roughness: None,
+            maps: TextureMaps::default(),
         }
     }
 }
@@ -171,7 +179,29 @@ pub fn load_asset_from(files: &InputFiles, path: &Path) -> Result<Asset, AssetEr
     if instanced_triangles == 0 {
         return Err(AssetError::invalid(path, "no triangles to render"));
     }
+    let mut asset = asset;
+    add_tangents(path, &mut asset);
     Ok(asset)
+}
+
+/// Gives every mesh with a normal-mapped material the tangents its map is read along: MikkTSpace's
+/// (tangents.rs) where the file has none. A mesh without normals or texture coordinates has no
+/// tangent frame: its normal maps are ignored, with a note on stderr.
+fn add_tangents(path: &Path, asset: &mut Asset) {
+    let normal_mapped: Vec<bool> = asset.materials.iter().map(|m| m.maps.normal.is_some()).collect();
+    for (k, mesh) in asset.meshes.iter_mut().enumerate() {
+        if !mesh.tangents.is_empty() || !mesh.triangle_materials.iter().any(|&m| normal_mapped[m as usize]) {
+            continue;
+        }
+        let missing = match (mesh.normals.is_empty(), mesh.uvs.is_empty()) {
+            (true, true) => "normals and texture coordinates",
+            (true, false) => "normals",
+            (false, true) => "texture coordinates",
+            (false, false) if tangents::generate(mesh) => continue,
+            (false, false) => "a tangent frame MikkTSpace can build",
+        };
+        eprintln!("caustica: {}: mesh {k} has no {missing}: its normal maps are ignored", path.display());
+    }
 }
 
 /// Wraps a single object-space mesh (OBJ, PLY) as an asset with one identity instance.

@@ -3,7 +3,9 @@
 //! MTL → [`AssetMaterial`] mapping:
 //! - `Kd` → albedo (0.8 grey when missing), clamped to [0, 1]; `map_Kd` → albedo texture, a path
 //!   relative to the OBJ's directory (options such as `-bm 1` before the name are skipped).
-//! - `Ke` → emission. Older files (Embree's `cornell_box.mtl`) mark lights with an ambient colour
+//! - `norm`, else `map_Bump` / `bump` → a tangent-space normal map (linear; `-bm` its scale) read
+//!   along MikkTSpace tangents (tangents.rs).
+//! - `Ke` → emission; `map_Ke` (sRGB) multiplies it per texel. Older files (Embree's `cornell_box.mtl`) mark lights with an ambient colour
 //!   above 1 instead (`Ka 20 20 20`), so without `Ke` a `Ka` with a channel > 1 is the emission.
 //! - `illum 3` or `5` → mirror: reflectivity = largest channel of `Ks`, or 1 when `Ks` is zero.
 //! - Glass: transparency = 1 - `d` when `d` < 1, else `Tr` when > 0, else 1 for `illum 7`;
@@ -23,7 +25,7 @@ use glam::{Vec2, Vec3};
 
 use super::{
     single_mesh_asset, texture, unit_normals, Asset, AssetError, AssetMaterial, MeshData,
-    TextureImage,
+    NormalMap, TextureImage, TextureMaps,
 };
 use crate::input_file::{InputError, InputFiles, InputKind};
 
@@ -180,16 +182,23 @@ impl MaterialLibraries<'_> {
     }
 }
 
-/// Decodes each `map_Kd` image once, however many materials share it.
+/// Decodes each `map_Kd` or `map_Ke` image once, however many materials share it.
 struct Textures<'a> {
     files: &'a InputFiles,
     directory: &'a Path,
-    by_path: HashMap<PathBuf, usize>,
+    /// (file, decoded as sRGB) → index into `images`.
+    by_path: HashMap<(PathBuf, bool), usize>,
     images: Vec<TextureImage>,
 }
 
 impl Textures<'_> {
+    /// The colour (sRGB) texture that `map` names.
     fn get(&mut self, map: &str) -> Result<usize, AssetError> {
+        self.get_decoded(map, true)
+    }
+
+    /// The texture that `map` names, sRGB-encoded colour or (`srgb` false) linear data.
+    fn get_decoded(&mut self, map: &str, srgb: bool) -> Result<usize, AssetError> {
         // Options (`-bm 1 -clamp on name.png`) precede the file name, which then has no spaces.
         let name = if map.starts_with('-') {
             map.split_whitespace().last().unwrap_or(map)
@@ -197,13 +206,22 @@ impl Textures<'_> {
             map
         };
         let path = self.directory.join(name);
-        if let Some(&index) = self.by_path.get(&path) {
+        if let Some(&index) = self.by_path.get(&(path.clone(), srgb)) {
             return Ok(index);
         }
-        self.images.push(texture::load_texture(self.files, &path)?);
-        self.by_path.insert(path, self.images.len() - 1);
+        let mut image = texture::load_texture(self.files, &path)?;
+        image.srgb = srgb;
+        self.images.push(image);
+        self.by_path.insert((path, srgb), self.images.len() - 1);
         Ok(self.images.len() - 1)
     }
+}
+
+/// The value of option `-name` in a texture statement (`-bm 0.5 normal.png`), if it has one.
+fn map_option(map: &str, name: &str) -> Option<String> {
+    let mut words = map.split_whitespace();
+    words.by_ref().find(|&w| w == name)?;
+    words.next().map(str::to_owned)
 }
 
 fn convert_material(
@@ -266,6 +284,25 @@ fn convert_material(
         .as_deref()
         .map(|map| textures.get(map))
         .transpose()?;
+    // tobj keeps `map_Ke` among the keys it does not know. Like glTF's, the texture is read only
+    // where it can show: black `Ke` times it is nothing.
+    let emission_texture = match m.unknown_param.get("map_Ke") {
+        Some(map) if emission.max_element() > 0.0 => Some(textures.get(map)? as u32),
+        _ => None,
+    };
+    // `norm` names a tangent-space normal map; `map_Bump` (and `bump`) do in the files that pair
+    // them with glTF-style assets, which is how caustica reads them (not as heights). `-bm` scales.
+    let normal_statement = m.unknown_param.get("norm").or(m.normal_texture.as_ref());
+    let normal = match normal_statement {
+        Some(map) => {
+            let scale = match map_option(map, "-bm") {
+                Some(text) => text.parse::<f32>().ok().filter(|s| s.is_finite()).ok_or_else(|| bad(&format!("cannot read the normal map's -bm '{text}'")))?,
+                None => 1.0,
+            };
+            Some(NormalMap { texture: textures.get_decoded(map, false)? as u32, scale })
+        }
+        None => None,
+    };
     Ok(AssetMaterial {
         name: m.name.clone(),
         albedo: vec3(m.diffuse)
@@ -276,6 +313,7 @@ fn convert_material(
         reflectivity: reflectivity.clamp(0.0, 1.0 - transparency),
         transparency,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(1.5),
+        maps: TextureMaps { emission: emission_texture, normal },
         ..AssetMaterial::default_grey()
     })
 }

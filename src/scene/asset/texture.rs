@@ -201,7 +201,8 @@ fn halve(texture: &mut TextureImage) {
     texture.texels = texels;
 }
 
-fn srgb_to_linear(value: u8) -> f32 {
+/// One sRGB-encoded 8-bit value as linear (the kernel decodes texels the same way, textures.glsl).
+pub fn srgb_to_linear(value: u8) -> f32 {
     let v = f32::from(value) / 255.0;
     if v <= 0.04045 {
         v / 12.92
