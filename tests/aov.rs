@@ -11,15 +11,7 @@ use caustica::scene::{Instance, Mesh, Scene, Texture};
 use common::*;
 use glam::{Mat4, Vec2, Vec3};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn caustica(args: &[&str]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustica"));
-    if let Some(icd) = lavapipe_override() {
-        cmd.env("VK_DRIVER_FILES", icd);
-    }
-    cmd.args(args).output().expect("run caustica")
-}
+use std::process::Output;
 
 /// A 8x8 render of the built-in scene with `args` added; panics unless it succeeds.
 fn render_cli(out: &Path, args: &[&str]) {

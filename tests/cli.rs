@@ -9,19 +9,6 @@ use common::*;
 use std::path::Path;
 use std::process::Command;
 
-fn caustica(args: &[&str]) -> std::process::Output {
-    caustica_command(args).output().expect("run caustica")
-}
-
-fn caustica_command(args: &[&str]) -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustica"));
-    if let Some(icd) = lavapipe_override() {
-        cmd.env("VK_DRIVER_FILES", icd);
-    }
-    cmd.args(args);
-    cmd
-}
-
 #[test]
 fn every_scene_renders_to_pfm_exr_and_png() {
     let dir = temp_dir("cli-scenes");

@@ -12,19 +12,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn caustica_command(args: &[&str]) -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustica"));
-    if let Some(icd) = lavapipe_override() {
-        cmd.env("VK_DRIVER_FILES", icd);
-    }
-    cmd.args(args);
-    cmd
-}
-
-fn caustica(args: &[&str]) -> Output {
-    caustica_command(args).output().expect("run caustica")
-}
-
 /// Runs a 16x16 render of the built-in scene with `args` added; panics unless it succeeds.
 fn render(out: &Path, args: &[&str]) -> Output {
     let mut all = vec!["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "-q", "--validation"];

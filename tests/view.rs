@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{lavapipe_override, temp_dir};
+use common::{caustica_command, temp_dir};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -16,15 +16,6 @@ use std::time::{Duration, Instant};
 
 /// How long a viewer may take to open, compile its kernel and reach a state (lavapipe, 2 cores).
 const PATIENCE: Duration = Duration::from_secs(90);
-
-fn caustica_command(args: &[&str]) -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_caustica"));
-    if let Some(icd) = lavapipe_override() {
-        cmd.env("VK_DRIVER_FILES", icd);
-    }
-    cmd.args(args);
-    cmd
-}
 
 fn installed(program: &str) -> bool {
     Command::new("sh").args(["-c", &format!("command -v {program}")]).stdout(Stdio::null()).status().is_ok_and(|s| s.success())

@@ -19,6 +19,21 @@ pub fn lavapipe_override() -> Option<&'static str> {
     (std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists()).then_some(LAVAPIPE_ICD)
 }
 
+/// The caustica binary of this build, on lavapipe unless the caller chose a driver.
+pub fn caustica_command(args: &[&str]) -> std::process::Command {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_caustica"));
+    if let Some(icd) = lavapipe_override() {
+        cmd.env("VK_DRIVER_FILES", icd);
+    }
+    cmd.args(args);
+    cmd
+}
+
+/// Runs the caustica binary to its end.
+pub fn caustica(args: &[&str]) -> std::process::Output {
+    caustica_command(args).output().expect("run caustica")
+}
+
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
 /// lavapipe already uses every core for one dispatch.
 pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
