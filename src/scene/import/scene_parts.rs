@@ -12,8 +12,9 @@ use std::path::Path;
 /// at most 0.95 a vertex, so a path reaches it with probability below 1e-22.
 pub const UNBOUNDED_DEPTH: u32 = 1024;
 
+/// `v` in single precision, -0 made 0 (for the converted file's sake).
 pub fn f32x3(v: DVec3) -> Triple {
-    Array(v.as_vec3().to_array())
+    Array((v + DVec3::ZERO).as_vec3().to_array())
 }
 
 /// `name`, primed until no material of `materials` has it.
