@@ -293,7 +293,7 @@ fn bad_input_is_an_error_naming_file_and_line_never_a_panic() {
         ("Shape \"disk\"", "scene.pbrt:7: Shape \"disk\": this shape is not supported", "unknown shape"),
         ("AttributeEnd", "scene.pbrt:7: AttributeEnd without AttributeBegin", "unbalanced"),
         ("AttributeBegin\nShape \"sphere\"", "scene.pbrt:7: this AttributeBegin is never ended", "unended"),
-        ("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 3]", "scene.pbrt:7: Shape \"trianglemesh\": index 3 is past the 3 vertices", "bad index"),
+        ("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 3]", "scene.pbrt:7: Shape \"trianglemesh\": index 3 is not one of the 3 vertices", "bad index"),
         ("Shape \"sphere\" \"float radius\" [1", "scene.pbrt:7: \"float radius\": the file ends before the list's ']'", "open list"),
     ];
     for (world, expected, what) in cases {

@@ -377,16 +377,17 @@ impl Mapper<'_> {
     fn mesh_arrays(&mut self, d: &Directive, corners: usize) -> Result<(Vec<DVec3>, Vec<usize>, Option<Vec<DVec3>>)> {
         let positions = d.triples("P", &["point3", "point"])?.ok_or_else(|| d.error("needs the vertices \"point3 P\""))?;
         let indices: Vec<usize> = match d.integers("indices")? {
-            Some(i) => i.iter().map(|&k| if k >= 0.0 { k as usize } else { usize::MAX }).collect(),
+            Some(i) => {
+                if let Some(bad) = i.iter().find(|&&k| !(k >= 0.0 && k < positions.len() as f64)) {
+                    return Err(d.error(format!("index {bad} is not one of the {} vertices", positions.len())));
+                }
+                i.iter().map(|&k| k as usize).collect()
+            }
             None if positions.len() == corners => (0..corners).collect(),
             None => return Err(d.error(format!("needs \"integer indices\" (it has {} vertices, not {corners})", positions.len()))),
         };
         if indices.len() % corners != 0 {
             return Err(d.error(format!("the number of indices ({}) is not a multiple of {corners}", indices.len())));
-        }
-        if let Some(bad) = indices.iter().find(|&&k| k >= positions.len()) {
-            let shown = if *bad == usize::MAX { "a negative index".to_owned() } else { format!("index {bad}") };
-            return Err(d.error(format!("{shown} is past the {} vertices", positions.len())));
         }
         if positions.iter().any(|p| !p.is_finite()) {
             return Err(d.error("a vertex is not finite"));
