@@ -141,6 +141,42 @@ fn transformations_apply_in_pbrts_order_and_blocks_restore_them() {
 }
 
 #[test]
+fn include_shares_the_graphics_state_and_import_keeps_its_own() {
+    let path = write_scene(
+        "include",
+        &[
+            ("scene.pbrt", &format!("{OPTIONS}WorldBegin\nInclude \"sub.pbrt\"\nShape \"sphere\"\nAttributeBegin\nImport \"sub.pbrt\"\nShape \"sphere\"\nAttributeEnd\nImport \"sub.pbrt\"\nShape \"sphere\"\n")),
+            ("sub.pbrt", "Translate 0 1 0\nMaterial \"diffuse\" \"rgb reflectance\" [0.2 0.2 0.2]\n"),
+        ],
+    );
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
+    let spheres: Vec<(Vec3, Vec3)> = s.shapes.iter().map(|shape| match *shape {
+        Shape::Sphere { center, material, .. } => (center, s.materials[material as usize].albedo),
+        _ => panic!("spheres only"),
+    }).collect();
+    // Include: the translation and material carry on; Import: they stay inside the imported file.
+    assert!(close(spheres[0].0, Vec3::Y) && close(spheres[0].1, Vec3::splat(0.2)), "{spheres:?}");
+    assert!(close(spheres[1].0, Vec3::Y) && close(spheres[1].1, Vec3::splat(0.2)), "{spheres:?}");
+    assert!(close(spheres[2].0, Vec3::Y) && close(spheres[2].1, Vec3::splat(0.2)), "{spheres:?}");
+}
+
+#[test]
+fn maxdepth_zero_shows_only_what_emits_and_one_adds_direct_light() {
+    // pbrt's maxdepth 0 is caustica's max_bounces 1: the floor under the lamp is black; 1 lights it.
+    let floor = |depth: u32| {
+        let text = LIT_SCENE.replace("\"integer maxdepth\" 4", &format!("\"integer maxdepth\" {depth}"));
+        let mut s = scene_of(&format!("depth{depth}"), &text);
+        assert_eq!(s.integrator.max_bounces, depth + 1);
+        s.film.spp = 2;
+        let (_lock, ctx) = gpu();
+        let image = render(&ctx, &s, 1);
+        (0..image.width).map(|x| image.get(x, image.height - 1)[0]).sum::<f32>()
+    };
+    assert_eq!(floor(0), 0.0, "maxdepth 0 lights nothing");
+    assert!(floor(1) > 0.0, "maxdepth 1 lights the floor");
+}
+
+#[test]
 fn maxdepth_counts_bounces_one_less_than_caustica_segments() {
     let integrator = |text: &str| {
         let s = scene_of("depth", &format!("Camera \"perspective\"\n{text}\nWorldBegin\n"));
