@@ -31,6 +31,13 @@ use std::rc::Rc;
 /// small file that instances a large mesh many times can ask for.
 const MAX_INLINE_TRIANGLES: usize = 4_000_000;
 
+/// A mesh written in the scene: vertices, polygon corners (indices into them) and normals.
+struct MeshArrays {
+    positions: Vec<DVec3>,
+    indices: Vec<usize>,
+    normals: Option<Vec<DVec3>>,
+}
+
 pub struct Mapper<'a> {
     pub(super) model: &'a Model,
     notes: &'a mut Notes,
@@ -312,7 +319,7 @@ impl Mapper<'_> {
         match d.kind.as_str() {
             "sphere" => self.sphere(s, to_world, m, &material)?,
             "trianglemesh" => {
-                let (positions, indices, normals) = self.mesh_arrays(d, 3)?;
+                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 3)?;
                 for t in indices.chunks_exact(3) {
                     let v = [positions[t[0]], positions[t[1]], positions[t[2]]];
                     let reversed = match &normals {
@@ -323,7 +330,7 @@ impl Mapper<'_> {
                 }
             }
             "bilinearmesh" => {
-                let (positions, indices, normals) = self.mesh_arrays(d, 4)?;
+                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 4)?;
                 for q in indices.chunks_exact(4) {
                     let [p00, p10, p01, p11] = [0, 1, 2, 3].map(|k| positions[q[k]]);
                     let reversed = match &normals {
@@ -374,7 +381,7 @@ impl Mapper<'_> {
     /// A mesh's vertices (`P`), its polygons of `corners` vertices (`indices`, which may be left
     /// out for a single polygon) and its normals (`N`); texture coordinates, tangents and face
     /// indices, which only textures use, are read and left.
-    fn mesh_arrays(&mut self, d: &Directive, corners: usize) -> Result<(Vec<DVec3>, Vec<usize>, Option<Vec<DVec3>>)> {
+    fn mesh_arrays(&mut self, d: &Directive, corners: usize) -> Result<MeshArrays> {
         let positions = d.triples("P", &["point3", "point"])?.ok_or_else(|| d.error("needs the vertices \"point3 P\""))?;
         let indices: Vec<usize> = match d.integers("indices")? {
             Some(i) => {
@@ -386,7 +393,7 @@ impl Mapper<'_> {
             None if positions.len() == corners => (0..corners).collect(),
             None => return Err(d.error(format!("needs \"integer indices\" (it has {} vertices, not {corners})", positions.len()))),
         };
-        if indices.len() % corners != 0 {
+        if !indices.len().is_multiple_of(corners) {
             return Err(d.error(format!("the number of indices ({}) is not a multiple of {corners}", indices.len())));
         }
         if positions.iter().any(|p| !p.is_finite()) {
@@ -402,7 +409,7 @@ impl Mapper<'_> {
         for name in ["uv", "S", "faceIndices"] {
             d.param(name);
         }
-        Ok((positions, indices, normals))
+        Ok(MeshArrays { positions, indices, normals })
     }
 
     /// A triangle with pbrt's front: its winding, turned when `reversed`, carried into caustica's

@@ -236,7 +236,7 @@ impl Mapper<'_> {
             return Err(p.error(format!("the named spectrum \"{name}\" is not supported here (named spectra are read for a conductor's eta and k and a dielectric's eta)")));
         }
         let v = p.numbers();
-        if v.len() < 4 || v.len() % 2 != 0 {
+        if v.len() < 4 || !v.len().is_multiple_of(2) {
             return Err(p.error(format!("needs wavelength-value pairs (at least two), got {} numbers", v.len())));
         }
         let pairs: Vec<(f64, f64)> = v.chunks_exact(2).map(|c| (c[0], c[1])).collect();
