@@ -456,3 +456,20 @@ fn convert_writes_toml_that_loads_to_the_same_scene_and_the_cli_fails_with_file_
         assert!(stderr.contains("scene.pbrt:7: Shape \"sphere\": radius must be > 0") || stderr.contains("-D x=..."), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn scenes_cornell_pbrt_is_the_cornell_box_of_scenes_cornell_toml() {
+    // The pbrt file is the TOML box mirrored in x, as pbrt shows it; caustica reads it back.
+    let (pbrt, toml) = (Scene::load(Path::new("scenes/cornell.pbrt")).unwrap(), Scene::load(Path::new("scenes/cornell.toml")).unwrap());
+    assert_eq!(format!("{:?}", pbrt.shapes), format!("{:?}", toml.shapes), "the same walls, light and spheres");
+    let (c, t) = (&pbrt.camera, &toml.camera);
+    assert!(close(c.position, t.position) && close(c.look_at - c.position, (t.look_at - t.position).normalize()) && close(c.up, t.up) && (c.fov_deg - t.fov_deg).abs() < 1e-4);
+    assert_eq!((pbrt.film.width, pbrt.film.height, pbrt.film.spp, pbrt.film.filter), (toml.film.width, toml.film.height, toml.film.spp, toml.film.filter));
+    for (a, b) in pbrt.materials.iter().zip(&toml.materials) {
+        assert!(a.name.starts_with(&b.name), "{} against {}", a.name, b.name);
+        assert_eq!((a.emission, a.transparency, a.ior), (b.emission, b.transparency, b.ior), "{}", b.name);
+        if a.transparency == 0.0 && a.reflectivity == 0.0 {
+            assert_eq!(a.albedo, b.albedo, "{}", b.name);
+        }
+    }
+}

@@ -26,10 +26,11 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use std::rc::Rc;
 
-/// The most triangles written out one by one (inline meshes, their instances, emitting PLY
-/// meshes): each is a scene-file entry of about a hundred bytes, so this bounds the memory a
-/// small file that instances a large mesh many times can ask for.
-const MAX_INLINE_TRIANGLES: usize = 4_000_000;
+/// The most shapes the scene file may get (spheres, quads, triangles, mesh placements), and the
+/// most bytes their entries may take with their material names: a small file that instances a
+/// large object many times over could otherwise ask for any amount of memory.
+const MAX_SHAPES: usize = 4_000_000;
+const MAX_SHAPE_BYTES: usize = 1 << 30;
 
 /// A mesh written in the scene: vertices, polygon corners (indices into them) and normals.
 struct MeshArrays {
@@ -50,7 +51,9 @@ pub struct Mapper<'a> {
     /// (material, area light) by address, to the caustica material made of them (None: an
     /// `interface` without emission, which is no surface).
     material_names: HashMap<(usize, usize), Option<String>>,
-    inline_triangles: usize,
+    /// Shapes written so far, and an estimate of their bytes (for MAX_SHAPES, MAX_SHAPE_BYTES).
+    shapes: usize,
+    shape_bytes: usize,
 }
 
 /// The scene file of `model`, read from `scene` (for messages).
@@ -67,7 +70,7 @@ pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: 
         environment: None,
         lights: vec![],
     };
-    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), inline_triangles: 0 };
+    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
     let start = Location { file: Rc::from(scene.display().to_string().as_str()), line: 1 };
     let absent = |directive: &'static str, kind: &str| Directive { directive, kind: kind.to_owned(), at: start.clone(), params: vec![] };
     let film = mapper.film(model.film.as_ref().unwrap_or(&absent("Film", "rgb")))?;
@@ -348,6 +351,7 @@ impl Mapper<'_> {
                 } else {
                     let placement = transform::placement(m).map_err(|e| d.error(e))?;
                     let file = relative_to(&path, self.base);
+                    self.count_shape(d, &material)?;
                     self.out.meshes.push(MeshFile { file, material: Some(material), translate: placement.translate, scale: placement.scale, rotate: placement.rotate, instances: vec![] });
                 }
             }
@@ -374,6 +378,7 @@ impl Mapper<'_> {
         if sided && s.reverse_orientation != (to_world.determinant() < 0.0) {
             return Err(d.error("a sphere turned inside out (ReverseOrientation or a mirroring transformation) that emits or refracts is not supported"));
         }
+        self.count_shape(d, material)?;
         self.out.spheres.push(SphereFile { center: f32x3(m.transform_point3(DVec3::ZERO)), radius: (radius * scale) as f32, material: material.to_owned() });
         Ok(())
     }
@@ -412,6 +417,17 @@ impl Mapper<'_> {
         Ok(MeshArrays { positions, indices, normals })
     }
 
+    /// Counts one more shape entry of `material` against the caps.
+    fn count_shape(&mut self, d: &Directive, material: &str) -> Result<()> {
+        self.shapes += 1;
+        // The entry (at most 13 numbers) and its material name, held once per entry.
+        self.shape_bytes += 64 + material.len();
+        if self.shapes > MAX_SHAPES || self.shape_bytes > MAX_SHAPE_BYTES {
+            return Err(d.error(format!("the scene becomes more than {MAX_SHAPES} shapes (or {} MiB of them), counting each triangle written in the scene and each instance's copy; store large meshes as PLY files", MAX_SHAPE_BYTES >> 20)));
+        }
+        Ok(())
+    }
+
     /// A triangle with pbrt's front: its winding, turned when `reversed`, carried into caustica's
     /// world by `m`, whose mirror turns the winding once more.
     fn triangle(&mut self, d: &Directive, m: DMat4, v: [DVec3; 3], reversed: bool, material: &str) -> Result<()> {
@@ -423,10 +439,7 @@ impl Mapper<'_> {
             self.warn("degenerate", || format!("{}: {}: triangles without area are left out", d.at, d.describe()));
             return Ok(());
         }
-        self.inline_triangles += 1;
-        if self.inline_triangles > MAX_INLINE_TRIANGLES {
-            return Err(d.error(format!("more than {MAX_INLINE_TRIANGLES} triangles written in the scene or placed from objects (store large meshes as PLY files)")));
-        }
+        self.count_shape(d, material)?;
         self.out.triangles.push(TriangleFile { vertices: Array(w.map(|p: Vec3| Array(p.to_array()))), material: material.to_owned() });
         Ok(())
     }
@@ -445,6 +458,7 @@ impl Mapper<'_> {
                 self.warn("degenerate", || format!("{}: {}: patches without area are left out", d.at, d.describe()));
                 return Ok(());
             }
+            self.count_shape(d, material)?;
             self.out.quads.push(QuadFile { origin: f32x3(m.transform_point3(p00)), edge_u: f32x3(u), edge_v: f32x3(v), material: material.to_owned() });
             return Ok(());
         }
