@@ -202,9 +202,9 @@ enum Command {
     },
     /// List the Vulkan devices.
     Devices,
-    /// Write a Mitsuba 3 XML scene as the equivalent caustica TOML scene (meshes referenced by path).
+    /// Write a Mitsuba 3 XML or pbrt-v4 scene as the equivalent caustica TOML scene (meshes referenced by path).
     Convert {
-        /// The scene to convert (.xml).
+        /// The scene to convert (.xml or .pbrt).
         input: PathBuf,
         /// The TOML scene to write.
         #[arg(short, long)]
@@ -488,7 +488,7 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
 fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<()> {
     use caustica::scene::import;
     if !import::is_foreign_scene(input) {
-        anyhow::bail!("{}: convert reads Mitsuba 3 XML scenes (.xml)", input.display());
+        anyhow::bail!("{}: convert reads Mitsuba 3 XML (.xml) and pbrt-v4 (.pbrt) scenes", input.display());
     }
     if output.extension().and_then(|e| e.to_str()) != Some("toml") {
         anyhow::bail!("{}: convert writes a caustica scene, so the output must be .toml", output.display());
