@@ -375,7 +375,7 @@ mod tests {
 
     #[test]
     fn pass_params_fit_the_push_constant_minimum() {
-        assert_eq!(size_of::<PassParams>(), 20);
+        assert_eq!(size_of::<PassParams>(), 24);
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 
