@@ -313,8 +313,33 @@ fn lights_map_to_caustica_lights_in_the_mirrored_world() {
         ref other => panic!("{other:?}"),
     }
     assert!(matches!(s.environment, Environment::Constant(c) if close(c, Vec3::new(0.1, 0.2, 0.3))));
-    let e = error("envmap", &format!("{OPTIONS}WorldBegin\nLightSource \"infinite\" \"string filename\" \"sky.exr\"\n"));
-    assert!(e.contains("scene.pbrt:7: LightSource \"infinite\"") && e.contains("octahedral"), "{e}");
+}
+
+#[test]
+fn an_equal_area_environment_map_is_resampled_to_lat_long_with_its_rotation() {
+    // Bright where the map's z > 0 (the diamond |u| + |v| < 1 in the middle of the square); pbrt
+    // scenes turn the map's z up with Rotate -90 1 0 0, so the sky is bright and the ground dark.
+    let mut sky = caustica::image::RgbImage::new(32, 32);
+    for y in 0..32 {
+        for x in 0..32 {
+            let (u, v) = ((x as f32 + 0.5) / 16.0 - 1.0, (y as f32 + 0.5) / 16.0 - 1.0);
+            sky.set(x, y, if u.abs() + v.abs() < 1.0 { [1.0; 3] } else { [0.0; 3] });
+        }
+    }
+    let dir = temp_dir("pbrt-envmap");
+    caustica::image::pfm::write(&dir.join("sky.pfm"), &sky).unwrap();
+    let path = dir.join("scene.pbrt");
+    std::fs::write(&path, format!("{OPTIONS}WorldBegin\nAttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" \"string filename\" \"sky.pfm\" \"float scale\" 2\nAttributeEnd\n")).unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
+    let Environment::Map(map) = &s.environment else { panic!("an environment map") };
+    assert_eq!((map.projection, map.intensity, map.image.width, map.image.height), (caustica::scene::MapProjection::LatLong, 2.0, 64, 32));
+    for y in [0, 5, 10] {
+        assert!((0..64).all(|x| map.image.get(x, y)[0] == 1.0 && map.image.get(x, 31 - y)[0] == 0.0), "row {y} bright, row {} dark", 31 - y);
+    }
+    // Not square: an error naming the file.
+    caustica::image::pfm::write(&dir.join("sky.pfm"), &caustica::image::RgbImage::new(8, 4)).unwrap();
+    let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).err().unwrap());
+    assert!(e.contains("sky.pfm") && e.contains("must be square"), "{e}");
 }
 
 #[test]

@@ -3,6 +3,7 @@
 mod asset;
 mod camera_toml;
 mod environment;
+mod equal_area_map;
 mod format;
 pub mod import;
 mod light;

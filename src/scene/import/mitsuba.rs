@@ -594,7 +594,7 @@ impl Mapper<'_> {
                     return Err(e.error("a constant emitter has no to_world"));
                 }
                 let color = f32x3(self.color(e, "radiance", 1.0)?);
-                self.environment(e, EnvironmentFile { color: Some(color), probe: None, latlong: None, intensity: 1.0, rotation: 0.0 })?;
+                self.environment(e, EnvironmentFile { color: Some(color), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 })?;
                 None
             }
             "envmap" => {
@@ -605,7 +605,7 @@ impl Mapper<'_> {
                 let scale = e.float("scale", 1.0)?;
                 // Mitsuba's u = 0 column looks down -z, caustica's centre column does: half a turn.
                 let rotation = ((rotation + 180.0) % 360.0) as f32;
-                self.environment(e, EnvironmentFile { color: None, probe: None, latlong: Some(latlong), intensity: scale as f32, rotation })?;
+                self.environment(e, EnvironmentFile { color: None, probe: None, latlong: Some(latlong), octahedral: None, axes: None, intensity: scale as f32, rotation })?;
                 None
             }
             _ => return Err(e.error("this emitter is not supported (area, point, spot, directional, constant, envmap)")),

@@ -566,14 +566,34 @@ impl Mapper<'_> {
                 Some(LightFile::Directional(DirectionalLightFile { direction: f32x3(direction), irradiance: f32x3(irradiance), angular_diameter: 0.0 }))
             }
             "infinite" => {
-                if d.param("filename").is_some() {
-                    return Err(d.error("image environment maps (pbrt-v4's equal-area octahedral images) are not supported yet; a constant L is"));
-                }
-                let color = self.light_color(d, "L")? * self.light_scale(d)?;
                 if self.out.environment.is_some() {
                     return Err(d.error("a second infinite light: caustica has one environment"));
                 }
-                self.out.environment = Some(EnvironmentFile { color: Some(f32x3(color)), probe: None, latlong: None, intensity: 1.0, rotation: 0.0 });
+                let environment = match d.string("filename")?.map(str::to_owned) {
+                    None => {
+                        let color = self.light_color(d, "L")? * self.light_scale(d)?;
+                        EnvironmentFile { color: Some(f32x3(color)), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 }
+                    }
+                    Some(name) => {
+                        if d.param("L").is_some() {
+                            return Err(d.error("give L or filename, not both"));
+                        }
+                        // pbrt scales an image's RGB to radiance as it does a constant L's.
+                        let scale = self.light_scale(d)?;
+                        let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+                        // Where the map's axes point in caustica's world: the light's rotation,
+                        // through the mirror.
+                        let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a));
+                        let size = axes[0].length();
+                        let orthonormal = size > 0.0 && axes.iter().all(|a| (a.length() - size).abs() <= 1e-6 * size) && (axes[0].dot(axes[1]).abs() + axes[1].dot(axes[2]).abs() + axes[0].dot(axes[2]).abs()) <= 1e-6 * size * size;
+                        if !orthonormal {
+                            return Err(d.error("an image infinite light's transformation must be a rotation (it shears or scales unevenly)"));
+                        }
+                        let axes = Array(axes.map(|a| f32x3(a / size)));
+                        EnvironmentFile { color: None, probe: None, latlong: None, octahedral: Some(relative_to(&path, self.base)), axes: Some(axes), intensity: scale as f32, rotation: 0.0 }
+                    }
+                };
+                self.out.environment = Some(environment);
                 None
             }
             _ => return Err(d.error("this light is not supported (point, spot, distant, infinite)")),
