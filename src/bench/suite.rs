@@ -52,6 +52,7 @@ const SIZES: &[(&str, SuiteSize)] = &[
     ("meshes_probe.toml", SuiteSize { width: 128, height: 96, spp: 64 }),
     ("bunny_field.toml", SuiteSize { width: 128, height: 96, spp: 32 }),
     ("helmet.toml", SuiteSize { width: 128, height: 128, spp: 48 }),
+    ("smallpt.toml", SuiteSize { width: 128, height: 96, spp: 16 }),
 ];
 
 /// A scene the table above does not know yet: small, so an unexpectedly slow scene cannot hold the
