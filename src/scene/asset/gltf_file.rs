@@ -5,7 +5,11 @@
 //!
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
 //! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
-//!   sets, the sampler and alpha are ignored).
+//!   sets and the sampler are ignored).
+//! - `alphaMode` `MASK` (with `alphaCutoff`, 0.5 by default) and `BLEND` → [`Alpha`]: the opacity
+//!   is `baseColorFactor.a` times the base colour texture's alpha; MASK keeps the surface where it
+//!   reaches the cutoff, BLEND meets it with that probability (stochastic opacity). `OPAQUE`
+//!   ignores alpha, as glTF says.
 //! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission; `emissiveTexture`
 //!   (texCoord 0, sRGB) multiplies it per texel. Its triangles are lights for next-event
 //!   estimation, picked by their texture-weighted power (src/render/textured_emission.rs).
@@ -29,6 +33,12 @@
 //! the cosine; the ends agree. `range` is ignored (a note on stderr): the light falls off by the
 //! inverse square without a cut-off, which the extension allows as the physical limit.
 //!
+//! Extensions: the four above (`KHR_lights_punctual`, `KHR_materials_emissive_strength`,
+//! `KHR_materials_transmission`, `KHR_materials_ior`) are read. A file that requires any other is
+//! an error naming the file and the extension; one that merely uses another renders without it,
+//! with one warning per extension. Occlusion textures are ignored (a path tracer computes
+//! occlusion), with one warning per file that has them.
+//!
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
 
@@ -45,7 +55,7 @@ use gltf::{Document, Semantic};
 
 use super::gltf_accessors::AccessorLimits;
 use super::{
-    texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
+    texture, unit_normals, Alpha, AlphaMode, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
     MeshData, MetallicRoughness, NormalMap, TextureMaps,
 };
 use crate::input_file::{InputFiles, InputKind};
@@ -53,6 +63,14 @@ use crate::input_file::{InputFiles, InputKind};
 /// Lumens per watt of radiant flux at 555 nm, the constant of the candela's definition: glTF's
 /// photometric light units over this are radiometric.
 const LUMENS_PER_WATT: f32 = 683.0;
+
+/// The glTF extensions caustica reads (see the mapping above).
+const IMPLEMENTED_EXTENSIONS: [&str; 4] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+];
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
 const MAX_NODE_DEPTH: usize = 1000;
@@ -77,6 +95,15 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     // checking that it exists, and panics on an out-of-range one (found by fuzzing), so check
     // that first and validate afterwards.
     let json = document.into_json();
+    if let Some(required) = unimplemented_required_extension(&json) {
+        return Err(AssetError::invalid(
+            path,
+            format!("requires the glTF extension {required}, which caustica does not implement"),
+        ));
+    }
+    for warning in ignored_features(&json) {
+        eprintln!("caustica: warning: {}: {warning}", path.display());
+    }
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             for (semantic, accessor) in &primitive.attributes {
@@ -157,6 +184,34 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         );
     }
     Ok(asset)
+}
+
+/// The first extension the file requires that caustica does not implement: the file cannot be
+/// rendered as its author meant.
+fn unimplemented_required_extension(json: &gltf::json::Root) -> Option<&str> {
+    json.extensions_required
+        .iter()
+        .map(String::as_str)
+        .find(|e| !IMPLEMENTED_EXTENSIONS.contains(e))
+}
+
+/// What of the file is left out, each said once: every extension it uses that caustica does not
+/// implement (the file stays valid without it), and occlusion textures.
+fn ignored_features(json: &gltf::json::Root) -> Vec<String> {
+    let unimplemented: std::collections::BTreeSet<&str> = json
+        .extensions_used
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !IMPLEMENTED_EXTENSIONS.contains(e))
+        .collect();
+    let mut ignored: Vec<String> = unimplemented
+        .into_iter()
+        .map(|e| format!("glTF extension {e} is not implemented: rendering without it"))
+        .collect();
+    if json.materials.iter().any(|m| m.occlusion_texture.is_some()) {
+        ignored.push("occlusion textures are ignored (a path tracer computes occlusion)".to_owned());
+    }
+    ignored
 }
 
 /// Where a glTF's URIs lead: data URIs, or files relative to the glTF read through `files`.
@@ -320,7 +375,7 @@ fn convert_material(
 ) -> Result<AssetMaterial, String> {
     let index = material.index().unwrap_or(0);
     let pbr = material.pbr_metallic_roughness();
-    let [r, g, b, _] = pbr.base_color_factor();
+    let [r, g, b, opacity] = pbr.base_color_factor();
     let albedo_texture = match pbr.base_color_texture() {
         Some(info) if info.tex_coord() == 0 => Some(image_texture(
             info.texture().source(),
@@ -388,6 +443,19 @@ fn convert_material(
         }),
         _ => None,
     };
+    let mode = match material.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => None,
+        gltf::material::AlphaMode::Mask => Some(AlphaMode::Mask { cutoff: material.alpha_cutoff().unwrap_or(0.5) }),
+        gltf::material::AlphaMode::Blend => Some(AlphaMode::Blend),
+    };
+    if !opacity.is_finite() || matches!(mode, Some(AlphaMode::Mask { cutoff }) if !cutoff.is_finite()) {
+        return Err(format!("material {index}: baseColorFactor alpha or alphaCutoff is not finite"));
+    }
+    let alpha = mode.map(|mode| Alpha {
+        factor: opacity.clamp(0.0, 1.0),
+        texture: albedo_texture.map(|t| t as u32),
+        mode,
+    });
     Ok(AssetMaterial {
         name: material
             .name()
@@ -402,7 +470,7 @@ fn convert_material(
         conductor: Conductor::Albedo,
         coat: true,
         metallic_roughness,
-        maps: TextureMaps { emission: emission_texture, normal },
+        maps: TextureMaps { emission: emission_texture, normal, alpha },
     })
 }
 
@@ -764,9 +832,11 @@ mod tests {
   ]}}],
   "materials": [{{
     "name": "glowing glass",
-    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
+    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 0.75], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
     "emissiveFactor": [1, 0.5, 0.25],
     "emissiveTexture": {{"index": 0}},
+    "alphaMode": "MASK",
+    "alphaCutoff": 0.25,
     "normalTexture": {{"index": 0, "scale": 0.75}},
     "extensions": {{
       "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
@@ -838,6 +908,8 @@ mod tests {
         assert_eq!(glass.albedo_texture, Some(0));
         assert_eq!(glass.maps.emission, Some(0), "the emissive texture is image 0 as colour, decoded once for both");
         assert_eq!(glass.maps.normal, Some(NormalMap { texture: 1, scale: 0.75 }), "the normal map is image 0 as data, shared with metallic-roughness");
+        let mask = Alpha { factor: 0.75, texture: Some(0), mode: AlphaMode::Mask { cutoff: 0.25 } };
+        assert_eq!(glass.maps.alpha, Some(mask), "baseColorFactor alpha times the base colour texture's, cut at alphaCutoff");
         assert_eq!(
             glass.metallic_roughness,
             Some(MetallicRoughness {
@@ -981,6 +1053,36 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("cut.glb"), "{err}");
+    }
+
+    /// A required extension caustica lacks is an error naming the file and the extension; used
+    /// ones it lacks and occlusion textures are warned about once each.
+    #[test]
+    fn unimplemented_extensions_are_errors_when_required_and_warnings_when_used() {
+        let encode = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
+        let buffer = format!(r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#, triangle_bin().len(), encode(&triangle_bin()));
+        let png = format!(r#"{{"uri": "data:image/png;base64,{}"}}"#, encode(&png_bytes()));
+        let images = format!("[{png}, {png}]");
+        let plain = document(&buffer, &images);
+        let path = write("gltf-required-extension", "required.gltf", plain.replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_draco_mesh_compression"], "scene": 0,"#, 1).as_bytes());
+        let err = load_asset(&path).unwrap_err().to_string();
+        assert!(err.contains(&path.display().to_string()) && err.contains("KHR_draco_mesh_compression"), "{err}");
+
+        let used = plain
+            .replacen(r#""KHR_materials_ior"]"#, r#""KHR_materials_ior", "KHR_materials_sheen", "KHR_materials_sheen", "EXT_texture_webp"]"#, 1)
+            .replacen(r#""normalTexture""#, r#""occlusionTexture": {"index": 0}, "normalTexture""#, 1);
+        let json = gltf::Gltf::from_slice_without_validation(used.as_bytes()).unwrap().document.into_json();
+        assert_eq!(unimplemented_required_extension(&json), None);
+        assert_eq!(
+            ignored_features(&json),
+            [
+                "glTF extension EXT_texture_webp is not implemented: rendering without it",
+                "glTF extension KHR_materials_sheen is not implemented: rendering without it",
+                "occlusion textures are ignored (a path tracer computes occlusion)",
+            ]
+        );
+        let path = write("gltf-used-extension", "used.gltf", used.as_bytes());
+        assert!(load_asset(&path).is_ok(), "a used extension caustica lacks is no error");
     }
 
     #[test]

@@ -11,7 +11,7 @@ mod texture;
 
 pub use texture::{downsample_to_fit, srgb_to_linear};
 
-use super::{Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
+use super::{Alpha, AlphaMode, Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
 use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::{Path, PathBuf};
