@@ -103,8 +103,14 @@ const uint INSTANCE_HAS_NORMALS = 1u;
 const uint INSTANCE_HAS_UVS = 2u;
 const uint INSTANCE_HAS_TANGENTS = 4u;
 const uint NO_TEXTURE = 0xffffffffu;
-// Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored).
+// Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored); the TEXTURE_WRAP_*
+// mode along u at bit TEXTURE_WRAP_U_SHIFT and along v at TEXTURE_WRAP_V_SHIFT (glTF samplers).
 const uint TEXTURE_SRGB = 1u;
+const uint TEXTURE_WRAP_U_SHIFT = 1u;
+const uint TEXTURE_WRAP_V_SHIFT = 3u;
+const uint TEXTURE_WRAP_REPEAT = 0u;
+const uint TEXTURE_WRAP_CLAMP = 1u;
+const uint TEXTURE_WRAP_MIRROR = 2u;
 
 // One placement of a bottom-level BVH. Rows of the 3x4 affine maps; info.x = kind, info.y = root
 // node of its BVH, info.z = flags.

@@ -8,9 +8,9 @@
 
 mod common;
 
-use base64::Engine as _;
 use caustica::image::RgbImage;
 use caustica::scene::Scene;
+use common::gltf_square::{self, png_uri};
 use common::*;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -59,37 +59,12 @@ fn write_obj_square(dir: &Path, y: f32, half: f32, mtl: &str, texture: &[u8]) {
 /// `square.gltf`: the same square with a black material of base colour alpha `factor`, alpha mode
 /// `mode` (a JSON fragment such as `"alphaMode": "MASK"`) and, when given, a base colour texture.
 fn write_gltf_square(dir: &Path, y: f32, half: f32, factor: f32, mode: &str, texture: Option<&[u8]>) {
-    let base64 = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
-    let (corners, uvs) = square(y, half);
-    let mut buffer: Vec<u8> = corners.iter().flatten().chain(uvs.iter().flatten()).flat_map(|v| v.to_le_bytes()).collect();
-    buffer.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
-    let (texture_ref, textures) = match texture {
-        Some(png) => (
-            r#", "baseColorTexture": {"index": 0}"#.to_owned(),
-            format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{}"}}],"#, base64(png)),
-        ),
+    let (texture_ref, resources) = match texture {
+        Some(png) => (r#", "baseColorTexture": {"index": 0}"#.to_owned(), format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "{}"}}],"#, png_uri(png))),
         None => (String::new(), String::new()),
     };
-    let json = format!(
-        r#"{{
-  "asset": {{"version": "2.0"}},
-  "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
-  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "indices": 2, "material": 0}}]}}],
-  "materials": [{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, {factor}]{texture_ref}, "metallicFactor": 0, "roughnessFactor": 1}}, {mode}}}],
-  {textures}
-  "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}],
-  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 32}}, {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}],
-  "accessors": [
-    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [{m}, {y}, {m}], "max": [{half}, {y}, {half}]}},
-    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
-    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}
-  ]
-}}"#,
-        buffer.len(),
-        base64(&buffer),
-        m = -half,
-    );
-    std::fs::write(dir.join("square.gltf"), json).unwrap();
+    let material = format!(r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, {factor}]{texture_ref}, "metallicFactor": 0, "roughnessFactor": 1}}, {mode}}}"#);
+    gltf_square::write_gltf_square(dir, "square.gltf", y, half, &material, &resources);
 }
 
 fn parse_in(dir: &Path, toml: &str) -> Scene {

@@ -95,17 +95,17 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         "#,
     );
     let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true }];
+    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
     // A bumpy normal map: each texel tilts the normal its own way.
     let bumps: Vec<[u8; 4]> = (0..16u32).map(|i| [(96 + i * 37 % 64) as u8, (96 + i * 23 % 64) as u8, 230, 255]).collect();
-    scene.textures.push(Texture { name: "bumps".into(), width: 4, height: 4, texels: bumps, srgb: false });
+    scene.textures.push(Texture { name: "bumps".into(), width: 4, height: 4, texels: bumps, srgb: false, wrap: Default::default() });
     scene.materials[0].maps.normal = Some(NormalMap { texture: 1, scale: 0.8 });
     let glow = scene.materials.iter().position(|m| m.name == "glow").unwrap() as u32;
     scene.materials[glow as usize].maps.emission = Some(0);
     // Opacity varying over the texture, read blended (lace) and cut at 0.5 (stencil).
     let holes: Vec<[u8; 4]> = (0..16u32).map(|i| [200, 200, 200, (i * 67 % 256) as u8]).collect();
-    scene.textures.push(Texture { name: "holes".into(), width: 4, height: 4, texels: holes, srgb: true });
+    scene.textures.push(Texture { name: "holes".into(), width: 4, height: 4, texels: holes, srgb: true, wrap: Default::default() });
     let lace = scene.materials.iter().position(|m| m.name == "lace").unwrap() as u32;
     scene.materials[lace as usize].maps.alpha = Some(Alpha { factor: 0.9, texture: Some(2), mode: AlphaMode::Blend });
     let stencil = scene.materials.iter().position(|m| m.name == "stencil").unwrap() as u32;

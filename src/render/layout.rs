@@ -19,6 +19,12 @@ pub const INSTANCE_HAS_UVS: u32 = 2;
 pub const INSTANCE_HAS_TANGENTS: u32 = 4;
 pub const NO_TEXTURE: u32 = u32::MAX;
 pub const TEXTURE_SRGB: u32 = 1;
+/// A texture's wrap mode along u sits at this bit of its flags, along v at TEXTURE_WRAP_V_SHIFT.
+pub const TEXTURE_WRAP_U_SHIFT: u32 = 1;
+pub const TEXTURE_WRAP_V_SHIFT: u32 = 3;
+pub const TEXTURE_WRAP_REPEAT: u32 = 0;
+pub const TEXTURE_WRAP_CLAMP: u32 = 1;
+pub const TEXTURE_WRAP_MIRROR: u32 = 2;
 
 pub const ALPHA_OPAQUE: u32 = 0;
 pub const ALPHA_MASK: u32 = 1;

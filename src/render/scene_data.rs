@@ -6,7 +6,7 @@ use super::textured_emission::mean_triangle_luminance;
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
 use super::light_selection::{area_light_power, emission_luminance, punctual_light_power, LightDistribution};
-use crate::scene::{average_fresnel, Alpha, AlphaMode, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape, Texture};
+use crate::scene::{average_fresnel, Alpha, AlphaMode, Wrap, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape, Texture};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -196,7 +196,13 @@ impl SceneData {
         let mut fitted = scene.textures.clone();
         downsample_to_fit(&mut fitted, texture_budget);
         for t in &fitted {
-            let flags = if t.srgb { TEXTURE_SRGB } else { 0 };
+            let wrap_bits = |w: Wrap| match w {
+                Wrap::Repeat => TEXTURE_WRAP_REPEAT,
+                Wrap::ClampToEdge => TEXTURE_WRAP_CLAMP,
+                Wrap::MirroredRepeat => TEXTURE_WRAP_MIRROR,
+            };
+            let srgb = if t.srgb { TEXTURE_SRGB } else { 0 };
+            let flags = srgb | wrap_bits(t.wrap[0]) << TEXTURE_WRAP_U_SHIFT | wrap_bits(t.wrap[1]) << TEXTURE_WRAP_V_SHIFT;
             textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, flags });
             texels.extend(t.texels.iter().map(|&p| u32::from_le_bytes(p)));
         }

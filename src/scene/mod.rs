@@ -11,7 +11,7 @@ mod optics;
 mod toml_error;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
-pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError};
+pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError, Wrap};
 pub use camera_toml::camera_toml;
 pub use format::{Filter, LightSelection, Sampler};
 pub use light::Light;
