@@ -3,6 +3,9 @@
 // (bvh.glsl), so camera, bounce and shadow rays alike pass through what is not there, and
 // shading, light sampling and MIS never meet it. Only kernels for scenes with alpha materials
 // call it (SCENE_ALPHA); there, a triangle a ray meets whose material is opaque costs two loads.
+// Not yet handled: an emitter with alpha. Next-event estimation samples its triangles whole (the
+// shadow ray stops short of the light), while rays that meet it count it only where it is there,
+// so such an emitter is too bright by the light-sampled share of its light.
 
 // A uniform number in [0, 1) fixed by the ray and the triangle it meets: BLEND's coin. The same ray
 // meeting the same triangle always gets the same answer (so an image does not depend on how its

@@ -17,15 +17,15 @@
 //!   reaches the cutoff, BLEND meets it with that probability (stochastic opacity). `OPAQUE`
 //!   ignores alpha, as glTF says.
 //! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission; `emissiveTexture`
-//!   (texCoord 0, sRGB) multiplies it per texel. Its triangles are lights for next-event
+//!   (sRGB) multiplies it per texel. Its triangles are lights for next-event
 //!   estimation, picked by their texture-weighted power (src/render/textured_emission.rs).
-//! - `normalTexture` (texCoord 0, linear) with its `scale` → a tangent-space normal map, read along
+//! - `normalTexture` (linear) with its `scale` → a tangent-space normal map, read along
 //!   the file's TANGENTs when every primitive of the mesh has them, else MikkTSpace's.
 //! - `metallicFactor` → reflectivity R, a conductor with the base colour as F0 (Schlick);
 //!   `roughnessFactor` → roughness (both perceptual) of every lobe.
 //! - `KHR_materials_transmission` factor → transparency T = (1 − metallic) × transmission, a
 //!   rough dielectric; `KHR_materials_ior` → ior (1.5 by default).
-//! - `metallicRoughnessTexture` (texCoord 0; linear, B = metallic, G = roughness) scales the two
+//! - `metallicRoughnessTexture` (linear, B = metallic, G = roughness) scales the two
 //!   factors per texel: the kernel recomputes R, T and roughness there as above.
 //! - The rest (1 − R − T) is a plastic: the base colour under a dielectric coat of that ior.
 //! - Primitives without a material get [`AssetMaterial::default_grey`].
