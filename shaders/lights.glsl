@@ -131,19 +131,31 @@ bool sphere_sampled_by_cone(float d2, float r2) {
     return d2 > r2 * 1.0001;
 }
 
+// The cone sphere light `p` subtends from `ref`, as both its pdf and its sampling need it.
+struct SphereCone {
+    vec3 to_center;
+    float distance2;  // squared distance to the centre
+    float radius2;
+    float cos_max;    // cosine of the cone's half angle; meaningful only when sampled by cone
+};
+
+// False when `ref` is not clearly outside the sphere (sampled by area then, see above).
+bool sphere_cone(Primitive p, vec3 ref, out SphereCone c) {
+    c.to_center = p.a.xyz - ref;
+    c.distance2 = dot(c.to_center, c.to_center);
+    c.radius2 = p.a.w * p.a.w;
+    c.cos_max = sqrt(max(0.0, 1.0 - c.radius2 / c.distance2));
+    return sphere_sampled_by_cone(c.distance2, c.radius2);
+}
+
 // Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, triangle by solid
 // angle where it can, otherwise by area).
 float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
     float pick = light_pick_probability(p);
     switch (prim_kind(p)) {
         case PRIM_SPHERE: {
-            vec3 to_center = p.a.xyz - ref;
-            float d2 = dot(to_center, to_center);
-            float r2 = p.a.w * p.a.w;
-            if (sphere_sampled_by_cone(d2, r2)) {
-                float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-                return pick / (2.0 * PI * (1.0 - cos_max));
-            }
+            SphereCone cone;
+            if (sphere_cone(p, ref, cone)) return pick / (2.0 * PI * (1.0 - cone.cos_max));
             break;
         }
         case PRIM_QUAD: break;
@@ -177,15 +189,12 @@ bool sample_area_light_point(Primitive p, vec3 ref, vec2 u, out vec3 point) {
     point = ref;
     switch (prim_kind(p)) {
         case PRIM_SPHERE: {
-            vec3 to_center = p.a.xyz - ref;
-            float d2 = dot(to_center, to_center);
-            float r2 = p.a.w * p.a.w;
-            if (sphere_sampled_by_cone(d2, r2)) {
-                float cos_max = sqrt(max(0.0, 1.0 - r2 / d2));
-                vec3 dir = sample_cone(u, to_center / sqrt(d2), cos_max);
+            SphereCone cone;
+            if (sphere_cone(p, ref, cone)) {
+                vec3 dir = sample_cone(u, cone.to_center / sqrt(cone.distance2), cone.cos_max);
                 float t = intersect_sphere(p.a.xyz, p.a.w, ref, dir, 1e30);
                 // Grazing directions can miss by rounding: use the tangent distance.
-                point = ref + dir * (t > 0.0 ? t : sqrt(max(0.0, d2 - r2)));
+                point = ref + dir * (t > 0.0 ? t : sqrt(max(0.0, cone.distance2 - cone.radius2)));
             } else {
                 point = p.a.xyz + p.a.w * sample_uniform_sphere(u);
             }

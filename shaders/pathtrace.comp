@@ -37,10 +37,27 @@ void start_sample(uvec2 pixel, uint index, uint s, out Rng rng, out Path path, o
     path = path_start(origin, dir);
 }
 
+// The band's row of workgroups that workgroup row `r` of `n` renders. lavapipe hands each of its
+// threads one contiguous run of a dispatch's workgroups, decided up front; when those are whole
+// regions of the image (a sky above, a mesh below) one thread finishes early and idles. Dealing
+// the rows into `pass.group_row_stripes` stripes (row r of stripe k is band row r * stripes + k)
+// gives every run rows from the whole band. One stripe is the identity (GPUs balance their own
+// workgroups). A bijection either way: every pixel is rendered once, and its sums do not depend
+// on which workgroup renders them.
+uint group_row_of(uint r, uint n) {
+    uint stripes = pass.group_row_stripes;
+    uint per_stripe = n / stripes;
+    uint longer = n % stripes;  // the first `longer` stripes hold one row more
+    if (r < longer * (per_stripe + 1u)) return (r % (per_stripe + 1u)) * stripes + r / (per_stripe + 1u);
+    uint rest = r - longer * (per_stripe + 1u);
+    return (rest % per_stripe) * stripes + longer + rest / per_stripe;
+}
+
 void main() {
-    uvec2 pixel = uvec2(gl_GlobalInvocationID.x, gl_GlobalInvocationID.y + pass.row_offset);
+    uint band_row = group_row_of(gl_WorkGroupID.y, gl_NumWorkGroups.y) * gl_WorkGroupSize.y + gl_LocalInvocationID.y;
+    uvec2 pixel = uvec2(gl_GlobalInvocationID.x, band_row + pass.row_offset);
     uint width = frame.width;
-    bool inside = pixel.x < width && gl_GlobalInvocationID.y < pass.row_count && pixel.y < frame.height;
+    bool inside = pixel.x < width && band_row < pass.row_count && pixel.y < frame.height;
     uint index = pixel.y * width + pixel.x;
     vec4 sum = inside ? load_accum(index) : vec4(0.0);
     // Counts are exact in a float up to 2^24, which the host does not exceed.

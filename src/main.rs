@@ -4,8 +4,8 @@ use anyhow::{Context as _, Result};
 use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
-use caustica::bench::{self, FilmOverrides};
-use caustica::render::{AovSet, KernelChoice, Renderer};
+use caustica::bench::{self, FilmOverrides, KernelSetup};
+use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer};
 use caustica::input_file::InputFiles;
 use caustica::scene::{check_film, Film, Filter, Scene};
 use clap::{Parser, Subcommand};
@@ -202,9 +202,9 @@ enum Command {
     },
     /// List the Vulkan devices.
     Devices,
-    /// Write a Mitsuba 3 XML scene as the equivalent caustica TOML scene (meshes referenced by path).
+    /// Write a Mitsuba 3 XML or pbrt-v4 scene as the equivalent caustica TOML scene (meshes referenced by path).
     Convert {
-        /// The scene to convert (.xml).
+        /// The scene to convert (.xml or .pbrt).
         input: PathBuf,
         /// The TOML scene to write.
         #[arg(short, long)]
@@ -253,6 +253,12 @@ enum Command {
         /// compiled for the scene: what specialization gains (the image is the same).
         #[arg(long)]
         general_kernel: bool,
+        /// The order in which a dispatch's workgroups take the image's rows (the image is the
+        /// same): in-order top to bottom, or interleaved across the band so that each of a CPU
+        /// device's threads gets rows from the whole image. Default: interleaved on CPU devices
+        /// (lavapipe), in order on GPUs.
+        #[arg(long, value_enum)]
+        group_order: Option<GroupOrder>,
         #[command(flatten)]
         scene_files: SceneFileArgs,
         #[command(flatten)]
@@ -488,7 +494,7 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
 fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<()> {
     use caustica::scene::import;
     if !import::is_foreign_scene(input) {
-        anyhow::bail!("{}: convert reads Mitsuba 3 XML scenes (.xml)", input.display());
+        anyhow::bail!("{}: convert reads Mitsuba 3 XML (.xml) and pbrt-v4 (.pbrt) scenes", input.display());
     }
     if output.extension().and_then(|e| e.to_str()) != Some("toml") {
         anyhow::bail!("{}: convert writes a caustica scene, so the output must be .toml", output.display());
@@ -508,7 +514,7 @@ fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<
 
 /// `bench SCENE`: one scene, by default at 256x256 and 64 spp (not the scene's own film, so that
 /// figures of different scenes compare).
-fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, kernel: KernelChoice, json: bool, gpu: &DeviceArgs) -> Result<()> {
+fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, kernel: KernelSetup, json: bool, gpu: &DeviceArgs) -> Result<()> {
     apply_overrides(&mut scene, Some(film.width.unwrap_or(256)), Some(film.height.unwrap_or(256)), Some(film.spp.unwrap_or(64)))?;
     let ctx = gpu.context()?;
     let measured = bench::measure(&ctx, &scene, aovs, kernel)?;
@@ -522,7 +528,7 @@ fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, kernel: KernelChoi
 
 /// `bench --suite`: every scene of the suite on one device; fails (after the table) when a scene
 /// that should have run did not.
-fn bench_suite(scenes: &Path, overrides: FilmOverrides, aovs: AovSet, kernel: KernelChoice, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
+fn bench_suite(scenes: &Path, overrides: FilmOverrides, aovs: AovSet, kernel: KernelSetup, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
     // A bad override is refused once, before any work, rather than by every scene in turn.
     let (w, h, spp) = (overrides.width.unwrap_or(1), overrides.height.unwrap_or(1), overrides.spp.unwrap_or(1));
     check_film(&Film { width: w, height: h, spp, filter: Filter::Box }).context("command-line film settings")?;
@@ -606,9 +612,10 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, suite, scenes, aov, json, general_kernel, scene_files, gpu } => {
+        Command::Bench { width, height, spp, scene, suite, scenes, aov, json, general_kernel, group_order, scene_files, gpu } => {
             let (aovs, film) = (aov.unwrap_or_default(), FilmOverrides { width, height, spp });
-            let kernel = if general_kernel { KernelChoice::General } else { KernelChoice::ForScene };
+            let choice = if general_kernel { KernelChoice::General } else { KernelChoice::ForScene };
+            let kernel = KernelSetup { choice, group_order };
             if suite {
                 let scenes = scenes.unwrap_or_else(|| PathBuf::from("scenes"));
                 return bench_suite(&scenes, film, aovs, kernel, json, &scene_files, &gpu);

@@ -75,31 +75,6 @@ fn inside_an_emissive_sphere_with_fixed_absorption_roulette() {
     assert_mean_is(&image, 0.3 / (1.0 - 0.7), 0.0002, 0.015, "inside an emissive sphere, fixed absorption 0.5");
 }
 
-/// A diffuse floor (albedo 0.5, y = 0) under one light and a black sky, seen at the origin through
-/// a 0.01 degree field of view, so that every pixel sees the same point and the answer is one
-/// number. Nothing but the floor can receive light, and the light's own albedo is 0: the pixel
-/// is the direct light alone (next-event estimation plus emitters hit by BSDF sampling, MIS
-/// weighted), albedo / pi x the irradiance.
-fn floor_under(light: &str, spp: u32) -> Scene {
-    parse(&format!(
-        r#"
-        camera = {{ position = [0.0, 1.0, 3.0], look_at = [0.0, 0.0, 0.0], fov = 0.01 }}
-        film = {{ width = 32, height = 32, spp = {spp} }}
-        [materials.floor]
-        albedo = [0.5, 0.5, 0.5]
-        [materials.lamp]
-        albedo = [0.0, 0.0, 0.0]
-        emission = [4.0, 4.0, 4.0]
-        [[quads]]
-        origin = [-50.0, 0.0, 50.0]
-        edge_u = [100.0, 0.0, 0.0]
-        edge_v = [0.0, 0.0, -100.0]
-        material = "floor"
-        {light}
-        "#
-    ))
-}
-
 /// Irradiance at the origin (normal +y) from a polygon of uniform radiance `radiance` facing it:
 /// Lambert's formula, E = L / 2 sum_i angle(v_i, v_i+1) (n . unit(v_i x v_i+1)).
 fn polygon_irradiance(vertices: &[Vec3], radiance: f64) -> f64 {
@@ -118,7 +93,7 @@ fn polygon_irradiance(vertices: &[Vec3], radiance: f64) -> f64 {
 #[test]
 fn sphere_light_irradiance_is_exact() {
     let (_lock, ctx) = gpu();
-    let scene = floor_under("[[spheres]]\ncenter = [0.0, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 256);
+    let scene = floor_point_scene("[[spheres]]\ncenter = [0.0, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 256, true);
     let irradiance = PI * 4.0 * (0.5f64 / 2.0).powi(2);
     assert_mean_is(&render(&ctx, &scene, 1), 0.5 / PI * irradiance, 0.0002, 0.001, "floor under a sphere light");
 }
@@ -128,7 +103,7 @@ fn sphere_light_irradiance_is_exact() {
 fn quad_light_irradiance_is_exact() {
     let (_lock, ctx) = gpu();
     // The emitting side faces cross(edge_u, edge_v) = -y: down at the floor.
-    let scene = floor_under("[[quads]]\norigin = [-0.3, 1.5, -0.2]\nedge_u = [1.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, 1.0]\nmaterial = \"lamp\"", 512);
+    let scene = floor_point_scene("[[quads]]\norigin = [-0.3, 1.5, -0.2]\nedge_u = [1.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, 1.0]\nmaterial = \"lamp\"", 512, true);
     let corners = [Vec3::new(-0.3, 1.5, -0.2), Vec3::new(-0.3, 1.5, 0.8), Vec3::new(0.7, 1.5, 0.8), Vec3::new(0.7, 1.5, -0.2)];
     assert_mean_is(&render(&ctx, &scene, 2), 0.5 / PI * polygon_irradiance(&corners, 4.0), 0.0002, 0.002, "floor under a quad light");
 }
@@ -142,7 +117,7 @@ fn assert_two_lights_sum_exactly(selection: LightSelection, seed: u32) {
     let lights = "[[spheres]]\ncenter = [1.5, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"\n\
                   [materials.panel]\nalbedo = [0.0, 0.0, 0.0]\nemission = [1.0, 1.0, 1.0]\ntwo_sided = true\n\
                   [[quads]]\norigin = [-0.3, 1.5, -0.2]\nedge_u = [0.0, 0.0, 1.0]\nedge_v = [1.0, 0.0, 0.0]\nmaterial = \"panel\"";
-    let mut scene = floor_under(lights, 512);
+    let mut scene = floor_point_scene(lights, 512, true);
     scene.integrator.light_selection = selection;
     // A sphere wholly above the horizon: E = pi L (r / d)^2 cos(theta) towards its centre.
     let centre = glam::DVec3::new(1.5, 2.0, 0.0);
@@ -181,7 +156,7 @@ fn triangle_light_sampled_by_area_is_exact() {
 /// The floor under a one-triangle mesh light with vertices `v`, 256 spp, against Lambert's formula.
 fn assert_floor_under_triangle_is_exact(v: [Vec3; 3], seed: u32, bias: f64, what: &str) {
     let (_lock, ctx) = gpu();
-    let scene = floor_under(&triangle_mesh_light(&v), 256);
+    let scene = floor_point_scene(&triangle_mesh_light(&v), 256, true);
     assert_mean_is(&render(&ctx, &scene, seed), 0.5 / PI * polygon_irradiance(&v, 4.0), 0.0002, bias, what);
 }
 
@@ -221,7 +196,7 @@ fn floor_under_a_latlong_sky_is_its_cosine_weighted_integral() {
         }
     }
     let column_mean = (0..w).map(column_value).sum::<f64>() / w as f64;
-    let mut scene = floor_under("", 512);
+    let mut scene = floor_point_scene("", 512, true);
     scene.environment = Environment::Map(EnvironmentMap { projection: MapProjection::LatLong, image: map, intensity: 1.0, rotation_deg: 0.0 });
     // Radiance at polar angle theta: linear in the texel coordinate between row centres, held
     // beyond the first and last (the kernel's bilinear lookup, constant along a row).
@@ -245,7 +220,7 @@ fn floor_under_a_latlong_sky_is_its_cosine_weighted_integral() {
 #[test]
 fn sky_and_sphere_light_add_up_exactly() {
     let (_lock, ctx) = gpu();
-    let mut scene = floor_under("[[spheres]]\ncenter = [1.5, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 512);
+    let mut scene = floor_point_scene("[[spheres]]\ncenter = [1.5, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 512, true);
     let mut map = RgbImage::new(16, 8);
     map.pixels.fill([0.5; 3]);
     scene.environment = Environment::Map(EnvironmentMap { projection: MapProjection::LatLong, image: map, intensity: 1.0, rotation_deg: 0.0 });

@@ -16,10 +16,11 @@ fn every_scene_renders_to_pfm_exr_and_png() {
     let mut rendered = 0;
     for entry in std::fs::read_dir(&scenes).unwrap() {
         let scene = entry.unwrap().path();
-        if scene.extension().is_none_or(|e| e != "toml") {
+        // caustica's own scenes and the pbrt-v4 ones beside them (scenes/cornell.pbrt).
+        if scene.extension().is_none_or(|e| e != "toml" && e != "pbrt") {
             continue;
         }
-        let stem = scene.file_stem().unwrap().to_string_lossy().to_string();
+        let stem = scene.file_name().unwrap().to_string_lossy().replace('.', "_");
         if std::fs::read_to_string(&scene).unwrap().contains("$CAUSTICA_DATA") && !caustica::scene::data_dir().exists() {
             eprintln!("SKIPPED: {stem} needs the shared data folder ({} is missing)", caustica::scene::data_dir().display());
             continue;

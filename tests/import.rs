@@ -394,10 +394,6 @@ fn the_command_line_converts_and_fails_with_file_and_line() {
     let s = Scene::load(&out).unwrap();
     assert!(matches!(s.shapes[..], [Shape::Sphere { radius: 2.5, .. }]), "{:?}", s.shapes);
     let bad = write_scene("cli-bad", &[("scene.xml", &xml(&format!("{SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>")))]);
-    let pbrt = write_scene("pbrt", &[("scene.pbrt", "Camera \"perspective\"\n")]);
-    let o = caustica(&["render", pbrt.to_str().unwrap(), "-o", "/tmp/never.png"]);
-    assert_eq!(o.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("pbrt-v4 scenes are not supported yet"), "{}", String::from_utf8_lossy(&o.stderr));
     for args in [vec!["render", bad.to_str().unwrap(), "-o", "/tmp/never.png"], vec!["convert", bad.to_str().unwrap(), "-o", "/tmp/never.toml"], vec!["render", "-D", "x"]] {
         let o = caustica(&args);
         let stderr = String::from_utf8_lossy(&o.stderr);

@@ -197,29 +197,6 @@ fn point_spot_and_directional_lights_picked_uniformly_add_up() {
     assert_four_lights_add_up(LightSelection::Uniform, 5);
 }
 
-/// A diffuse floor (albedo 0.5) seen at one point through a 0.01 degree field of view, under
-/// `lights` (as bias.rs's floor): the pixel mean is albedo / pi x the irradiance at the origin.
-fn floor_point_scene(lights: &str, spp: u32, nee: bool) -> Scene {
-    parse(&format!(
-        r#"
-        camera = {{ position = [0.0, 1.0, 3.0], look_at = [0.0, 0.0, 0.0], fov = 0.01 }}
-        film = {{ width = 32, height = 32, spp = {spp} }}
-        integrator = {{ nee = {nee} }}
-        [materials.floor]
-        albedo = [0.5, 0.5, 0.5]
-        [materials.lamp]
-        albedo = [0.0, 0.0, 0.0]
-        emission = [4.0, 4.0, 4.0]
-        [[quads]]
-        origin = [-50.0, 0.0, 50.0]
-        edge_u = [100.0, 0.0, 0.0]
-        edge_v = [0.0, 0.0, -100.0]
-        material = "floor"
-        {lights}
-        "#
-    ))
-}
-
 /// Mean of the image against `expected` within 5 standard errors plus 0.02 %, the tolerance below
 /// `bias` (relative).
 fn assert_mean_is(image: &RgbImage, expected: f64, bias: f64, what: &str) {

@@ -2,11 +2,12 @@
 //! the general kernel: every checked-in scene (those of the shared data folder when present) and a
 //! scene that uses every feature. A feature wrongly detected as absent drops its code and changes
 //! the image (the mutations `features-*` of tests/mutations.toml remove each detection in turn).
+//! Likewise for the order the workgroups take the image's rows in (src/render/group_order.rs).
 
 mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
-use caustica::render::{AovSet, KernelChoice, Renderer, SceneFeatures};
+use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures};
 use caustica::scene::{Alpha, AlphaMode, Instance, Mesh, NormalMap, Scene, Texture};
 use common::{gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -14,7 +15,13 @@ use std::path::Path;
 
 /// The accumulated sums of `scene` (seed 3, its own spp), as bits, and the features its kernel had.
 fn sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice) -> (Vec<[u32; 4]>, SceneFeatures) {
+    sums_with(ctx, scene, choice, |_| {})
+}
+
+/// [`sums`] of a renderer that `configure` has set up.
+fn sums_with(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice, configure: impl FnOnce(&mut Renderer)) -> (Vec<[u32; 4]>, SceneFeatures) {
     let mut renderer = Renderer::with_kernel(ctx, scene, 3, AovSet::default(), choice).expect("scene uploads");
+    configure(&mut renderer);
     renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
     let bits = renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect();
     (bits, renderer.features)
@@ -132,4 +139,26 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     let (_lock, ctx) = gpu();
     let features = assert_specialized_kernel_agrees(&ctx, scene);
     assert_eq!(features, SceneFeatures::ALL, "the scene was meant to use every feature");
+}
+
+/// Dealing the rows of workgroups into stripes (the default on lavapipe) renders each pixel once,
+/// as in order: the same sums bit for bit. Each dispatch covers the whole image, 100 rows: 13 rows
+/// of workgroups in 3 stripes of unequal length, so a row mapping that is off renders some rows
+/// twice and others never (their sums change, or the host sees pixels missing).
+#[test]
+fn both_workgroup_orders_render_the_same_sums() {
+    let mut scene = Scene::default_scene();
+    (scene.film.width, scene.film.height, scene.film.spp) = (24, 100, 2);
+    let (_lock, ctx) = gpu();
+    let render = |order: GroupOrder| {
+        sums_with(&ctx, &scene, KernelChoice::ForScene, |r| {
+            r.set_group_order(order);
+            r.fix_samples_per_dispatch(1);
+        })
+        .0
+    };
+    let (in_order, interleaved) = (render(GroupOrder::InOrder), render(GroupOrder::Interleaved));
+    assert!(in_order.iter().all(|p| f32::from_bits(p[3]) == 2.0), "every pixel holds its 2 samples");
+    let differing = in_order.iter().zip(&interleaved).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{differing} of {} pixels differ between the workgroup orders", in_order.len());
 }

@@ -15,11 +15,19 @@ pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcom
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext};
 use crate::process_time::cpu_seconds;
-use crate::render::{AovSet, GeometryReport, KernelChoice, Renderer, SceneFeatures};
+use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures};
 use crate::scene::Scene;
 use anyhow::Result;
 use serde_json::{json, Value};
 use std::time::Instant;
+
+/// How the kernel measured is compiled and dispatched: the A/B switches of `caustica bench`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct KernelSetup {
+    pub choice: KernelChoice,
+    /// The order of the workgroups' rows; `None`: the device's own ([`GroupOrder::for_device`]).
+    pub group_order: Option<GroupOrder>,
+}
 
 /// One scene's throughput on one device. The timed samples follow one warm-up sample, whose
 /// first-dispatch costs (pipeline caches, page faults) are not throughput.
@@ -34,6 +42,8 @@ pub struct Measurement {
     pub kernel: KernelChoice,
     /// The scene features that kernel was compiled with.
     pub features: SceneFeatures,
+    /// The order its workgroups took the image's rows in.
+    pub group_order: GroupOrder,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
     pub setup_seconds: f64,
     /// Wall time of the timed dispatches, fences included.
@@ -55,13 +65,16 @@ pub struct Measurement {
     pub geometry: GeometryReport,
 }
 
-/// Renders `scene` at its film's size and sample count (seed 1) with the `kernel` chosen and times
-/// it.
-pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, kernel: KernelChoice) -> Result<Measurement> {
+/// Renders `scene` at its film's size and sample count (seed 1) with the kernel set up as `setup`
+/// says and times it.
+pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup) -> Result<Measurement> {
     let (width, height, spp) = (scene.film.width, scene.film.height, scene.film.spp);
-    let setup = Instant::now();
-    let mut renderer = Renderer::with_kernel(ctx, scene, 1, aovs, kernel)?;
-    let setup_seconds = setup.elapsed().as_secs_f64();
+    let setup_start = Instant::now();
+    let mut renderer = Renderer::with_kernel(ctx, scene, 1, aovs, setup.choice)?;
+    if let Some(order) = setup.group_order {
+        renderer.set_group_order(order);
+    }
+    let setup_seconds = setup_start.elapsed().as_secs_f64();
     renderer.render(1, |_| {})?;
     let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
     let (cpu0, gpu0) = (cpu_seconds(), renderer.gpu_seconds);
@@ -77,8 +90,9 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, kernel: KernelChoi
         height,
         spp,
         aovs,
-        kernel,
+        kernel: setup.choice,
         features: renderer.features,
+        group_order: renderer.group_order(),
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
@@ -121,6 +135,7 @@ impl Measurement {
                 KernelChoice::General => "general",
             },
             "kernel_features": self.features.names(),
+            "group_order": self.group_order.label(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,

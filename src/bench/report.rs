@@ -32,7 +32,7 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         KernelChoice::ForScene => "compiled for the scene",
         KernelChoice::General => "general (--general-kernel)",
     };
-    println!("kernel:       {kernel}: {}", m.features.names().join(", "));
+    println!("kernel:       {kernel}: {}; workgroup rows {}", m.features.names().join(", "), m.group_order.label());
     print_geometry(&m.geometry);
     println!("setup:        {:.3} s (load excluded: BVH, upload, kernel compile)", m.setup_seconds);
     let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));

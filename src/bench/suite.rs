@@ -7,7 +7,8 @@
 
 use super::{measure, Measurement};
 use crate::gpu::GpuContext;
-use crate::render::{AovSet, KernelChoice};
+use super::KernelSetup;
+use crate::render::AovSet;
 use crate::scene::{check_film, Scene, DEFAULT_SCENE_TOML};
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{Context as _, Result};
@@ -127,7 +128,7 @@ pub fn run_suite(
     entries: &[SuiteEntry],
     overrides: FilmOverrides,
     aovs: AovSet,
-    kernel: KernelChoice,
+    kernel: KernelSetup,
     load: impl Fn(&Path) -> Result<Scene>,
 ) -> SuiteOutcome {
     let mut outcome = SuiteOutcome::default();

@@ -249,6 +249,9 @@ glsl_block! {
         pub row_count: u32,
         /// The trip count of loop_limit_intact()'s check loop (LOOP_CHECK_ITERATIONS).
         pub loop_check_iterations: u32,
+        /// Stripes the band's rows of workgroups are dealt into (pathtrace.comp's
+        /// `group_row_of`): 1 takes them in order; see [`crate::render::GroupOrder`].
+        pub group_row_stripes: u32,
     }
 }
 
@@ -385,7 +388,7 @@ mod tests {
 
     #[test]
     fn pass_params_fit_the_push_constant_minimum() {
-        assert_eq!(size_of::<PassParams>(), 20);
+        assert_eq!(size_of::<PassParams>(), 24);
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 

@@ -8,6 +8,7 @@ mod chunks;
 mod env_sampling;
 mod features;
 mod glsl_block;
+mod group_order;
 mod kernel;
 pub mod layout;
 mod light_selection;
@@ -24,6 +25,7 @@ pub use aov::{AovSet, AovSums};
 pub use renderer::{frame_params, mean_image, GeometryReport, KernelChoice, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};
 pub use scene_data::SceneData;
 pub use features::SceneFeatures;
+pub use group_order::GroupOrder;
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling
 /// make their distributions proportional to (lights.glsl evaluates the same weights in the kernel).

@@ -12,6 +12,7 @@ use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FI
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::features::SceneFeatures;
+use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use crate::image::RgbImage;
@@ -81,6 +82,8 @@ pub struct Renderer<'a> {
     hashed_bytes: Vec<Option<u64>>,
     /// The pass whose bands [`Self::render_step`] is dispatching, between calls.
     pass_in_progress: Option<PassInProgress>,
+    /// Order of the workgroups' rows (the device's unless [`Self::set_group_order`]).
+    group_order: GroupOrder,
 }
 
 /// A pass cut into bands and dispatched a band per [`Renderer::render_step`]: rows before
@@ -380,7 +383,7 @@ impl<'a> Renderer<'a> {
             lights: data.lights.len(),
             gpu_bytes: data.gpu_bytes(),
             split_arrays,
-        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0, dispatch_target_s: DISPATCH_TARGET_S, params, hashed_bytes, pass_in_progress: None })
+        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0, dispatch_target_s: DISPATCH_TARGET_S, params, hashed_bytes, pass_in_progress: None, group_order: GroupOrder::for_device(ctx.info.kind) })
     }
 
     /// Dispatches `samples` samples per pixel over the whole image at a time (at least 1; fewer
@@ -389,6 +392,17 @@ impl<'a> Renderer<'a> {
     /// agree bit for bit.
     pub fn fix_samples_per_dispatch(&mut self, samples: u32) {
         self.fixed_samples_per_dispatch = Some(samples.max(1));
+    }
+
+    /// Takes the workgroups' rows in `order` instead of the device's choice (the image is the same
+    /// bit for bit; `caustica bench --group-order` measures what it changes).
+    pub fn set_group_order(&mut self, order: GroupOrder) {
+        self.group_order = order;
+    }
+
+    /// The order the workgroups' rows are taken in.
+    pub fn group_order(&self) -> GroupOrder {
+        self.group_order
     }
 
     /// Sizes dispatches as if the device had no loop limit, so that the limit cuts them short and
@@ -680,7 +694,7 @@ impl<'a> Renderer<'a> {
         self.buffer_mut(KernelBuffer::Stats).expect("every kernel binds the statistics").write(bytemuck::bytes_of(&CLEARED_STATS))?;
         let kernel = self.kernel.as_ref().expect("kernel lives until drop");
         let groups = [self.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1];
-        let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS };
+        let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS, group_row_stripes: self.group_order.stripes(groups[1]) };
         let start = Instant::now();
         let device_seconds = kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?;
         let elapsed = start.elapsed().as_secs_f64();

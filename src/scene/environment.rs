@@ -1,11 +1,13 @@
-//! Environment lighting: a constant sky or an HDR map (Debevec angular light probe, or lat-long).
+//! Environment lighting: a constant sky or an HDR map (Debevec angular light probe, or lat-long,
+//! or pbrt-v4's equal-area octahedral map resampled to lat-long).
 //! The direction conventions are those of shaders/environment.glsl: +y up, -z forward.
 
-use super::format::EnvironmentFile;
+use super::equal_area_map;
+use super::format::{Array, EnvironmentFile};
 use crate::image::{self, RgbImage};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
-use glam::{Vec2, Vec3};
+use glam::{DMat3, Vec2, Vec3};
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,11 +35,23 @@ pub enum Environment {
 }
 
 pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) -> Result<Environment> {
-    let maps = [(e.probe.as_ref(), MapProjection::Angular), (e.latlong.as_ref(), MapProjection::LatLong)];
+    // An equal-area map is resampled to a lat-long one once read.
+    let maps = [(e.probe.as_ref(), MapProjection::Angular), (e.latlong.as_ref(), MapProjection::LatLong), (e.octahedral.as_ref(), MapProjection::LatLong)];
     let given: Vec<_> = maps.iter().filter_map(|(f, p)| f.map(|f| (f, *p))).collect();
     if given.len() + usize::from(e.color.is_some()) > 1 {
-        bail!("environment: give only one of color, probe and latlong");
+        bail!("environment: give only one of color, probe, latlong and octahedral");
     }
+    let axes = match (e.axes, &e.octahedral) {
+        (Some(_), None) => bail!("environment.axes go with an octahedral map"),
+        (None, _) => DMat3::IDENTITY,
+        (Some(Array(axes)), Some(_)) => {
+            let m = DMat3::from_cols_array_2d(&axes.map(|a| a.0.map(f64::from)));
+            if !(m.is_finite() && (m.transpose() * m).abs_diff_eq(DMat3::IDENTITY, 1e-4)) {
+                bail!("environment.axes must be orthonormal (a rotation, possibly with a mirror), got {axes:?}");
+            }
+            m
+        }
+    };
     if !(e.intensity.is_finite() && e.intensity >= 0.0) {
         bail!("environment.intensity must be finite and >= 0, got {}", e.intensity);
     }
@@ -58,11 +72,16 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) ->
     if image.pixels.iter().flatten().any(|&c| c < 0.0) {
         bail!("{name}: the environment map has negative radiance");
     }
-    if projection == MapProjection::Angular {
+    if projection == MapProjection::Angular || e.octahedral.is_some() {
         if image.width != image.height {
-            bail!("{name}: an angular light probe must be square, got {} x {}", image.width, image.height);
+            bail!("{name}: an angular light probe or an equal-area octahedral map must be square, got {} x {}", image.width, image.height);
         }
+    }
+    if projection == MapProjection::Angular {
         fill_outside_disk(&mut image);
+    }
+    if e.octahedral.is_some() {
+        image = equal_area_map::to_latlong(&image, axes);
     }
     Ok(Environment::Map(EnvironmentMap { projection, image, intensity: e.intensity, rotation_deg: e.rotation }))
 }

@@ -342,6 +342,12 @@ pub struct EnvironmentFile {
     pub probe: Option<String>,
     /// Equirectangular (lat-long) map, PFM or EXR.
     pub latlong: Option<String>,
+    /// pbrt-v4's equal-area octahedral map (square PFM or EXR), resampled to a lat-long map on
+    /// load (`scene::equal_area_map`).
+    pub octahedral: Option<String>,
+    /// With `octahedral`: the world directions of the map's x, y and z axes, orthonormal
+    /// (absent: the world's own axes).
+    pub axes: Option<Array<Triple, 3>>,
     #[serde(default = "one")]
     pub intensity: f32,
     /// Degrees about +y.

@@ -3,6 +3,7 @@
 mod asset;
 mod camera_toml;
 mod environment;
+mod equal_area_map;
 mod format;
 pub mod import;
 mod light;
@@ -227,12 +228,9 @@ impl Scene {
         Scene::load_with(files, path, &[])
     }
 
-    /// As [`Scene::load_from`], reading Mitsuba 3 XML too (`import`), with `defines` setting its
+    /// As [`Scene::load_from`], reading Mitsuba 3 XML and pbrt-v4 too (`import`), with `defines` setting Mitsuba's
     /// `<default>` parameters (`-D name=value`); the import's warnings go to stderr.
     pub fn load_with(files: &InputFiles, path: &Path, defines: &[(String, String)]) -> Result<Scene> {
-        if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("pbrt")) {
-            bail!("{}: pbrt-v4 scenes are not supported yet (Mitsuba 3 .xml scenes are)", path.display());
-        }
         if import::is_foreign_scene(path) {
             let imported = import::import(files, path, defines)?;
             for warning in &imported.warnings {

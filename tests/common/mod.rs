@@ -93,6 +93,32 @@ pub fn parse(toml: &str) -> Scene {
     Scene::parse(toml, "test scene", Path::new(".")).expect("valid test scene")
 }
 
+/// A diffuse floor (albedo 0.5, y = 0) under `lights` and a black sky, seen at the origin through
+/// a 0.01 degree field of view, so that every pixel sees the same point and the answer is one
+/// number. Nothing but the floor can receive light, and the material `lamp` it offers (emission
+/// 4, albedo 0) reflects none: the pixel is the direct light alone (next-event estimation, if
+/// `nee`, plus emitters hit by BSDF sampling, MIS weighted), albedo / pi x the irradiance.
+pub fn floor_point_scene(lights: &str, spp: u32, nee: bool) -> Scene {
+    parse(&format!(
+        r#"
+        camera = {{ position = [0.0, 1.0, 3.0], look_at = [0.0, 0.0, 0.0], fov = 0.01 }}
+        film = {{ width = 32, height = 32, spp = {spp} }}
+        integrator = {{ nee = {nee} }}
+        [materials.floor]
+        albedo = [0.5, 0.5, 0.5]
+        [materials.lamp]
+        albedo = [0.0, 0.0, 0.0]
+        emission = [4.0, 4.0, 4.0]
+        [[quads]]
+        origin = [-50.0, 0.0, 50.0]
+        edge_u = [100.0, 0.0, 0.0]
+        edge_v = [0.0, 0.0, -100.0]
+        material = "floor"
+        {lights}
+        "#
+    ))
+}
+
 pub fn luminance(p: [f32; 3]) -> f64 {
     (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64
 }

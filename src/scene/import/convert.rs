@@ -45,8 +45,10 @@ fn absolute_paths(value: &mut toml::Value, base: &Path) {
             }
         }
     }
-    if let Some(toml::Value::String(s)) = value.get_mut("environment").and_then(|e| e.get_mut("latlong")) {
-        absolute(s);
+    for key in ["latlong", "octahedral"] {
+        if let Some(toml::Value::String(s)) = value.get_mut("environment").and_then(|e| e.get_mut(key)) {
+            absolute(s);
+        }
     }
 }
 

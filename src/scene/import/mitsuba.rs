@@ -5,21 +5,17 @@
 
 use super::super::format::{
     Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler, SceneFile,
-    SphereFile, SpotLightFile, TriangleFile, Triple,
+    SphereFile, SpotLightFile, TriangleFile,
 };
 use super::mitsuba_xml::{self, Object, Resolver};
+use super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
 use super::{transform, Location, Notes};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec3};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
-
-/// caustica's cap on the path length (`integrator.max_bounces`' default), for Mitsuba's
-/// unbounded `max_depth = -1`: roulette survival is at most 0.95 a vertex, so a path reaches it
-/// with probability below 1e-22.
-const UNBOUNDED_DEPTH: u32 = 1024;
 
 /// Sides of the polygon a `disk` becomes.
 const DISK_SEGMENTS: usize = 64;
@@ -73,10 +69,6 @@ struct Mapper<'a> {
     /// (BSDF, area emitter) objects, by address, to the material made of them.
     material_names: HashMap<(usize, usize), String>,
     file: Option<SceneFile>,
-}
-
-fn f32x3(v: DVec3) -> Triple {
-    Array(v.as_vec3().to_array())
 }
 
 fn point(m: DMat4, p: DVec3) -> DVec3 {
@@ -363,10 +355,7 @@ impl Mapper<'_> {
                 // Texture coordinates only matter to textures, which are not imported.
                 s.boolean("flip_tex_coords", true)?;
                 let path = self.resolver.resolve(&name, Path::new(&*s.at.file));
-                let file = match path.strip_prefix(&self.base) {
-                    Ok(relative) => relative.display().to_string(),
-                    Err(_) => path.display().to_string(),
-                };
+                let file = relative_to(&path, &self.base);
                 let placement = transform::placement(m).map_err(|e| s.error(e))?;
                 self.out().meshes.push(MeshFile {
                     file,
@@ -452,9 +441,7 @@ impl Mapper<'_> {
             e.check_all_used()?;
             name = format!("{name} + {}", object_name(e));
         }
-        while self.materials.contains_key(&name) {
-            name.push('\'');
-        }
+        let name = unique_name(&self.materials, name);
         self.materials.insert(name.clone(), material);
         self.material_names.insert(key, name.clone());
         Ok(name)
@@ -607,21 +594,18 @@ impl Mapper<'_> {
                     return Err(e.error("a constant emitter has no to_world"));
                 }
                 let color = f32x3(self.color(e, "radiance", 1.0)?);
-                self.environment(e, EnvironmentFile { color: Some(color), probe: None, latlong: None, intensity: 1.0, rotation: 0.0 })?;
+                self.environment(e, EnvironmentFile { color: Some(color), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 })?;
                 None
             }
             "envmap" => {
                 let Some(name) = e.string("filename")?.map(str::to_owned) else { return Err(e.error("needs a filename")) };
                 let path = self.resolver.resolve(&name, Path::new(&*e.at.file));
-                let latlong = match path.strip_prefix(&self.base) {
-                    Ok(relative) => relative.display().to_string(),
-                    Err(_) => path.display().to_string(),
-                };
+                let latlong = relative_to(&path, &self.base);
                 let rotation = y_rotation_degrees(m.unwrap_or(DMat4::IDENTITY)).ok_or_else(|| e.error("only a to_world that rotates about +y is supported for an envmap"))?;
                 let scale = e.float("scale", 1.0)?;
                 // Mitsuba's u = 0 column looks down -z, caustica's centre column does: half a turn.
                 let rotation = ((rotation + 180.0) % 360.0) as f32;
-                self.environment(e, EnvironmentFile { color: None, probe: None, latlong: Some(latlong), intensity: scale as f32, rotation })?;
+                self.environment(e, EnvironmentFile { color: None, probe: None, latlong: Some(latlong), octahedral: None, axes: None, intensity: scale as f32, rotation })?;
                 None
             }
             _ => return Err(e.error("this emitter is not supported (area, point, spot, directional, constant, envmap)")),
@@ -662,15 +646,6 @@ fn relative_ior(b: &Object, interior_default: &str) -> Result<f32> {
         return Err(b.error("int_ior and ext_ior must be > 0"));
     }
     Ok((interior / exterior) as f32)
-}
-
-/// The scale of a similarity transform (rotation, uniform scale, translation), else None.
-fn uniform_scale(m: DMat4) -> Option<f64> {
-    let axes = [m.x_axis, m.y_axis, m.z_axis].map(|a: DVec4| a.truncate());
-    let s = axes[0].length();
-    let even = axes.iter().all(|a| (a.length() - s).abs() <= 1e-6 * s);
-    let orthogonal = axes[0].dot(axes[1]).abs() + axes[1].dot(axes[2]).abs() + axes[0].dot(axes[2]).abs() <= 1e-6 * s * s;
-    (s > 0.0 && even && orthogonal).then_some(s)
 }
 
 /// The angle (degrees) of a rotation about +y, else None.

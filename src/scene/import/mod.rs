@@ -1,5 +1,5 @@
 //! Scenes written for other renderers: Mitsuba 3 XML (`mitsuba_xml` reads the document,
-//! `mitsuba` maps it), onto caustica's own scene file model, so that a rendered import and the
+//! `mitsuba` maps it) and pbrt-v4 (`pbrt`), onto caustica's own scene file model, so that a rendered import and the
 //! TOML `caustica convert` writes from it are the same scene by construction (`convert`).
 //!
 //! Faithful where caustica's model allows and loud where it does not: an element or parameter
@@ -9,13 +9,15 @@
 mod convert;
 mod mitsuba;
 mod mitsuba_xml;
+mod pbrt;
+mod scene_parts;
 mod spectrum;
 mod transform;
 
 use super::format::SceneFile;
 use super::{build, Scene};
 use crate::input_file::InputFiles;
-use anyhow::{Context as _, Result};
+use anyhow::{bail, Context as _, Result};
 use std::collections::BTreeSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -36,7 +38,7 @@ impl fmt::Display for Location {
 
 /// Is `path` a scene of another renderer that [`import`] reads?
 pub fn is_foreign_scene(path: &Path) -> bool {
-    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("xml") || e.eq_ignore_ascii_case("pbrt"))
 }
 
 /// A foreign scene in caustica's model, with the approximations made on the way.
@@ -62,10 +64,16 @@ impl Imported {
     }
 }
 
-/// Reads a foreign scene (see [`is_foreign_scene`]); `defines` are `-D name=value` parameters.
+/// Reads a foreign scene (see [`is_foreign_scene`]); `defines` are `-D name=value` parameters
+/// (Mitsuba's `<default>`s; pbrt has none).
 pub fn import(files: &InputFiles, path: &Path, defines: &[(String, String)]) -> Result<Imported> {
     let mut notes = Notes::default();
-    let (file, base) = mitsuba::import(files, path, defines, &mut notes)?;
+    let pbrt = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("pbrt"));
+    let (file, base) = match (pbrt, defines.first()) {
+        (true, Some((name, _))) => bail!("-D {name}=...: parameters are for Mitsuba XML scenes, not {}", path.display()),
+        (true, None) => pbrt::import(files, path, &mut notes)?,
+        (false, _) => mitsuba::import(files, path, defines, &mut notes)?,
+    };
     Ok(Imported { file, base, name: path.display().to_string(), warnings: notes.warnings })
 }
 

@@ -1,4 +1,4 @@
-//! Spectra given as wavelength:value pairs, reduced to the linear sRGB triple caustica renders
+//! Spectra given as wavelength:value pairs (and black bodies), reduced to the linear sRGB triple caustica renders
 //! with, as Mitsuba 3's RGB modes do: the spectrum (linear between its samples, zero outside
 //! them) is integrated against the CIE 1931 colour matching functions, normalised by the integral
 //! of y-bar (so that a constant spectrum of 1 has Y = 1, an equal-energy white), and converted from
@@ -48,6 +48,25 @@ pub fn to_rgb(samples: &[(f64, f64)]) -> DVec3 {
     xyz_to_linear_srgb(xyz / y_integral)
 }
 
+/// Relative luminance (Y) of a linear sRGB colour.
+pub fn luminance(c: DVec3) -> f64 {
+    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+}
+
+/// Linear sRGB of a black body at `kelvin`, scaled to luminance 1: pbrt-v4 normalises an
+/// emitter's spectrum to unit luminance before its `scale`, so only the colour is left.
+pub fn blackbody_rgb(kelvin: f64) -> DVec3 {
+    // Planck's law with the constants in SI units; wavelengths in nm.
+    let (h, c, k) = (6.62606957e-34, 299792458.0, 1.3806488e-23);
+    let planck = |nm: f64| {
+        let l = nm * 1e-9;
+        2.0 * h * c * c / (l.powi(5) * ((h * c / (l * k * kelvin)).exp() - 1.0))
+    };
+    let samples: Vec<(f64, f64)> = (360..=830).map(|nm| (nm as f64, planck(nm as f64))).collect();
+    let rgb = to_rgb(&samples);
+    rgb / luminance(rgb)
+}
+
 fn xyz_to_linear_srgb(c: DVec3) -> DVec3 {
     DVec3::new(
         3.240479 * c.x - 1.537150 * c.y - 0.498535 * c.z,
@@ -86,8 +105,21 @@ mod tests {
     #[test]
     fn an_equal_energy_spectrum_has_unit_luminance() {
         let flat = to_rgb(&[(LAMBDA_MIN, 1.0), (LAMBDA_MAX, 1.0)]);
-        let y = 0.212671 * flat.x + 0.715160 * flat.y + 0.072169 * flat.z;
-        assert!((y - 1.0).abs() < 1e-3, "{flat:?}");
+        assert!((luminance(flat) - 1.0).abs() < 1e-3, "{flat:?}");
         assert_eq!(to_rgb(&[(400.0, 0.0), (700.0, 0.0)]), DVec3::ZERO);
+    }
+}
+
+#[cfg(test)]
+mod blackbody_tests {
+    use super::*;
+
+    #[test]
+    fn a_cool_black_body_is_red_a_hot_one_blue_and_6500k_near_white() {
+        let (cool, white, hot) = (blackbody_rgb(2700.0), blackbody_rgb(6500.0), blackbody_rgb(12000.0));
+        assert!(cool.x > cool.y && cool.y > cool.z, "{cool:?}");
+        assert!(hot.z > hot.x, "{hot:?}");
+        assert!((white - DVec3::ONE).abs().max_element() < 0.1, "{white:?}");
+        assert!((luminance(cool) - 1.0).abs() < 1e-9);
     }
 }

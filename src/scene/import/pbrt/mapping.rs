@@ -1,0 +1,607 @@
+//! A pbrt-v4 [`Model`] onto caustica's scene file: camera, film, sampler, integrator, filter,
+//! shapes (with their instances), lights and, through `materials.rs`, materials. Each directive
+//! reads the parameters it understands with pbrt's defaults and refuses the rest
+//! (`Directive::check_all_used`). The README's "pbrt-v4" section documents each mapping.
+//!
+//! Handedness: pbrt's camera puts camera +x on the image's right with +y up and +z forward, so a
+//! `LookAt` shows the world the other way round from caustica's right-handed camera (whose image
+//! right is forward x up). caustica therefore reads pbrt's world through a mirror across x = 0
+//! ([`Mapper::world`]): the mirrored world seen by caustica's camera is pbrt's image exactly. A
+//! camera transformation that mirrors already (`Scale -1 1 1`, common in exported scenes) needs
+//! no mirror. The mirror turns every winding, which the shapes undo, so fronts stay where pbrt
+//! has them.
+
+use crate::scene::format::{
+    Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
+    SceneFile, SphereFile, SpotLightFile, TriangleFile,
+};
+use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
+use super::super::{spectrum, transform, Location, Notes};
+use super::params::Directive;
+use super::parser::{MaterialRef, Model, ShapeUse};
+use crate::input_file::InputFiles;
+use anyhow::{bail, Result};
+use glam::{DMat4, DVec3, Vec3};
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+use std::rc::Rc;
+
+/// The most shapes the scene file may get (spheres, quads, triangles, mesh placements), and the
+/// most bytes their entries may take with their material names: a small file that instances a
+/// large object many times over could otherwise ask for any amount of memory.
+const MAX_SHAPES: usize = 4_000_000;
+const MAX_SHAPE_BYTES: usize = 1 << 30;
+
+/// A mesh written in the scene: vertices, polygon corners (indices into them) and normals.
+struct MeshArrays {
+    positions: Vec<DVec3>,
+    indices: Vec<usize>,
+    normals: Option<Vec<DVec3>>,
+}
+
+pub struct Mapper<'a> {
+    pub(super) model: &'a Model,
+    notes: &'a mut Notes,
+    files: &'a InputFiles,
+    /// The main scene's folder: pbrt resolves every relative file name against it.
+    base: &'a Path,
+    out: SceneFile,
+    /// caustica's world from pbrt's: the mirror across x = 0, or the identity (module docs).
+    world: DMat4,
+    /// (material, area light) by address, to the caustica material made of them (None: an
+    /// `interface` without emission, which is no surface).
+    material_names: HashMap<(usize, usize), Option<String>>,
+    /// Shapes written so far, and an estimate of their bytes (for MAX_SHAPES, MAX_SHAPE_BYTES).
+    shapes: usize,
+    shape_bytes: usize,
+}
+
+/// The scene file of `model`, read from `scene` (for messages).
+pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: &mut Notes) -> Result<SceneFile> {
+    let out = SceneFile {
+        camera: CameraFile { position: Array([0.0; 3]), look_at: Array([0.0, 0.0, -1.0]), up: Array([0.0, 1.0, 0.0]), fov: 90.0, aperture: 0.0, focus_distance: None },
+        film: FilmFile::default(),
+        integrator: IntegratorFile::default(),
+        materials: BTreeMap::new(),
+        spheres: vec![],
+        quads: vec![],
+        triangles: vec![],
+        meshes: vec![],
+        environment: None,
+        lights: vec![],
+    };
+    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
+    let start = Location { file: Rc::from(scene.display().to_string().as_str()), line: 1 };
+    let absent = |directive: &'static str, kind: &str| Directive { directive, kind: kind.to_owned(), at: start.clone(), params: vec![] };
+    let film = mapper.film(model.film.as_ref().unwrap_or(&absent("Film", "rgb")))?;
+    let (camera_directive, camera_from_world) = match &model.camera {
+        Some(c) => (&c.camera, c.camera_from_world),
+        None => (&absent("Camera", "perspective"), DMat4::IDENTITY),
+    };
+    mapper.out.camera = mapper.camera(camera_directive, camera_from_world, film.width as f64 / film.height as f64)?;
+    mapper.out.film = film;
+    mapper.out.film.filter = mapper.filter(model.filter.as_ref().unwrap_or(&absent("PixelFilter", "gaussian")))?;
+    let (spp, sampler) = mapper.sampler(model.sampler.as_ref().unwrap_or(&absent("Sampler", "zsobol")))?;
+    mapper.out.film.spp = spp;
+    mapper.out.integrator = mapper.integrator(model.integrator.as_ref().unwrap_or(&absent("Integrator", "volpath")))?;
+    mapper.out.integrator.sampler = sampler;
+    for s in &model.shapes {
+        mapper.shape(s, DMat4::IDENTITY)?;
+    }
+    for instance in &model.instances {
+        let Some((shapes, _)) = model.objects.get(&instance.name) else { bail!("{}: ObjectInstance \"{}\": no object of that name (ObjectBegin)", instance.at, instance.name) };
+        for s in shapes {
+            mapper.shape(s, instance.transform)?;
+        }
+    }
+    for (light, transform) in &model.lights {
+        mapper.light(light, *transform)?;
+    }
+    Ok(mapper.out)
+}
+
+impl Mapper<'_> {
+    pub(super) fn warn(&mut self, kind: &'static str, message: impl FnOnce() -> String) {
+        self.notes.warn_once(kind, message);
+    }
+
+    /// The camera, and with it the mirror caustica reads pbrt's world through.
+    fn camera(&mut self, d: &Directive, camera_from_world: DMat4, aspect: f64) -> Result<CameraFile> {
+        if d.kind != "perspective" {
+            return Err(d.error("only the perspective camera is supported"));
+        }
+        let world_from_camera = camera_from_world.inverse();
+        let eye = world_from_camera.transform_point3(DVec3::ZERO);
+        let [right, up, forward] = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| world_from_camera.transform_vector3(a));
+        let size = forward.length();
+        let rigid = [right, up].iter().all(|a| (a.length() - size).abs() <= 1e-6 * size)
+            && (right.dot(up).abs() + up.dot(forward).abs() + right.dot(forward).abs()) <= 1e-6 * size * size
+            && size > 0.0;
+        if !rigid {
+            return Err(d.error("the camera transformation shears or scales unevenly; caustica's camera cannot follow"));
+        }
+        // pbrt's image right is camera +x; caustica's is forward x up. In the usual left-handed
+        // frame (a LookAt) forward x up is -right, and a mirror of the world turns it round.
+        self.world = if forward.cross(up).dot(right) < 0.0 { DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)) } else { DMat4::IDENTITY };
+        let (forward, up) = (self.world.transform_vector3(forward / size), self.world.transform_vector3(up / size));
+        let position = self.world.transform_point3(eye);
+
+        let fov = d.float_or("fov", 90.0)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(d.error(format!("fov must be in (0, 180) degrees, got {fov}")));
+        }
+        if let Some(frame) = d.float("frameaspectratio")? {
+            if (frame - aspect).abs() > 1e-6 * aspect {
+                return Err(d.error(format!("a frameaspectratio ({frame}) other than the film's ({aspect}) stretches the image, which caustica's camera cannot")));
+            }
+        }
+        // pbrt's screen window spans [-1, 1] along the shorter image axis, which fov covers.
+        let default_half_height = if aspect >= 1.0 { 1.0 } else { 1.0 / aspect };
+        let half_height = match d.floats("screenwindow")? {
+            None => default_half_height,
+            Some(&[x0, x1, y0, y1]) if x0 == -x1 && y0 == -y1 && y1 > 0.0 && (x1 / y1 - aspect).abs() <= 1e-6 * aspect => y1,
+            Some(_) => return Err(d.error("only a screenwindow centred on the view and of the film's aspect ratio is supported (caustica's camera is centred)")),
+        };
+        let vertical = 2.0 * ((0.5 * fov.to_radians()).tan() * half_height).atan().to_degrees();
+        if vertical >= 180.0 {
+            return Err(d.error("the screenwindow widens the view to 180 degrees or more"));
+        }
+        let aperture = d.float_or("lensradius", 0.0)?;
+        let focus = d.float_or("focaldistance", 1e6)?;
+        if aperture < 0.0 || focus <= 0.0 {
+            return Err(d.error(format!("lensradius must be >= 0 and focaldistance > 0, got {aperture} and {focus}")));
+        }
+        // The shutter only matters to animated transformations, which are refused.
+        d.float("shutteropen")?;
+        d.float("shutterclose")?;
+        d.check_all_used()?;
+        Ok(CameraFile {
+            position: f32x3(position),
+            look_at: f32x3(position + forward),
+            up: f32x3(up),
+            fov: vertical as f32,
+            aperture: aperture as f32,
+            focus_distance: (aperture > 0.0).then_some(focus as f32),
+        })
+    }
+
+    fn film(&mut self, d: &Directive) -> Result<FilmFile> {
+        if d.kind != "rgb" {
+            return Err(d.error("only the rgb film is supported"));
+        }
+        let size = |name: &str, default: i64| -> Result<u32> {
+            let v = d.integer(name)?.unwrap_or(default);
+            u32::try_from(v).ok().filter(|v| (1..=16384).contains(v)).ok_or_else(|| d.error(format!("{name} must be in [1, 16384], got {v}")))
+        };
+        let (width, height) = (size("xresolution", 1280)?, size("yresolution", 720)?);
+        // Where and how pbrt writes its image: caustica writes what -o says.
+        d.string("filename")?;
+        d.boolean("savefp16", true)?;
+        // The film's physical size, which only pbrt's realistic camera uses.
+        d.float("diagonal")?;
+        // The sensor's response: only pbrt's default (the CIE 1931 observer, ISO 100, a unit
+        // exposure, no white balance) leaves the colours as caustica renders them.
+        if d.string("sensor")?.is_some_and(|s| s != "cie1931") || d.float_or("iso", 100.0)? != 100.0 || d.float_or("exposuretime", 1.0)? != 1.0 || d.float_or("whitebalance", 0.0)? != 0.0 {
+            return Err(d.error("only the default sensor (cie1931, iso 100, exposuretime 1, whitebalance 0) is supported"));
+        }
+        if let Some(clamp) = d.float("maxcomponentvalue")? {
+            // pbrt scales a sample down so its largest component is at most this, as caustica's
+            // integrator.clamp does.
+            if !(clamp > 0.0) {
+                return Err(d.error(format!("maxcomponentvalue must be > 0, got {clamp}")));
+            }
+            self.out.integrator.clamp = Some(clamp as f32);
+        }
+        d.check_all_used()?;
+        Ok(FilmFile { width, height, spp: 16, filter: Filter::Gaussian })
+    }
+
+    fn filter(&mut self, d: &Directive) -> Result<Filter> {
+        let radii = |default: f64| -> Result<(f64, f64)> { Ok((d.float_or("xradius", default)?, d.float_or("yradius", default)?)) };
+        let filter = match d.kind.as_str() {
+            "box" if radii(0.5)? == (0.5, 0.5) => Filter::Box,
+            "triangle" if radii(2.0)? == (1.0, 1.0) => Filter::Tent,
+            "gaussian" if radii(1.5)? == (1.5, 1.5) && d.float_or("sigma", 0.5)? == 0.5 => {
+                self.warn("filter", || format!("{}: {}: pbrt's Gaussian (sigma 0.5, cut at 1.5 pixels and lowered to 0 there) becomes caustica's uncut Gaussian of sigma 0.5", d.at, d.describe()));
+                Filter::Gaussian
+            }
+            "box" | "triangle" | "gaussian" => return Err(d.error("only box of radius 0.5, triangle of radius 1 and gaussian of radius 1.5 and sigma 0.5 are supported")),
+            _ => return Err(d.error("this filter is not supported (box, triangle, gaussian)")),
+        };
+        d.check_all_used()?;
+        Ok(filter)
+    }
+
+    fn sampler(&mut self, d: &Directive) -> Result<(u32, Sampler)> {
+        let (spp, sampler) = match d.kind.as_str() {
+            "independent" => (d.integer("pixelsamples")?.unwrap_or(16), Sampler::Independent),
+            "stratified" => {
+                d.boolean("jitter", true)?;
+                (d.integer("xsamples")?.unwrap_or(4).saturating_mul(d.integer("ysamples")?.unwrap_or(4)), Sampler::Sobol)
+            }
+            "zsobol" | "sobol" | "paddedsobol" | "halton" | "pmj02bn" => {
+                d.string("randomization")?;
+                (d.integer("pixelsamples")?.unwrap_or(16), Sampler::Sobol)
+            }
+            _ => return Err(d.error("this sampler is not supported")),
+        };
+        if sampler == Sampler::Sobol {
+            self.warn("sampler", || format!("{}: {}: pbrt's samplers other than independent become caustica's Owen-scrambled Sobol (the same image, other noise)", d.at, d.describe()));
+        }
+        if d.integer("seed")?.is_some() {
+            self.warn("seed", || format!("{}: the sampler's seed is ignored: caustica takes it from --seed", d.at));
+        }
+        d.check_all_used()?;
+        let spp = u32::try_from(spp).ok().filter(|&n| n >= 1).ok_or_else(|| d.error(format!("the sample count must be at least 1, got {spp}")))?;
+        Ok((spp, sampler))
+    }
+
+    /// pbrt's `maxdepth` counts bounces: 0 shows the emitters seen directly, 1 adds direct
+    /// light. caustica's `max_bounces` counts path segments, the camera ray included, so it is
+    /// maxdepth + 1; a negative maxdepth never ends a path (caustica's cap). pbrt first plays
+    /// roulette after the first bounce, caustica's `rr_start` 1 (the noise differs, not the
+    /// expected image).
+    fn integrator(&mut self, d: &Directive) -> Result<IntegratorFile> {
+        if !matches!(d.kind.as_str(), "path" | "volpath") {
+            return Err(d.error("only the path and volpath integrators are supported"));
+        }
+        let depth = d.integer("maxdepth")?.unwrap_or(5);
+        let max_bounces = if depth < 0 { UNBOUNDED_DEPTH } else { u32::try_from(depth + 1).unwrap_or(u32::MAX).min(UNBOUNDED_DEPTH) };
+        let light_selection = match d.string("lightsampler")?.unwrap_or("bvh") {
+            "bvh" | "power" => LightSelection::Power,
+            "uniform" => LightSelection::Uniform,
+            other => return Err(d.error(format!("lightsampler \"{other}\" is not supported (bvh, power, uniform)"))),
+        };
+        if d.boolean("regularize", false)? {
+            return Err(d.error("regularize is not supported"));
+        }
+        d.check_all_used()?;
+        Ok(IntegratorFile { max_bounces, rr_start: 1, light_selection, clamp: self.out.integrator.clamp, ..IntegratorFile::default() })
+    }
+
+    /// The caustica material of a shape's material and area light, made once per pair; None
+    /// for an `interface` that emits nothing.
+    fn shape_material(&mut self, s: &ShapeUse) -> Result<Option<String>> {
+        let short = |at: &Location| format!("{}:{}", Path::new(&*at.file).file_name().map_or(String::new(), |f| f.to_string_lossy().into_owned()), at.line);
+        let (def, label) = match &s.material {
+            MaterialRef::Default => (None, "default diffuse".to_owned()),
+            MaterialRef::Anonymous(def) => (Some(def.clone()), format!("{} at {}", def.ty, short(&def.directive.at))),
+            MaterialRef::Named(name, at) => match self.model.named_materials.get(name) {
+                Some(def) => (Some(def.clone()), name.clone()),
+                None => bail!("{at}: NamedMaterial \"{name}\": no material of that name (MakeNamedMaterial)"),
+            },
+        };
+        let key = (def.as_ref().map_or(0, |d| Rc::as_ptr(d) as usize), s.area_light.as_ref().map_or(0, |l| Rc::as_ptr(l) as usize));
+        if let Some(name) = self.material_names.get(&key) {
+            return Ok(name.clone());
+        }
+        let material = match &def {
+            None => Some(MaterialFile { albedo: Array([0.5; 3]), ..MaterialFile::default() }),
+            Some(def) => self.material(def)?,
+        };
+        let mut material = match (material, &s.area_light) {
+            (Some(m), _) => m,
+            (None, None) => {
+                self.material_names.insert(key, None);
+                return Ok(None);
+            }
+            // An emitting interface: light passes through unchanged (index 1), as through no surface.
+            (None, Some(_)) => MaterialFile { transparency: 1.0, ior: 1.0, ..MaterialFile::default() },
+        };
+        let mut name = label;
+        if let Some(light) = &s.area_light {
+            if light.kind != "diffuse" {
+                return Err(light.error("only the diffuse area light is supported"));
+            }
+            material.emission = f32x3(self.light_color(light, "L")? * self.light_scale(light)?);
+            material.two_sided = light.boolean("twosided", false)?;
+            light.check_all_used()?;
+            name = format!("{name} + area light at {}", short(&light.at));
+        }
+        let name = unique_name(&self.out.materials, name);
+        self.out.materials.insert(name.clone(), material);
+        self.material_names.insert(key, Some(name.clone()));
+        Ok(Some(name))
+    }
+
+    /// A shape placed by `instance` (an ObjectInstance's transformation) after its own.
+    fn shape(&mut self, s: &ShapeUse, instance: DMat4) -> Result<()> {
+        let d = &*s.shape;
+        let Some(material) = self.shape_material(s)? else {
+            // An interface bounds a participating medium, which caustica does not render.
+            self.warn("interface", || format!("{}: {}: shapes with the interface material are left out (they only bound media)", d.at, d.describe()));
+            return Ok(());
+        };
+        let to_world = instance * s.transform;
+        let m = self.world * to_world;
+        if let Some(alpha) = d.param("alpha") {
+            if !(alpha.ty == "float" && alpha.numbers() == [1.0]) {
+                return Err(alpha.error("cut-outs (alpha other than 1) are not supported"));
+            }
+        }
+        match d.kind.as_str() {
+            "sphere" => self.sphere(s, to_world, m, &material)?,
+            "trianglemesh" => {
+                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 3)?;
+                for t in indices.chunks_exact(3) {
+                    let v = [positions[t[0]], positions[t[1]], positions[t[2]]];
+                    let reversed = match &normals {
+                        Some(n) => (v[1] - v[0]).cross(v[2] - v[0]).dot(n[t[0]] + n[t[1]] + n[t[2]]) < 0.0,
+                        None => s.reverse_orientation,
+                    };
+                    self.triangle(d, m, v, reversed, &material)?;
+                }
+            }
+            "bilinearmesh" => {
+                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 4)?;
+                for q in indices.chunks_exact(4) {
+                    let [p00, p10, p01, p11] = [0, 1, 2, 3].map(|k| positions[q[k]]);
+                    let reversed = match &normals {
+                        Some(n) => (p10 - p00).cross(p01 - p00).dot(n[q[0]] + n[q[1]] + n[q[2]] + n[q[3]]) < 0.0,
+                        None => s.reverse_orientation,
+                    };
+                    self.bilinear_patch(d, m, [p00, p10, p01, p11], reversed, &material)?;
+                }
+            }
+            "plymesh" => {
+                let Some(name) = d.string("filename")?.map(str::to_owned) else { return Err(d.error("needs a filename")) };
+                let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+                if self.out.materials[&material].emission != Array([0.0; 3]) {
+                    self.emitting_ply(d, &path, m, s.reverse_orientation, &material)?;
+                } else {
+                    let placement = transform::placement(m).map_err(|e| d.error(e))?;
+                    let file = relative_to(&path, self.base);
+                    self.count_shape(d, &material)?;
+                    self.out.meshes.push(MeshFile { file, material: Some(material), translate: placement.translate, scale: placement.scale, rotate: placement.rotate, instances: vec![] });
+                }
+            }
+            _ => return Err(d.error("this shape is not supported (sphere, trianglemesh, bilinearmesh, plymesh)")),
+        }
+        d.check_all_used()
+    }
+
+    fn sphere(&mut self, s: &ShapeUse, to_world: DMat4, m: DMat4, material: &str) -> Result<()> {
+        let d = &*s.shape;
+        let radius = d.float_or("radius", 1.0)?;
+        if !(radius > 0.0) {
+            return Err(d.error(format!("radius must be > 0, got {radius}")));
+        }
+        let partial = d.float_or("zmin", -radius)? > -radius || d.float_or("zmax", radius)? < radius || d.float_or("phimax", 360.0)? < 360.0;
+        if partial {
+            return Err(d.error("partial spheres (zmin, zmax, phimax) are not supported"));
+        }
+        let scale = uniform_scale(to_world).ok_or_else(|| d.error("its transformation scales unevenly or shears; a sphere needs a uniform scale"))?;
+        // caustica's spheres face outwards; pbrt's turn inside out under ReverseOrientation or a
+        // mirroring transformation, which matters where they emit or refract.
+        let m_file = &self.out.materials[material];
+        let sided = m_file.emission != Array([0.0; 3]) || m_file.transparency > 0.0;
+        if sided && s.reverse_orientation != (to_world.determinant() < 0.0) {
+            return Err(d.error("a sphere turned inside out (ReverseOrientation or a mirroring transformation) that emits or refracts is not supported"));
+        }
+        self.count_shape(d, material)?;
+        self.out.spheres.push(SphereFile { center: f32x3(m.transform_point3(DVec3::ZERO)), radius: (radius * scale) as f32, material: material.to_owned() });
+        Ok(())
+    }
+
+    /// A mesh's vertices (`P`), its polygons of `corners` vertices (`indices`, which may be left
+    /// out for a single polygon) and its normals (`N`); texture coordinates, tangents and face
+    /// indices, which only textures use, are read and left.
+    fn mesh_arrays(&mut self, d: &Directive, corners: usize) -> Result<MeshArrays> {
+        let positions = d.triples("P", &["point3", "point"])?.ok_or_else(|| d.error("needs the vertices \"point3 P\""))?;
+        let indices: Vec<usize> = match d.integers("indices")? {
+            Some(i) => {
+                if let Some(bad) = i.iter().find(|&&k| !(k >= 0.0 && k < positions.len() as f64)) {
+                    return Err(d.error(format!("index {bad} is not one of the {} vertices", positions.len())));
+                }
+                i.iter().map(|&k| k as usize).collect()
+            }
+            None if positions.len() == corners => (0..corners).collect(),
+            None => return Err(d.error(format!("needs \"integer indices\" (it has {} vertices, not {corners})", positions.len()))),
+        };
+        if !indices.len().is_multiple_of(corners) {
+            return Err(d.error(format!("the number of indices ({}) is not a multiple of {corners}", indices.len())));
+        }
+        if positions.iter().any(|p| !p.is_finite()) {
+            return Err(d.error("a vertex is not finite"));
+        }
+        let normals = d.triples("N", &["normal", "normal3"])?;
+        if let Some(n) = &normals {
+            if n.len() != positions.len() {
+                return Err(d.error(format!("has {} normals for {} vertices", n.len(), positions.len())));
+            }
+            self.warn("normals", || format!("{}: {}: the vertex normals of meshes written in the scene are not kept (caustica's own triangles are flat); they decide the front side only", d.at, d.describe()));
+        }
+        for name in ["uv", "S", "faceIndices"] {
+            d.param(name);
+        }
+        Ok(MeshArrays { positions, indices, normals })
+    }
+
+    /// Counts one more shape entry of `material` against the caps.
+    fn count_shape(&mut self, d: &Directive, material: &str) -> Result<()> {
+        self.shapes += 1;
+        // The entry (at most 13 numbers) and its material name, held once per entry.
+        self.shape_bytes += 64 + material.len();
+        if self.shapes > MAX_SHAPES || self.shape_bytes > MAX_SHAPE_BYTES {
+            return Err(d.error(format!("the scene becomes more than {MAX_SHAPES} shapes (or {} MiB of them), counting each triangle written in the scene and each instance's copy; store large meshes as PLY files", MAX_SHAPE_BYTES >> 20)));
+        }
+        Ok(())
+    }
+
+    /// A triangle with pbrt's front: its winding, turned when `reversed`, carried into caustica's
+    /// world by `m`, whose mirror turns the winding once more.
+    fn triangle(&mut self, d: &Directive, m: DMat4, v: [DVec3; 3], reversed: bool, material: &str) -> Result<()> {
+        let turn = reversed != (m.determinant() < 0.0);
+        let w = v.map(|p| m.transform_point3(p).as_vec3());
+        let w = if turn { [w[0], w[2], w[1]] } else { w };
+        // As caustica checks its triangles: one without area cannot be lit or hit.
+        if (w[1] - w[0]).cross(w[2] - w[0]).length() == 0.0 {
+            self.warn("degenerate", || format!("{}: {}: triangles without area are left out", d.at, d.describe()));
+            return Ok(());
+        }
+        self.count_shape(d, material)?;
+        self.out.triangles.push(TriangleFile { vertices: Array(w.map(|p: Vec3| Array(p.to_array()))), material: material.to_owned() });
+        Ok(())
+    }
+
+    /// A bilinear patch (p00, p10, p01, p11), front (p10 - p00) x (p01 - p00): a quad when it
+    /// is a parallelogram, else two triangles (exact when it is planar, warned when not).
+    fn bilinear_patch(&mut self, d: &Directive, m: DMat4, p: [DVec3; 4], reversed: bool, material: &str) -> Result<()> {
+        let [p00, p10, p01, p11] = p;
+        let (u, v) = (p10 - p00, p01 - p00);
+        let extent = u.length().max(v.length());
+        if (p11 - (p10 + v)).length() <= 1e-6 * extent {
+            let turn = reversed != (m.determinant() < 0.0);
+            let (u, v) = (m.transform_vector3(u), m.transform_vector3(v));
+            let (u, v) = if turn { (v, u) } else { (u, v) };
+            if u.as_vec3().cross(v.as_vec3()).length() == 0.0 {
+                self.warn("degenerate", || format!("{}: {}: patches without area are left out", d.at, d.describe()));
+                return Ok(());
+            }
+            self.count_shape(d, material)?;
+            self.out.quads.push(QuadFile { origin: f32x3(m.transform_point3(p00)), edge_u: f32x3(u), edge_v: f32x3(v), material: material.to_owned() });
+            return Ok(());
+        }
+        let normal = u.cross(v);
+        if (p11 - p00).dot(normal).abs() > 1e-6 * extent * normal.length() {
+            self.warn("bilinear", || format!("{}: {}: patches that are not planar become two triangles each", d.at, d.describe()));
+        }
+        self.triangle(d, m, [p00, p10, p11], reversed, material)?;
+        self.triangle(d, m, [p00, p11, p01], reversed, material)
+    }
+
+    /// An emitting PLY mesh, written out triangle by triangle: caustica's mesh files emit from
+    /// the side their winding gives, so the front pbrt gives them (by their normals, or
+    /// ReverseOrientation) is made their winding.
+    fn emitting_ply(&mut self, d: &Directive, path: &Path, m: DMat4, reverse: bool, material: &str) -> Result<()> {
+        let asset = crate::scene::load_asset_from(self.files, path).map_err(|e| d.error(e))?;
+        for &(index, local) in &asset.instances {
+            let mesh = &asset.meshes[index];
+            let m = m * local.as_dmat4();
+            for t in &mesh.triangles {
+                let [a, b, c] = t.map(|k| mesh.positions[k as usize].as_dvec3());
+                let reversed = if mesh.normals.is_empty() {
+                    reverse
+                } else {
+                    let n: Vec3 = t.iter().map(|&k| mesh.normals[k as usize]).sum();
+                    (b - a).cross(c - a).dot(n.as_dvec3()) < 0.0
+                };
+                self.triangle(d, m, [a, b, c], reversed, material)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// An emitter's spectrum as caustica's RGB: rgb as given; a black body or sampled spectrum
+    /// at luminance 1, as pbrt-v4 normalises emission spectra before their `scale`.
+    fn light_color(&mut self, d: &Directive, name: &str) -> Result<DVec3> {
+        let Some(p) = d.param(name) else { return Ok(DVec3::ONE) };
+        let c = match (p.ty.as_str(), p.numbers(), p.strings()) {
+            ("rgb", &[r, g, b], _) => DVec3::new(r, g, b),
+            ("blackbody", &[kelvin], _) if kelvin > 0.0 => spectrum::blackbody_rgb(kelvin),
+            // pbrt's colour space illuminant: white in caustica's linear sRGB.
+            ("spectrum", _, [named]) if named == "stdillum-D65" => DVec3::ONE,
+            ("spectrum", _, []) => {
+                let rgb = self.sampled_spectrum(p)?;
+                let y = spectrum::luminance(rgb);
+                if !(y > 0.0) {
+                    return Err(p.error("a spectrum without luminance"));
+                }
+                rgb / y
+            }
+            ("rgb" | "blackbody", ..) => return Err(p.error("needs 3 numbers (rgb) or one temperature > 0 (blackbody)")),
+            ("spectrum", _, _) => return Err(p.error("only the named spectrum stdillum-D65 is supported for an emitter")),
+            (ty, ..) => return Err(p.error(format!("an emitter's {name} cannot be given as {ty}"))),
+        };
+        if !(c.min_element() >= 0.0 && c.is_finite()) {
+            return Err(p.error(format!("must be finite and not negative, got {c}")));
+        }
+        Ok(c)
+    }
+
+    fn light_scale(&mut self, d: &Directive) -> Result<f64> {
+        if d.param("power").is_some() {
+            return Err(d.error("power (an emitter given by its total power) is not supported; give L or I with scale"));
+        }
+        let scale = d.float_or("scale", 1.0)?;
+        if !(scale >= 0.0) {
+            return Err(d.error(format!("scale must be >= 0, got {scale}")));
+        }
+        Ok(scale)
+    }
+
+    fn light(&mut self, d: &Directive, to_world: DMat4) -> Result<()> {
+        let m = self.world * to_world;
+        let from = |d: &Directive| -> Result<DVec3> { Ok(d.point("from")?.unwrap_or(DVec3::ZERO)) };
+        let light = match d.kind.as_str() {
+            "point" => {
+                let intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                Some(LightFile::Point(PointLightFile { position: f32x3(m.transform_point3(from(d)?)), intensity: f32x3(intensity) }))
+            }
+            "spot" => {
+                let intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                let from = from(d)?;
+                let to = d.point("to")?.unwrap_or(DVec3::Z);
+                let (cone, delta) = (d.float_or("coneangle", 30.0)?, d.float_or("conedelta", 5.0)?);
+                if !(cone > 0.0 && cone <= 180.0 && (0.0..=cone).contains(&delta)) || (to - from).length() == 0.0 {
+                    return Err(d.error(format!("needs 0 < coneangle <= 180, 0 <= conedelta <= coneangle and from != to, got {cone} and {delta}")));
+                }
+                self.warn("spot", || format!("{}: {}: pbrt's spot falls off smoothly in the cosine between coneangle - conedelta and coneangle; caustica's falls off linearly in the angle", d.at, d.describe()));
+                Some(LightFile::Spot(SpotLightFile {
+                    position: f32x3(m.transform_point3(from)),
+                    look_at: f32x3(m.transform_point3(to)),
+                    intensity: f32x3(intensity),
+                    cone_angle: cone as f32,
+                    falloff_start: (cone - delta) as f32,
+                }))
+            }
+            "distant" => {
+                let irradiance = self.light_color(d, "L")? * self.light_scale(d)?;
+                let from = from(d)?;
+                let to = d.point("to")?.unwrap_or(DVec3::Z);
+                let direction = m.transform_vector3(to - from);
+                if direction.length() == 0.0 {
+                    return Err(d.error("from and to coincide, so the light has no direction"));
+                }
+                Some(LightFile::Directional(DirectionalLightFile { direction: f32x3(direction), irradiance: f32x3(irradiance), angular_diameter: 0.0 }))
+            }
+            "infinite" => {
+                if self.out.environment.is_some() {
+                    return Err(d.error("a second infinite light: caustica has one environment"));
+                }
+                let environment = match d.string("filename")?.map(str::to_owned) {
+                    None => {
+                        let color = self.light_color(d, "L")? * self.light_scale(d)?;
+                        EnvironmentFile { color: Some(f32x3(color)), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 }
+                    }
+                    Some(name) => {
+                        if d.param("L").is_some() {
+                            return Err(d.error("give L or filename, not both"));
+                        }
+                        // pbrt scales an image's RGB to radiance as it does a constant L's.
+                        let scale = self.light_scale(d)?;
+                        let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+                        // Where the map's axes point in caustica's world: the light's rotation,
+                        // through the mirror.
+                        let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a));
+                        let size = axes[0].length();
+                        let orthonormal = size > 0.0 && axes.iter().all(|a| (a.length() - size).abs() <= 1e-6 * size) && (axes[0].dot(axes[1]).abs() + axes[1].dot(axes[2]).abs() + axes[0].dot(axes[2]).abs()) <= 1e-6 * size * size;
+                        if !orthonormal {
+                            return Err(d.error("an image infinite light's transformation must be a rotation (it shears or scales unevenly)"));
+                        }
+                        let axes = Array(axes.map(|a| f32x3(a / size)));
+                        EnvironmentFile { color: None, probe: None, latlong: None, octahedral: Some(relative_to(&path, self.base)), axes: Some(axes), intensity: scale as f32, rotation: 0.0 }
+                    }
+                };
+                self.out.environment = Some(environment);
+                None
+            }
+            _ => return Err(d.error("this light is not supported (point, spot, distant, infinite)")),
+        };
+        d.check_all_used()?;
+        if let Some(light) = light {
+            self.out.lights.push(light);
+        }
+        Ok(())
+    }
+}
