@@ -136,6 +136,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                         vec2 bary;
                         float t = intersect_triangle(tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, ro, rd, hit.t, bary);
                         if (t > 0.0) {
+                            if (SCENE_ALPHA == 1 && !alpha_passes(tri, i, instance, bary, ro, rd)) continue;
                             hit = Hit(t, i, instance, bary);
                             if (any_hit) return true;
                         }

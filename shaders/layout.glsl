@@ -36,7 +36,9 @@ const uint CONDUCTOR_ALBEDO = 2u;
 // roughness and transmission factors that surface_material() turns into R, T and alpha per texel.
 // maps.x = emission texture index (uint bits; NO_TEXTURE for none), which multiplies emission_t.rgb
 // per texel; maps.y = tangent-space normal map index (uint bits; NO_TEXTURE for none), maps.z its
-// scale (of the normal's x and y); maps.w unused.
+// scale (of the normal's x and y); maps.w unused. alpha (tested in traversal, alpha.glsl): .x = an
+// RGBA texture whose A channel is the opacity (uint bits; NO_TEXTURE for none), .y = the opacity
+// factor it multiplies, .z = the cutoff of ALPHA_MASK, .w = the ALPHA_* mode (uint bits).
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;
@@ -45,7 +47,14 @@ struct Material {
     vec4 conductor_k;
     vec4 metallic_roughness;
     vec4 maps;
+    vec4 alpha;
 };
+
+// Alpha modes (ALPHA_* must match layout.rs): always there; there where the opacity reaches the
+// cutoff (glTF MASK); met with probability equal to the opacity (glTF BLEND, MTL d).
+const uint ALPHA_OPAQUE = 0u;
+const uint ALPHA_MASK = 1u;
+const uint ALPHA_BLEND = 2u;
 
 // Lights without a surface (LIGHT_* must match layout.rs; src/scene/light.rs).
 const uint LIGHT_POINT = 0u;
@@ -94,8 +103,14 @@ const uint INSTANCE_HAS_NORMALS = 1u;
 const uint INSTANCE_HAS_UVS = 2u;
 const uint INSTANCE_HAS_TANGENTS = 4u;
 const uint NO_TEXTURE = 0xffffffffu;
-// Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored).
+// Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored); the TEXTURE_WRAP_*
+// mode along u at bit TEXTURE_WRAP_U_SHIFT and along v at TEXTURE_WRAP_V_SHIFT (glTF samplers).
 const uint TEXTURE_SRGB = 1u;
+const uint TEXTURE_WRAP_U_SHIFT = 1u;
+const uint TEXTURE_WRAP_V_SHIFT = 3u;
+const uint TEXTURE_WRAP_REPEAT = 0u;
+const uint TEXTURE_WRAP_CLAMP = 1u;
+const uint TEXTURE_WRAP_MIRROR = 2u;
 
 // One placement of a bottom-level BVH. Rows of the 3x4 affine maps; info.x = kind, info.y = root
 // node of its BVH, info.z = flags.

@@ -172,7 +172,7 @@ fn textured_mesh_gives_material_albedo_times_texture() {
         "#,
     );
     let texel = [200u8, 100, 50, 255];
-    scene.textures = vec![Texture { name: "flat".into(), width: 1, height: 1, texels: vec![texel], srgb: true }];
+    scene.textures = vec![Texture { name: "flat".into(), width: 1, height: 1, texels: vec![texel], srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
     let corners = [Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0)];
     scene.meshes = vec![Mesh {

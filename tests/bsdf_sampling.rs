@@ -19,7 +19,7 @@ use bytemuck::Zeroable;
 use caustica::gpu::{compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use caustica::render::{assemble_with_kernel_files, shader_file};
 use caustica::render::bindings::KernelBuffer;
-use caustica::render::layout::{GpuMaterial, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, NO_TEXTURE};
+use caustica::render::layout::{GpuMaterial, ALPHA_OPAQUE, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, NO_TEXTURE};
 use caustica::scene::average_fresnel;
 use common::*;
 use std::f64::consts::PI;
@@ -381,6 +381,7 @@ fn material(albedo: f32, r: f32, t: f32, ior: f32, alpha: f32) -> GpuMaterial {
         conductor_k: [0.0; 4],
         metallic_roughness: [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
         maps: [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
+        alpha: [f32::from_bits(NO_TEXTURE), 1.0, 0.0, f32::from_bits(ALPHA_OPAQUE)],
     }
 }
 

@@ -233,7 +233,7 @@ fn textured_albedo_is_sampled_bilinearly_with_wrapping() {
         "#,
     );
     let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true }];
+    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
     let corners = [Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0)];
     let uv_of = |p: Vec3| Vec2::new(p.x + 0.5, 0.5 - p.y);
@@ -490,7 +490,7 @@ fn sphere_scene() -> Scene {
         Instance { mesh: 0, transform: Mat4::from_scale_rotation_translation(Vec3::splat(0.7), Quat::from_rotation_z(0.5), Vec3::new(1.0, 0.2, -0.5)) },
     ];
     let texels: Vec<[u8; 4]> = (0..64 * 32u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i % 256) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "noise".into(), width: 64, height: 32, texels, srgb: true }];
+    scene.textures = vec![Texture { name: "noise".into(), width: 64, height: 32, texels, srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
     let mut sky = caustica::image::RgbImage::new(32, 16);
     for y in 0..16 {

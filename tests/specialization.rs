@@ -8,7 +8,7 @@ mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
 use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures};
-use caustica::scene::{Instance, Mesh, NormalMap, Scene, Texture};
+use caustica::scene::{Alpha, AlphaMode, Instance, Mesh, NormalMap, Scene, Texture};
 use common::{gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::Path;
@@ -64,9 +64,10 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
 }
 
 /// A textured, instanced mesh with a rough metal, a plastic and a sphere under an environment map,
-/// lit by a mesh lamp with an emission texture, the floor normal-mapped: every feature on, which
-/// the checked-in scenes without the shared data lack (textures, several instances, textured
-/// emitters, normal maps).
+/// lit by a mesh lamp with an emission texture, the floor normal-mapped, and two squares with
+/// alpha over it (a textured BLEND and a textured MASK): every feature on, which the checked-in
+/// scenes without the shared data lack (textures, several instances, textured emitters, normal
+/// maps, alpha).
 #[test]
 fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     let mut scene = parse(
@@ -86,6 +87,10 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         [materials.glow]
         albedo = [0, 0, 0]
         emission = [4, 3, 2]
+        [materials.lace]
+        albedo = [0.9, 0.9, 0.9]
+        [materials.stencil]
+        albedo = [0.8, 0.2, 0.2]
         [[spheres]]
         center = [0.8, 0.3, 0.0]
         radius = 0.3
@@ -97,14 +102,21 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         "#,
     );
     let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true }];
+    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
     // A bumpy normal map: each texel tilts the normal its own way.
     let bumps: Vec<[u8; 4]> = (0..16u32).map(|i| [(96 + i * 37 % 64) as u8, (96 + i * 23 % 64) as u8, 230, 255]).collect();
-    scene.textures.push(Texture { name: "bumps".into(), width: 4, height: 4, texels: bumps, srgb: false });
+    scene.textures.push(Texture { name: "bumps".into(), width: 4, height: 4, texels: bumps, srgb: false, wrap: Default::default() });
     scene.materials[0].maps.normal = Some(NormalMap { texture: 1, scale: 0.8 });
     let glow = scene.materials.iter().position(|m| m.name == "glow").unwrap() as u32;
     scene.materials[glow as usize].maps.emission = Some(0);
+    // Opacity varying over the texture, read blended (lace) and cut at 0.5 (stencil).
+    let holes: Vec<[u8; 4]> = (0..16u32).map(|i| [200, 200, 200, (i * 67 % 256) as u8]).collect();
+    scene.textures.push(Texture { name: "holes".into(), width: 4, height: 4, texels: holes, srgb: true, wrap: Default::default() });
+    let lace = scene.materials.iter().position(|m| m.name == "lace").unwrap() as u32;
+    scene.materials[lace as usize].maps.alpha = Some(Alpha { factor: 0.9, texture: Some(2), mode: AlphaMode::Blend });
+    let stencil = scene.materials.iter().position(|m| m.name == "stencil").unwrap() as u32;
+    scene.materials[stencil as usize].maps.alpha = Some(Alpha { factor: 1.0, texture: Some(2), mode: AlphaMode::Mask { cutoff: 0.5 } });
     let corners = [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)];
     let quad = |material: u32, triangles: [[u32; 3]; 2]| Mesh {
         name: "quad".into(),
@@ -116,11 +128,13 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         tangents: vec![Vec4::new(1.0, 0.0, 0.0, 1.0); 4],
     };
     // The floor faces up; the lamp above it faces down.
-    scene.meshes = vec![quad(0, [[0, 2, 1], [0, 3, 2]]), quad(glow, [[0, 1, 2], [0, 2, 3]])];
+    scene.meshes = vec![quad(0, [[0, 2, 1], [0, 3, 2]]), quad(glow, [[0, 1, 2], [0, 2, 3]]), quad(lace, [[0, 2, 1], [0, 3, 2]]), quad(stencil, [[0, 2, 1], [0, 3, 2]])];
     scene.instances = vec![
         Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, 0.0)) },
         Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, -2.0)) },
         Instance { mesh: 1, transform: Mat4::from_translation(Vec3::new(0.0, 1.5, 0.0)) * Mat4::from_scale(Vec3::splat(0.3)) },
+        Instance { mesh: 2, transform: Mat4::from_translation(Vec3::new(-0.3, 0.6, 0.3)) * Mat4::from_scale(Vec3::splat(0.5)) },
+        Instance { mesh: 3, transform: Mat4::from_translation(Vec3::new(0.4, 0.9, 0.2)) * Mat4::from_scale(Vec3::splat(0.4)) },
     ];
     let (_lock, ctx) = gpu();
     let features = assert_specialized_kernel_agrees(&ctx, scene);

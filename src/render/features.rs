@@ -1,11 +1,11 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
-//! textures, emission textures, normal maps, an environment map, rough lobes, coated bases) is left out by `#if` and by constants
+//! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases) is left out by `#if` and by constants
 //! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
-use super::layout::{INSTANCE_MESH, INSTANCE_PRIMITIVES, NO_TEXTURE};
+use super::layout::{ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, NO_TEXTURE};
 use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
@@ -29,6 +29,9 @@ pub struct SceneFeatures {
     pub emissive_textures: bool,
     /// Tangent-space normal maps on meshes with tangents: the shading normal bent per texel.
     pub normal_maps: bool,
+    /// Mesh materials with alpha (glTF MASK or BLEND, MTL `d` / `map_d`): traversal looks up
+    /// the material of every triangle a ray meets (shaders/alpha.glsl); without them it never does.
+    pub alpha: bool,
     /// An environment map (else the sky is one colour, never importance sampled).
     pub environment_map: bool,
     /// GGX lobes: a material with a roughness at or above ALPHA_DELTA, or a metallic-roughness
@@ -41,7 +44,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, environment_map: true, rough_lobes: true, coated: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -55,6 +58,7 @@ impl SceneFeatures {
             textures: !data.textures.is_empty(),
             emissive_textures: data.materials.iter().any(|m| m.maps[0].to_bits() != NO_TEXTURE && m.emission_t[..3].iter().any(|&e| e > 0.0)),
             normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
+            alpha: has_instance(INSTANCE_MESH) && data.materials.iter().any(|m| m.alpha[3].to_bits() != ALPHA_OPAQUE),
             environment_map: data.env_kind != ENV_CONSTANT,
             rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA),
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
@@ -62,7 +66,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 9] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 10] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -70,6 +74,7 @@ impl SceneFeatures {
             ("textures", "SCENE_TEXTURES", self.textures),
             ("emissive_textures", "SCENE_EMISSIVE_TEXTURES", self.emissive_textures),
             ("normal_maps", "SCENE_NORMAL_MAPS", self.normal_maps),
+            ("alpha", "SCENE_ALPHA", self.alpha),
             ("environment_map", "SCENE_ENV_MAP", self.environment_map),
             ("rough_lobes", "SCENE_ROUGH_LOBES", self.rough_lobes),
             ("coated", "SCENE_COATED", self.coated),

@@ -27,6 +27,7 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("intersect.glsl", include_str!("../../shaders/intersect.glsl")),
     ("bvh.glsl", include_str!("../../shaders/bvh.glsl")),
     ("textures.glsl", include_str!("../../shaders/textures.glsl")),
+    ("alpha.glsl", include_str!("../../shaders/alpha.glsl")),
     ("surface.glsl", include_str!("../../shaders/surface.glsl")),
     ("fresnel.glsl", include_str!("../../shaders/fresnel.glsl")),
     ("microfacet.glsl", include_str!("../../shaders/microfacet.glsl")),

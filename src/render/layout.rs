@@ -19,6 +19,16 @@ pub const INSTANCE_HAS_UVS: u32 = 2;
 pub const INSTANCE_HAS_TANGENTS: u32 = 4;
 pub const NO_TEXTURE: u32 = u32::MAX;
 pub const TEXTURE_SRGB: u32 = 1;
+/// A texture's wrap mode along u sits at this bit of its flags, along v at TEXTURE_WRAP_V_SHIFT.
+pub const TEXTURE_WRAP_U_SHIFT: u32 = 1;
+pub const TEXTURE_WRAP_V_SHIFT: u32 = 3;
+pub const TEXTURE_WRAP_REPEAT: u32 = 0;
+pub const TEXTURE_WRAP_CLAMP: u32 = 1;
+pub const TEXTURE_WRAP_MIRROR: u32 = 2;
+
+pub const ALPHA_OPAQUE: u32 = 0;
+pub const ALPHA_MASK: u32 = 1;
+pub const ALPHA_BLEND: u32 = 2;
 
 pub const CONDUCTOR_MIRROR: u32 = 0;
 pub const CONDUCTOR_COMPLEX: u32 = 1;
@@ -64,6 +74,8 @@ pub struct GpuMaterial {
     pub metallic_roughness: [f32; 4],
     /// emission texture (u32 bits), normal map (u32 bits), normal map scale, unused
     pub maps: [f32; 4],
+    /// alpha texture (u32 bits), opacity factor, MASK cutoff, ALPHA_* mode (u32 bits)
+    pub alpha: [f32; 4],
 }
 
 /// `struct Instance`: rows of the two 3x4 affine maps, then kind, BVH root node and flags.
@@ -287,15 +299,16 @@ mod tests {
 
     #[test]
     fn material_matches_glsl_std430() {
-        assert_eq!(size_of::<GpuMaterial>(), 112);
+        assert_eq!(size_of::<GpuMaterial>(), 128);
         assert_eq!(offset_of!(GpuMaterial, emission_t), 16);
         assert_eq!(offset_of!(GpuMaterial, params), 32);
         assert_eq!(offset_of!(GpuMaterial, conductor_eta), 48);
         assert_eq!(offset_of!(GpuMaterial, conductor_k), 64);
         assert_eq!(offset_of!(GpuMaterial, metallic_roughness), 80);
         assert_eq!(offset_of!(GpuMaterial, maps), 96);
+        assert_eq!(offset_of!(GpuMaterial, alpha), 112);
         let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n    vec4 maps;\n};";
+        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n    vec4 maps;\n    vec4 alpha;\n};";
         assert!(glsl.contains(members), "struct Material members differ from GpuMaterial");
     }
 

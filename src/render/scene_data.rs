@@ -6,7 +6,7 @@ use super::textured_emission::mean_triangle_luminance;
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
 use super::light_selection::{area_light_power, emission_luminance, punctual_light_power, LightDistribution};
-use crate::scene::{average_fresnel, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape, Texture};
+use crate::scene::{average_fresnel, Alpha, AlphaMode, Wrap, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape, Texture};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -167,6 +167,17 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         conductor_k: k.extend(coat_norm).into(),
         metallic_roughness,
         maps: [texture_bits(m.maps.emission), texture_bits(m.maps.normal.map(|n| n.texture)), m.maps.normal.map_or(0.0, |n| n.scale), 0.0],
+        alpha: gpu_alpha(m.maps.alpha),
+    }
+}
+
+/// A material's `alpha` row: texture, factor, cutoff and mode (layout.glsl).
+fn gpu_alpha(alpha: Option<Alpha>) -> [f32; 4] {
+    let texture_bits = |t: Option<u32>| f32::from_bits(t.unwrap_or(NO_TEXTURE));
+    match alpha {
+        None => [texture_bits(None), 1.0, 0.0, f32::from_bits(ALPHA_OPAQUE)],
+        Some(Alpha { factor, texture, mode: AlphaMode::Mask { cutoff } }) => [texture_bits(texture), factor, cutoff, f32::from_bits(ALPHA_MASK)],
+        Some(Alpha { factor, texture, mode: AlphaMode::Blend }) => [texture_bits(texture), factor, 0.0, f32::from_bits(ALPHA_BLEND)],
     }
 }
 
@@ -185,7 +196,13 @@ impl SceneData {
         let mut fitted = scene.textures.clone();
         downsample_to_fit(&mut fitted, texture_budget);
         for t in &fitted {
-            let flags = if t.srgb { TEXTURE_SRGB } else { 0 };
+            let wrap_bits = |w: Wrap| match w {
+                Wrap::Repeat => TEXTURE_WRAP_REPEAT,
+                Wrap::ClampToEdge => TEXTURE_WRAP_CLAMP,
+                Wrap::MirroredRepeat => TEXTURE_WRAP_MIRROR,
+            };
+            let srgb = if t.srgb { TEXTURE_SRGB } else { 0 };
+            let flags = srgb | wrap_bits(t.wrap[0]) << TEXTURE_WRAP_U_SHIFT | wrap_bits(t.wrap[1]) << TEXTURE_WRAP_V_SHIFT;
             textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, flags });
             texels.extend(t.texels.iter().map(|&p| u32::from_le_bytes(p)));
         }

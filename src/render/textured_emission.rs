@@ -5,13 +5,13 @@
 //! ones.
 //!
 //! The mean is over the triangle's texture footprint: the texture filtered as the kernel filters
-//! it (textures.glsl: sRGB decoded, bilinear, repeating) at the centroids of a regular split of
+//! it (textures.glsl: sRGB decoded, bilinear, wrapped by the texture's modes) at the centroids of a regular split of
 //! the triangle into n^2 equal parts, n growing with the texels it covers. It needs no exactness:
 //! the kernel reads the same number for picking and for the pick's probability (lights.glsl), so
 //! any value gives an unbiased image, and a closer one less noise.
 
 use super::luminance;
-use crate::scene::{srgb_to_linear, Texture};
+use crate::scene::{srgb_to_linear, Texture, Wrap};
 use glam::{Vec2, Vec3};
 
 /// Most subdivisions of a triangle's edge: n^2 = 1024 lookups for triangles that span many texels.
@@ -43,6 +43,19 @@ pub fn mean_triangle_luminance(texture: &Texture, emission: Vec3, uv: [Vec2; 3])
     sum / (n * n) as f64
 }
 
+/// The texel that whole-numbered position `i` reads in an axis of `n` texels, as wrapped_texel()
+/// in textures.glsl.
+fn wrapped(i: i64, n: i64, wrap: Wrap) -> i64 {
+    match wrap {
+        Wrap::Repeat => i.rem_euclid(n),
+        Wrap::ClampToEdge => i.clamp(0, n - 1),
+        Wrap::MirroredRepeat => {
+            let m = i.rem_euclid(2 * n);
+            if m < n { m } else { 2 * n - 1 - m }
+        }
+    }
+}
+
 /// Linear RGB of `texture` at `uv`, as texture_rgb() in textures.glsl computes it.
 fn filtered(texture: &Texture, uv: Vec2) -> Vec3 {
     let (w, h) = (texture.width as i64, texture.height as i64);
@@ -50,7 +63,7 @@ fn filtered(texture: &Texture, uv: Vec2) -> Vec3 {
     let f = p - p.floor();
     let (x0, y0) = (p.x.floor() as i64, p.y.floor() as i64);
     let texel = |x: i64, y: i64| {
-        let t = texture.texels[(y.rem_euclid(h) * w + x.rem_euclid(w)) as usize];
+        let t = texture.texels[(wrapped(y, h, texture.wrap[1]) * w + wrapped(x, w, texture.wrap[0])) as usize];
         let channel = |c: u8| if texture.srgb { srgb_to_linear(c) } else { f32::from(c) / 255.0 };
         Vec3::new(channel(t[0]), channel(t[1]), channel(t[2]))
     };
@@ -64,7 +77,7 @@ mod tests {
     use super::*;
 
     fn texture(width: u32, height: u32, texels: Vec<[u8; 4]>) -> Texture {
-        Texture { name: "t".into(), width, height, texels, srgb: true }
+        Texture { name: "t".into(), width, height, texels, srgb: true, wrap: Default::default() }
     }
 
     #[test]

@@ -12,7 +12,7 @@ mod optics;
 mod toml_error;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
-pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError};
+pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError, Wrap};
 pub use camera_toml::camera_toml;
 pub use format::{Filter, LightSelection, Sampler};
 pub use light::Light;
@@ -104,6 +104,29 @@ pub struct TextureMaps {
     pub emission: Option<u32>,
     /// A tangent-space normal map (glTF `normalTexture`, MTL `norm` / `map_Bump`).
     pub normal: Option<NormalMap>,
+    /// How much of the surface is there (glTF `alphaMode`, MTL `d` / `map_d`); None: all of it.
+    pub alpha: Option<Alpha>,
+}
+
+/// A surface's opacity: `factor` times, with a texture, the texture's A channel (bilinearly
+/// filtered, never sRGB-decoded). It is tested where a ray meets the surface, during traversal, so
+/// a surface that is not there is not hit by any ray (camera, bounce or shadow).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Alpha {
+    pub factor: f32,
+    /// An RGBA texture whose A channel is the opacity (glTF `baseColorTexture`, MTL `map_d`).
+    pub texture: Option<u32>,
+    pub mode: AlphaMode,
+}
+
+/// How opacity decides whether a ray meets the surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// glTF `MASK`: there where the opacity is at least `cutoff`, absent elsewhere.
+    Mask { cutoff: f32 },
+    /// glTF `BLEND`, MTL `d`: met with probability equal to the opacity (stochastic opacity, an
+    /// unbiased estimate of blending the surface over what lies behind it).
+    Blend,
 }
 
 /// A tangent-space normal map (linear RGB = (normal + 1) / 2 in the frame of the tangent, the
@@ -122,6 +145,7 @@ impl TextureMaps {
         TextureMaps {
             emission: self.emission.map(|t| t + base),
             normal: self.normal.map(|n| NormalMap { texture: n.texture + base, ..n }),
+            alpha: self.alpha.map(|a| Alpha { texture: a.texture.map(|t| t + base), ..a }),
         }
     }
 }

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod furnace;
+pub mod gltf_square;
 
 use caustica::gpu::{ContextOptions, GpuContext};
 use caustica::image::RgbImage;

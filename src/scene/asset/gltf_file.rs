@@ -4,18 +4,28 @@
 //! file is read through [`InputFiles`] (regular files, size caps, `--confine`).
 //!
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
-//! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture (texCoord 0 only; other
-//!   sets, the sampler and alpha are ignored).
+//! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture.
+//! - Texture coordinates: a material's textures are read through one `texCoord` set (0 or 1) and
+//!   one `KHR_texture_transform` (offset, rotation, scale, its `texCoord` override), those of its
+//!   first texture among base colour, emissive, metallic-roughness and normal; they are applied
+//!   to its primitives' coordinates on load (the kernel keeps one set a vertex). A texture of the
+//!   material that names another set or transform is read through the first's, with a warning.
+//!   Each texture's sampler gives its wrap modes (REPEAT, CLAMP_TO_EDGE, MIRRORED_REPEAT); the
+//!   filters are ignored (lookups are bilinear).
+//! - `alphaMode` `MASK` (with `alphaCutoff`, 0.5 by default) and `BLEND` → [`Alpha`]: the opacity
+//!   is `baseColorFactor.a` times the base colour texture's alpha; MASK keeps the surface where it
+//!   reaches the cutoff, BLEND meets it with that probability (stochastic opacity). `OPAQUE`
+//!   ignores alpha, as glTF says.
 //! - `emissiveFactor` × `KHR_materials_emissive_strength` → emission; `emissiveTexture`
-//!   (texCoord 0, sRGB) multiplies it per texel. Its triangles are lights for next-event
+//!   (sRGB) multiplies it per texel. Its triangles are lights for next-event
 //!   estimation, picked by their texture-weighted power (src/render/textured_emission.rs).
-//! - `normalTexture` (texCoord 0, linear) with its `scale` → a tangent-space normal map, read along
+//! - `normalTexture` (linear) with its `scale` → a tangent-space normal map, read along
 //!   the file's TANGENTs when every primitive of the mesh has them, else MikkTSpace's.
 //! - `metallicFactor` → reflectivity R, a conductor with the base colour as F0 (Schlick);
 //!   `roughnessFactor` → roughness (both perceptual) of every lobe.
 //! - `KHR_materials_transmission` factor → transparency T = (1 − metallic) × transmission, a
 //!   rough dielectric; `KHR_materials_ior` → ior (1.5 by default).
-//! - `metallicRoughnessTexture` (texCoord 0; linear, B = metallic, G = roughness) scales the two
+//! - `metallicRoughnessTexture` (linear, B = metallic, G = roughness) scales the two
 //!   factors per texel: the kernel recomputes R, T and roughness there as above.
 //! - The rest (1 − R − T) is a plastic: the base colour under a dielectric coat of that ior.
 //! - Primitives without a material get [`AssetMaterial::default_grey`].
@@ -29,6 +39,12 @@
 //! the cosine; the ends agree. `range` is ignored (a note on stderr): the light falls off by the
 //! inverse square without a cut-off, which the extension allows as the physical limit.
 //!
+//! Extensions: the five above (`KHR_lights_punctual`, `KHR_materials_emissive_strength`,
+//! `KHR_materials_transmission`, `KHR_materials_ior`, `KHR_texture_transform`) are read. A file that requires any other is
+//! an error naming the file and the extension; one that merely uses another renders without it,
+//! with one warning per extension. Occlusion textures are ignored (a path tracer computes
+//! occlusion), with one warning per file that has them.
+//!
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
 
@@ -38,14 +54,14 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use base64::Engine as _;
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Affine2, Mat2, Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
 
 use super::gltf_accessors::AccessorLimits;
 use super::{
-    texture, unit_normals, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
+    texture, unit_normals, Alpha, AlphaMode, Wrap, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
     MeshData, MetallicRoughness, NormalMap, TextureMaps,
 };
 use crate::input_file::{InputFiles, InputKind};
@@ -53,6 +69,15 @@ use crate::input_file::{InputFiles, InputKind};
 /// Lumens per watt of radiant flux at 555 nm, the constant of the candela's definition: glTF's
 /// photometric light units over this are radiometric.
 const LUMENS_PER_WATT: f32 = 683.0;
+
+/// The glTF extensions caustica reads (see the mapping above).
+const IMPLEMENTED_EXTENSIONS: [&str; 5] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_texture_transform",
+];
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
 const MAX_NODE_DEPTH: usize = 1000;
@@ -77,6 +102,15 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     // checking that it exists, and panics on an out-of-range one (found by fuzzing), so check
     // that first and validate afterwards.
     let json = document.into_json();
+    if let Some(required) = unimplemented_required_extension(&json) {
+        return Err(AssetError::invalid(
+            path,
+            format!("requires the glTF extension {required}, which caustica does not implement"),
+        ));
+    }
+    for warning in ignored_features(&json) {
+        eprintln!("caustica: warning: {}: {warning}", path.display());
+    }
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             for (semantic, accessor) in &primitive.attributes {
@@ -108,8 +142,9 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
 
     let mut asset = Asset::default();
     let mut decoded_images = DecodedImages::new();
+    let mut uv_mappings = Vec::new();
     for material in document.materials() {
-        let converted = convert_material(
+        let (converted, uv_mapping) = convert_material(
             &material,
             &buffers,
             &sources,
@@ -117,7 +152,11 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             &mut asset,
         )
         .map_err(|m| AssetError::invalid(path, m))?;
+        if uv_mapping.mixed {
+            eprintln!("caustica: warning: {}: material '{}': its textures use different texture coordinates or KHR_texture_transforms; all are read through its first texture's", path.display(), converted.name);
+        }
         asset.materials.push(converted);
+        uv_mappings.push(uv_mapping.mapping);
     }
     let mut skipped_primitives = 0;
     let mut default_material = None;
@@ -125,6 +164,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     for mesh in document.meshes() {
         let mut converted = convert_mesh(
             &mesh,
+            &uv_mappings,
             &mut limits,
             &mut asset.materials,
             &mut default_material,
@@ -157,6 +197,34 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         );
     }
     Ok(asset)
+}
+
+/// The first extension the file requires that caustica does not implement: the file cannot be
+/// rendered as its author meant.
+fn unimplemented_required_extension(json: &gltf::json::Root) -> Option<&str> {
+    json.extensions_required
+        .iter()
+        .map(String::as_str)
+        .find(|e| !IMPLEMENTED_EXTENSIONS.contains(e))
+}
+
+/// What of the file is left out, each said once: every extension it uses that caustica does not
+/// implement (the file stays valid without it), and occlusion textures.
+fn ignored_features(json: &gltf::json::Root) -> Vec<String> {
+    let unimplemented: std::collections::BTreeSet<&str> = json
+        .extensions_used
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !IMPLEMENTED_EXTENSIONS.contains(e))
+        .collect();
+    let mut ignored: Vec<String> = unimplemented
+        .into_iter()
+        .map(|e| format!("glTF extension {e} is not implemented: rendering without it"))
+        .collect();
+    if json.materials.iter().any(|m| m.occlusion_texture.is_some()) {
+        ignored.push("occlusion textures are ignored (a path tracer computes occlusion)".to_owned());
+    }
+    ignored
 }
 
 /// Where a glTF's URIs lead: data URIs, or files relative to the glTF read through `files`.
@@ -244,20 +312,32 @@ enum ImageSource {
     File(PathBuf),
 }
 
-/// Textures decoded so far: (source, sRGB) → index into `asset.textures`. An image used as both
-/// colour and data is stored twice, as its texels are decoded differently.
-type DecodedImages = HashMap<(ImageSource, bool), usize>;
+/// Textures decoded so far: (source, sRGB, wrap modes) → index into `asset.textures`. An image used
+/// as both colour and data, or with two samplers' wrap modes, is stored twice.
+type DecodedImages = HashMap<(ImageSource, bool, [Wrap; 2]), usize>;
 
-/// Decodes each image the first time a material uses it in a colour space (sRGB for base colour,
-/// linear for metallic-roughness), into `asset.textures`.
+/// A glTF sampler's wrap mode.
+fn wrap(mode: gltf::texture::WrappingMode) -> Wrap {
+    match mode {
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+    }
+}
+
+/// Decodes each texture's image the first time a material uses it in a colour space (sRGB for base
+/// colour, linear for metallic-roughness) with its sampler's wrap modes, into `asset.textures`.
 fn image_texture(
-    image: gltf::Image,
+    texture: gltf::Texture,
     srgb: bool,
     buffers: &[Rc<Vec<u8>>],
     sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
 ) -> Result<usize, String> {
+    let image = texture.source();
+    let sampler = texture.sampler();
+    let wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
     let source = match image.source() {
         gltf::image::Source::View { view, .. } => ImageSource::View(view.index()),
         gltf::image::Source::Uri { uri, .. } => sources
@@ -265,7 +345,7 @@ fn image_texture(
             .map_err(|m| format!("image {}: {m}", image.index()))?
             .map_or(ImageSource::Image(image.index()), ImageSource::File),
     };
-    if let Some(&index) = decoded_images.get(&(source.clone(), srgb)) {
+    if let Some(&index) = decoded_images.get(&(source.clone(), srgb, wrap)) {
         return Ok(index);
     }
     let file_bytes;
@@ -301,8 +381,10 @@ fn image_texture(
             (file_bytes.as_slice(), name)
         }
     };
-    asset.textures.push(texture::decode_texture(bytes, name, srgb)?);
-    decoded_images.insert((source, srgb), asset.textures.len() - 1);
+    let mut decoded = texture::decode_texture(bytes, name, srgb)?;
+    decoded.wrap = wrap;
+    asset.textures.push(decoded);
+    decoded_images.insert((source, srgb, wrap), asset.textures.len() - 1);
     Ok(asset.textures.len() - 1)
 }
 
@@ -311,19 +393,65 @@ fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Rc<Vec<u8>>]) -> Opti
     buffers.get(view.buffer().index())?.get(view.offset()..end)
 }
 
+/// Where a material's textures are read: a TEXCOORD set, and the affine map of it that
+/// `KHR_texture_transform` gives (T x R x S of the extension: offset, rotation, scale).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct UvMapping {
+    set: u32,
+    transform: Affine2,
+}
+
+impl UvMapping {
+    const PLAIN: UvMapping = UvMapping { set: 0, transform: Affine2::IDENTITY };
+
+    /// The mapping a texture reference names.
+    fn of(tex_coord: u32, transform: Option<gltf::texture::TextureTransform>) -> UvMapping {
+        let Some(t) = transform else {
+            return UvMapping { set: tex_coord, ..UvMapping::PLAIN };
+        };
+        let (sin, cos) = t.rotation().sin_cos();
+        // The extension's rotation matrix has rows (cos, sin) and (-sin, cos); glam's columns.
+        let rotation = Mat2::from_cols(Vec2::new(cos, -sin), Vec2::new(sin, cos));
+        let scale = Mat2::from_diagonal(Vec2::from(t.scale()));
+        UvMapping {
+            set: t.tex_coord().unwrap_or(tex_coord),
+            transform: Affine2::from_mat2_translation(rotation * scale, Vec2::from(t.offset())),
+        }
+    }
+}
+
+/// A material's one [`UvMapping`], and whether its textures named others (which it replaces).
+struct MaterialUvs {
+    mapping: UvMapping,
+    mixed: bool,
+}
+
+/// The mapping of the material's first texture among base colour, emissive, metallic-roughness
+/// and normal (normal textures carry no transform the gltf crate reads).
+fn material_uvs(material: &gltf::Material) -> MaterialUvs {
+    let pbr = material.pbr_metallic_roughness();
+    let info = |i: Option<gltf::texture::Info>| i.map(|i| UvMapping::of(i.tex_coord(), i.texture_transform()));
+    let mappings: Vec<UvMapping> = [info(pbr.base_color_texture()), info(material.emissive_texture()), info(pbr.metallic_roughness_texture()), material.normal_texture().map(|n| UvMapping::of(n.tex_coord(), None))]
+        .into_iter()
+        .flatten()
+        .collect();
+    let mapping = mappings.first().copied().unwrap_or(UvMapping::PLAIN);
+    MaterialUvs { mapping, mixed: mappings.iter().any(|m| *m != mapping) }
+}
+
 fn convert_material(
     material: &gltf::Material,
     buffers: &[Rc<Vec<u8>>],
     sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
-) -> Result<AssetMaterial, String> {
+) -> Result<(AssetMaterial, MaterialUvs), String> {
     let index = material.index().unwrap_or(0);
     let pbr = material.pbr_metallic_roughness();
-    let [r, g, b, _] = pbr.base_color_factor();
+    let [r, g, b, opacity] = pbr.base_color_factor();
     let albedo_texture = match pbr.base_color_texture() {
-        Some(info) if info.tex_coord() == 0 => Some(image_texture(
-            info.texture().source(),
+        Some(info) => Some(image_texture(
+            info.texture(),
             true,
             buffers,
             sources,
@@ -337,8 +465,8 @@ fn convert_material(
     // Decoded only when it can show: glTF's default factor is black, and black times the texture
     // is nothing to render.
     let emission_texture = match material.emissive_texture() {
-        Some(info) if info.tex_coord() == 0 && emission.max_element() > 0.0 => Some(image_texture(
-            info.texture().source(),
+        Some(info) if emission.max_element() > 0.0 => Some(image_texture(
+            info.texture(),
             true,
             buffers,
             sources,
@@ -348,8 +476,8 @@ fn convert_material(
         _ => None,
     };
     let normal = match material.normal_texture() {
-        Some(info) if info.tex_coord() == 0 => Some(NormalMap {
-            texture: image_texture(info.texture().source(), false, buffers, sources, decoded_images, asset)? as u32,
+        Some(info) => Some(NormalMap {
+            texture: image_texture(info.texture(), false, buffers, sources, decoded_images, asset)? as u32,
             scale: info.scale(),
         }),
         _ => None,
@@ -373,9 +501,9 @@ fn convert_material(
     }
     let roughness = roughness.clamp(0.0, 1.0);
     let metallic_roughness = match pbr.metallic_roughness_texture() {
-        Some(info) if info.tex_coord() == 0 => Some(MetallicRoughness {
+        Some(info) => Some(MetallicRoughness {
             texture: image_texture(
-                info.texture().source(),
+                info.texture(),
                 false,
                 buffers,
                 sources,
@@ -388,7 +516,24 @@ fn convert_material(
         }),
         _ => None,
     };
-    Ok(AssetMaterial {
+    let mode = match material.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => None,
+        gltf::material::AlphaMode::Mask => Some(AlphaMode::Mask { cutoff: material.alpha_cutoff().unwrap_or(0.5) }),
+        gltf::material::AlphaMode::Blend => Some(AlphaMode::Blend),
+    };
+    if !opacity.is_finite() || matches!(mode, Some(AlphaMode::Mask { cutoff }) if !cutoff.is_finite()) {
+        return Err(format!("material {index}: baseColorFactor alpha or alphaCutoff is not finite"));
+    }
+    let alpha = mode.map(|mode| Alpha {
+        factor: opacity.clamp(0.0, 1.0),
+        texture: albedo_texture.map(|t| t as u32),
+        mode,
+    });
+    let uvs = material_uvs(material);
+    if !uvs.mapping.transform.is_finite() {
+        return Err(format!("material {index}: KHR_texture_transform is not finite"));
+    }
+    let converted = AssetMaterial {
         name: material
             .name()
             .map_or_else(|| format!("material {index}"), str::to_owned),
@@ -402,14 +547,16 @@ fn convert_material(
         conductor: Conductor::Albedo,
         coat: true,
         metallic_roughness,
-        maps: TextureMaps { emission: emission_texture, normal },
-    })
+        maps: TextureMaps { emission: emission_texture, normal, alpha },
+    };
+    Ok((converted, uvs))
 }
 
 /// Merges a mesh's triangle primitives. An attribute (normals, uvs) is kept only when every
 /// primitive has it, since the result needs exactly one per position.
 fn convert_mesh(
     mesh: &gltf::Mesh,
+    uv_mappings: &[UvMapping],
     limits: &mut AccessorLimits,
     materials: &mut Vec<AssetMaterial>,
     default_material: &mut Option<u32>,
@@ -479,20 +626,23 @@ fn convert_mesh(
             }
             _ => all_tangents = false,
         }
-        match primitive.get(&Semantic::TexCoords(0)) {
+        // The coordinates its material's textures are read through, mapped as they say.
+        let uv_mapping = primitive.material().index().and_then(|m| uv_mappings.get(m)).copied().unwrap_or(UvMapping::PLAIN);
+        let set = uv_mapping.set;
+        match primitive.get(&Semantic::TexCoords(set)) {
             Some(accessor) if all_uvs => {
                 limits.admit(
                     &accessor,
                     Dimensions::Vec2,
                     &[DataType::F32, DataType::U8, DataType::U16],
                 )
-                .map_err(|m| format!("primitive {p}: TEXCOORD_0 {m}"))?;
+                .map_err(|m| format!("primitive {p}: TEXCOORD_{set} {m}"))?;
                 out.uvs.extend(
                     reader
-                        .read_tex_coords(0)
-                        .ok_or_else(|| outside("TEXCOORD_0"))?
+                        .read_tex_coords(set)
+                        .ok_or_else(|| outside(&format!("TEXCOORD_{set}")))?
                         .into_f32()
-                        .map(Vec2::from),
+                        .map(|uv| uv_mapping.transform.transform_point2(Vec2::from(uv))),
                 );
                 all_uvs = out.uvs.len() == out.positions.len() + positions.len();
             }
@@ -764,9 +914,11 @@ mod tests {
   ]}}],
   "materials": [{{
     "name": "glowing glass",
-    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 1], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
+    "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.6, 0.7, 0.75], "baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0.2, "metallicRoughnessTexture": {{"index": 0}}}},
     "emissiveFactor": [1, 0.5, 0.25],
     "emissiveTexture": {{"index": 0}},
+    "alphaMode": "MASK",
+    "alphaCutoff": 0.25,
     "normalTexture": {{"index": 0, "scale": 0.75}},
     "extensions": {{
       "KHR_materials_emissive_strength": {{"emissiveStrength": 4}},
@@ -838,6 +990,8 @@ mod tests {
         assert_eq!(glass.albedo_texture, Some(0));
         assert_eq!(glass.maps.emission, Some(0), "the emissive texture is image 0 as colour, decoded once for both");
         assert_eq!(glass.maps.normal, Some(NormalMap { texture: 1, scale: 0.75 }), "the normal map is image 0 as data, shared with metallic-roughness");
+        let mask = Alpha { factor: 0.75, texture: Some(0), mode: AlphaMode::Mask { cutoff: 0.25 } };
+        assert_eq!(glass.maps.alpha, Some(mask), "baseColorFactor alpha times the base colour texture's, cut at alphaCutoff");
         assert_eq!(
             glass.metallic_roughness,
             Some(MetallicRoughness {
@@ -981,6 +1135,36 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("cut.glb"), "{err}");
+    }
+
+    /// A required extension caustica lacks is an error naming the file and the extension; used
+    /// ones it lacks and occlusion textures are warned about once each.
+    #[test]
+    fn unimplemented_extensions_are_errors_when_required_and_warnings_when_used() {
+        let encode = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
+        let buffer = format!(r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#, triangle_bin().len(), encode(&triangle_bin()));
+        let png = format!(r#"{{"uri": "data:image/png;base64,{}"}}"#, encode(&png_bytes()));
+        let images = format!("[{png}, {png}]");
+        let plain = document(&buffer, &images);
+        let path = write("gltf-required-extension", "required.gltf", plain.replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_draco_mesh_compression"], "scene": 0,"#, 1).as_bytes());
+        let err = load_asset(&path).unwrap_err().to_string();
+        assert!(err.contains(&path.display().to_string()) && err.contains("KHR_draco_mesh_compression"), "{err}");
+
+        let used = plain
+            .replacen(r#""KHR_materials_ior"]"#, r#""KHR_materials_ior", "KHR_materials_sheen", "KHR_materials_sheen", "EXT_texture_webp"]"#, 1)
+            .replacen(r#""normalTexture""#, r#""occlusionTexture": {"index": 0}, "normalTexture""#, 1);
+        let json = gltf::Gltf::from_slice_without_validation(used.as_bytes()).unwrap().document.into_json();
+        assert_eq!(unimplemented_required_extension(&json), None);
+        assert_eq!(
+            ignored_features(&json),
+            [
+                "glTF extension EXT_texture_webp is not implemented: rendering without it",
+                "glTF extension KHR_materials_sheen is not implemented: rendering without it",
+                "occlusion textures are ignored (a path tracer computes occlusion)",
+            ]
+        );
+        let path = write("gltf-used-extension", "used.gltf", used.as_bytes());
+        assert!(load_asset(&path).is_ok(), "a used extension caustica lacks is no error");
     }
 
     #[test]

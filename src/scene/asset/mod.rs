@@ -11,7 +11,8 @@ mod texture;
 
 pub use texture::{downsample_to_fit, srgb_to_linear};
 
-use super::{Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
+
+use super::{Alpha, AlphaMode, Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
 use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::{Path, PathBuf};
@@ -111,6 +112,21 @@ pub struct TextureImage {
     pub texels: Vec<[u8; 4]>,
     /// RGB is sRGB-encoded colour (albedo); false: linear data (glTF metallic-roughness).
     pub srgb: bool,
+    /// How lookups outside [0, 1] find texels, along u and along v (a glTF sampler's wrapS and
+    /// wrapT).
+    pub wrap: [Wrap; 2],
+}
+
+/// What a texture shows outside [0, 1] along one axis (glTF's sampler wrap modes).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum Wrap {
+    /// The texture tiles (glTF REPEAT, and every texture of OBJ files).
+    #[default]
+    Repeat,
+    /// The edge texels extend (CLAMP_TO_EDGE).
+    ClampToEdge,
+    /// Every other tile is mirrored (MIRRORED_REPEAT).
+    MirroredRepeat,
 }
 
 /// A perspective camera in world space.

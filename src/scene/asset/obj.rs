@@ -8,8 +8,13 @@
 //! - `Ke` → emission; `map_Ke` (sRGB) multiplies it per texel. Older files (Embree's `cornell_box.mtl`) mark lights with an ambient colour
 //!   above 1 instead (`Ka 20 20 20`), so without `Ke` a `Ka` with a channel > 1 is the emission.
 //! - `illum 3` or `5` → mirror: reflectivity = largest channel of `Ks`, or 1 when `Ks` is zero.
-//! - Glass: transparency = 1 - `d` when `d` < 1, else `Tr` when > 0, else 1 for `illum 7`;
-//!   `illum 4` and `6` alone, with `d` 1, stay opaque (exporters write them for opaque surfaces).
+//! - Opacity (alpha, tested during traversal): `d` (else 1 - `Tr`) times `map_d`, whose alpha
+//!   channel is the opacity, or its grey level (R) when every texel is opaque (a greyscale map).
+//!   The surface is met with that probability (stochastic opacity, [`AlphaMode::Blend`]), so a
+//!   cut-out texture of 0 and 1 cuts out exactly. Not for the glass illumination models:
+//! - Glass: `illum 4`, `6` or `7` (MTL's transparent models) with transparency = 1 - `d` when `d`
+//!   < 1, else `Tr` when > 0, else 1 for `illum 7`; `illum 4` and `6` alone, with `d` 1, stay
+//!   opaque (exporters write them for opaque surfaces). Such a material has no alpha.
 //! - `Ni` → ior, 1.5 when missing or not positive. R + T <= 1 is kept by lowering R.
 //!
 //! Faces without a material get [`AssetMaterial::default_grey`].
@@ -24,8 +29,8 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::{
-    single_mesh_asset, texture, unit_normals, Asset, AssetError, AssetMaterial, MeshData,
-    NormalMap, TextureImage, TextureMaps,
+    single_mesh_asset, texture, unit_normals, Alpha, AlphaMode, Asset, AssetError, AssetMaterial,
+    MeshData, NormalMap, TextureImage, TextureMaps,
 };
 use crate::input_file::{InputError, InputFiles, InputKind};
 
@@ -182,23 +187,34 @@ impl MaterialLibraries<'_> {
     }
 }
 
-/// Decodes each `map_Kd` or `map_Ke` image once, however many materials share it.
+/// Decodes each texture image once per way it is read, however many materials share it.
 struct Textures<'a> {
     files: &'a InputFiles,
     directory: &'a Path,
-    /// (file, decoded as sRGB) → index into `images`.
-    by_path: HashMap<(PathBuf, bool), usize>,
+    /// (file, how it is read) → index into `images`.
+    by_path: HashMap<(PathBuf, Decoding), usize>,
     images: Vec<TextureImage>,
+}
+
+/// How a texture's texels are read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Decoding {
+    /// sRGB-encoded colour (`map_Kd`, `map_Ke`).
+    Colour,
+    /// Linear data (normal maps).
+    Data,
+    /// Opacity in the alpha channel (`map_d`): a greyscale image's grey level moved there.
+    Opacity,
 }
 
 impl Textures<'_> {
     /// The colour (sRGB) texture that `map` names.
     fn get(&mut self, map: &str) -> Result<usize, AssetError> {
-        self.get_decoded(map, true)
+        self.get_decoded(map, Decoding::Colour)
     }
 
-    /// The texture that `map` names, sRGB-encoded colour or (`srgb` false) linear data.
-    fn get_decoded(&mut self, map: &str, srgb: bool) -> Result<usize, AssetError> {
+    /// The texture that `map` names, read as `decoding` says.
+    fn get_decoded(&mut self, map: &str, decoding: Decoding) -> Result<usize, AssetError> {
         // Options (`-bm 1 -clamp on name.png`) precede the file name, which then has no spaces.
         let name = if map.starts_with('-') {
             map.split_whitespace().last().unwrap_or(map)
@@ -206,14 +222,28 @@ impl Textures<'_> {
             map
         };
         let path = self.directory.join(name);
-        if let Some(&index) = self.by_path.get(&(path.clone(), srgb)) {
+        if let Some(&index) = self.by_path.get(&(path.clone(), decoding)) {
             return Ok(index);
         }
         let mut image = texture::load_texture(self.files, &path)?;
-        image.srgb = srgb;
+        image.srgb = decoding == Decoding::Colour;
+        if decoding == Decoding::Opacity {
+            opacity_in_alpha(&mut image);
+        }
         self.images.push(image);
-        self.by_path.insert((path, srgb), self.images.len() - 1);
+        self.by_path.insert((path, decoding), self.images.len() - 1);
         Ok(self.images.len() - 1)
+    }
+}
+
+/// `map_d` is a scalar map: an image with an alpha channel gives it there, a greyscale one (every
+/// texel opaque, as decoding fills a missing alpha) as its grey level, which is moved into alpha,
+/// where the kernel reads opacity.
+fn opacity_in_alpha(image: &mut TextureImage) {
+    if image.texels.iter().all(|t| t[3] == u8::MAX) {
+        for t in &mut image.texels {
+            t[3] = t[0];
+        }
     }
 }
 
@@ -269,7 +299,12 @@ fn convert_material(
             .ok_or_else(|| bad(&format!("cannot read Tr '{text}'")))?,
         None => 0.0,
     };
-    let transparency = if dissolve < 1.0 {
+    // MTL's transparent illumination models make `d` the glass's transmission; otherwise `d`
+    // (written by some exporters as `Tr` = 1 - d) is the opacity.
+    let glass = matches!(illum, 4 | 6 | 7);
+    let transparency = if !glass {
+        0.0
+    } else if dissolve < 1.0 {
         1.0 - dissolve
     } else if tr > 0.0 {
         tr
@@ -279,6 +314,20 @@ fn convert_material(
         0.0
     };
     let transparency = transparency.clamp(0.0, 1.0);
+    let opacity = match (m.dissolve, tr) {
+        (Some(d), _) => d,
+        (None, tr) => 1.0 - tr,
+    }
+    .clamp(0.0, 1.0);
+    let opacity_texture = match &m.dissolve_texture {
+        Some(map) if !glass => Some(textures.get_decoded(map, Decoding::Opacity)? as u32),
+        _ => None,
+    };
+    let alpha = (!glass && (opacity < 1.0 || opacity_texture.is_some())).then_some(Alpha {
+        factor: opacity,
+        texture: opacity_texture,
+        mode: AlphaMode::Blend,
+    });
     let albedo_texture = m
         .diffuse_texture
         .as_deref()
@@ -299,7 +348,7 @@ fn convert_material(
                 Some(text) => text.parse::<f32>().ok().filter(|s| s.is_finite()).ok_or_else(|| bad(&format!("cannot read the normal map's -bm '{text}'")))?,
                 None => 1.0,
             };
-            Some(NormalMap { texture: textures.get_decoded(map, false)? as u32, scale })
+            Some(NormalMap { texture: textures.get_decoded(map, Decoding::Data)? as u32, scale })
         }
         None => None,
     };
@@ -313,7 +362,7 @@ fn convert_material(
         reflectivity: reflectivity.clamp(0.0, 1.0 - transparency),
         transparency,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(1.5),
-        maps: TextureMaps { emission: emission_texture, normal },
+        maps: TextureMaps { emission: emission_texture, normal, alpha },
         ..AssetMaterial::default_grey()
     })
 }
@@ -352,7 +401,7 @@ newmtl mirror
 illum 3
 Ks 0.9 0.7 0.5
 newmtl glass
-illum 2
+illum 7
 Kd 1 1 1
 d 0.25
 Ni 1.33
@@ -360,7 +409,12 @@ newmtl ambient_light
 Ka 20 20 20
 newmtl tr_glass
 Tr 0.6
-illum 3
+illum 6
+newmtl veil
+illum 2
+d 0.25
+newmtl tr_veil
+Tr 0.6
 ";
 
     fn write_obj(tag: &str, obj: &str, mtl: &str) -> PathBuf {
@@ -429,9 +483,15 @@ illum 3
             Vec3::splat(20.0),
             "old Ka > 1 light convention"
         );
+        assert_eq!(glass.maps.alpha, None, "d of a glass illumination model is its transmission");
         let tr = material("tr_glass");
-        assert_eq!((tr.transparency, tr.ior), (0.6, 1.5));
-        assert!((tr.reflectivity - 0.4).abs() < 1e-6, "R + T <= 1 lowers R");
+        assert_eq!((tr.transparency, tr.ior, tr.maps.alpha), (0.6, 1.5, None));
+        let blend = |factor| Some(Alpha { factor, texture: None, mode: AlphaMode::Blend });
+        let veil = material("veil");
+        assert_eq!((veil.transparency, veil.maps.alpha), (0.0, blend(0.25)), "d is opacity");
+        let tr_veil = material("tr_veil");
+        assert_eq!(tr_veil.transparency, 0.0);
+        assert!((tr_veil.maps.alpha.unwrap().factor - 0.4).abs() < 1e-6, "Tr is 1 - d");
         assert_eq!(asset.dropped_triangles, 0);
     }
 

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use image::{DynamicImage, ImageReader, Limits};
 
-use super::{AssetError, TextureImage};
+use super::{AssetError, TextureImage, Wrap};
 use crate::input_file::{describe_bytes, InputFiles, InputKind};
 
 /// Largest accepted width or height: GPUs commonly cap 2D images at 16384, and the check runs
@@ -91,6 +91,7 @@ fn decode_texture_within(bytes: &[u8], name: String, srgb: bool, max_bytes: u64)
         height: new_height,
         texels,
         srgb,
+        wrap: [Wrap::Repeat; 2],
     })
 }
 
@@ -375,6 +376,7 @@ mod tests {
             height,
             texels: vec![texel; (width * height) as usize],
             srgb: true,
+            wrap: Default::default(),
         };
         let mut textures = vec![
             texture("big", 8, 8, [255, 0, 128, 255]),
@@ -405,6 +407,7 @@ mod tests {
             height: 1,
             texels: vec![[0, 0, 0, 0], [255, 255, 255, 255]],
             srgb: true,
+            wrap: Default::default(),
         }];
         assert_eq!(downsample_to_fit(&mut stripes, 4), 4);
         assert_eq!(stripes[0].texels, vec![[188, 188, 188, 128]]);
@@ -416,6 +419,7 @@ mod tests {
             height: 1,
             texels: vec![[0, 0, 0, 0], [255, 255, 255, 255]],
             srgb: false,
+            wrap: Default::default(),
         }];
         assert_eq!(downsample_to_fit(&mut data, 4), 4);
         assert_eq!(data[0].texels, vec![[128, 128, 128, 128]]);
