@@ -120,7 +120,7 @@ impl Mapper<'_> {
         if let Some(texture) = of("texture").first() {
             return Err(texture.error("textures are not supported"));
         }
-        for o in objects.iter().filter(|o| matches!(o.tag.as_str(), "film" | "sampler" | "rfilter")) {
+        if let Some(o) = objects.iter().find(|o| matches!(o.tag.as_str(), "film" | "sampler" | "rfilter")) {
             return Err(o.error("belongs inside a <sensor>"));
         }
         let mut file = self.file.take().expect("set above");
