@@ -91,18 +91,7 @@ impl Mapper<'_> {
         let (camera, film, sampler) = self.sensor(&sensor)?;
         let mut integrator = self.integrator(&of("integrator"))?;
         integrator.sampler = sampler;
-        self.file = Some(SceneFile {
-            camera,
-            film,
-            integrator,
-            materials: BTreeMap::new(),
-            spheres: vec![],
-            quads: vec![],
-            triangles: vec![],
-            meshes: vec![],
-            environment: None,
-            lights: vec![],
-        });
+        self.file = Some(SceneFile::empty(camera, film, integrator));
         for shape in of("shape") {
             match shape.plugin.as_str() {
                 // A definition, placed by the instances that <ref> it.
