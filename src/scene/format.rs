@@ -88,6 +88,14 @@ pub struct SceneFile {
     pub lights: Vec<LightFile>,
 }
 
+impl SceneFile {
+    /// A scene with this camera, film and integrator and nothing in it yet: what the importers
+    /// fill.
+    pub fn empty(camera: CameraFile, film: FilmFile, integrator: IntegratorFile) -> Self {
+        Self { camera, film, integrator, materials: Default::default(), spheres: vec![], quads: vec![], triangles: vec![], meshes: vec![], environment: None, lights: vec![] }
+    }
+}
+
 #[derive(Deserialize, Serialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct CameraFile {

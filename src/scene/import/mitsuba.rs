@@ -91,18 +91,7 @@ impl Mapper<'_> {
         let (camera, film, sampler) = self.sensor(&sensor)?;
         let mut integrator = self.integrator(&of("integrator"))?;
         integrator.sampler = sampler;
-        self.file = Some(SceneFile {
-            camera,
-            film,
-            integrator,
-            materials: BTreeMap::new(),
-            spheres: vec![],
-            quads: vec![],
-            triangles: vec![],
-            meshes: vec![],
-            environment: None,
-            lights: vec![],
-        });
+        self.file = Some(SceneFile::empty(camera, film, integrator));
         for shape in of("shape") {
             match shape.plugin.as_str() {
                 // A definition, placed by the instances that <ref> it.
@@ -120,7 +109,7 @@ impl Mapper<'_> {
         if let Some(texture) = of("texture").first() {
             return Err(texture.error("textures are not supported"));
         }
-        for o in objects.iter().filter(|o| matches!(o.tag.as_str(), "film" | "sampler" | "rfilter")) {
+        if let Some(o) = objects.iter().find(|o| matches!(o.tag.as_str(), "film" | "sampler" | "rfilter")) {
             return Err(o.error("belongs inside a <sensor>"));
         }
         let mut file = self.file.take().expect("set above");

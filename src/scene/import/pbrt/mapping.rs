@@ -22,7 +22,7 @@ use super::parser::{MaterialRef, Model, ShapeUse};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
 use glam::{DMat4, DVec3, Vec3};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::path::Path;
 use std::rc::Rc;
 
@@ -58,18 +58,8 @@ pub struct Mapper<'a> {
 
 /// The scene file of `model`, read from `scene` (for messages).
 pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: &mut Notes) -> Result<SceneFile> {
-    let out = SceneFile {
-        camera: CameraFile { position: Array([0.0; 3]), look_at: Array([0.0, 0.0, -1.0]), up: Array([0.0, 1.0, 0.0]), fov: 90.0, aperture: 0.0, focus_distance: None },
-        film: FilmFile::default(),
-        integrator: IntegratorFile::default(),
-        materials: BTreeMap::new(),
-        spheres: vec![],
-        quads: vec![],
-        triangles: vec![],
-        meshes: vec![],
-        environment: None,
-        lights: vec![],
-    };
+    let camera = CameraFile { position: Array([0.0; 3]), look_at: Array([0.0, 0.0, -1.0]), up: Array([0.0, 1.0, 0.0]), fov: 90.0, aperture: 0.0, focus_distance: None };
+    let out = SceneFile::empty(camera, FilmFile::default(), IntegratorFile::default());
     let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
     let start = Location { file: Rc::from(scene.display().to_string().as_str()), line: 1 };
     let absent = |directive: &'static str, kind: &str| Directive { directive, kind: kind.to_owned(), at: start.clone(), params: vec![] };
