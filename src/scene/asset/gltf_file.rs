@@ -552,6 +552,43 @@ fn convert_material(
     Ok((converted, uvs))
 }
 
+/// The error for primitive `p`'s accessor `what` that reads past its buffer.
+fn outside_buffer(p: usize, what: &str) -> String {
+    format!("primitive {p}: the {what} accessor lies outside its buffer")
+}
+
+/// A float vertex attribute that a merged mesh keeps only when every primitive has it (normals,
+/// tangents).
+struct VertexAttribute {
+    semantic: Semantic,
+    name: &'static str,
+    dimensions: Dimensions,
+}
+
+impl VertexAttribute {
+    /// Appends `primitive`'s values to `values` while the primitives before it all had some
+    /// (`complete`); returns whether the merged mesh still has one per vertex of its `vertices`.
+    fn append<T, I: Iterator<Item = T>>(
+        &self,
+        primitive: &gltf::Primitive,
+        limits: &mut AccessorLimits,
+        complete: bool,
+        values: &mut Vec<T>,
+        vertices: usize,
+        read: impl FnOnce() -> Option<I>,
+    ) -> Result<bool, String> {
+        let p = primitive.index();
+        match primitive.get(&self.semantic) {
+            Some(accessor) if complete => {
+                limits.admit(&accessor, self.dimensions, &[DataType::F32]).map_err(|m| format!("primitive {p}: {} {m}", self.name))?;
+                values.extend(read().ok_or_else(|| outside_buffer(p, self.name))?);
+                Ok(values.len() == vertices)
+            }
+            _ => Ok(false),
+        }
+    }
+}
+
 /// Merges a mesh's triangle primitives. An attribute (normals, uvs) is kept only when every
 /// primitive has it, since the result needs exactly one per position.
 fn convert_mesh(
@@ -576,8 +613,7 @@ fn convert_mesh(
         }
         let buffers = limits.buffers();
         let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|b| b.as_slice()));
-        let outside =
-            |what: &str| format!("primitive {p}: the {what} accessor lies outside its buffer");
+        let outside = |what: &str| outside_buffer(p, what);
 
         let position_accessor = primitive
             .get(&Semantic::Positions)
@@ -598,34 +634,11 @@ fn convert_mesh(
             .map_err(|_| "more than 2^32 vertices".to_owned())?
             - positions.len() as u32;
 
-        match primitive.get(&Semantic::Normals) {
-            Some(accessor) if all_normals => {
-                limits.admit(&accessor, Dimensions::Vec3, &[DataType::F32])
-                    .map_err(|m| format!("primitive {p}: NORMAL {m}"))?;
-                normals.extend(
-                    reader
-                        .read_normals()
-                        .ok_or_else(|| outside("NORMAL"))?
-                        .map(Vec3::from),
-                );
-                all_normals = normals.len() == out.positions.len() + positions.len();
-            }
-            _ => all_normals = false,
-        }
-        match primitive.get(&Semantic::Tangents) {
-            Some(accessor) if all_tangents => {
-                limits.admit(&accessor, Dimensions::Vec4, &[DataType::F32])
-                    .map_err(|m| format!("primitive {p}: TANGENT {m}"))?;
-                tangents.extend(
-                    reader
-                        .read_tangents()
-                        .ok_or_else(|| outside("TANGENT"))?
-                        .map(Vec4::from),
-                );
-                all_tangents = tangents.len() == out.positions.len() + positions.len();
-            }
-            _ => all_tangents = false,
-        }
+        let vertices = out.positions.len() + positions.len();
+        let normal = VertexAttribute { semantic: Semantic::Normals, name: "NORMAL", dimensions: Dimensions::Vec3 };
+        all_normals = normal.append(&primitive, limits, all_normals, &mut normals, vertices, || reader.read_normals().map(|r| r.map(Vec3::from)))?;
+        let tangent = VertexAttribute { semantic: Semantic::Tangents, name: "TANGENT", dimensions: Dimensions::Vec4 };
+        all_tangents = tangent.append(&primitive, limits, all_tangents, &mut tangents, vertices, || reader.read_tangents().map(|r| r.map(Vec4::from)))?;
         // The coordinates its material's textures are read through, mapped as they say.
         let uv_mapping = primitive.material().index().and_then(|m| uv_mappings.get(m)).copied().unwrap_or(UvMapping::PLAIN);
         let set = uv_mapping.set;
