@@ -3,9 +3,8 @@
 // (bvh.glsl), so camera, bounce and shadow rays alike pass through what is not there, and
 // shading, light sampling and MIS never meet it. Only kernels for scenes with alpha materials
 // call it (SCENE_ALPHA); there, a triangle a ray meets whose material is opaque costs two loads.
-// Not yet handled: an emitter with alpha. Next-event estimation samples its triangles whole (the
-// shadow ray stops short of the light), while rays that meet it count it only where it is there,
-// so such an emitter is too bright by the light-sampled share of its light.
+// An emitter with alpha is counted by next-event estimation as rays that meet it count it:
+// light_presence (lights.glsl) weighs each point it samples by alpha_presence there.
 
 // A uniform number in [0, 1) fixed by the ray and the triangle it meets: BLEND's coin. The same ray
 // meeting the same triangle always gets the same answer (so an image does not depend on how its
@@ -28,10 +27,21 @@ bool alpha_passes(MeshTriangle tri, uint triangle, uint instance, vec2 bary, vec
     if (mode == ALPHA_OPAQUE) return true;
     float opacity = alpha.y;
     uint map = floatBitsToUint(alpha.x);
-    if (SCENE_TEXTURES == 1 && map != NO_TEXTURE && (instances[instance].info.z & INSTANCE_HAS_UVS) != 0u) {
+    // A mesh without texture coordinates has zeros in their place (acceleration.rs): its texture
+    // is read at (0, 0) here as in shading (surface.glsl) and light sampling (light_presence).
+    if (SCENE_TEXTURES == 1 && map != NO_TEXTURE) {
         uvec3 v = floatBitsToUint(vec3(tri.v0.w, tri.e1.w, tri.e2.w));
         vec2 uv = (1.0 - bary.x - bary.y) * load_vertex_uvs(v.x) + bary.x * load_vertex_uvs(v.y) + bary.y * load_vertex_uvs(v.z);
         opacity *= texture_alpha(map, uv);
     }
     return mode == ALPHA_MASK ? opacity >= alpha.z : blend_coin(o, d, triangle, instance) < opacity;
+}
+
+// How much of a surface of non-opaque alpha row `alpha` (Material.alpha) and opacity `opacity` is
+// there, in expectation over the coin alpha_passes tosses: 1 or 0 under MASK, the opacity under
+// BLEND. Next-event estimation takes this expectation instead of tossing the coin (less noise, the
+// same mean), which also keeps MIS consistent: a BSDF ray meets the emitter with probability equal
+// to the opacity, so both strategies estimate opacity x radiance.
+float alpha_presence(vec4 alpha, float opacity) {
+    return floatBitsToUint(alpha.w) == ALPHA_MASK ? (opacity >= alpha.z ? 1.0 : 0.0) : opacity;
 }

@@ -35,7 +35,7 @@ float light_power(Primitive p) {
     return primitive_area(p) * PI * luminance * sides;
 }
 
-#if SCENE_EMISSIVE_TEXTURES
+#if SCENE_EMISSIVE_TEXTURES || SCENE_ALPHA
 // Texture coordinates at `point` on the mesh-triangle light `p`: its barycentric coordinates in
 // the world-space triangle, applied to the corners' coordinates in the order the light keeps.
 vec2 light_uv(Primitive p, vec3 point) {
@@ -48,6 +48,20 @@ vec2 light_uv(Primitive p, vec3 point) {
     uvec3 corner = floatBitsToUint(vec3(triangle.v0.w, triangle.e1.w, triangle.e2.w));
     if ((floatBitsToUint(p.a.w) & TRIANGLE_LIGHT_MIRRORED) != 0u) corner.yz = corner.zy;
     return (1.0 - b1 - b2) * load_vertex_uvs(corner.x) + b1 * load_vertex_uvs(corner.y) + b2 * load_vertex_uvs(corner.z);
+}
+#endif
+
+#if SCENE_ALPHA
+// How much of area light `p` (of material `m`) is there at `point`, which light sampling drew from
+// the whole triangle: rays that meet the light find it only where its alpha keeps it (alpha_passes),
+// and next-event estimation must count the same light, or an emitter with alpha is too bright by
+// its light-sampled share. Only mesh triangles carry alpha.
+float light_presence(Primitive p, Material m, vec3 point) {
+    if (floatBitsToUint(m.alpha.w) == ALPHA_OPAQUE) return 1.0;
+    float opacity = m.alpha.y;
+    uint map = floatBitsToUint(m.alpha.x);
+    if (SCENE_TEXTURES == 1 && map != NO_TEXTURE) opacity *= texture_alpha(map, light_uv(p, point));
+    return alpha_presence(m.alpha, opacity);
 }
 #endif
 
@@ -326,6 +340,9 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
 #if SCENE_EMISSIVE_TEXTURES
     uint emission_index = floatBitsToUint(m.maps.x);
     if (emission_index != NO_TEXTURE) ls.radiance *= texture_rgb(emission_index, light_uv(p, point));
+#endif
+#if SCENE_ALPHA
+    ls.radiance *= light_presence(p, m, point);
 #endif
     ls.pdf = light_pdf(p, ref, ls.dir, ls.dist);
     return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
