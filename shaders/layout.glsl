@@ -36,7 +36,7 @@ const uint CONDUCTOR_ALBEDO = 2u;
 // roughness and transmission factors that surface_material() turns into R, T and alpha per texel.
 // maps.x = emission texture index (uint bits; NO_TEXTURE for none), which multiplies emission_t.rgb
 // per texel; maps.y = tangent-space normal map index (uint bits; NO_TEXTURE for none), maps.z its
-// scale (of the normal's x and y); maps.w unused. alpha (tested in traversal, alpha.glsl): .x = an
+// scale (of the normal's x and y); maps.w = MATERIAL_* flags (uint bits). alpha (tested in traversal, alpha.glsl): .x = an
 // RGBA texture whose A channel is the opacity (uint bits; NO_TEXTURE for none), .y = the opacity
 // factor it multiplies, .z = the cutoff of ALPHA_MASK, .w = the ALPHA_* mode (uint bits).
 struct Material {
@@ -49,6 +49,15 @@ struct Material {
     vec4 maps;
     vec4 alpha;
 };
+
+// Material flags in maps.w (MATERIAL_* must match layout.rs): the rough lobes and the coat are
+// Beckmann rather than GGX; the T lobe is a thin sheet rather than the surface of a solid.
+const uint MATERIAL_BECKMANN = 1u;
+const uint MATERIAL_THIN = 2u;
+
+uint material_flags(Material m) {
+    return floatBitsToUint(m.maps.w);
+}
 
 // Alpha modes (ALPHA_* must match layout.rs): always there; there where the opacity reaches the
 // cutoff (glTF MASK); met with probability equal to the opacity (glTF BLEND, MTL d).

@@ -2,7 +2,8 @@
 // a conductor with Fresnel), with probability T a dielectric, otherwise the base (diffuse, or a
 // plastic: diffuse under a dielectric coat). A lobe's weight equals the probability of picking it,
 // so the two cancel; the path then samples, evaluates and MIS-weights that lobe alone, which keeps
-// delta lobes (roughness ~0) and rough lobes in one scheme. Rough lobes are GGX (microfacet.glsl).
+// delta lobes (roughness ~0) and rough lobes in one scheme. Rough lobes are GGX or Beckmann
+// (microfacet.glsl).
 
 #include "fresnel.glsl"
 #include "microfacet.glsl"
@@ -11,6 +12,7 @@ const uint LOBE_DIFFUSE = 0u;         // albedo / pi
 const uint LOBE_REFLECT = 1u;         // GGX or mirror reflection with Fresnel `fresnel`
 const uint LOBE_DIELECTRIC = 2u;      // GGX or smooth reflection + refraction (Walter et al. 2007)
 const uint LOBE_COATED_DIFFUSE = 3u;  // the diffuse base of a plastic, seen through its coat
+const uint LOBE_THIN_DIELECTRIC = 4u; // a thin sheet of glass: reflects, or passes straight through
 
 // Fresnel of the coat's reflection, next to the CONDUCTOR_* kinds of layout.glsl.
 const uint FRESNEL_COAT = 3u;
@@ -18,7 +20,8 @@ const uint FRESNEL_COAT = 3u;
 struct Lobe {
     uint kind;
     uint fresnel;     // LOBE_REFLECT: CONDUCTOR_* or FRESNEL_COAT
-    float alpha;      // GGX alpha; below ALPHA_DELTA the lobe is smooth (a delta lobe)
+    float alpha;      // microfacet alpha; below ALPHA_DELTA the lobe is smooth (a delta lobe)
+    uint distribution;  // MICROFACET_* of the rough R and T lobes and the coat
     float eta;        // eta_i / eta_t across the interface (dielectric and coat)
     vec3 color;       // diffuse albedo, F0 (CONDUCTOR_ALBEDO) or eta (CONDUCTOR_COMPLEX)
     vec3 k;           // CONDUCTOR_COMPLEX: extinction coefficient
@@ -45,7 +48,7 @@ vec3 from_local(Lobe l, vec3 w) {
 }
 
 bool lobe_is_delta(Lobe l) {
-    return (l.kind == LOBE_REFLECT || l.kind == LOBE_DIELECTRIC) && l.alpha < ALPHA_DELTA;
+    return ((l.kind == LOBE_REFLECT || l.kind == LOBE_DIELECTRIC) && l.alpha < ALPHA_DELTA) || l.kind == LOBE_THIN_DIELECTRIC;
 }
 
 vec3 lobe_fresnel(Lobe l, float cos_i) {
@@ -65,6 +68,7 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
     // A scene without rough lobes (SCENE_ROUGH_LOBES, src/render/features.rs) has every R and T lobe
     // smooth: the constant lets the compiler drop the GGX code.
     l.alpha = SCENE_ROUGH_LOBES == 1 ? m.params.w : 0.0;
+    l.distribution = (material_flags(m) & MATERIAL_BECKMANN) != 0u ? MICROFACET_BECKMANN : MICROFACET_GGX;
     l.eta = 1.0;
     l.color = m.albedo_r.rgb;
     l.k = vec3(0.0);
@@ -81,6 +85,10 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
             l.color = m.conductor_eta.rgb;
             l.k = m.conductor_k.rgb;
         }
+    } else if (xi < r + t && SCENE_THIN_DIELECTRICS == 1 && (material_flags(m) & MATERIAL_THIN) != 0u) {
+        // A sheet has the outside medium on both sides, whichever side the ray comes from.
+        l.kind = LOBE_THIN_DIELECTRIC;
+        l.eta = 1.0 / m.params.x;
     } else if (xi < r + t) {
         l.kind = LOBE_DIELECTRIC;
         l.eta = entering ? 1.0 / m.params.x : m.params.x;
@@ -166,12 +174,12 @@ bool sample_reflect(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
     }
     vec3 wo = to_local(l, -d);
     if (wo.z <= 0.0) return false;
-    vec3 m = sample_vndf(wo, l.alpha, rng_next2(rng));
+    vec3 m;
+    if (!sample_normal(wo, l.alpha, l.distribution, rng_next2(rng), m)) return false;
     vec3 wi = reflect(-wo, m);
     if (wi.z <= 0.0) return false;
-    s.pdf = reflection_pdf(wo, m, l.alpha);
-    // G2 / G1(wo): what remains of f cos / pdf once D and the Jacobians cancel.
-    s.weight = lobe_fresnel(l, dot(wo, m)) * (ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha) * l.scale);
+    s.pdf = reflection_pdf(wo, m, l.alpha, l.distribution);
+    s.weight = lobe_fresnel(l, dot(wo, m)) * (microfacet_weight(wo, wi, m, l.alpha, l.distribution) * l.scale);
     s.dir = from_local(l, wi);
     return s.pdf > 0.0;
 }
@@ -184,8 +192,8 @@ vec3 eval_reflect(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
     vec3 h = normalize(wo + wi);
     float cos_h = dot(wo, h);
     if (cos_h <= 0.0) return vec3(0.0);
-    pdf = reflection_pdf(wo, h, l.alpha);
-    return lobe_fresnel(l, cos_h) * (ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) / (4.0 * wo.z) * l.scale);
+    pdf = reflection_pdf(wo, h, l.alpha, l.distribution);
+    return lobe_fresnel(l, cos_h) * (microfacet_d(h, l.alpha, l.distribution) * microfacet_g2(wo, wi, l.alpha, l.distribution) / (4.0 * wo.z) * l.scale);
 }
 
 // Dielectric: smooth or GGX reflection and refraction (Walter et al. 2007), each picked with its
@@ -202,20 +210,21 @@ bool sample_dielectric(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
     }
     vec3 wo = to_local(l, -d);
     if (wo.z <= 0.0) return false;
-    vec3 m = sample_vndf(wo, l.alpha, rng_next2(rng));
+    vec3 m;
+    if (!sample_normal(wo, l.alpha, l.distribution, rng_next2(rng), m)) return false;
     float f = fresnel_dielectric(dot(wo, m), l.eta);
     vec3 refracted = refract(-wo, m, l.eta);
     vec3 wi;
     if (rng_next(rng) < f || dot(refracted, refracted) == 0.0) {
         wi = reflect(-wo, m);
         if (wi.z <= 0.0) return false;
-        s.pdf = f * reflection_pdf(wo, m, l.alpha);
+        s.pdf = f * reflection_pdf(wo, m, l.alpha, l.distribution);
     } else {
         wi = refracted;
         if (wi.z >= 0.0) return false;
-        s.pdf = (1.0 - f) * refraction_pdf(wo, wi, m, l.alpha, l.eta);
+        s.pdf = (1.0 - f) * refraction_pdf(wo, wi, m, l.alpha, l.eta, l.distribution);
     }
-    s.weight = vec3(ggx_g2(wo, wi, l.alpha) / ggx_g1(wo, l.alpha) * l.scale);
+    s.weight = vec3(microfacet_weight(wo, wi, m, l.alpha, l.distribution) * l.scale);
     s.dir = from_local(l, wi);
     return s.pdf > 0.0;
 }
@@ -230,8 +239,8 @@ vec3 eval_dielectric(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
         float cos_h = dot(wo, h);
         if (cos_h <= 0.0) return vec3(0.0);
         float f = fresnel_dielectric(cos_h, l.eta);
-        pdf = f * reflection_pdf(wo, h, l.alpha);
-        return vec3(f * ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) / (4.0 * wo.z) * l.scale);
+        pdf = f * reflection_pdf(wo, h, l.alpha, l.distribution);
+        return vec3(f * microfacet_d(h, l.alpha, l.distribution) * microfacet_g2(wo, wi, l.alpha, l.distribution) / (4.0 * wo.z) * l.scale);
     }
     // Refraction: the generalised half vector, turned to the +z side.
     vec3 h = -(l.eta * wo + wi);
@@ -243,11 +252,23 @@ vec3 eval_dielectric(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
     if (cos_o <= 0.0 || cos_t >= 0.0) return vec3(0.0);
     float f = fresnel_dielectric(cos_o, l.eta);
     float denom = l.eta * cos_o + cos_t;
-    pdf = (1.0 - f) * refraction_pdf(wo, wi, h, l.alpha, l.eta);
+    pdf = (1.0 - f) * refraction_pdf(wo, wi, h, l.alpha, l.eta, l.distribution);
     // Walter et al.'s BTDF times |wi.z|, without the 1/eta^2 radiance scaling (as the smooth
     // dielectric above: the factors cancel for a camera outside a closed object).
-    float fcos = (1.0 - f) * ggx_d(h, l.alpha) * ggx_g2(wo, wi, l.alpha) * cos_o * abs(cos_t) / (wo.z * denom * denom);
+    float fcos = (1.0 - f) * microfacet_d(h, l.alpha, l.distribution) * microfacet_g2(wo, wi, l.alpha, l.distribution) * cos_o * abs(cos_t) / (wo.z * denom * denom);
     return vec3(fcos * l.scale);
+}
+
+// Thin dielectric (Mitsuba's and pbrt-v4's thindielectric): a sheet whose two parallel faces are
+// the same interface. Light that enters leaves parallel to how it came, after any number of inner
+// reflections; summing them, F + (1 - F)^2 F (1 + F^2 + F^4 + ...) = 2F / (1 + F) is reflected and
+// the rest passes straight through. Smooth only (a delta lobe: no eval).
+bool sample_thin_dielectric(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
+    float f = fresnel_dielectric(-dot(d, l.n), l.eta);
+    float reflected = 2.0 * f / (1.0 + f);
+    s.dir = rng_next(rng) < reflected ? reflect(d, l.n) : d;
+    s.weight = vec3(l.scale);
+    return true;
 }
 
 // Samples the lobe for a ray arriving along `d`. False when it yields no direction (the path ends).
@@ -261,6 +282,7 @@ bool sample_lobe(Lobe l, vec3 d, inout Rng rng, out BsdfSample s) {
         case LOBE_COATED_DIFFUSE: return sample_coated_diffuse(l, d, rng, s);
         case LOBE_REFLECT: return sample_reflect(l, d, rng, s);
         case LOBE_DIELECTRIC: return sample_dielectric(l, d, rng, s);
+        case LOBE_THIN_DIELECTRIC: return sample_thin_dielectric(l, d, rng, s);
         default: return false;
     }
 }

@@ -19,8 +19,8 @@ use bytemuck::Zeroable;
 use caustica::gpu::{compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
 use caustica::render::{assemble_with_kernel_files, shader_file};
 use caustica::render::bindings::KernelBuffer;
-use caustica::render::layout::{GpuMaterial, ALPHA_OPAQUE, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, NO_TEXTURE};
-use caustica::scene::average_fresnel;
+use caustica::render::layout::{GpuMaterial, ALPHA_OPAQUE, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, MATERIAL_BECKMANN, MATERIAL_THIN, NO_TEXTURE};
+use caustica::scene::{average_fresnel, fresnel_dielectric};
 use common::*;
 use std::f64::consts::PI;
 
@@ -32,6 +32,8 @@ use std::f64::consts::PI;
 ///   (dir, lobe code, or -1 - code when sample_lobe fails), (weight, pdf), (eval_lobe's f cos, its pdf).
 /// Mode 1: finds the lobe with the requested code (pick_lobe with successive streams) and writes
 ///   eval_lobe's pdf for every direction of `dirs`.
+/// Mode 2: writes the weak white furnace integrand D(h) G1(wo) / (4 wo.z) of the material's
+///   microfacet distribution for every direction wi of `dirs` (h the half vector, wo = -d).
 /// A lobe's code is kind * 4 + fresnel, which tells the plastic's coat from a conductor.
 const TEST_KERNEL: &str = r#"#version 460
 layout(local_size_x = 64) in;
@@ -58,6 +60,19 @@ void main() {
     uint id = gl_GlobalInvocationID.x;
     if (id >= query.info.y) return;
     vec3 d = query.d.xyz;
+    if (query.info.x == 2u) {
+        Material m = materials[0];
+        uint distribution = (material_flags(m) & MATERIAL_BECKMANN) != 0u ? MICROFACET_BECKMANN : MICROFACET_GGX;
+        vec3 wo = -d;
+        vec3 h = wo + dirs[id].xyz;
+        float value = 0.0;
+        if (dot(h, h) > 0.0 && dot(wo, normalize(h)) > 0.0) {
+            h = normalize(h);
+            value = microfacet_d(h, m.params.w, distribution) * microfacet_g1(wo, m.params.w, distribution) / (4.0 * wo.z);
+        }
+        results[id] = vec4(value);
+        return;
+    }
     if (query.info.x == 0u) {
         Rng rng = rng_for_sample(query.info.w, id, 0u, SAMPLER_INDEPENDENT);
         Lobe l = lobe_for(rng);
@@ -93,7 +108,7 @@ const PHI_BINS: usize = 160;
 const GL_NODES: [f64; 5] = [-0.906_179_845_938_664, -0.538_469_310_105_683_1, 0.0, 0.538_469_310_105_683_1, 0.906_179_845_938_664];
 const GL_WEIGHTS: [f64; 5] = [0.236_926_885_056_189_1, 0.478_628_670_499_366_5, 0.568_888_888_888_888_9, 0.478_628_670_499_366_5, 0.236_926_885_056_189_1];
 /// Number of chi-square tests in this file (lobes tested), for the Bonferroni correction.
-const TESTS: f64 = 13.0;
+const TESTS: f64 = 18.0;
 const SIGNIFICANCE: f64 = 1e-4 / TESTS;
 /// Cells with fewer expected samples are pooled, as the textbook test requires.
 const MIN_EXPECTED: f64 = 5.0;
@@ -385,6 +400,12 @@ fn material(albedo: f32, r: f32, t: f32, ior: f32, alpha: f32) -> GpuMaterial {
     }
 }
 
+/// `m` with Beckmann's distribution instead of GGX.
+fn beckmann(mut m: GpuMaterial) -> GpuMaterial {
+    m.maps[3] = f32::from_bits(MATERIAL_BECKMANN);
+    m
+}
+
 /// Gold's complex index (roughly, at R, G, B).
 fn gold(alpha: f32) -> GpuMaterial {
     let mut m = material(1.0, 1.0, 0.0, 1.0, alpha);
@@ -404,14 +425,17 @@ fn run_cases(cases: &[Case], kind: u32) {
 }
 
 /// The lobes of shaders/materials.glsl, by the name of their LOBE_* kind, each with the cases that
-/// pick it: a lobe added to the kernel without cases here fails
-/// `every_lobe_of_the_kernel_has_chi_square_cases`.
+/// pick it: a lobe added to the kernel without cases here (or a test of its own in DELTA_LOBES)
+/// fails `every_lobe_of_the_kernel_has_chi_square_cases`.
 const LOBES: [(&str, fn() -> Vec<Case>); 4] = [
     ("LOBE_DIFFUSE", diffuse_cases),
     ("LOBE_REFLECT", reflector_cases),
     ("LOBE_DIELECTRIC", dielectric_cases),
     ("LOBE_COATED_DIFFUSE", coated_diffuse_cases),
 ];
+
+/// Lobes that are always delta (no pdf to test against), each with the test that checks it.
+const DELTA_LOBES: [(&str, &str); 1] = [("LOBE_THIN_DIELECTRIC", "a_thin_sheet_reflects_two_f_over_one_plus_f_and_passes_the_rest_straight")];
 
 fn diffuse_cases() -> Vec<Case> {
     vec![Case { name: "diffuse (cos 0.6)".into(), material: material(0.7, 0.0, 0.0, 1.5, 0.0), cos_o: 0.6, entering: true }]
@@ -427,6 +451,11 @@ fn reflector_cases() -> Vec<Case> {
             cases.push(Case { name, material, cos_o, entering: true });
         }
     }
+    // Beckmann samples all normals by D cos rather than the visible ones: grazing incidence at
+    // high alpha is where its rejected samples (normals facing away) and its weights differ most.
+    for (alpha, cos_o) in [(0.05, 0.2), (0.3, 0.9), (1.0, 0.2)] {
+        cases.push(Case { name: format!("Beckmann conductor, alpha {alpha} (cos {cos_o})"), material: beckmann(gold(alpha)), cos_o, entering: true });
+    }
     cases
 }
 
@@ -437,6 +466,10 @@ fn dielectric_cases() -> Vec<Case> {
             let name = format!("dielectric ior 1.5, alpha {alpha}, {side} (cos 0.7)");
             cases.push(Case { name, material: material(1.0, 0.0, 1.0, 1.5, alpha), cos_o: 0.7, entering });
         }
+    }
+    for (entering, side) in [(true, "from outside"), (false, "from inside")] {
+        let name = format!("Beckmann dielectric ior 1.5, alpha 0.3, {side} (cos 0.7)");
+        cases.push(Case { name, material: beckmann(material(1.0, 0.0, 1.0, 1.5, 0.3)), cos_o: 0.7, entering });
     }
     cases
 }
@@ -465,7 +498,7 @@ fn kernel_lobes() -> Vec<(String, u32)> {
 #[test]
 fn every_lobe_of_the_kernel_has_chi_square_cases() {
     let mut kernel: Vec<String> = kernel_lobes().into_iter().map(|(name, _)| name).collect();
-    let mut tested: Vec<String> = LOBES.iter().map(|(name, _)| name.to_string()).collect();
+    let mut tested: Vec<String> = LOBES.iter().map(|(name, _)| name.to_string()).chain(DELTA_LOBES.iter().map(|(name, _)| name.to_string())).collect();
     kernel.sort();
     tested.sort();
     assert_eq!(kernel, tested, "the lobes of materials.glsl and the lobes with chi-square cases here differ");
@@ -499,6 +532,79 @@ fn rough_dielectric_samples_follow_its_pdf() {
 #[test]
 fn plastic_samples_follow_its_pdfs() {
     run_lobe("LOBE_COATED_DIFFUSE");
+}
+
+/// A thin sheet of glass (ior 1.5, Mitsuba's and pbrt-v4's thindielectric) reflects 2F / (1 + F)
+/// of the light (every inner reflection summed) exactly in the mirror direction and passes the rest
+/// exactly along the incoming ray, with weight 1, from either side. At cos 0.7, F = 0.0509 and
+/// 2F / (1 + F) = 0.0969; 2^20 samples put five binomial standard errors at 0.0014, so a sheet
+/// that reflected F alone (one interface), or refracted, fails by far.
+#[test]
+fn a_thin_sheet_reflects_two_f_over_one_plus_f_and_passes_the_rest_straight() {
+    let (_lock, ctx) = gpu();
+    let mut kernel = Kernel::new(&ctx);
+    let kind = kernel_lobes().into_iter().find(|(name, _)| name == "LOBE_THIN_DIELECTRIC").expect("materials.glsl has LOBE_THIN_DIELECTRIC").1;
+    let mut sheet = material(1.0, 0.0, 1.0, 1.5, 0.0);
+    sheet.maps[3] = f32::from_bits(MATERIAL_THIN);
+    let cos_o = 0.7f64;
+    let f = fresnel_dielectric(cos_o, 1.5);
+    let expected = 2.0 * f / (1.0 + f);
+    let sin_o = (1.0 - cos_o * cos_o).sqrt();
+    for entering in [true, false] {
+        let case = Case { name: format!("thin sheet, entering {entering}"), material: sheet, cos_o, entering };
+        let samples = kernel.samples(&case);
+        // The ray arrives along d = (-sin, 0, -cos) (kernel.run) and the lobe's normal faces it,
+        // +z from either side (lobe_for), so the mirror direction is (-sin, 0, cos).
+        let d = [-sin_o as f32, 0.0, -cos_o as f32];
+        let mirror = [-sin_o as f32, 0.0, cos_o as f32];
+        let mut reflected = 0usize;
+        for s in &samples {
+            assert!(s.ok && s.lobe / 4 == kind, "{}: sample_lobe failed or picked another lobe ({})", case.name, s.lobe);
+            assert!(s.weight.iter().all(|&w| (w - 1.0).abs() < 1e-6), "{}: weight {:?}, expected 1", case.name, s.weight);
+            let is = |v: [f32; 3]| (0..3).all(|c| (s.dir[c] - v[c]).abs() < 1e-5);
+            if is(mirror) {
+                reflected += 1;
+            } else {
+                assert!(is(d), "{}: direction {:?} is neither the mirror direction {mirror:?} nor straight on {d:?}", case.name, s.dir);
+            }
+        }
+        let n = samples.len() as f64;
+        let share = reflected as f64 / n;
+        let five_sigma = 5.0 * (expected * (1.0 - expected) / n).sqrt();
+        eprintln!("{}: reflected {share:.5}, expected 2F / (1 + F) = {expected:.5} (five standard errors {five_sigma:.5})", case.name);
+        assert!((share - expected).abs() <= five_sigma, "{}: reflects {share:.5} of the light, expected 2F / (1 + F) = {expected:.5} (F = {f:.5}); five standard errors {five_sigma:.5}", case.name);
+    }
+    kernel.destroy();
+}
+
+/// The weak white furnace (Heitz 2014): for any wo, the integral over all wi of
+/// D(h) G1(wo) / (4 wo.z), h the half vector, is 1: visible normals are a distribution. It ties
+/// Smith's Lambda to D, which the sampling tests cannot (sample and eval share both), so a wrong
+/// Lambda or an unnormalised D fails: the tolerance, 2e-3, is ten times the quadrature's error at
+/// these alphas, and GGX's Lambda with alpha in place of alpha^2 is off by 8 % at alpha 0.3.
+#[test]
+fn visible_normals_integrate_to_one_for_ggx_and_beckmann() {
+    let (_lock, ctx) = gpu();
+    let mut kernel = Kernel::new(&ctx);
+    let (_, weights) = quadrature();
+    let mut failures = Vec::new();
+    for (name, distribution) in [("GGX", 0), ("Beckmann", MATERIAL_BECKMANN)] {
+        for alpha in [0.3f32, 0.6] {
+            for cos_o in [0.9, 0.3] {
+                let mut m = material(1.0, 1.0, 0.0, 1.0, alpha);
+                m.maps[3] = f32::from_bits(distribution);
+                let case = Case { name: format!("{name}, alpha {alpha}, cos {cos_o}"), material: m, cos_o, entering: true };
+                let values = kernel.run(&case, 2, weights.len() as u32, 0);
+                let integral: f64 = values.iter().zip(&weights).map(|(v, w)| v[0] as f64 * w).sum();
+                eprintln!("{}: the visible normals integrate to {integral:.5}", case.name);
+                if !((integral - 1.0).abs() <= 2e-3) {
+                    failures.push(format!("{}: the visible normals integrate to {integral:.5}, not 1", case.name));
+                }
+            }
+        }
+    }
+    kernel.destroy();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// The p-value routine itself, against known chi-square quantiles.

@@ -63,7 +63,8 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
     assert!(specialized >= 3, "only {specialized} scenes got a kernel of their own");
 }
 
-/// A textured, instanced mesh with a rough metal, a plastic and a sphere under an environment map,
+/// A textured, instanced mesh with a rough metal (GGX and Beckmann), a plastic, a thin pane and
+/// spheres under an environment map,
 /// lit by a mesh lamp with an emission texture, the floor normal-mapped, and two squares with
 /// alpha over it (a textured BLEND and a textured MASK): every feature on, which the checked-in
 /// scenes without the shared data lack (textures, several instances, textured emitters, normal
@@ -91,6 +92,14 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         albedo = [0.9, 0.9, 0.9]
         [materials.stencil]
         albedo = [0.8, 0.2, 0.2]
+        [materials.brushed]
+        albedo = [0.9, 0.9, 0.9]
+        reflectivity = 1.0
+        roughness = 0.4
+        distribution = "beckmann"
+        [materials.pane]
+        transparency = 1.0
+        thin = true
         [[spheres]]
         center = [0.8, 0.3, 0.0]
         radius = 0.3
@@ -99,6 +108,14 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         center = [-0.8, 0.3, 0.0]
         radius = 0.3
         material = "plastic"
+        [[spheres]]
+        center = [0.0, 0.3, 0.6]
+        radius = 0.25
+        material = "brushed"
+        [[spheres]]
+        center = [0.0, 0.8, 0.9]
+        radius = 0.2
+        material = "pane"
         "#,
     );
     let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();

@@ -1,11 +1,12 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
-//! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases) is left out by `#if` and by constants
+//! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
+//! Beckmann lobes, thin dielectrics) is left out by `#if` and by constants
 //! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
-use super::layout::{ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, NO_TEXTURE};
+use super::layout::{GpuMaterial, ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, MATERIAL_BECKMANN, MATERIAL_THIN, NO_TEXTURE};
 use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
@@ -39,18 +40,23 @@ pub struct SceneFeatures {
     pub rough_lobes: bool,
     /// Plastics: a diffuse base under a dielectric coat.
     pub coated: bool,
+    /// Rough lobes of Beckmann's distribution (the MATERIAL_BECKMANN flag).
+    pub beckmann: bool,
+    /// Thin dielectric sheets (the MATERIAL_THIN flag).
+    pub thin_dielectrics: bool,
 }
 
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, thin_dielectrics: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
         let instances = &data.acceleration.instances;
         let has_instance = |kind| instances.iter().any(|i| i.info[0] == kind);
         let has_mr_texture = data.materials.iter().any(|m| m.metallic_roughness[0].to_bits() != NO_TEXTURE);
+        let flags = |m: &GpuMaterial| m.maps[3].to_bits();
         Self {
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
@@ -62,11 +68,13 @@ impl SceneFeatures {
             environment_map: data.env_kind != ENV_CONSTANT,
             rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA),
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
+            beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && (m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE)),
+            thin_dielectrics: data.materials.iter().any(|m| flags(m) & MATERIAL_THIN != 0),
         }
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 10] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 12] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -78,6 +86,8 @@ impl SceneFeatures {
             ("environment_map", "SCENE_ENV_MAP", self.environment_map),
             ("rough_lobes", "SCENE_ROUGH_LOBES", self.rough_lobes),
             ("coated", "SCENE_COATED", self.coated),
+            ("beckmann", "SCENE_BECKMANN", self.beckmann),
+            ("thin_dielectrics", "SCENE_THIN_DIELECTRICS", self.thin_dielectrics),
         ]
     }
 

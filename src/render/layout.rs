@@ -26,6 +26,11 @@ pub const TEXTURE_WRAP_REPEAT: u32 = 0;
 pub const TEXTURE_WRAP_CLAMP: u32 = 1;
 pub const TEXTURE_WRAP_MIRROR: u32 = 2;
 
+/// Material flags in `maps[3]` (u32 bits): Beckmann rather than GGX rough lobes and coat; a thin
+/// sheet rather than a solid's surface for the T lobe.
+pub const MATERIAL_BECKMANN: u32 = 1;
+pub const MATERIAL_THIN: u32 = 2;
+
 pub const ALPHA_OPAQUE: u32 = 0;
 pub const ALPHA_MASK: u32 = 1;
 pub const ALPHA_BLEND: u32 = 2;
@@ -72,7 +77,7 @@ pub struct GpuMaterial {
     pub conductor_k: [f32; 4],
     /// metallic-roughness texture (u32 bits), metallic, roughness and transmission factors
     pub metallic_roughness: [f32; 4],
-    /// emission texture (u32 bits), normal map (u32 bits), normal map scale, unused
+    /// emission texture (u32 bits), normal map (u32 bits), normal map scale, MATERIAL_* flags (u32 bits)
     pub maps: [f32; 4],
     /// alpha texture (u32 bits), opacity factor, MASK cutoff, ALPHA_* mode (u32 bits)
     pub alpha: [f32; 4],
@@ -437,6 +442,8 @@ mod tests {
             ("INSTANCE_HAS_TANGENTS", INSTANCE_HAS_TANGENTS),
             ("NO_TEXTURE", NO_TEXTURE),
             ("TEXTURE_SRGB", TEXTURE_SRGB),
+            ("MATERIAL_BECKMANN", MATERIAL_BECKMANN),
+            ("MATERIAL_THIN", MATERIAL_THIN),
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
             ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
             ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),

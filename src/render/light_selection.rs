@@ -197,6 +197,8 @@ mod tests {
             roughness: 0.0,
             conductor: Conductor::Mirror,
             coat: false,
+            microfacet: Default::default(),
+            thin: false,
             metallic_roughness: None,
             maps: Default::default(),
         }

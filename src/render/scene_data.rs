@@ -6,7 +6,7 @@ use super::textured_emission::mean_triangle_luminance;
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
 use super::light_selection::{area_light_power, emission_luminance, punctual_light_power, LightDistribution};
-use crate::scene::{average_fresnel, Alpha, AlphaMode, Wrap, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Scene, Shape, Texture};
+use crate::scene::{average_fresnel, Alpha, AlphaMode, Wrap, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Microfacet, Scene, Shape, Texture};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -166,9 +166,16 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         conductor_eta: eta.extend(f32::from_bits(kind)).into(),
         conductor_k: k.extend(coat_norm).into(),
         metallic_roughness,
-        maps: [texture_bits(m.maps.emission), texture_bits(m.maps.normal.map(|n| n.texture)), m.maps.normal.map_or(0.0, |n| n.scale), 0.0],
+        maps: [texture_bits(m.maps.emission), texture_bits(m.maps.normal.map(|n| n.texture)), m.maps.normal.map_or(0.0, |n| n.scale), f32::from_bits(material_flags(m))],
         alpha: gpu_alpha(m.maps.alpha),
     }
+}
+
+/// A material's MATERIAL_* flags (layout.glsl).
+fn material_flags(m: &Material) -> u32 {
+    let beckmann = if m.microfacet == Microfacet::Beckmann { MATERIAL_BECKMANN } else { 0 };
+    let thin = if m.thin { MATERIAL_THIN } else { 0 };
+    beckmann | thin
 }
 
 /// A material's `alpha` row: texture, factor, cutoff and mode (layout.glsl).

@@ -215,6 +215,22 @@ pub struct MaterialFile {
     pub k: Option<Triple>,
     /// The base is a plastic: the albedo under a dielectric coat of index `ior`.
     pub coat: bool,
+    /// The microfacet distribution of the rough R and T lobes and of the coat.
+    pub distribution: Microfacet,
+    /// The T lobe is a thin sheet (a window pane, a soap film) rather than the surface of a solid:
+    /// it reflects 2F / (1 + F) and passes the rest straight through, smooth whatever `roughness`.
+    pub thin: bool,
+}
+
+/// The microfacet distribution of a material's rough lobes (shaders/microfacet.glsl).
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Microfacet {
+    /// Trowbridge-Reitz: long tails (glTF's and pbrt's).
+    #[default]
+    Ggx,
+    /// Beckmann: a Gaussian of slopes (Mitsuba's default).
+    Beckmann,
 }
 
 impl Default for MaterialFile {
@@ -231,6 +247,8 @@ impl Default for MaterialFile {
             eta: None,
             k: None,
             coat: false,
+            distribution: Microfacet::Ggx,
+            thin: false,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! mesh files (OBJ + MTL, PLY, glTF) into the scene's materials, meshes and textures.
 
 use super::asset::{self, Asset, AssetMaterial};
-use super::{Light, Material, MetallicRoughness, Scene};
+use super::{Light, Material, MetallicRoughness, Microfacet, Scene};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Context as _, Result};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -137,6 +137,8 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         roughness: m.roughness.clamp(0.0, 1.0),
         conductor: m.conductor,
         coat: m.coat,
+        microfacet: Microfacet::Ggx,
+        thin: false,
         metallic_roughness: m.metallic_roughness.map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
         maps: m.maps.rebased(texture_base),
     })

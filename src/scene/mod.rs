@@ -14,10 +14,10 @@ mod toml_error;
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError, Wrap};
 pub use camera_toml::camera_toml;
-pub use format::{Filter, LightSelection, Sampler};
+pub use format::{Filter, LightSelection, Microfacet, Sampler};
 pub use light::Light;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
-pub use optics::{average_fresnel, metal, METALS};
+pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{bail, Context as _, Result};
@@ -89,6 +89,10 @@ pub struct Material {
     /// The base (1 - R - T) is a plastic: the albedo under a dielectric coat of index `ior` and
     /// roughness `roughness`; false: plain diffuse.
     pub coat: bool,
+    /// The microfacet distribution of the rough R and T lobes and of the coat.
+    pub microfacet: Microfacet,
+    /// The T lobe is a thin sheet: reflects 2F / (1 + F), passes the rest straight through.
+    pub thin: bool,
     /// glTF: `reflectivity`, `transparency` and `roughness` come per texel from a texture.
     pub metallic_roughness: Option<MetallicRoughness>,
     /// Emission, normal and alpha textures (mesh files only).
@@ -438,6 +442,8 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         roughness: finite(&key("roughness"), m.roughness)?,
         conductor,
         coat: m.coat,
+        microfacet: m.distribution,
+        thin: m.thin,
         metallic_roughness: None,
         maps: TextureMaps::default(),
     };

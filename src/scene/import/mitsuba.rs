@@ -4,7 +4,7 @@
 //! parameter is documented in the README's "Scenes from other renderers" section.
 
 use super::super::format::{
-    Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler, SceneFile,
+    Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler, SceneFile,
     SphereFile, SpotLightFile, TriangleFile,
 };
 use super::mitsuba_xml::{self, Object, Resolver};
@@ -465,7 +465,7 @@ impl Mapper<'_> {
                 if !two_sided {
                     self.warn("one-sided", one_sided);
                 }
-                let roughness = self.roughness(b, b.plugin == "roughconductor")?;
+                let (roughness, distribution) = self.microfacet(b, b.plugin == "roughconductor")?;
                 self.unit_factor(b, "specular_reflectance")?;
                 let given = (b.color("eta", &mut |_| {})?, b.color("k", &mut |_| {})?);
                 let (metal, eta, k) = match (b.string("material")?, given) {
@@ -481,14 +481,19 @@ impl Mapper<'_> {
                         }
                     },
                 };
-                MaterialFile { reflectivity: Some(1.0), roughness, metal, eta, k, ..defaults }
+                MaterialFile { reflectivity: Some(1.0), roughness, distribution, metal, eta, k, ..defaults }
             }
             "dielectric" | "roughdielectric" => {
-                let roughness = self.roughness(b, b.plugin == "roughdielectric")?;
+                let (roughness, distribution) = self.microfacet(b, b.plugin == "roughdielectric")?;
                 self.unit_factor(b, "specular_reflectance")?;
                 self.unit_factor(b, "specular_transmittance")?;
                 let ior = relative_ior(b, "bk7")?;
-                MaterialFile { transparency: 1.0, ior, roughness, ..defaults }
+                MaterialFile { transparency: 1.0, ior, roughness, distribution, ..defaults }
+            }
+            "thindielectric" => {
+                self.unit_factor(b, "specular_reflectance")?;
+                self.unit_factor(b, "specular_transmittance")?;
+                MaterialFile { transparency: 1.0, ior: relative_ior(b, "bk7")?, thin: true, ..defaults }
             }
             "plastic" | "roughplastic" => {
                 if !two_sided {
@@ -497,31 +502,31 @@ impl Mapper<'_> {
                 self.warn("plastic", || {
                     format!("{}: {}: plastic becomes caustica's coated diffuse, which does not model light reflected inside the coat (a little brighter and less saturated than Mitsuba's)", b.at, b.describe())
                 });
-                let roughness = self.roughness(b, b.plugin == "roughplastic")?;
+                let (roughness, distribution) = self.microfacet(b, b.plugin == "roughplastic")?;
                 self.unit_factor(b, "specular_reflectance")?;
                 if b.boolean("nonlinear", false)? {
                     return Err(b.error("nonlinear is not supported"));
                 }
                 let albedo = f32x3(self.reflectance(b, "diffuse_reflectance", 0.5)?);
-                MaterialFile { albedo, coat: true, ior: relative_ior(b, "polypropylene")?, roughness, ..defaults }
+                MaterialFile { albedo, coat: true, ior: relative_ior(b, "polypropylene")?, roughness, distribution, ..defaults }
             }
-            _ => return Err(b.error("this BSDF is not supported (diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, twosided)")),
+            _ => return Err(b.error("this BSDF is not supported (diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, twosided)")),
         };
         b.check_all_used()?;
         Ok(material)
     }
 
-    /// caustica's roughness of a rough BSDF: sqrt(alpha), alpha defaulting to Mitsuba's 0.1; GGX
-    /// stands in for Mitsuba's default Beckmann distribution.
-    fn roughness(&mut self, b: &Object, rough: bool) -> Result<f32> {
+    /// caustica's roughness (sqrt(alpha), alpha defaulting to Mitsuba's 0.1) and distribution
+    /// (Mitsuba's default Beckmann, or GGX) of a rough BSDF.
+    fn microfacet(&mut self, b: &Object, rough: bool) -> Result<(f32, Microfacet)> {
         if !rough {
-            return Ok(0.0);
+            return Ok((0.0, Microfacet::Ggx));
         }
-        match b.string("distribution")?.unwrap_or("beckmann") {
-            "ggx" => {}
-            "beckmann" => self.warn("beckmann", || format!("{}: {}: the Beckmann distribution (Mitsuba's default) is approximated by GGX of the same alpha", b.at, b.describe())),
+        let distribution = match b.string("distribution")?.unwrap_or("beckmann") {
+            "ggx" => Microfacet::Ggx,
+            "beckmann" => Microfacet::Beckmann,
             other => return Err(b.error(format!("distribution '{other}' is not supported (beckmann, ggx)"))),
-        }
+        };
         b.boolean("sample_visible", true)?;
         let alpha = match (b.float_if_given("alpha")?, b.float_if_given("alpha_u")?, b.float_if_given("alpha_v")?) {
             (Some(a), None, None) => a,
@@ -533,7 +538,7 @@ impl Mapper<'_> {
         if !(0.0..=1.0).contains(&alpha) {
             return Err(b.error(format!("alpha must be in [0, 1], got {alpha}")));
         }
-        Ok(alpha.sqrt() as f32)
+        Ok((alpha.sqrt() as f32, distribution))
     }
 
     /// A scale factor caustica has no place for: only its default, 1, is accepted.

@@ -71,9 +71,10 @@ impl Mapper<'_> {
                 d.check_all_used()?;
                 return Ok(None);
             }
-            "thindielectric" => return Err(d.error("caustica has no thin dielectric (a sheet with two parallel surfaces); model the sheet's two faces as a dielectric instead")),
+            // pbrt-v4's thindielectric is smooth: it has no roughness parameters.
+            "thindielectric" => MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d)?, thin: true, ..defaults },
             "coatedconductor" => return Err(d.error("caustica's coat covers a diffuse base only, not a conductor")),
-            _ => return Err(d.error("this material is not supported (diffuse, conductor, dielectric, coateddiffuse, interface)")),
+            _ => return Err(d.error("this material is not supported (diffuse, conductor, dielectric, thindielectric, coateddiffuse, interface)")),
         };
         d.check_all_used()?;
         Ok(Some(material))
