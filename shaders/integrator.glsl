@@ -140,6 +140,10 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
         path.radiance += path.throughput * le * weight;
     }
 
+    // A one-sided surface met from behind scatters nothing: no light is sampled there and the
+    // path ends (its emission, above, has its own sidedness).
+    if (SCENE_ONE_SIDED == 1 && !front && (material_flags(m) & MATERIAL_ONE_SIDED) != 0u) return false;
+
     if (depth >= frame.rr_start) {
         float q = survival_probability(path.throughput);
         if (rng_next(rng) >= q) return false;

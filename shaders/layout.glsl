@@ -51,9 +51,11 @@ struct Material {
 };
 
 // Material flags in maps.w (MATERIAL_* must match layout.rs): the rough lobes and the coat are
-// Beckmann rather than GGX; the T lobe is a thin sheet rather than the surface of a solid.
+// Beckmann rather than GGX; the T lobe is a thin sheet rather than the surface of a solid; the
+// surface scatters on its front side only and is black from behind (Mitsuba's BSDFs).
 const uint MATERIAL_BECKMANN = 1u;
 const uint MATERIAL_THIN = 2u;
+const uint MATERIAL_ONE_SIDED = 4u;
 
 uint material_flags(Material m) {
     return floatBitsToUint(m.maps.w);

@@ -63,7 +63,7 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
     assert!(specialized >= 3, "only {specialized} scenes got a kernel of their own");
 }
 
-/// A textured, instanced mesh with a rough metal (GGX and Beckmann), a plastic, a thin pane and
+/// A textured, instanced mesh with a rough metal (GGX and Beckmann), a one-sided plastic, a thin pane and
 /// spheres under an environment map,
 /// lit by a mesh lamp with an emission texture, the floor normal-mapped, and two squares with
 /// alpha over it (a textured BLEND and a textured MASK): every feature on, which the checked-in
@@ -85,6 +85,7 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         [materials.plastic]
         albedo = [0.2, 0.5, 0.8]
         coat = true
+        one_sided = true
         [materials.glow]
         albedo = [0, 0, 0]
         emission = [4, 3, 2]

@@ -1,12 +1,12 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
 //! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
-//! Beckmann lobes, thin dielectrics) is left out by `#if` and by constants
+//! Beckmann lobes, thin dielectrics, one-sided surfaces) is left out by `#if` and by constants
 //! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
-use super::layout::{GpuMaterial, ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, MATERIAL_BECKMANN, MATERIAL_THIN, NO_TEXTURE};
+use super::layout::{GpuMaterial, ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE};
 use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
@@ -44,12 +44,14 @@ pub struct SceneFeatures {
     pub beckmann: bool,
     /// Thin dielectric sheets (the MATERIAL_THIN flag).
     pub thin_dielectrics: bool,
+    /// Surfaces black from behind (the MATERIAL_ONE_SIDED flag).
+    pub one_sided: bool,
 }
 
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, thin_dielectrics: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, thin_dielectrics: true, one_sided: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -70,11 +72,12 @@ impl SceneFeatures {
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
             beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && (m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE)),
             thin_dielectrics: data.materials.iter().any(|m| flags(m) & MATERIAL_THIN != 0),
+            one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
         }
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 12] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 13] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -88,6 +91,7 @@ impl SceneFeatures {
             ("coated", "SCENE_COATED", self.coated),
             ("beckmann", "SCENE_BECKMANN", self.beckmann),
             ("thin_dielectrics", "SCENE_THIN_DIELECTRICS", self.thin_dielectrics),
+            ("one_sided", "SCENE_ONE_SIDED", self.one_sided),
         ]
     }
 

@@ -199,6 +199,7 @@ mod tests {
             coat: false,
             microfacet: Default::default(),
             thin: false,
+            one_sided: false,
             metallic_roughness: None,
             maps: Default::default(),
         }

@@ -175,7 +175,8 @@ fn gpu_material(m: &Material) -> GpuMaterial {
 fn material_flags(m: &Material) -> u32 {
     let beckmann = if m.microfacet == Microfacet::Beckmann { MATERIAL_BECKMANN } else { 0 };
     let thin = if m.thin { MATERIAL_THIN } else { 0 };
-    beckmann | thin
+    let one_sided = if m.one_sided { MATERIAL_ONE_SIDED } else { 0 };
+    beckmann | thin | one_sided
 }
 
 /// A material's `alpha` row: texture, factor, cutoff and mode (layout.glsl).

@@ -220,6 +220,9 @@ pub struct MaterialFile {
     /// The T lobe is a thin sheet (a window pane, a soap film) rather than the surface of a solid:
     /// it reflects 2F / (1 + F) and passes the rest straight through, smooth whatever `roughness`.
     pub thin: bool,
+    /// The surface scatters on its front side only and is black from behind (Mitsuba's BSDFs
+    /// without `twosided`); not with `transparency`, whose light must leave through the back.
+    pub one_sided: bool,
 }
 
 /// The microfacet distribution of a material's rough lobes (shaders/microfacet.glsl).
@@ -249,6 +252,7 @@ impl Default for MaterialFile {
             coat: false,
             distribution: Microfacet::Ggx,
             thin: false,
+            one_sided: false,
         }
     }
 }

@@ -139,6 +139,7 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         coat: m.coat,
         microfacet: Microfacet::Ggx,
         thin: false,
+        one_sided: false,
         metallic_roughness: m.metallic_roughness.map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
         maps: m.maps.rebased(texture_base),
     })

@@ -93,6 +93,8 @@ pub struct Material {
     pub microfacet: Microfacet,
     /// The T lobe is a thin sheet: reflects 2F / (1 + F), passes the rest straight through.
     pub thin: bool,
+    /// Black from behind: scatters on its front side only.
+    pub one_sided: bool,
     /// glTF: `reflectivity`, `transparency` and `roughness` come per texel from a texture.
     pub metallic_roughness: Option<MetallicRoughness>,
     /// Emission, normal and alpha textures (mesh files only).
@@ -444,6 +446,7 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         coat: m.coat,
         microfacet: m.distribution,
         thin: m.thin,
+        one_sided: m.one_sided,
         metallic_roughness: None,
         maps: TextureMaps::default(),
     };
@@ -462,6 +465,9 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
     }
     if material.ior <= 0.0 {
         bail!("{} must be > 0, got {}", key("ior"), material.ior);
+    }
+    if material.one_sided && material.transparency > 0.0 {
+        bail!("{}: a one-sided material cannot be transparent (light it lets in must leave through its back), got transparency {}", key("one_sided"), material.transparency);
     }
     Ok(material)
 }

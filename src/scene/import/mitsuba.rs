@@ -436,16 +436,12 @@ impl Mapper<'_> {
         Ok(name)
     }
 
-    /// A BSDF as a caustica material; `two_sided`: inside a `twosided`.
+    /// A BSDF as a caustica material; `two_sided`: inside a `twosided`. Mitsuba's reflecting
+    /// BSDFs are black from behind unless wrapped in `twosided` (caustica's `one_sided`); its
+    /// dielectrics scatter from both sides.
     fn bsdf(&mut self, b: &Object, two_sided: bool) -> Result<MaterialFile> {
-        let defaults = MaterialFile::default();
-        let one_sided = || {
-            format!(
-                "{}: {}: Mitsuba's BSDFs are black from behind unless wrapped in twosided; caustica's surfaces scatter from both sides, so its backs are lit (this and every other one-sided BSDF)",
-                b.at,
-                b.describe()
-            )
-        };
+        let defaults = MaterialFile { one_sided: !two_sided, ..MaterialFile::default() };
+        let see_through = MaterialFile::default();
         let material = match b.plugin.as_str() {
             "twosided" if two_sided => return Err(b.error("a twosided inside a twosided")),
             "twosided" => {
@@ -456,15 +452,9 @@ impl Mapper<'_> {
                 }
             }
             "diffuse" => {
-                if !two_sided {
-                    self.warn("one-sided", one_sided);
-                }
                 MaterialFile { albedo: f32x3(self.reflectance(b, "reflectance", 0.5)?), ..defaults }
             }
             "conductor" | "roughconductor" => {
-                if !two_sided {
-                    self.warn("one-sided", one_sided);
-                }
                 let (roughness, distribution) = self.microfacet(b, b.plugin == "roughconductor")?;
                 self.unit_factor(b, "specular_reflectance")?;
                 let given = (b.color("eta", &mut |_| {})?, b.color("k", &mut |_| {})?);
@@ -488,17 +478,14 @@ impl Mapper<'_> {
                 self.unit_factor(b, "specular_reflectance")?;
                 self.unit_factor(b, "specular_transmittance")?;
                 let ior = relative_ior(b, "bk7")?;
-                MaterialFile { transparency: 1.0, ior, roughness, distribution, ..defaults }
+                MaterialFile { transparency: 1.0, ior, roughness, distribution, ..see_through }
             }
             "thindielectric" => {
                 self.unit_factor(b, "specular_reflectance")?;
                 self.unit_factor(b, "specular_transmittance")?;
-                MaterialFile { transparency: 1.0, ior: relative_ior(b, "bk7")?, thin: true, ..defaults }
+                MaterialFile { transparency: 1.0, ior: relative_ior(b, "bk7")?, thin: true, ..see_through }
             }
             "plastic" | "roughplastic" => {
-                if !two_sided {
-                    self.warn("one-sided", one_sided);
-                }
                 self.warn("plastic", || {
                     format!("{}: {}: plastic becomes caustica's coated diffuse, which does not model light reflected inside the coat (a little brighter and less saturated than Mitsuba's)", b.at, b.describe())
                 });
