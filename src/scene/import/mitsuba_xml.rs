@@ -542,6 +542,18 @@ impl Object {
         }
     }
 
+    /// A texture given for the parameter `name`, if any, marked used.
+    pub fn texture(&self, name: &str) -> Result<Option<Rc<Object>>> {
+        for ((child_name, child), used) in self.children.iter().zip(&self.children_used) {
+            let object = self.resolve(child)?;
+            if child_name.as_deref() == Some(name) && object.tag == "texture" {
+                used.set(true);
+                return Ok(Some(object));
+            }
+        }
+        Ok(None)
+    }
+
     /// A texture given for the parameter `name`, if any.
     fn texture_for(&self, name: &str) -> Result<Option<Rc<Object>>> {
         for (child_name, child) in &self.children {
