@@ -122,15 +122,22 @@ impl Mapper<'_> {
     fn color(&mut self, o: &Object, name: &str, default: f64) -> Result<DVec3> {
         let mut sampled_at: Option<Location> = None;
         let c = o.color(name, &mut |at| sampled_at = Some(at.clone()))?;
-        if let Some(at) = sampled_at {
-            self.warn("spectrum", || format!("{at}: spectra given as wavelengths are reduced to linear sRGB (CIE 1931 fit, as Mitsuba's RGB modes)"));
-        }
+        self.warn_sampled(sampled_at);
         Ok(c.unwrap_or(DVec3::splat(default)))
+    }
+
+    fn warn_sampled(&mut self, sampled_at: Option<Location>) {
+        if let Some(at) = sampled_at {
+            self.warn("spectrum", || format!("{at}: spectra given as wavelengths are reduced to linear sRGB (CIE 1931 fit; reflectances under D65, as Mitsuba's RGB modes)"));
+        }
     }
 
     /// A reflectance: a colour each channel of which lies in [0, 1] (errors name its line).
     fn reflectance(&mut self, o: &Object, name: &str, default: f64) -> Result<DVec3> {
-        let c = self.color(o, name, default)?;
+        let mut sampled_at: Option<Location> = None;
+        let c = o.reflectance_color(name, &mut |at| sampled_at = Some(at.clone()))?;
+        self.warn_sampled(sampled_at);
+        let c = c.unwrap_or(DVec3::splat(default));
         if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
             return Err(o.error(format!("{name} must be in [0, 1] per channel (energy conservation), got {c}")));
         }
