@@ -410,7 +410,7 @@ fn the_command_line_converts_and_fails_with_file_and_line() {
 fn serialized_mesh(version: u16, positions: &[[f64; 3]], normals: Option<&[[f64; 3]]>, uvs: Option<&[[f64; 2]]>, triangles: &[[u32; 3]], double: bool) -> Vec<u8> {
     use std::io::Write;
     let mut raw = Vec::new();
-    let flags = u32::from(normals.is_some()) | 2 * u32::from(uvs.is_some()) | if double { 0x2000 } else { 0x1000 };
+    let flags = u32::from(normals.is_some()) | (2 * u32::from(uvs.is_some())) | if double { 0x2000 } else { 0x1000 };
     raw.extend(flags.to_le_bytes());
     if version == 4 {
         raw.extend(b"mesh\0");
@@ -533,7 +533,7 @@ fn bad_serialized_files_are_errors_naming_the_file() {
         (lying, 0, vec!["mesh.serialized", "2147483648 vertices", "cannot fit"]),
         (bad_index, 0, vec!["mesh.serialized", "triangle 0 uses vertex 7"]),
     ] {
-        let e = format!("{:#}", serialized_scene("bad-serialized", &file, &shape(index)).err().expect("refused"));
+        let e = format!("{:#}", serialized_scene("bad-serialized", &file, &shape(index)).expect_err("refused"));
         for needle in needles {
             assert!(e.contains(needle), "'{needle}' missing from: {e}");
         }
@@ -542,7 +542,7 @@ fn bad_serialized_files_are_errors_naming_the_file() {
     let dir = temp_dir("shape-index-obj");
     std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let toml = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.m]\nalbedo = [0.5, 0.5, 0.5]\n[[meshes]]\nfile = \"tri.obj\"\nmaterial = \"m\"\nshape_index = 1\n";
-    let e = format!("{:#}", Scene::parse(toml, "t.toml", &dir).err().expect("refused"));
+    let e = format!("{:#}", Scene::parse(toml, "t.toml", &dir).expect_err("refused"));
     assert!(e.contains("tri.obj") && e.contains("shape_index"), "{e}");
 }
 
@@ -594,7 +594,7 @@ fn textured_materials_need_meshes_with_texture_coordinates() {
     std::fs::write(dir.join("bare.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let material = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.checks]\nalbedo = [1, 1, 1]\nalbedo_texture = { checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]], to_uv = [[2, 0, 0], [0, 2, 0]] }\n";
     let refused = |extra: &str, needles: &[&str]| {
-        let e = format!("{:#}", Scene::parse(&format!("{material}{extra}"), "t.toml", &dir).err().expect("refused"));
+        let e = format!("{:#}", Scene::parse(&format!("{material}{extra}"), "t.toml", &dir).expect_err("refused"));
         for needle in needles {
             assert!(e.contains(needle), "'{needle}' missing from: {e}");
         }
@@ -602,7 +602,7 @@ fn textured_materials_need_meshes_with_texture_coordinates() {
     refused("[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"checks\"\n", &["materials.checks.albedo_texture", "texture coordinates"]);
     refused("[[meshes]]\nfile = \"bare.obj\"\nmaterial = \"checks\"\n", &["bare.obj", "no texture coordinates", "checks"]);
     let both = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.m]\nalbedo_texture = { file = \"a.png\", checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]] }\n";
-    let e = format!("{:#}", Scene::parse(both, "t.toml", &dir).err().expect("refused"));
+    let e = format!("{:#}", Scene::parse(both, "t.toml", &dir).expect_err("refused"));
     assert!(e.contains("materials.m.albedo_texture") && e.contains("one of file and checkerboard"), "{e}");
 }
 

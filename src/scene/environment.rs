@@ -73,10 +73,8 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) ->
     if image.pixels.iter().flatten().any(|&c| c < 0.0) {
         bail!("{name}: the environment map has negative radiance");
     }
-    if projection == MapProjection::Angular || e.octahedral.is_some() {
-        if image.width != image.height {
-            bail!("{name}: an angular light probe or an equal-area octahedral map must be square, got {} x {}", image.width, image.height);
-        }
+    if (projection == MapProjection::Angular || e.octahedral.is_some()) && image.width != image.height {
+        bail!("{name}: an angular light probe or an equal-area octahedral map must be square, got {} x {}", image.width, image.height);
     }
     if projection == MapProjection::Angular {
         fill_outside_disk(&mut image);
