@@ -184,6 +184,55 @@ fn angle_weighted_normals(mesh: &MeshData) -> Vec<Vec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::Write;
+
+    /// A version 4 file of two quads, the second with normals and texture coordinates.
+    fn two_quads() -> Vec<u8> {
+        let mesh = |flags: u32, extra: &[f32]| {
+            let mut raw = flags.to_le_bytes().to_vec();
+            raw.extend(b"q\0");
+            raw.extend(4u64.to_le_bytes());
+            raw.extend(2u64.to_le_bytes());
+            let positions = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0];
+            raw.extend(positions.iter().chain(extra).flat_map(|v| v.to_le_bytes()));
+            raw.extend([0u32, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+            let mut z = flate2::write::ZlibEncoder::new(vec![0x1C, 0x04, 4, 0], flate2::Compression::default());
+            z.write_all(&raw).unwrap();
+            z.finish().unwrap()
+        };
+        let normals_uvs: Vec<f32> = [[0.0, 0.0, 1.0]; 4].concat().into_iter().chain([0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]).collect();
+        let (a, b) = (mesh(0x1000, &[]), mesh(0x1003, &normals_uvs));
+        let mut file = [a.clone(), b].concat();
+        file.extend(0u64.to_le_bytes());
+        file.extend((a.len() as u64).to_le_bytes());
+        file.extend(2u32.to_le_bytes());
+        file
+    }
+
+    #[test]
+    fn mutated_files_give_a_mesh_or_an_error_never_a_panic() {
+        let file = two_quads();
+        assert_eq!(decode(&file, 1).unwrap().uvs.len(), 4);
+        // A small xorshift: the same mutations on every run.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..3000 {
+            let mut bytes = file.clone();
+            for _ in 0..1 + next() % 4 {
+                let at = (next() % bytes.len() as u64) as usize;
+                bytes[at] ^= 1 << (next() % 8);
+            }
+            let cut = bytes.len() - (next() % 8) as usize * usize::from(next() % 3 == 0);
+            for index in [0, 1, 2, u32::MAX] {
+                let _ = decode(&bytes[..cut], index);
+            }
+        }
+    }
 
     #[test]
     fn a_flat_square_gets_normals_along_its_face() {
