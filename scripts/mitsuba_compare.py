@@ -7,6 +7,16 @@ the device is caustica's own threads, and Dr.Jit's pool is Mitsuba's).
     python3 scripts/mitsuba_compare.py [SCENE.toml] [--width W] [--height H] [--spp N]
         [--reference REF.pfm | --reference-spp N] [--out DIR] [--json]
 
+    python3 scripts/mitsuba_compare.py SCENE.xml [--width W] [--spp N] [--reference-spp N]
+        [--path DIR]... [--out DIR] [--json]
+    python3 scripts/mitsuba_compare.py --mitsuba-data CHECKOUT [--width W] [--spp N] ...
+
+A Mitsuba 3 XML scene (or, with --mitsuba-data, each of the example scenes of a mitsuba-data
+checkout) is given to both renderers as it is, apart from its film size and any <path>s
+(MITSUBA_DATA_SCENES, xml_copy): Mitsuba renders the reference at --reference-spp (default 64 x
+spp) and both render at --spp (default 64); each is compared with the reference, per pixel and by
+8 x 8 block means (noise mostly averaged away, bias left). No speed is measured in this mode.
+
 SCENE defaults to scenes/cornell.toml (the built-in Cornell box). caustica is timed by
 `caustica bench --json` (one warm-up sample, then the timed ones) and its image comes from
 `caustica render`; Mitsuba's scene is built from the same TOML file, rendered once to compile its
@@ -45,6 +55,15 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 DATA_PREFIX = "$CAUSTICA_DATA/"
+# Side of the blocks whose means the bias figure compares.
+BLOCK = 8
+# mitsuba-data's example scenes (github.com/mitsuba-renderer/mitsuba-data): name, scene file and
+# extra folders its files are in (the Veach scene's meshes are in docs/scenes/meshes).
+MITSUBA_DATA_SCENES = [
+    ("Cornell box", "scenes/cbox/cbox.xml", []),
+    ("Veach MIS", "docs/scenes/include/veach_mis.xml", ["docs/scenes"]),
+    ("material preview", "scenes/matpreview/matpreview.xml", []),
+]
 
 
 class Unmapped(Exception):
@@ -368,7 +387,170 @@ def measure_mitsuba(scene_dict, width, height, spp, variant, out):
     }, path
 
 
+# --- a Mitsuba XML scene, read by both renderers -------------------------------------------------
+
+
+def xml_copy(scene_path, out, width, paths):
+    """The XML scene written into `out` with its film `width` wide (the height keeping the film's
+    aspect ratio, so `fov_axis` means the same) and `<path>`s to its own folder and to `paths`, so
+    both renderers find its meshes and maps from there, and Mitsuba's default integrator (`path`)
+    written out where it has none. Returns the copy and its (width, height)."""
+    import xml.etree.ElementTree as ET
+
+    tree = ET.parse(scene_path)
+    root = tree.getroot()
+    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
+    value = lambda v: defaults.get(v[1:], v) if v.startswith("$") else v
+    films = list(root.iter("film"))
+    if len(films) != 1:
+        raise Unmapped(f"{len(films)} films: the comparison needs exactly one")
+    film = films[0]
+    sizes = {e.get("name"): e for e in film.findall("integer") if e.get("name") in ("width", "height")}
+    w0, h0 = (int(value(sizes[k].get("value"))) if k in sizes else d for k, d in (("width", 768), ("height", 576)))
+    width = width or w0
+    height = max(1, round(width * h0 / w0))
+    for name, v in (("width", width), ("height", height)):
+        element = sizes.get(name)
+        if element is None:
+            element = ET.SubElement(film, "integer", name=name)
+        element.set("value", str(v))
+    if root.find("integrator") is None:
+        # What `mitsuba scene.xml` renders such a scene with (mi.render wants it written out).
+        root.append(ET.Element("integrator", type="path"))
+    for k, folder in enumerate([scene_path.parent, *paths]):
+        root.insert(k, ET.Element("path", value=str(Path(folder).resolve())))
+    copy = out / scene_path.name
+    tree.write(copy)
+    return copy, width, height
+
+
+def caustica_warnings(stderr):
+    return [line.removeprefix("caustica: warning: ") for line in stderr.splitlines() if line.startswith("caustica: warning: ")]
+
+
+def render_mitsuba_xml(scene_file, spp, seed, variant, path):
+    """Mitsuba's render of the scene file at `spp`, written to `path` (PFM); returns its seconds and
+    the warnings Mitsuba logged."""
+    import mitsuba as mi
+    import numpy as np
+
+    warnings = []
+
+    class Collect(mi.Appender):
+        def append(self, level, text):
+            if level >= mi.LogLevel.Warn:
+                warnings.append(text.strip())
+
+        def log_progress(self, *args):
+            pass
+
+    logger = mi.logger() if hasattr(mi, "logger") else mi.Thread.thread().logger()
+    logger.clear_appenders()
+    logger.add_appender(Collect())
+    started = time.perf_counter()
+    scene = mi.load_file(str(scene_file))
+    image = np.array(mi.render(scene, spp=spp, seed=seed))
+    seconds = time.perf_counter() - started
+    write_pfm(path, image[..., :3])
+    return seconds, warnings
+
+
+def read_pfm(path):
+    import numpy as np
+
+    with open(path, "rb") as f:
+        f.readline()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    return data.reshape(h, w, 3)[::-1]
+
+
+def block_relative_mse(image, reference, k=BLOCK):
+    """`caustica compare`'s relative MSE of the k x k block means of the two images: averaging
+    divides the noise's share by about k^2 and leaves a bias (a brighter wall, a wider highlight)
+    as it is, so what is left beyond Mitsuba's own figure is bias."""
+    a, b = read_pfm(image), read_pfm(reference)
+    h, w = a.shape[0] // k * k, a.shape[1] // k * k
+    means = lambda x: x[:h, :w].reshape(h // k, k, w // k, k, 3).mean(axis=(1, 3))
+    a, b = means(a), means(b)
+    return float(((a - b) ** 2 / (b * b + 0.01)).mean())
+
+
+def compare_xml(args, scene_path, out):
+    """A Mitsuba XML scene: Mitsuba's high-spp reference, then both renderers at --spp, each
+    against that reference (Mitsuba's own equal-spp error is the noise the other is measured
+    against). Returns the figures."""
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        copy, width, height = xml_copy(scene_path, out, args.width, args.path)
+    except Unmapped as e:
+        sys.exit(f"mitsuba_compare: {scene_path}: {e}")
+    spp = args.spp or 64
+    reference_spp = args.reference_spp or 64 * spp
+    reference = out / "mitsuba-reference.pfm"
+    with stdout_to_stderr():
+        reference_seconds, mitsuba_warnings = render_mitsuba_xml(copy, reference_spp, 99, args.variant, reference)
+        mitsuba_seconds, _ = render_mitsuba_xml(copy, spp, 1, args.variant, out / "mitsuba.pfm")
+    started = time.perf_counter()
+    done = subprocess.run([str(c) for c in [args.caustica, "render", copy, "-o", out / "caustica.pfm", "--spp", spp, "--seed", 1]], capture_output=True, text=True)
+    caustica_seconds = time.perf_counter() - started
+    if done.returncode != 0:
+        sys.exit(f"mitsuba_compare: caustica cannot render {scene_path}:\n{done.stderr}")
+    result = {
+        "scene": str(scene_path),
+        "width": width,
+        "height": height,
+        "spp": spp,
+        "reference": {"image": str(reference), "spp": reference_spp, "renderer": f"Mitsuba {mi.__version__} {args.variant}", "seconds": reference_seconds},
+        "images": str(out),
+    }
+    for name, seconds, warnings in (("caustica", caustica_seconds, caustica_warnings(done.stderr)), ("mitsuba", mitsuba_seconds, mitsuba_warnings)):
+        image = out / f"{name}.pfm"
+        result[name] = {**compare(args.caustica, image, reference), "block_relative_mse": block_relative_mse(image, reference), "seconds": seconds, "warnings": warnings}
+    return result
+
+
+def print_xml_result(result):
+    print(f"scene:      {result['scene']} at {result['width']}x{result['height']}, {result['spp']} spp")
+    print(f"reference:  {result['reference']['image']} ({result['reference']['spp']} spp, {result['reference']['renderer']})")
+    print(f"{'renderer':<10}  {'relative MSE':>12}  {f'{BLOCK}x{BLOCK} blocks':>12}  {'ratio of means':>14}  {'seconds':>8}")
+    for name in ("caustica", "mitsuba"):
+        r = result[name]
+        ratio = "-" if r["ratio_of_means"] is None else f"{r['ratio_of_means']:.4f}"
+        print(f"{name:<10}  {r['relative_mse']:>12.5f}  {r['block_relative_mse']:>12.5f}  {ratio:>14}  {r['seconds']:>8.1f}")
+        for w in r["warnings"]:
+            print(f"  warning: {w}")
+
+
+def mitsuba_data_table(args):
+    """Every scene of MITSUBA_DATA_SCENES from the mitsuba-data checkout at args.mitsuba_data, and
+    a Markdown table of the figures (docs/benchmarks.md)."""
+    root = Path(args.mitsuba_data)
+    out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="mitsuba-compare-"))
+    results = []
+    for name, scene, paths in MITSUBA_DATA_SCENES:
+        args.path = [str(root / p) for p in paths]
+        result = compare_xml(args, root / scene, out / Path(scene).stem)
+        print_xml_result(result)
+        print(flush=True)
+        results.append((name, scene, result))
+    if args.json:
+        print(json.dumps([r for _, _, r in results], indent=2))
+        return
+    print(f"| scene | size, spp | reference | caustica rel. MSE | Mitsuba rel. MSE | caustica {BLOCK}x{BLOCK}-block rel. MSE | Mitsuba {BLOCK}x{BLOCK}-block rel. MSE | caustica / reference mean |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, scene, r in results:
+        c, m = r["caustica"], r["mitsuba"]
+        print(f"| {name} (`{scene}`) | {r['width']}x{r['height']}, {r['spp']} | {r['reference']['spp']} spp | {c['relative_mse']:.4f} | {m['relative_mse']:.4f} | {c['block_relative_mse']:.5f} | {m['block_relative_mse']:.5f} | {c['ratio_of_means']:.4f} |")
+
+
 def main():
+    if any(a.lower().endswith(".xml") or a == "--mitsuba-data" for a in sys.argv[1:2]):
+        return xml_main()
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("scene", nargs="?", default=str(REPO / "scenes" / "cornell.toml"), help="caustica TOML scene (default: scenes/cornell.toml)")
     parser.add_argument("--width", type=int, help="image width (default: the scene's film.width)")
@@ -454,6 +636,30 @@ def main():
     if cpu_ratio is not None:
         print(f"caustica / Mitsuba, samples per CPU-second: {cpu_ratio:.3f}")
     print(f"images in {out}")
+
+
+def xml_main():
+    parser = argparse.ArgumentParser(description="A Mitsuba 3 XML scene rendered by Mitsuba (reference and equal spp) and caustica.")
+    parser.add_argument("scene", nargs="?", help="Mitsuba 3 XML scene")
+    parser.add_argument("--mitsuba-data", help="instead of a scene: a checkout of github.com/mitsuba-renderer/mitsuba-data, whose example scenes are all compared, with a Markdown table")
+    parser.add_argument("--width", type=int, help="image width; the height keeps the film's aspect ratio (default: the scene's)")
+    parser.add_argument("--spp", type=int, help="samples per pixel of the compared renders (default: 64)")
+    parser.add_argument("--reference-spp", type=int, help="spp of Mitsuba's reference (default: 64 x spp)")
+    parser.add_argument("--path", action="append", default=[], help="another folder the scene's files are looked for in (Mitsuba's <path>)")
+    parser.add_argument("--caustica", default=str(REPO / "target" / "release" / "caustica"), help="the caustica binary (default: target/release/caustica)")
+    parser.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (default: llvm_ad_rgb, the CPU one)")
+    parser.add_argument("--out", help="folder for the images (default: a temporary folder, kept and printed)")
+    parser.add_argument("--json", action="store_true", help="print the results as one JSON document")
+    args = parser.parse_args()
+    if args.mitsuba_data:
+        return mitsuba_data_table(args)
+    if args.scene is None:
+        parser.error("give a scene or --mitsuba-data")
+    result = compare_xml(args, Path(args.scene), Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="mitsuba-compare-")))
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        print_xml_result(result)
 
 
 if __name__ == "__main__":

@@ -98,6 +98,21 @@ fn ply_corpus() {
 }
 
 #[test]
+fn serialized_corpus() {
+    // The fuzz target's entry point: the first and the second mesh of each file.
+    let dir = common::temp_dir("fuzz-serialized");
+    let path = dir.join("input.serialized");
+    replay("serialized", |bytes| {
+        std::fs::write(&path, bytes).unwrap();
+        for shape_index in [None, Some(1)] {
+            if let Err(e) = caustica::scene::load_asset_part(&caustica::input_file::InputFiles::anywhere(), &path, shape_index) {
+                assert_names(&e.to_string(), &path.display().to_string());
+            }
+        }
+    });
+}
+
+#[test]
 fn gltf_corpus() {
     replay_asset("gltf", "glb", |_| {});
 }

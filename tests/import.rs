@@ -266,7 +266,9 @@ fn unsupported_or_bad_input_is_an_error_naming_file_line_and_element() {
         (format!("{SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>"), vec!["scene.xml:8:", "$r"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"conductor\"><string name=\"material\" value=\"Cr\"/></bsdf></shape>"), vec!["scene.xml:8:", "'Cr'", "Au"]),
         (format!("{SENSOR}\n<shape type=\"serialized\"/>"), vec!["scene.xml:8:", "<shape type=\"serialized\">"]),
-        (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"/></bsdf></shape>"), vec!["scene.xml:8:", "textures"]),
+        (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"><string name=\"filename\" value=\"a.png\"/></texture></bsdf></shape>"), vec!["scene.xml:8:", "<shape type=\"sphere\">", "textured"]),
+        (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"mesh_attribute\" name=\"reflectance\"/></bsdf></shape>"), vec!["scene.xml:8:", "<texture type=\"mesh_attribute\">", "not supported"]),
+        (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"plastic\"><texture type=\"checkerboard\" name=\"diffuse_reflectance\"/></bsdf></shape>"), vec!["scene.xml:8:", "textures ('diffuse_reflectance') are not supported"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"1.2, 0.5, 0.5\"/></bsdf></shape>"), vec!["scene.xml:8:", "reflectance must be in [0, 1]"]),
         (format!("{SENSOR}\n<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"10\"/><float name=\"beam_width\" value=\"20\"/></emitter>"), vec!["scene.xml:8:", "beam_width"]),
         (format!("{SENSOR}\n<integrator type=\"volpath\"/>"), vec!["scene.xml:8:", "<integrator type=\"volpath\">"]),
@@ -407,5 +409,227 @@ fn the_command_line_converts_and_fails_with_file_and_line() {
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
         assert!(stderr.contains("scene.xml:8:") || stderr.contains("NAME=VALUE"), "{args:?}: {stderr}");
+    }
+}
+
+/// One mesh of a Mitsuba `.serialized` file as Mitsuba writes it (src/shapes/serialized.cpp):
+/// the uncompressed header, then the zlib stream of flags, (version 4) name, counts, positions,
+/// normals, texture coordinates and u32 indices, in f64 when `double`.
+fn serialized_mesh(version: u16, positions: &[[f64; 3]], normals: Option<&[[f64; 3]]>, uvs: Option<&[[f64; 2]]>, triangles: &[[u32; 3]], double: bool) -> Vec<u8> {
+    use std::io::Write;
+    let mut raw = Vec::new();
+    let flags = u32::from(normals.is_some()) | (2 * u32::from(uvs.is_some())) | if double { 0x2000 } else { 0x1000 };
+    raw.extend(flags.to_le_bytes());
+    if version == 4 {
+        raw.extend(b"mesh\0");
+    }
+    raw.extend((positions.len() as u64).to_le_bytes());
+    raw.extend((triangles.len() as u64).to_le_bytes());
+    let mut floats = |values: &mut dyn Iterator<Item = f64>| {
+        for v in values {
+            if double {
+                raw.extend(v.to_le_bytes());
+            } else {
+                raw.extend((v as f32).to_le_bytes());
+            }
+        }
+    };
+    floats(&mut positions.iter().flatten().copied());
+    if let Some(n) = normals {
+        floats(&mut n.iter().flatten().copied());
+    }
+    if let Some(uv) = uvs {
+        floats(&mut uv.iter().flatten().copied());
+    }
+    raw.extend(triangles.iter().flatten().flat_map(|i| i.to_le_bytes()));
+    let mut out = vec![0x1C, 0x04];
+    out.extend(version.to_le_bytes());
+    let mut z = flate2::write::ZlibEncoder::new(out, flate2::Compression::default());
+    z.write_all(&raw).unwrap();
+    z.finish().unwrap()
+}
+
+/// Meshes concatenated, then the dictionary of their offsets (u64 in version 4, u32 in 3) and
+/// their count.
+fn serialized_file(version: u16, meshes: &[Vec<u8>]) -> Vec<u8> {
+    let mut file = Vec::new();
+    let mut offsets = Vec::new();
+    for m in meshes {
+        offsets.push(file.len() as u64);
+        file.extend(m);
+    }
+    for o in offsets {
+        if version == 4 {
+            file.extend(o.to_le_bytes());
+        } else {
+            file.extend((o as u32).to_le_bytes());
+        }
+    }
+    file.extend((meshes.len() as u32).to_le_bytes());
+    file
+}
+
+const QUAD: [[f64; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+const QUAD_UVS: [[f64; 2]; 4] = [[0.0, 0.0], [0.25, 0.0], [0.25, 0.5], [0.0, 0.5]];
+const QUAD_TRIANGLES: [[u32; 3]; 2] = [[0, 1, 2], [0, 2, 3]];
+
+fn serialized_quads(version: u16) -> Vec<u8> {
+    let tilted: Vec<[f64; 3]> = QUAD.iter().map(|p| [p[0] + 0.125, p[1], p[2] + 0.5 * p[0]]).collect();
+    let normals = [[0.0, 0.0, 1.0], [0.0, 0.0, 2.0], [0.0, 0.6, 0.8], [0.0, 0.0, 1.0]];
+    serialized_file(
+        version,
+        &[
+            serialized_mesh(version, &QUAD, None, None, &QUAD_TRIANGLES, false),
+            serialized_mesh(version, &tilted, Some(&normals), Some(&QUAD_UVS), &QUAD_TRIANGLES, true),
+        ],
+    )
+}
+
+fn serialized_scene(tag: &str, file: &[u8], shape: &str) -> anyhow::Result<Scene> {
+    let body = xml(&format!("{SENSOR}\n{shape}"));
+    let path = write_scene(tag, &[("scene.xml", &body)]);
+    std::fs::write(path.parent().unwrap().join("mesh.serialized"), file).unwrap();
+    import(&InputFiles::anywhere(), &path, &[])?.into_scene(&InputFiles::anywhere())
+}
+
+#[test]
+fn serialized_meshes_are_read_back_exactly_in_both_versions() {
+    for version in [3, 4] {
+        let file = serialized_quads(version);
+        let shape = |index: u32| format!(r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/><integer name="shape_index" value="{index}"/></shape>"#);
+        let s = serialized_scene("serialized", &file, &shape(1)).unwrap_or_else(|e| panic!("{e:#}"));
+        let mesh = &s.meshes[0];
+        let expected: Vec<Vec3> = QUAD.iter().map(|p| Vec3::new(p[0] as f32 + 0.125, p[1] as f32, 0.5 * p[0] as f32)).collect();
+        assert_eq!(mesh.positions, expected, "version {version}: the f64 positions of mesh 1");
+        assert_eq!(mesh.triangles, QUAD_TRIANGLES.to_vec());
+        // Texture coordinates as stored (Mitsuba's (0, 0) is the image's top-left, as caustica's).
+        assert_eq!(mesh.uvs, QUAD_UVS.iter().map(|uv| glam::Vec2::new(uv[0] as f32, uv[1] as f32)).collect::<Vec<_>>());
+        assert_eq!(mesh.normals, vec![Vec3::Z, Vec3::Z, Vec3::new(0.0, 0.6, 0.8), Vec3::Z], "unit normals as stored");
+        // Mesh 0 (the default index) has no normals: Mitsuba's smooth ones, here the face's.
+        let s = serialized_scene("serialized-0", &file, r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/></shape>"#).unwrap();
+        assert_eq!(s.meshes[0].positions, QUAD.iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect::<Vec<_>>());
+        assert_eq!(s.meshes[0].normals, vec![Vec3::Z; 4]);
+        assert!(s.meshes[0].uvs.is_empty());
+    }
+}
+
+#[test]
+fn bad_serialized_files_are_errors_naming_the_file() {
+    let good = serialized_quads(4);
+    let shape = |index: i64| format!(r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/><integer name="shape_index" value="{index}"/></shape>"#);
+    let mut lying = serialized_mesh(4, &QUAD, None, None, &QUAD_TRIANGLES, false);
+    // A header claiming 2^31 vertices over the same few compressed bytes: refused before any
+    // allocation (the counts cannot fit in what the stream can inflate to).
+    {
+        use std::io::{Read, Write};
+        let mut raw = Vec::new();
+        flate2::read::ZlibDecoder::new(&lying[4..]).read_to_end(&mut raw).unwrap();
+        raw[9..17].copy_from_slice(&(1u64 << 31).to_le_bytes());
+        let mut z = flate2::write::ZlibEncoder::new(lying[..4].to_vec(), flate2::Compression::default());
+        z.write_all(&raw).unwrap();
+        lying = serialized_file(4, &[z.finish().unwrap()]);
+    }
+    let mut bad_index = serialized_mesh(4, &QUAD, None, None, &[[0, 1, 7]], false);
+    bad_index = serialized_file(4, &[bad_index]);
+    for (file, index, needles) in [
+        (good.clone(), 2, vec!["mesh.serialized", "shape_index 2", "out of range", "2 meshes"]),
+        (good.clone(), -1, vec!["scene.xml:8:", "shape_index must be >= 0"]),
+        (serialized_mesh(4, &QUAD, None, None, &QUAD_TRIANGLES, false)[..40].to_vec(), 0, vec!["mesh.serialized", "shape_index 0", "compressed data"]),
+        (good[..good.len() / 2].to_vec(), 1, vec!["mesh.serialized", "shape_index 1"]),
+        (good[..3].to_vec(), 0, vec!["mesh.serialized", "truncated"]),
+        (b"PK\x03\x04 not a mesh at all".to_vec(), 0, vec!["mesh.serialized", "not a Mitsuba serialized mesh"]),
+        (lying, 0, vec!["mesh.serialized", "2147483648 vertices", "cannot fit"]),
+        (bad_index, 0, vec!["mesh.serialized", "triangle 0 uses vertex 7"]),
+    ] {
+        let e = format!("{:#}", serialized_scene("bad-serialized", &file, &shape(index)).expect_err("refused"));
+        for needle in needles {
+            assert!(e.contains(needle), "'{needle}' missing from: {e}");
+        }
+    }
+    // shape_index is for serialized files only (TOML).
+    let dir = temp_dir("shape-index-obj");
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let toml = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.m]\nalbedo = [0.5, 0.5, 0.5]\n[[meshes]]\nfile = \"tri.obj\"\nmaterial = \"m\"\nshape_index = 1\n";
+    let e = format!("{:#}", Scene::parse(toml, "t.toml", &dir).expect_err("refused"));
+    assert!(e.contains("tri.obj") && e.contains("shape_index"), "{e}");
+}
+
+#[test]
+fn checkerboard_and_bitmap_reflectances_become_albedo_textures_read_through_to_uv() {
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+    let body = xml(&format!(
+        r#"{SENSOR}
+        <texture type="checkerboard" id="checks">
+            <rgb name="color0" value="0.4"/><rgb name="color1" value="0.2"/>
+            <transform name="to_uv"><scale x="8" y="4"/><translate x="0.5"/></transform>
+        </texture>
+        <shape type="obj"><string name="filename" value="tri.obj"/><bsdf type="diffuse"><ref name="reflectance" id="checks"/></bsdf></shape>
+        <shape type="serialized"><string name="filename" value="mesh.serialized"/><integer name="shape_index" value="1"/>
+            <bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="wood.png"/></texture></bsdf></shape>"#
+    ));
+    let path = write_scene("textures", &[("scene.xml", &body), ("tri.obj", obj)]);
+    let dir = path.parent().unwrap();
+    std::fs::write(dir.join("mesh.serialized"), serialized_quads(4)).unwrap();
+    caustica::image::png::write(&dir.join("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default()).unwrap();
+    let i = import(&InputFiles::anywhere(), &path, &[]).unwrap();
+    let s = i.into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(s.textures.len(), 2);
+    let material = |mesh: usize| &s.materials[s.meshes[mesh].triangle_materials[0] as usize];
+    let (checks, wood) = (material(0), material(1));
+    assert_eq!((checks.albedo, wood.albedo), (Vec3::ONE, Vec3::ONE), "the texture is the whole colour");
+    let checker = &s.textures[checks.albedo_texture.unwrap() as usize];
+    let texel = |u: f32, v: f32| checker.texels[(v * checker.height as f32) as usize * checker.width as usize + (u * checker.width as f32) as usize];
+    assert_eq!((texel(0.1, 0.1), texel(0.6, 0.1)), ([102, 102, 102, 255], [51, 51, 51, 255]), "Mitsuba's colour 0 where u and v agree");
+    assert_eq!(&s.textures[wood.albedo_texture.unwrap() as usize].name, "wood.png");
+    // to_uv maps the mesh's texture coordinates (OBJ's v turned upside down, as Mitsuba does):
+    // (8 u + 0.5, 4 v).
+    let uvs: Vec<(f32, f32)> = s.meshes[0].uvs.iter().map(|uv| (uv.x, uv.y)).collect();
+    assert_eq!(uvs, vec![(0.5, 4.0), (8.5, 4.0), (0.5, 0.0)]);
+    assert_eq!(s.meshes[1].uvs.len(), 4, "the bitmap's mesh keeps its own coordinates");
+
+    // `convert` writes the textures, to_uv and shape_index out: the TOML, written elsewhere (so
+    // with absolute paths), loads to the same meshes and textures.
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&temp_dir("textures-out")).unwrap();
+    assert!(toml.contains("shape_index = 1") && toml.contains("to_uv") && toml.contains("checkerboard"), "{toml}");
+    let t = Scene::parse(&toml, "converted.toml", &temp_dir("textures-out")).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    assert_eq!(t.textures, s.textures);
+    assert_eq!((t.meshes[0].uvs.clone(), t.meshes[1].positions.clone()), (s.meshes[0].uvs.clone(), s.meshes[1].positions.clone()));
+}
+
+#[test]
+fn textured_materials_need_meshes_with_texture_coordinates() {
+    let dir = temp_dir("textured-toml");
+    std::fs::write(dir.join("bare.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let material = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.checks]\nalbedo = [1, 1, 1]\nalbedo_texture = { checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]], to_uv = [[2, 0, 0], [0, 2, 0]] }\n";
+    let refused = |extra: &str, needles: &[&str]| {
+        let e = format!("{:#}", Scene::parse(&format!("{material}{extra}"), "t.toml", &dir).expect_err("refused"));
+        for needle in needles {
+            assert!(e.contains(needle), "'{needle}' missing from: {e}");
+        }
+    };
+    refused("[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"checks\"\n", &["materials.checks.albedo_texture", "texture coordinates"]);
+    refused("[[meshes]]\nfile = \"bare.obj\"\nmaterial = \"checks\"\n", &["bare.obj", "no texture coordinates", "checks"]);
+    let both = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.m]\nalbedo_texture = { file = \"a.png\", checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]] }\n";
+    let e = format!("{:#}", Scene::parse(both, "t.toml", &dir).expect_err("refused"));
+    assert!(e.contains("materials.m.albedo_texture") && e.contains("one of file and checkerboard"), "{e}");
+}
+
+#[test]
+fn an_envmap_turned_off_the_y_axis_is_resampled_to_its_axes() {
+    // A lat-long map bright in its upper half, turned by Mitsuba's to_world so that its up (+y)
+    // points down the world's -y: the world's lower half is then the bright one.
+    let mut map = caustica::image::RgbImage::new(16, 8);
+    for y in 0..4 {
+        for x in 0..16 {
+            map.set(x, y, [1.0; 3]);
+        }
+    }
+    let body = xml(&format!(r#"{SENSOR}<emitter type="envmap"><string name="filename" value="sky.pfm"/><transform name="to_world"><rotate x="1" angle="180"/></transform></emitter>"#));
+    let path = write_scene("envmap-axes", &[("scene.xml", &body)]);
+    caustica::image::pfm::write(&path.parent().unwrap().join("sky.pfm"), &map).unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    let caustica::scene::Environment::Map(m) = &s.environment else { panic!("a map") };
+    for x in 0..16 {
+        assert_eq!((m.image.get(x, 0), m.image.get(x, 7)), ([0.0; 3], [1.0; 3]), "column {x}");
     }
 }

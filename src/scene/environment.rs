@@ -7,7 +7,8 @@ use super::format::{Array, EnvironmentFile};
 use crate::image::{self, RgbImage};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
-use glam::{DMat3, Vec2, Vec3};
+use glam::{DMat3, DVec3, Vec2, Vec3};
+use std::f64::consts::{PI, TAU};
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,10 +42,10 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) ->
     if given.len() + usize::from(e.color.is_some()) > 1 {
         bail!("environment: give only one of color, probe, latlong and octahedral");
     }
-    let axes = match (e.axes, &e.octahedral) {
-        (Some(_), None) => bail!("environment.axes go with an octahedral map"),
+    let axes = match (e.axes, e.octahedral.is_some() || e.latlong.is_some()) {
+        (Some(_), false) => bail!("environment.axes go with an octahedral or lat-long map"),
         (None, _) => DMat3::IDENTITY,
-        (Some(Array(axes)), Some(_)) => {
+        (Some(Array(axes)), true) => {
             let m = DMat3::from_cols_array_2d(&axes.map(|a| a.0.map(f64::from)));
             if !(m.is_finite() && (m.transpose() * m).abs_diff_eq(DMat3::IDENTITY, 1e-4)) {
                 bail!("environment.axes must be orthonormal (a rotation, possibly with a mirror), got {axes:?}");
@@ -72,18 +73,50 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) ->
     if image.pixels.iter().flatten().any(|&c| c < 0.0) {
         bail!("{name}: the environment map has negative radiance");
     }
-    if projection == MapProjection::Angular || e.octahedral.is_some() {
-        if image.width != image.height {
-            bail!("{name}: an angular light probe or an equal-area octahedral map must be square, got {} x {}", image.width, image.height);
-        }
+    if (projection == MapProjection::Angular || e.octahedral.is_some()) && image.width != image.height {
+        bail!("{name}: an angular light probe or an equal-area octahedral map must be square, got {} x {}", image.width, image.height);
     }
     if projection == MapProjection::Angular {
         fill_outside_disk(&mut image);
     }
     if e.octahedral.is_some() {
         image = equal_area_map::to_latlong(&image, axes);
+    } else if axes != DMat3::IDENTITY {
+        image = rotated_latlong(&image, axes);
     }
     Ok(Environment::Map(EnvironmentMap { projection, image, intensity: e.intensity, rotation_deg: e.rotation }))
+}
+
+/// The lat-long map of the same size whose directions are those of `image` turned by `axes` (the
+/// world directions of `image`'s x, y and z; orthonormal), each texel looked up bilinearly: the
+/// kernel's lat-long maps turn only about +y (`rotation`), and a map given another orientation
+/// (Mitsuba's `envmap` to_world) is resampled once on load instead.
+fn rotated_latlong(image: &RgbImage, axes: DMat3) -> RgbImage {
+    let (w, h) = (image.width as usize, image.height as usize);
+    let mut out = RgbImage::new(image.width, image.height);
+    // Orthonormal, so the inverse is the transpose.
+    let to_map = axes.transpose();
+    for y in 0..h {
+        let theta = (y as f64 + 0.5) / h as f64 * PI;
+        for x in 0..w {
+            let phi = ((x as f64 + 0.5) / w as f64 - 0.5) * TAU;
+            let world = DVec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+            let d = (to_map * world).normalize();
+            // Texel coordinates of d in `image`, texel centres at whole numbers.
+            let u = (0.5 + d.x.atan2(-d.z) / TAU) * w as f64 - 0.5;
+            let v = d.y.clamp(-1.0, 1.0).acos() / PI * h as f64 - 0.5;
+            let (x0, y0) = (u.floor(), v.floor());
+            let (fx, fy) = ((u - x0) as f32, (v - y0) as f32);
+            let column = |i: f64| (i.rem_euclid(w as f64) as usize).min(w - 1) as u32;
+            let row = |i: f64| i.clamp(0.0, (h - 1) as f64) as u32;
+            let texel = |i: f64, j: f64| image.get(column(i), row(j));
+            let lerp = |a: [f32; 3], b: [f32; 3], t: f32| std::array::from_fn(|c| a[c] + (b[c] - a[c]) * t);
+            let top = lerp(texel(x0, y0), texel(x0 + 1.0, y0), fx);
+            let bottom = lerp(texel(x0, y0 + 1.0), texel(x0 + 1.0, y0 + 1.0), fx);
+            out.set(x as u32, y as u32, lerp(top, bottom, fy));
+        }
+    }
+    out
 }
 
 /// Debevec angular map (u, v) in [-1, 1]^2 for a unit direction, u right and v up; the mirror of

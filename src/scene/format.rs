@@ -223,6 +223,9 @@ pub struct MaterialFile {
     /// The surface scatters on its front side only and is black from behind (Mitsuba's BSDFs
     /// without `twosided`); not with `transparency`, whose light must leave through the back.
     pub one_sided: bool,
+    /// A texture whose colour multiplies `albedo` (on meshes, which carry texture coordinates).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub albedo_texture: Option<AlbedoTextureFile>,
 }
 
 /// The microfacet distribution of a material's rough lobes (shaders/microfacet.glsl).
@@ -234,6 +237,22 @@ pub enum Microfacet {
     Ggx,
     /// Beckmann: a Gaussian of slopes (Mitsuba's default).
     Beckmann,
+}
+
+/// A material's albedo texture: an image or Mitsuba's checkerboard, read at texture coordinates
+/// mapped by `to_uv`. (0, 0) is the image's top-left corner; outside [0, 1] it tiles.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AlbedoTextureFile {
+    /// A PNG or JPEG image of sRGB colour.
+    pub file: Option<String>,
+    /// Two linear RGB colours: the first where frac(u) and frac(v) are both above 1/2 or both
+    /// not, the second elsewhere (Mitsuba's `checkerboard`, one period across [0, 1]).
+    pub checkerboard: Option<Array<Triple, 2>>,
+    /// The rows [[a, b, c], [d, e, f]] of an affine map: the texture is read at
+    /// (a u + b v + c, d u + e v + f). Absent: the identity.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub to_uv: Option<Array<Triple, 2>>,
 }
 
 impl Default for MaterialFile {
@@ -253,6 +272,7 @@ impl Default for MaterialFile {
             distribution: Microfacet::Ggx,
             thin: false,
             one_sided: false,
+            albedo_texture: None,
         }
     }
 }
@@ -288,6 +308,9 @@ pub struct MeshFile {
     pub file: String,
     /// Replaces every material the file defines.
     pub material: Option<String>,
+    /// Which mesh of a Mitsuba `.serialized` file (default: the first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape_index: Option<u32>,
     /// Where the file's meshes go (after the file's own node transforms). Listed here rather than
     /// as a flattened `Placement`, which serde cannot combine with deny_unknown_fields.
     #[serde(default)]
@@ -375,8 +398,8 @@ pub struct EnvironmentFile {
     /// pbrt-v4's equal-area octahedral map (square PFM or EXR), resampled to a lat-long map on
     /// load (`scene::equal_area_map`).
     pub octahedral: Option<String>,
-    /// With `octahedral`: the world directions of the map's x, y and z axes, orthonormal
-    /// (absent: the world's own axes).
+    /// With `octahedral` or `latlong`: the world directions of the map's x, y and z axes,
+    /// orthonormal (absent: the world's own axes). A lat-long map is resampled to them on load.
     pub axes: Option<Array<Triple, 3>>,
     #[serde(default = "one")]
     pub intensity: f32,

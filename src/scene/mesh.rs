@@ -5,7 +5,7 @@ use super::asset::{self, Asset, AssetMaterial};
 use super::{Light, Material, MetallicRoughness, Microfacet, Scene};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Context as _, Result};
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Affine2, Mat4, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -53,24 +53,43 @@ struct LoadedFile {
 pub struct MeshImporter<'a> {
     /// How the files are read (and from where).
     files: &'a InputFiles,
-    /// The file's own placements of its meshes, as scene mesh indices.
-    loaded: HashMap<(PathBuf, Option<u32>), LoadedFile>,
+    /// The file's own placements of its meshes, as scene mesh indices, by (file, mesh of the file,
+    /// material override).
+    loaded: HashMap<(PathBuf, Option<u32>, Option<u32>), LoadedFile>,
+    /// Textured scene materials and the maps of texture coordinates (their `to_uv`) of the meshes
+    /// they replace the materials of.
+    uv_maps: HashMap<u32, Affine2>,
 }
 
 impl<'a> MeshImporter<'a> {
     /// An importer reading every file through `files`.
     pub fn new(files: &'a InputFiles) -> Self {
-        MeshImporter { files, loaded: HashMap::new() }
+        MeshImporter { files, loaded: HashMap::new(), uv_maps: HashMap::new() }
+    }
+
+    /// The same importer, mapping the texture coordinates of every mesh placed with one of these
+    /// materials (which must have texture coordinates) through its map.
+    pub fn with_uv_maps(self, uv_maps: HashMap<u32, Affine2>) -> Self {
+        MeshImporter { uv_maps, ..self }
     }
 
     /// Places the meshes of `path` with `transform` applied after the file's own node transforms.
     /// `material` replaces every material of the file. Returns the file's camera, if it has one.
     pub fn place(&mut self, scene: &mut Scene, path: &Path, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
-        let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), material);
+        self.place_part(scene, path, None, material, transform)
+    }
+
+    /// As [`MeshImporter::place`], for mesh `shape_index` of a file that holds several (Mitsuba's
+    /// `.serialized`; `asset::load_asset_part`).
+    pub fn place_part(&mut self, scene: &mut Scene, path: &Path, shape_index: Option<u32>, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
+        let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), shape_index, material);
         if !self.loaded.contains_key(&key) {
-            let asset = asset::load_asset_from(self.files, path)?;
+            let mut asset = asset::load_asset_part(self.files, path, shape_index)?;
             if asset.dropped_triangles > 0 {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
+            }
+            if let Some(to_uv) = material.and_then(|m| self.uv_maps.get(&m)) {
+                map_uvs(scene, path, &mut asset, material.expect("set"), *to_uv)?;
             }
             let (camera, lights) = (asset.camera, asset.lights.clone());
             let placements = add_asset(scene, path, asset, material)?;
@@ -90,6 +109,18 @@ impl<'a> MeshImporter<'a> {
         }
         Ok(file.camera)
     }
+}
+
+/// Maps the texture coordinates of every mesh of `asset`, whose material is to be the textured
+/// `material`, through `to_uv`.
+fn map_uvs(scene: &Scene, path: &Path, asset: &mut Asset, material: u32, to_uv: Affine2) -> Result<()> {
+    for (k, mesh) in asset.meshes.iter_mut().enumerate() {
+        if mesh.uvs.is_empty() {
+            bail!("{}: mesh {k} has no texture coordinates, which material '{}' needs for its albedo_texture", path.display(), scene.materials[material as usize].name);
+        }
+        mesh.uvs.iter_mut().for_each(|uv| *uv = to_uv.transform_point2(*uv));
+    }
+    Ok(())
 }
 
 /// Appends the asset's materials (unless overridden), textures and meshes to the scene.

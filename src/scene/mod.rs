@@ -1,5 +1,6 @@
 //! Scenes: the TOML format (`format`), validation into a `Scene`, meshes and environment maps.
 
+mod albedo_texture;
 mod asset;
 mod camera_toml;
 mod environment;
@@ -12,7 +13,7 @@ mod optics;
 mod toml_error;
 
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
-pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, Asset, AssetError, Wrap};
+pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, load_asset_part, Asset, AssetError, Wrap};
 pub use camera_toml::camera_toml;
 pub use format::{Filter, LightSelection, Microfacet, Sampler};
 pub use light::Light;
@@ -370,7 +371,17 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
     let film = Film { width: file.film.width, height: file.film.height, spp: file.film.spp, filter: file.film.filter };
     check_film(&film)?;
     let integrator = integrator_from(&file.integrator)?;
-    let materials = materials_from(&file.materials)?;
+    let mut materials = materials_from(&file.materials)?;
+    let mut textures = vec![];
+    let mut uv_maps = HashMap::new();
+    for (index, (mname, m)) in file.materials.iter().enumerate() {
+        if let Some(t) = &m.albedo_texture {
+            let (texture, to_uv) = albedo_texture::load(t, &format!("materials.{mname}.albedo_texture"), base, files)?;
+            materials[index].albedo_texture = Some(textures.len() as u32);
+            textures.push(texture);
+            uv_maps.insert(index as u32, to_uv);
+        }
+    }
     // Materials are numbered in name order, as materials_from lists them.
     let by_name: HashMap<&str, u32> = file.materials.keys().enumerate().map(|(i, name)| (name.as_str(), i as u32)).collect();
     let material = |key: String, mname: &str| -> Result<u32> {
@@ -380,13 +391,17 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
         })
     };
     let shapes = shapes_from(&file, &material)?;
+    if let Some(shape) = shapes.iter().find(|s| uv_maps.contains_key(&s.material())) {
+        let m = &materials[shape.material() as usize];
+        bail!("materials.{}.albedo_texture needs a mesh's texture coordinates; spheres, quads and triangles have none ({shape:?})", m.name);
+    }
     let environment = match &file.environment {
         None => Environment::Constant(Vec3::ZERO),
         Some(e) => environment::from_file(e, base, files)?,
     };
     let lights = light::lights_from(&file.lights)?;
-    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures: vec![], environment, lights };
-    place_meshes(&mut scene, &file.meshes, &material, base, files)?;
+    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures, environment, lights };
+    place_meshes(&mut scene, &file.meshes, &material, base, MeshImporter::new(files).with_uv_maps(uv_maps))?;
     Ok(scene)
 }
 
@@ -512,18 +527,17 @@ fn shapes_from(file: &SceneFile, material: &MaterialLookup) -> Result<Vec<Shape>
 }
 
 /// Loads every `[[meshes]]` file and places it once, or at each of its instances.
-fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, files: &InputFiles) -> Result<()> {
-    let mut importer = MeshImporter::new(files);
+fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, mut importer: MeshImporter) -> Result<()> {
     for (k, m) in meshes.iter().enumerate() {
         let key = format!("meshes[{k}]");
         let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;
         let outer = placement(&key, &m.placement())?;
         let path = resolve(base, &m.file);
         if m.instances.is_empty() {
-            importer.place(scene, &path, override_material, outer)?;
+            importer.place_part(scene, &path, m.shape_index, override_material, outer)?;
         }
         for (j, p) in m.instances.iter().enumerate() {
-            importer.place(scene, &path, override_material, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
+            importer.place_part(scene, &path, m.shape_index, override_material, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
         }
     }
     Ok(())

@@ -1,4 +1,4 @@
-//! Mesh assets (OBJ + MTL, PLY, glTF 2.0) loaded into one GPU-agnostic form: meshes, materials,
+//! Mesh assets (OBJ + MTL, PLY, glTF 2.0, Mitsuba's serialized meshes) loaded into one GPU-agnostic form: meshes, materials,
 //! textures, instances and an optional camera. The renderer turns an [`Asset`] into GPU buffers;
 //! nothing here knows about Vulkan.
 
@@ -6,10 +6,11 @@ mod gltf_accessors;
 mod gltf_file;
 mod obj;
 mod ply;
+mod serialized;
 mod tangents;
 mod texture;
 
-pub use texture::{downsample_to_fit, srgb_to_linear};
+pub use texture::{downsample_to_fit, load_texture, srgb_to_linear};
 
 
 use super::{Alpha, AlphaMode, Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
@@ -149,7 +150,7 @@ pub enum AssetError {
     Input(#[from] InputError),
     #[error("{}: {message}", path.display())]
     Invalid { path: PathBuf, message: String },
-    #[error("{}: unsupported mesh format '{extension}' (expected .obj, .ply, .gltf or .glb)", path.display())]
+    #[error("{}: unsupported mesh format '{extension}' (expected .obj, .ply, .gltf, .glb or .serialized)", path.display())]
     UnsupportedExtension { path: PathBuf, extension: String },
 }
 
@@ -171,15 +172,26 @@ pub fn load_asset(path: &Path) -> Result<Asset, AssetError> {
 /// it names (MTL libraries, textures, glTF buffers and images) are read through `files`. A file
 /// that ends up without a single triangle is an error: there would be nothing to render.
 pub fn load_asset_from(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
+    load_asset_part(files, path, None)
+}
+
+/// As [`load_asset_from`], for one of the meshes of a file that holds several: `shape_index`
+/// picks a mesh of a Mitsuba `.serialized` file (absent: the first) and is an error for any other
+/// format.
+pub fn load_asset_part(files: &InputFiles, path: &Path, shape_index: Option<u32>) -> Result<Asset, AssetError> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
+    if shape_index.is_some() && extension != "serialized" {
+        return Err(AssetError::invalid(path, "shape_index picks a mesh of a Mitsuba .serialized file only"));
+    }
     let asset = match extension.as_str() {
         "obj" => obj::load(files, path)?,
         "ply" => ply::load(files, path)?,
         "gltf" | "glb" => gltf_file::load(files, path)?,
+        "serialized" => serialized::load(files, path, shape_index.unwrap_or(0))?,
         _ => {
             return Err(AssetError::UnsupportedExtension {
                 path: path.to_owned(),

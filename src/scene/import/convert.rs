@@ -29,7 +29,8 @@ fn base_or_dot(p: &Path) -> &Path {
     }
 }
 
-/// Mesh files and environment maps, relative to `base`, made absolute: the TOML lives elsewhere.
+/// Mesh files, texture images and environment maps, relative to `base`, made absolute: the TOML
+/// lives elsewhere.
 fn absolute_paths(value: &mut toml::Value, base: &Path) {
     let absolute = |s: &mut String| {
         let p = Path::new(s.as_str());
@@ -41,6 +42,13 @@ fn absolute_paths(value: &mut toml::Value, base: &Path) {
     if let Some(meshes) = value.get_mut("meshes").and_then(|m| m.as_array_mut()) {
         for mesh in meshes {
             if let Some(toml::Value::String(s)) = mesh.get_mut("file") {
+                absolute(s);
+            }
+        }
+    }
+    if let Some(materials) = value.get_mut("materials").and_then(|m| m.as_table_mut()) {
+        for (_, material) in materials.iter_mut() {
+            if let Some(toml::Value::String(s)) = material.get_mut("albedo_texture").and_then(|t| t.get_mut("file")) {
                 absolute(s);
             }
         }

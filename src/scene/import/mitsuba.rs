@@ -4,7 +4,7 @@
 //! parameter is documented in the README's "Scenes from other renderers" section.
 
 use super::super::format::{
-    Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler, SceneFile,
+    AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler, SceneFile,
     SphereFile, SpotLightFile, TriangleFile,
 };
 use super::mitsuba_xml::{self, Object, Resolver};
@@ -12,7 +12,7 @@ use super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUND
 use super::{transform, Location, Notes};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
-use glam::{DMat4, DVec3};
+use glam::{DMat3, DMat4, DVec3};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -106,9 +106,6 @@ impl Mapper<'_> {
                 self.emitter(&emitter)?;
             }
         }
-        if let Some(texture) = of("texture").first() {
-            return Err(texture.error("textures are not supported"));
-        }
         if let Some(o) = objects.iter().find(|o| matches!(o.tag.as_str(), "film" | "sampler" | "rfilter")) {
             return Err(o.error("belongs inside a <sensor>"));
         }
@@ -125,15 +122,22 @@ impl Mapper<'_> {
     fn color(&mut self, o: &Object, name: &str, default: f64) -> Result<DVec3> {
         let mut sampled_at: Option<Location> = None;
         let c = o.color(name, &mut |at| sampled_at = Some(at.clone()))?;
-        if let Some(at) = sampled_at {
-            self.warn("spectrum", || format!("{at}: spectra given as wavelengths are reduced to linear sRGB (CIE 1931 fit, as Mitsuba's RGB modes)"));
-        }
+        self.warn_sampled(sampled_at);
         Ok(c.unwrap_or(DVec3::splat(default)))
+    }
+
+    fn warn_sampled(&mut self, sampled_at: Option<Location>) {
+        if let Some(at) = sampled_at {
+            self.warn("spectrum", || format!("{at}: spectra given as wavelengths are reduced to linear sRGB (CIE 1931 fit; reflectances under D65, as Mitsuba's RGB modes)"));
+        }
     }
 
     /// A reflectance: a colour each channel of which lies in [0, 1] (errors name its line).
     fn reflectance(&mut self, o: &Object, name: &str, default: f64) -> Result<DVec3> {
-        let c = self.color(o, name, default)?;
+        let mut sampled_at: Option<Location> = None;
+        let c = o.reflectance_color(name, &mut |at| sampled_at = Some(at.clone()))?;
+        self.warn_sampled(sampled_at);
+        let c = c.unwrap_or(DVec3::splat(default));
         if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
             return Err(o.error(format!("{name} must be in [0, 1] per channel (energy conservation), got {c}")));
         }
@@ -332,8 +336,13 @@ impl Mapper<'_> {
         // A mirroring transform turns the winding, so Mitsuba's normals (transformed as normals)
         // face the other way round the edges.
         let reverse = flip != (m.determinant() < 0.0);
+        let textured = self.materials[&material].albedo_texture.is_some();
+        let mesh = matches!(s.plugin.as_str(), "obj" | "ply" | "serialized");
+        if textured && !mesh {
+            return Err(s.error("a textured BSDF on this shape is not supported (caustica's spheres and quads have no texture coordinates; meshes do)"));
+        }
         match s.plugin.as_str() {
-            "obj" | "ply" => {
+            "obj" | "ply" | "serialized" => {
                 let Some(name) = s.string("filename")?.map(str::to_owned) else { return Err(s.error("needs a filename")) };
                 if flip {
                     return Err(s.error("flip_normals on a mesh is not supported"));
@@ -341,14 +350,24 @@ impl Mapper<'_> {
                 if s.boolean("face_normals", false)? {
                     return Err(s.error("face_normals is not supported (caustica shades with the file's vertex normals)"));
                 }
-                // Texture coordinates only matter to textures, which are not imported.
-                s.boolean("flip_tex_coords", true)?;
+                let shape_index = if s.plugin == "serialized" {
+                    let index = s.integer("shape_index", 0)?;
+                    Some(u32::try_from(index).map_err(|_| s.error(format!("shape_index must be >= 0, got {index}")))?)
+                } else {
+                    // caustica turns OBJ and PLY texture coordinates upside down as Mitsuba does by
+                    // default; they only matter to textures.
+                    if !s.boolean("flip_tex_coords", true)? && textured {
+                        return Err(s.error("flip_tex_coords = false is not supported on a textured mesh"));
+                    }
+                    None
+                };
                 let path = self.resolver.resolve(&name, Path::new(&*s.at.file));
                 let file = relative_to(&path, &self.base);
                 let placement = transform::placement(m).map_err(|e| s.error(e))?;
                 self.out().meshes.push(MeshFile {
                     file,
                     material: Some(material),
+                    shape_index,
                     translate: placement.translate,
                     scale: placement.scale,
                     rotate: placement.rotate,
@@ -392,7 +411,7 @@ impl Mapper<'_> {
                     self.out().triangles.push(TriangleFile { vertices, material: material.clone() });
                 }
             }
-            _ => return Err(s.error("this shape is not supported (obj, ply, sphere, rectangle, cube, disk, shapegroup, instance)")),
+            _ => return Err(s.error("this shape is not supported (obj, ply, serialized, sphere, rectangle, cube, disk, shapegroup, instance)")),
         }
         s.check_all_used()
     }
@@ -452,7 +471,10 @@ impl Mapper<'_> {
                 }
             }
             "diffuse" => {
-                MaterialFile { albedo: f32x3(self.reflectance(b, "reflectance", 0.5)?), ..defaults }
+                match b.texture("reflectance")? {
+                    Some(t) => MaterialFile { albedo: Array([1.0; 3]), albedo_texture: Some(self.albedo_texture(&t)?), ..defaults },
+                    None => MaterialFile { albedo: f32x3(self.reflectance(b, "reflectance", 0.5)?), ..defaults },
+                }
             }
             "conductor" | "roughconductor" => {
                 let (roughness, distribution) = self.microfacet(b, b.plugin == "roughconductor")?;
@@ -501,6 +523,45 @@ impl Mapper<'_> {
         };
         b.check_all_used()?;
         Ok(material)
+    }
+
+    /// A `checkerboard` or `bitmap` texture as caustica's albedo texture, with its `to_uv`.
+    fn albedo_texture(&mut self, t: &Object) -> Result<AlbedoTextureFile> {
+        let mut texture = match t.plugin.as_str() {
+            "checkerboard" => {
+                let colors = [self.reflectance(t, "color0", 0.4)?, self.reflectance(t, "color1", 0.2)?];
+                AlbedoTextureFile { file: None, checkerboard: Some(Array(colors.map(f32x3))), to_uv: None }
+            }
+            "bitmap" => {
+                let Some(name) = t.string("filename")?.map(str::to_owned) else { return Err(t.error("needs a filename")) };
+                // What Mitsuba does by default, and caustica always: bilinear lookups of sRGB
+                // colour that tile.
+                if t.string("filter_type")?.is_some_and(|f| f != "bilinear") {
+                    return Err(t.error("only filter_type bilinear is supported"));
+                }
+                if t.string("wrap_mode")?.is_some_and(|w| w != "repeat") {
+                    return Err(t.error("only wrap_mode repeat is supported"));
+                }
+                if t.boolean("raw", false)? {
+                    return Err(t.error("raw (linear) bitmaps are not supported; caustica reads colour images as sRGB"));
+                }
+                let path = self.resolver.resolve(&name, Path::new(&*t.at.file));
+                let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+                if !matches!(extension.as_str(), "png" | "jpg" | "jpeg") {
+                    return Err(t.error(format!("'{name}': only PNG and JPEG bitmaps are supported")));
+                }
+                AlbedoTextureFile { file: Some(relative_to(&path, &self.base)), checkerboard: None, to_uv: None }
+            }
+            _ => return Err(t.error("this texture is not supported for a diffuse reflectance (checkerboard, bitmap)")),
+        };
+        if let Some(m) = t.transform("to_uv")? {
+            // Mitsuba keeps the 2D affine part of a 4x4 to_uv: its upper-left 2x2 and the
+            // translation's first two components.
+            let row = |r: usize| Array([m.col(0)[r] as f32, m.col(1)[r] as f32, m.col(3)[r] as f32]);
+            texture.to_uv = Some(Array([row(0), row(1)]));
+        }
+        t.check_all_used()?;
+        Ok(texture)
     }
 
     /// caustica's roughness (sqrt(alpha), alpha defaulting to Mitsuba's 0.1) and distribution
@@ -582,11 +643,21 @@ impl Mapper<'_> {
                 let Some(name) = e.string("filename")?.map(str::to_owned) else { return Err(e.error("needs a filename")) };
                 let path = self.resolver.resolve(&name, Path::new(&*e.at.file));
                 let latlong = relative_to(&path, &self.base);
-                let rotation = y_rotation_degrees(m.unwrap_or(DMat4::IDENTITY)).ok_or_else(|| e.error("only a to_world that rotates about +y is supported for an envmap"))?;
+                let m = m.unwrap_or(DMat4::IDENTITY);
                 let scale = e.float("scale", 1.0)?;
                 // Mitsuba's u = 0 column looks down -z, caustica's centre column does: half a turn.
-                let rotation = ((rotation + 180.0) % 360.0) as f32;
-                self.environment(e, EnvironmentFile { color: None, probe: None, latlong: Some(latlong), octahedral: None, axes: None, intensity: scale as f32, rotation })?;
+                let (rotation, axes) = match y_rotation_degrees(m) {
+                    Some(rotation) => (((rotation + 180.0) % 360.0) as f32, None),
+                    None => {
+                        // Any other orientation: the map's axes, to which caustica resamples it.
+                        let turned = DMat3::from_mat4(m) * DMat3::from_rotation_y(std::f64::consts::PI);
+                        if !(turned.is_finite() && (turned.transpose() * turned).abs_diff_eq(DMat3::IDENTITY, 1e-4)) {
+                            return Err(e.error("an envmap's to_world must rotate (and may mirror and translate) but not scale or shear"));
+                        }
+                        (0.0, Some(Array(turned.to_cols_array_2d().map(|c| Array(c.map(|v| v as f32))))))
+                    }
+                };
+                self.environment(e, EnvironmentFile { color: None, probe: None, latlong: Some(latlong), octahedral: None, axes, intensity: scale as f32, rotation })?;
                 None
             }
             _ => return Err(e.error("this emitter is not supported (area, point, spot, directional, constant, envmap)")),

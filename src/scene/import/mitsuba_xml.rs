@@ -479,6 +479,16 @@ impl Object {
     /// A colour: `<rgb>`, a `<float>` or constant `<spectrum>` (grey), or a sampled `<spectrum>`
     /// (reduced to RGB, with the warning `sampled`).
     pub fn color(&self, name: &str, sampled: &mut dyn FnMut(&Location)) -> Result<Option<DVec3>> {
+        self.color_read(name, sampled, super::spectrum::to_rgb)
+    }
+
+    /// As [`Object::color`], for a reflectance: a sampled spectrum is read under D65, as Mitsuba
+    /// reads the spectra of everything but emitters.
+    pub fn reflectance_color(&self, name: &str, sampled: &mut dyn FnMut(&Location)) -> Result<Option<DVec3>> {
+        self.color_read(name, sampled, super::spectrum::reflectance_to_rgb)
+    }
+
+    fn color_read(&self, name: &str, sampled: &mut dyn FnMut(&Location), spectrum_to_rgb: fn(&[(f64, f64)]) -> DVec3) -> Result<Option<DVec3>> {
         if let Some(texture) = self.texture_for(name)? {
             return Err(texture.error(format!("textures ('{name}') are not supported; give an <rgb>")));
         }
@@ -489,7 +499,7 @@ impl Object {
             Some(Property { value: Value::Spectrum(s), .. }) if s.len() == 1 && s[0].0 == 0.0 => Ok(Some(DVec3::splat(s[0].1))),
             Some(p @ Property { value: Value::Spectrum(s), .. }) => {
                 sampled(&p.at);
-                Ok(Some(super::spectrum::to_rgb(s)))
+                Ok(Some(spectrum_to_rgb(s)))
             }
             Some(p) => Err(self.wrong_type(p, "an <rgb>, <float> or <spectrum>")),
         }
@@ -540,6 +550,18 @@ impl Object {
             0 | 1 => Ok(found.pop()),
             n => Err(self.error(format!("has {n} nested <{tag}>s; caustica takes one"))),
         }
+    }
+
+    /// A texture given for the parameter `name`, if any, marked used.
+    pub fn texture(&self, name: &str) -> Result<Option<Rc<Object>>> {
+        for ((child_name, child), used) in self.children.iter().zip(&self.children_used) {
+            let object = self.resolve(child)?;
+            if child_name.as_deref() == Some(name) && object.tag == "texture" {
+                used.set(true);
+                return Ok(Some(object));
+            }
+        }
+        Ok(None)
     }
 
     /// A texture given for the parameter `name`, if any.

@@ -2,7 +2,8 @@
 //! with, as Mitsuba 3's RGB modes do: the spectrum (linear between its samples, zero outside
 //! them) is integrated against the CIE 1931 colour matching functions, normalised by the integral
 //! of y-bar (so that a constant spectrum of 1 has Y = 1, an equal-energy white), and converted from
-//! XYZ to linear sRGB. The matching functions are the multi-lobe Gaussian fit of Wyman, Sloan and
+//! XYZ to linear sRGB; a reflectance is weighted by the D65 illuminant first (its colour under
+//! sRGB's white light). The matching functions are the multi-lobe Gaussian fit of Wyman, Sloan and
 //! Shirley (JCGT 2013), within about 1% of the tabulated curves: the one approximation here.
 
 use glam::DVec3;
@@ -27,8 +28,37 @@ fn cie_xyz(lambda: f64) -> DVec3 {
     )
 }
 
-/// Linear sRGB of a sampled spectrum: (wavelength nm, value) pairs, wavelengths increasing.
+/// CIE standard illuminant D65 from 360 to 830 nm in steps of 5 nm (relative, 100 at 560 nm).
+const D65: [f64; 95] = [
+    46.6383, 49.3637, 52.0891, 51.0323, 49.9755, 52.3118, 54.6482, 68.7015, 82.7549, 87.1204, 91.486, 92.4589, 93.4318, 90.057, 86.6823, 95.7736, 104.865, 110.936, 117.008,
+    117.41, 117.812, 116.336, 114.861, 115.392, 115.923, 112.367, 108.811, 109.082, 109.354, 108.578, 107.802, 106.296, 104.79, 106.239, 107.689, 106.047, 104.405, 104.225,
+    104.046, 102.023, 100.0, 98.1671, 96.3342, 96.0611, 95.788, 92.2368, 88.6856, 89.3459, 90.0062, 89.8026, 89.5991, 88.6489, 87.6987, 85.4936, 83.2886, 83.4939, 83.6992,
+    81.863, 80.0268, 80.1207, 80.2146, 81.2462, 82.2778, 80.281, 78.2842, 74.0027, 69.7213, 70.6652, 71.6091, 72.979, 74.349, 67.9765, 61.604, 65.7448, 69.8856, 72.4863,
+    75.087, 69.3398, 63.5927, 55.0054, 46.4182, 56.6118, 66.8054, 65.0941, 63.3828, 63.8434, 64.304, 61.8779, 59.4519, 55.7054, 51.959, 54.6998, 57.4406, 58.8765, 60.3125,
+];
+
+/// D65 at `lambda` nm, linear between the table's samples.
+fn d65(lambda: f64) -> f64 {
+    let t = ((lambda - LAMBDA_MIN) / 5.0).clamp(0.0, (D65.len() - 1) as f64);
+    let i = (t as usize).min(D65.len() - 2);
+    D65[i] + (D65[i + 1] - D65[i]) * (t - i as f64)
+}
+
+/// Linear sRGB of an emitted spectrum: (wavelength nm, value) pairs, wavelengths increasing.
 pub fn to_rgb(samples: &[(f64, f64)]) -> DVec3 {
+    weighted_rgb(samples, &|_| 1.0)
+}
+
+/// Linear sRGB of a reflectance spectrum, as Mitsuba 3's RGB modes read one (outside emitters):
+/// its colour under D65, the illuminant whose white is sRGB's (1, 1, 1), normalised so that a
+/// reflectance of 1 everywhere is that white, and clamped to [0, 1] as Mitsuba clamps it.
+pub fn reflectance_to_rgb(samples: &[(f64, f64)]) -> DVec3 {
+    weighted_rgb(samples, &d65).clamp(DVec3::ZERO, DVec3::ONE)
+}
+
+/// The spectrum's XYZ under `weight` (an illuminant), relative to the illuminant's own Y, in
+/// linear sRGB.
+fn weighted_rgb(samples: &[(f64, f64)], weight: &dyn Fn(f64) -> f64) -> DVec3 {
     let value = |lambda: f64| -> f64 {
         let k = samples.partition_point(|&(l, _)| l < lambda);
         match (k.checked_sub(1).map(|j| samples[j]), samples.get(k)) {
@@ -41,7 +71,7 @@ pub fn to_rgb(samples: &[(f64, f64)]) -> DVec3 {
     let (mut xyz, mut y_integral) = (DVec3::ZERO, 0.0);
     for i in 0..STEPS {
         let lambda = LAMBDA_MIN + (i as f64 + 0.5) * h;
-        let cmf = cie_xyz(lambda);
+        let cmf = cie_xyz(lambda) * weight(lambda);
         xyz += cmf * value(lambda);
         y_integral += cmf.y;
     }
@@ -100,6 +130,16 @@ mod tests {
             .collect();
         let rgb = to_rgb(&red);
         assert!(close(rgb, DVec3::new(0.570068, 0.0430135, 0.0443706), 0.02), "{rgb:?}");
+        // Mitsuba 3.9 itself reads the spectrum as a reflectance, under D65 (what
+        // mi.traverse shows of scenes/cbox/cbox.xml in llvm_ad_rgb).
+        let rgb = reflectance_to_rgb(&red);
+        assert!(close(rgb, DVec3::new(0.49132, 0.0492281, 0.0509219), 0.02), "{rgb:?}");
+    }
+
+    #[test]
+    fn a_flat_reflectance_is_grey() {
+        let grey = reflectance_to_rgb(&[(400.0, 0.78), (700.0, 0.78)]);
+        assert!(close(grey, DVec3::splat(0.78), 0.01), "{grey:?}");
     }
 
     #[test]

@@ -26,7 +26,7 @@ pub fn placement(m: DMat4) -> Result<Placement> {
     .as_dmat4();
     let size = m.to_cols_array().iter().fold(1.0f64, |a, v| a.max(v.abs()));
     let error = (rebuilt - m).to_cols_array().iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    if !(error <= 1e-4 * size) || scale.x * scale.y * scale.z == 0.0 {
+    if error.is_nan() || error > 1e-4 * size || scale.x * scale.y * scale.z == 0.0 {
         bail!("its transformation is not a scale, rotation and translation (a shear, a zero scale, or a non-uniform scale after a rotation), which caustica cannot place a mesh by");
     }
     Ok(placement)

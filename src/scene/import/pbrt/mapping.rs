@@ -177,7 +177,7 @@ impl Mapper<'_> {
         if let Some(clamp) = d.float("maxcomponentvalue")? {
             // pbrt scales a sample down so its largest component is at most this, as caustica's
             // integrator.clamp does.
-            if !(clamp > 0.0) {
+            if clamp.is_nan() || clamp <= 0.0 {
                 return Err(d.error(format!("maxcomponentvalue must be > 0, got {clamp}")));
             }
             self.out.integrator.clamp = Some(clamp as f32);
@@ -342,7 +342,7 @@ impl Mapper<'_> {
                     let placement = transform::placement(m).map_err(|e| d.error(e))?;
                     let file = relative_to(&path, self.base);
                     self.count_shape(d, &material)?;
-                    self.out.meshes.push(MeshFile { file, material: Some(material), translate: placement.translate, scale: placement.scale, rotate: placement.rotate, instances: vec![] });
+                    self.out.meshes.push(MeshFile { file, material: Some(material), shape_index: None, translate: placement.translate, scale: placement.scale, rotate: placement.rotate, instances: vec![] });
                 }
             }
             _ => return Err(d.error("this shape is not supported (sphere, trianglemesh, bilinearmesh, plymesh)")),
@@ -353,7 +353,7 @@ impl Mapper<'_> {
     fn sphere(&mut self, s: &ShapeUse, to_world: DMat4, m: DMat4, material: &str) -> Result<()> {
         let d = &*s.shape;
         let radius = d.float_or("radius", 1.0)?;
-        if !(radius > 0.0) {
+        if radius.is_nan() || radius <= 0.0 {
             return Err(d.error(format!("radius must be > 0, got {radius}")));
         }
         let partial = d.float_or("zmin", -radius)? > -radius || d.float_or("zmax", radius)? < radius || d.float_or("phimax", 360.0)? < 360.0;
@@ -494,7 +494,7 @@ impl Mapper<'_> {
             ("spectrum", _, []) => {
                 let rgb = self.sampled_spectrum(p)?;
                 let y = spectrum::luminance(rgb);
-                if !(y > 0.0) {
+                if y.is_nan() || y <= 0.0 {
                     return Err(p.error("a spectrum without luminance"));
                 }
                 rgb / y
@@ -514,7 +514,7 @@ impl Mapper<'_> {
             return Err(d.error("power (an emitter given by its total power) is not supported; give L or I with scale"));
         }
         let scale = d.float_or("scale", 1.0)?;
-        if !(scale >= 0.0) {
+        if scale.is_nan() || scale < 0.0 {
             return Err(d.error(format!("scale must be >= 0, got {scale}")));
         }
         Ok(scale)

@@ -229,7 +229,8 @@ impl Reader<'_> {
                     bail!("{at}: a second Camera");
                 }
                 let camera_from_world = self.state.ctm;
-                if !(camera_from_world.determinant().abs() > 1e-12) {
+                let determinant = camera_from_world.determinant().abs();
+                if determinant.is_nan() || determinant <= 1e-12 {
                     bail!("{at}: Camera: the current transformation is not invertible");
                 }
                 self.coordinate_systems.insert("camera".into(), camera_from_world.inverse());
