@@ -117,8 +117,8 @@ fn an_alpha_checkered_square_shows_half_the_background() {
             for y in 8 * by + 2..8 * by + 6 {
                 for x in 8 * bx + 2..8 * bx + 6 {
                     let p = image.get(x, y);
-                    for c in 0..3 {
-                        assert!((p[c] - expected).abs() <= 1e-5, "{what}: pixel ({x}, {y}) channel {c} is {}, expected {expected}", p[c]);
+                    for (c, value) in p.iter().enumerate() {
+                        assert!((value - expected).abs() <= 1e-5, "{what}: pixel ({x}, {y}) channel {c} is {value}, expected {expected}");
                     }
                 }
             }
@@ -200,8 +200,8 @@ fn shadow_rays_respect_alpha() {
         write_gltf_square(&dir, 1.0, 2.0, opacity, r#""alphaMode": "MASK", "alphaCutoff": 0.5"#, None);
         let image = floor_under_square(&ctx, &dir, "square.gltf");
         for (i, p) in image.pixels.iter().enumerate() {
-            for c in 0..3 {
-                let value = p[c] as f64;
+            for (c, &value) in p.iter().enumerate() {
+                let value = value as f64;
                 assert!((value - expected).abs() <= 1e-4 * lit, "floor under a MASK square of opacity {opacity}: pixel {i} channel {c} is {value:.6}, expected {expected:.6}");
             }
         }

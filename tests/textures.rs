@@ -214,8 +214,8 @@ fn a_normal_map_changes_a_diffuse_plane_s_brightness_by_the_cosine_of_its_tilt()
         let image = normal_mapped_floor(&ctx, &dir, texel, from, scale as f32, flip_v);
         let expected = 0.5 / std::f64::consts::PI * 2.0 * bent(texel, scale, flip_v).dot(from);
         for (i, p) in image.pixels.iter().enumerate() {
-            for c in 0..3 {
-                let value = p[c] as f64;
+            for (c, &value) in p.iter().enumerate() {
+                let value = value as f64;
                 assert!((value - expected).abs() <= 1e-4 * expected, "{what}: pixel {i} channel {c} is {value:.6}, expected {expected:.6} (a flat floor: {:.6})", 0.5 / std::f64::consts::PI * 2.0 * from.y);
             }
         }

@@ -47,14 +47,14 @@ fn accessor(numbers: &mut Numbers, kind: &str, component_types: &[u32], views: u
         format!(r#""count": {}"#, numbers.size()),
         format!(r#""type": "{kind}""#),
     ];
-    if numbers.byte() % 4 != 0 {
+    if !numbers.byte().is_multiple_of(4) {
         fields.push(format!(r#""bufferView": {}"#, numbers.byte() as usize % views));
         fields.push(format!(r#""byteOffset": {}"#, numbers.size() & !3));
     }
     if position {
         fields.push(r#""min": [-1, -1, -1], "max": [1, 1, 1]"#.to_owned());
     }
-    if numbers.byte() % 2 == 0 {
+    if numbers.byte().is_multiple_of(2) {
         fields.push(format!(
             r#""sparse": {{"count": {}, "indices": {{"bufferView": {}, "byteOffset": {}, "componentType": {}}}, "values": {{"bufferView": {}, "byteOffset": {}}}}}"#,
             numbers.size(),
@@ -88,7 +88,7 @@ pub fn gltf(data: &[u8]) -> (String, Vec<u8>) {
     let mut numbers = Numbers { data };
     let buffer_length = numbers.byte() as usize * 4;
     let buffer: Vec<u8> = triangle_block().into_iter().cycle().take(buffer_length).collect();
-    let declared = if numbers.byte() % 8 == 0 { numbers.size() as usize } else { buffer_length };
+    let declared = if numbers.byte().is_multiple_of(8) { numbers.size() as usize } else { buffer_length };
     let view_count = 1 + numbers.byte() as usize % 4;
     let views: Vec<String> = (0..view_count)
         .map(|_| {
@@ -101,15 +101,15 @@ pub fn gltf(data: &[u8]) -> (String, Vec<u8>) {
         .collect();
     let mut accessors = vec![accessor(&mut numbers, "VEC3", &[5126, 5126, 5123], view_count, true)];
     let mut attributes = vec![r#""POSITION": 0"#.to_owned()];
-    if numbers.byte() % 2 == 0 {
+    if numbers.byte().is_multiple_of(2) {
         attributes.push(format!(r#""NORMAL": {}"#, accessors.len()));
         accessors.push(accessor(&mut numbers, "VEC3", &[5126], view_count, false));
     }
-    if numbers.byte() % 2 == 0 {
+    if numbers.byte().is_multiple_of(2) {
         attributes.push(format!(r#""TEXCOORD_0": {}"#, accessors.len()));
         accessors.push(accessor(&mut numbers, "VEC2", &[5126, 5121, 5123], view_count, false));
     }
-    let indices = if numbers.byte() % 4 != 0 {
+    let indices = if !numbers.byte().is_multiple_of(4) {
         accessors.push(accessor(&mut numbers, "SCALAR", &[5121, 5123, 5125], view_count, false));
         format!(r#", "indices": {}"#, accessors.len() - 1)
     } else {
