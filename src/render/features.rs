@@ -1,6 +1,6 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
-//! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases) is left out by `#if` and by constants
+//! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases, clear coats, absorption) is left out by `#if` and by constants
 //! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
@@ -39,12 +39,17 @@ pub struct SceneFeatures {
     pub rough_lobes: bool,
     /// Plastics: a diffuse base under a dielectric coat.
     pub coated: bool,
+    /// glTF clear coats (a factor above 0): the coat's pick in pick_lobe and its textures.
+    pub clearcoat: bool,
+    /// Absorbing dielectrics (Beer-Lambert, KHR_materials_volume): the attenuation of each path
+    /// segment that ends on such a surface from inside.
+    pub absorption: bool,
 }
 
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, clearcoat: true, absorption: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -60,13 +65,15 @@ impl SceneFeatures {
             normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
             alpha: has_instance(INSTANCE_MESH) && data.materials.iter().any(|m| m.alpha[3].to_bits() != ALPHA_OPAQUE),
             environment_map: data.env_kind != ENV_CONSTANT,
-            rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA),
+            rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
+            clearcoat: data.materials.iter().any(|m| m.coat[0] > 0.0),
+            absorption: data.materials.iter().any(|m| m.volume[..3].iter().any(|&s| s > 0.0)),
         }
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 10] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 12] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -78,6 +85,8 @@ impl SceneFeatures {
             ("environment_map", "SCENE_ENV_MAP", self.environment_map),
             ("rough_lobes", "SCENE_ROUGH_LOBES", self.rough_lobes),
             ("coated", "SCENE_COATED", self.coated),
+            ("clearcoat", "SCENE_CLEARCOAT", self.clearcoat),
+            ("absorption", "SCENE_ABSORPTION", self.absorption),
         ]
     }
 

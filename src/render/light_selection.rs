@@ -199,6 +199,8 @@ mod tests {
             coat: false,
             metallic_roughness: None,
             maps: Default::default(),
+            clearcoat: None,
+            attenuation: None,
         }
     }
 

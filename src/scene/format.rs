@@ -215,6 +215,10 @@ pub struct MaterialFile {
     pub k: Option<Triple>,
     /// The base is a plastic: the albedo under a dielectric coat of index `ior`.
     pub coat: bool,
+    /// Beer-Lambert absorption inside a dielectric (transparency > 0): the share of white light
+    /// left, per channel in (0, 1], after travelling `attenuation_distance` inside. Both or neither.
+    pub attenuation_color: Option<Triple>,
+    pub attenuation_distance: Option<f32>,
 }
 
 impl Default for MaterialFile {
@@ -231,6 +235,8 @@ impl Default for MaterialFile {
             eta: None,
             k: None,
             coat: false,
+            attenuation_color: None,
+            attenuation_distance: None,
         }
     }
 }
