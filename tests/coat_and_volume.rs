@@ -7,7 +7,7 @@
 mod common;
 
 use caustica::render::{AovSet, KernelChoice, Renderer};
-use caustica::scene::{Clearcoat, Scene};
+use caustica::scene::{fresnel_dielectric, Clearcoat, Scene};
 use common::gltf_square::{png_uri, write_gltf_square};
 use common::{gpu, mean_and_stderr, parse, render, temp_dir};
 use std::path::Path;
@@ -41,12 +41,13 @@ fn assert_channel_means(image: &caustica::image::RgbImage, expected: [f64; 3], r
     }
 }
 
-/// A slab of glass of index 1 (no refraction, no reflection) between y = 0 and y = 1, its faces
+/// A slab of glass of index 1 (no refraction, no reflection) between y = 0 and y = 0.75, its faces
 /// outwards, absorbing with `attenuation_color` [0.8, 0.5, 0.2] per `attenuation_distance` 0.5:
-/// every path crosses it straight, so each pixel is the sky times 0.8^2, 0.5^2, 0.2^2, exactly (no
-/// noise; the corners' longer paths change it by under 1e-3). Without absorption the pixel is the
-/// sky (a factor 1.6 to 25 off); absorbing on the way in instead of out (over the 3 units from the
-/// camera) gives the sixth powers; any error in sigma_a or the path length above 0.2 % fails.
+/// every path crosses it straight, so each pixel is the sky times 0.8, 0.5, 0.2 to the power 1.5,
+/// exactly (no noise; the corners' longer paths change it by under 1e-3). Without absorption the
+/// pixel is the sky (a factor 1.4 to 11 off); absorbing on the way in instead of out (over the 3
+/// units from the camera) gives the sixth powers, and sigma_a not multiplied by the length the
+/// cubes; any error in sigma_a or the path length above 0.2 % fails.
 #[test]
 fn a_slab_of_absorbing_glass_passes_the_attenuation_color_per_distance() {
     let sky = [2.0f32, 1.0, 0.5];
@@ -66,7 +67,7 @@ fn a_slab_of_absorbing_glass_passes_the_attenuation_color_per_distance() {
         edge_v = [0.0, 0.0, 4.0]
         material = "glass"
         [[quads]]
-        origin = [-2.0, 1.0, -2.0]
+        origin = [-2.0, 0.75, -2.0]
         edge_u = [0.0, 0.0, 4.0]
         edge_v = [4.0, 0.0, 0.0]
         material = "glass"
@@ -74,7 +75,7 @@ fn a_slab_of_absorbing_glass_passes_the_attenuation_color_per_distance() {
     ));
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &scene, 3);
-    let expected = [0.8f32, 0.5, 0.2].map(|c| c * c);
+    let expected = [0.8f32, 0.5, 0.2].map(|c| c.powf(1.5));
     for (i, p) in image.pixels.iter().enumerate() {
         for c in 0..3 {
             let want = sky[c] * expected[c];
@@ -85,7 +86,7 @@ fn a_slab_of_absorbing_glass_passes_the_attenuation_color_per_distance() {
 
 /// The same slab from a glTF file (two placements of one square, the second turned to face up), of
 /// index 1.5 and KHR_materials_volume attenuationColor [0.8, 0.5, 0.2] per attenuationDistance 1
-/// (its thicknessFactor, 0.1, is ignored): light crossing the slab once keeps a = colour, each
+/// (its thicknessFactor, 0.1, is ignored): light crossing the slab once keeps a = colour^0.75, each
 /// face reflects F = 0.04, and the pixel is the sky times all that the slab returns and passes:
 /// R + T = F + (1 - F)^2 F a^2 / (1 - F^2 a^2) + (1 - F)^2 a / (1 - F^2 a^2). Resolves 2 %.
 #[test]
@@ -106,7 +107,7 @@ fn a_gltf_slab_with_khr_materials_volume_absorbs_between_its_faces() {
             [[meshes]]
             file = "slab.gltf"
             rotate = [180.0, 0.0, 0.0]
-            translate = [0.0, 1.0, 0.0]
+            translate = [0.0, 0.75, 0.0]
             "#,
         ),
         "gltf slab",
@@ -115,7 +116,8 @@ fn a_gltf_slab_with_khr_materials_volume_absorbs_between_its_faces() {
     .expect("valid test scene");
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &scene, 5);
-    let expected = [0.8, 0.5, 0.2].map(|a: f64| {
+    let expected = [0.8, 0.5, 0.2].map(|color: f64| {
+        let a = color.powf(0.75);
         let bounce = 1.0 - F0 * F0 * a * a;
         F0 + (1.0 - F0).powi(2) * F0 * a * a / bounce + (1.0 - F0).powi(2) * a / bounce
     });
@@ -138,19 +140,31 @@ fn coated_quad(albedo: f32, coat: Option<Clearcoat>, size: u32, spp: u32) -> Sce
     scene
 }
 
+/// [`coated_quad`] seen at 60 degrees from its normal (cos 0.5) through half a degree.
+fn coated_quad_at_60_degrees(albedo: f32, coat: Option<Clearcoat>, size: u32, spp: u32) -> Scene {
+    let mut scene = coated_quad(albedo, coat, size, spp);
+    scene.camera.position = glam::Vec3::new(0.0, -1.5, 3.0 * 0.75f32.sqrt());
+    scene.camera.up = glam::Vec3::Y;
+    scene.camera.fov_deg = 0.5;
+    scene
+}
+
 fn smooth_coat(factor: f32) -> Option<Clearcoat> {
     Some(Clearcoat { factor, roughness: 0.0, texture: None, roughness_texture: None })
 }
 
-/// A smooth clear coat of factor 0.6 over a black diffuse base, seen at normal incidence under a
-/// white sky, reflects the sky times factor x F(0) = 0.6 x 0.04 = 0.024 (glTF's `fresnel_coat`
-/// weight): the base reflects nothing. Resolves 5 %: a Fresnel of the wrong index (1.33 gives
-/// 0.02), the factor left out (0.04) or the coat weighted by its factor alone (0.6) fail.
+/// A smooth clear coat of factor 0.6 over a black diffuse base under a white sky reflects the sky
+/// times factor x F(view) (glTF's `fresnel_coat` weight): 0.6 x 0.04 = 0.024 at normal incidence,
+/// 0.6 x 0.0918 at 60 degrees; the base reflects nothing. Resolves 5 %: a Fresnel of the wrong
+/// index (1.33 gives 0.02 head-on), the factor left out (0.04), the coat weighted by its factor
+/// alone (0.6), or F taken from inside the coat (total reflection at 60 degrees: 0.6) fail.
 #[test]
 fn a_smooth_clear_coat_over_black_reflects_factor_times_fresnel() {
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &coated_quad(0.0, smooth_coat(0.6), 48, 64), 7);
-    assert_channel_means(&image, [0.6 * F0; 3], 0.05, "clear coat 0.6 over black");
+    assert_channel_means(&image, [0.6 * F0; 3], 0.05, "clear coat 0.6 over black, head-on");
+    let image = render(&ctx, &coated_quad_at_60_degrees(0.0, smooth_coat(0.6), 48, 64), 7);
+    assert_channel_means(&image, [0.6 * fresnel_dielectric(0.5, 1.5); 3], 0.05, "clear coat 0.6 over black, at 60 degrees");
 }
 
 /// Over a white diffuse base the same coat conserves energy exactly: every path returns the white

@@ -17,7 +17,7 @@ pub use camera_toml::camera_toml;
 pub use format::{Filter, LightSelection, Sampler};
 pub use light::Light;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
-pub use optics::{average_fresnel, metal, METALS};
+pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{bail, Context as _, Result};
