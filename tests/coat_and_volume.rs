@@ -176,8 +176,8 @@ fn a_clear_coat_over_white_conserves_energy_in_a_white_furnace() {
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &coated_quad(1.0, smooth_coat(0.6), 16, 16), 7);
     for (i, p) in image.pixels.iter().enumerate() {
-        for c in 0..3 {
-            assert!((p[c] - 1.0).abs() <= 1e-4, "pixel {i} channel {c}: {} under a white sky, not 1", p[c]);
+        for (c, value) in p.iter().enumerate() {
+            assert!((value - 1.0).abs() <= 1e-4, "pixel {i} channel {c}: {value} under a white sky, not 1");
         }
     }
 }

@@ -439,8 +439,7 @@ impl UvMapping {
         UvMapping::of_parts(tex_coord, transform.map(|t| (t.offset.0, t.rotation.0, t.scale.0, t.tex_coord)))
     }
 
-    /// `transform`: the extension's offset, rotation, scale and texCoord override.
-    fn of_parts(tex_coord: u32, transform: Option<([f32; 2], f32, [f32; 2], Option<u32>)>) -> UvMapping {
+    fn of_parts(tex_coord: u32, transform: Option<TransformParts>) -> UvMapping {
         let Some((offset, rotation, scale, set)) = transform else {
             return UvMapping { set: tex_coord, ..UvMapping::PLAIN };
         };
@@ -454,6 +453,9 @@ impl UvMapping {
         }
     }
 }
+
+/// A `KHR_texture_transform`'s offset, rotation, scale and texCoord override.
+type TransformParts = ([f32; 2], f32, [f32; 2], Option<u32>);
 
 /// A material's one [`UvMapping`], and whether its textures named others (which it replaces).
 struct MaterialUvs {
