@@ -219,10 +219,11 @@ fn png_texel(texel: [u8; 4]) -> Vec<u8> {
 /// under KHR_materials_clearcoat factor 1 with clearcoatTexture R = 128 (so c = 128 / 255) and
 /// clearcoatRoughnessFactor 1 with clearcoatRoughnessTexture G = 0 (a smooth coat: both read from
 /// one texel (128, 0, 255, 255)). Under a white sky at normal incidence the pixel is c F + (1 - c F) F
-/// = 0.0593. Resolves 5 %: without the coat it is 0.04, with the texture's R ignored 0.0784; with
-/// the roughness texture ignored (or read from R or B) the coat is rough, GGX at alpha >= 0.25 at
-/// normal incidence loses 5 % or more of the coat's share, and the texture channels swapped give
-/// no coat (R = 0 for the factor).
+/// = 0.0593. Resolves 5 %: without the coat it is 0.04, with the texture's R ignored 0.0784, with
+/// the texture channels swapped 0.04 (G = 0 for the factor); with the roughness texture ignored
+/// the coat has roughness 1 and the pixel is 0.0453 (measured: single-scattering GGX at alpha 1
+/// keeps about a quarter of the coat's share). A roughness read from R (alpha 0.25) would lose
+/// too little to see here.
 #[test]
 fn a_gltf_clear_coat_reads_its_factor_and_roughness_textures() {
     let dir = temp_dir("gltf-clearcoat");
