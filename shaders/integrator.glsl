@@ -120,6 +120,11 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
     vec3 point = surface.point;
     vec3 n = surface.ng;
     bool front = dot(n, path.dir) < 0.0;
+    // A ray that meets an absorbing dielectric from behind travelled hit.t inside it (the mesh is
+    // closed): Beer-Lambert. Before the surface's own emission, which inside is absorbed too.
+    // Only the segment ending on the absorbing surface itself is attenuated: an object nested
+    // inside the medium interrupts it unattenuated.
+    if (SCENE_ABSORPTION == 1 && !front) path.throughput *= exp(-m.volume.rgb * hit.t);
     if (AOVS == 1 && first.open) {
         // Written at every vertex while open, so a path that ends on a specular chain keeps
         // its last surface.

@@ -39,6 +39,10 @@ const uint CONDUCTOR_ALBEDO = 2u;
 // scale (of the normal's x and y); maps.w = MATERIAL_* flags (uint bits). alpha (tested in traversal, alpha.glsl): .x = an
 // RGBA texture whose A channel is the opacity (uint bits; NO_TEXTURE for none), .y = the opacity
 // factor it multiplies, .z = the cutoff of ALPHA_MASK, .w = the ALPHA_* mode (uint bits).
+// coat (glTF KHR_materials_clearcoat, pick_lobe): .x = the clear coat's factor (0: none), .y its
+// perceptual roughness (GGX alpha is its square), .z / .w = textures whose R / G channel multiplies
+// .x / .y per texel (uint bits; NO_TEXTURE for none). volume.rgb = the absorption coefficient
+// sigma_a per world unit inside the material (Beer-Lambert, path_step; 0: clear); volume.w unused.
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;
@@ -48,6 +52,8 @@ struct Material {
     vec4 metallic_roughness;
     vec4 maps;
     vec4 alpha;
+    vec4 coat;
+    vec4 volume;
 };
 
 // Material flags in maps.w (MATERIAL_* must match layout.rs): the rough lobes and the coat are

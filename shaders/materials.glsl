@@ -1,6 +1,6 @@
 // The R/T material model. Each vertex picks one lobe: with probability R a reflector (a mirror, or
 // a conductor with Fresnel), with probability T a dielectric, otherwise the base (diffuse, or a
-// plastic: diffuse under a dielectric coat). A lobe's weight equals the probability of picking it,
+// plastic: diffuse under a dielectric coat); a glTF clear coat over all of them comes first. A lobe's weight equals the probability of picking it,
 // so the two cancel; the path then samples, evaluates and MIS-weights that lobe alone, which keeps
 // delta lobes (roughness ~0) and rough lobes in one scheme. Rough lobes are GGX or Beckmann
 // (microfacet.glsl).
@@ -16,6 +16,9 @@ const uint LOBE_THIN_DIELECTRIC = 4u; // a thin sheet of glass: reflects, or pas
 
 // Fresnel of the coat's reflection, next to the CONDUCTOR_* kinds of layout.glsl.
 const uint FRESNEL_COAT = 3u;
+
+// Index of refraction of glTF's clear coat (KHR_materials_clearcoat fixes it).
+const float CLEARCOAT_IOR = 1.5;
 
 struct Lobe {
     uint kind;
@@ -75,6 +78,22 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
     l.fresnel = CONDUCTOR_MIRROR;
     l.scale = 1.0;
     l.coat_norm = 0.0;
+    // glTF's clear coat over the whole material (KHR_materials_clearcoat): mix(material, coat,
+    // factor x F(cos_o)), with F the Fresnel of a dielectric of index CLEARCOAT_IOR on the
+    // viewing direction and the coat's BRDF a GGX reflection with no Fresnel of its own. Picked
+    // with probability equal to its weight (scale 1), else the material's own pick below, whose
+    // weight 1 - factor x F(cos_o) is likewise its probability. The coat lies on the front side:
+    // a ray from behind (inside a closed mesh) meets the material alone. A material without a
+    // coat draws no number here, so it renders exactly as it would without this code.
+    if (SCENE_CLEARCOAT == 1 && entering && m.coat.x > 0.0) {
+        float f = fresnel_dielectric(clamp(-dot(d, l.n), 0.0, 1.0), 1.0 / CLEARCOAT_IOR);
+        if (rng_next(rng) < m.coat.x * f) {
+            l.kind = LOBE_REFLECT;
+            l.alpha = SCENE_ROUGH_LOBES == 1 ? m.coat.y * m.coat.y : 0.0;
+            l.distribution = MICROFACET_GGX;  // glTF's, whatever the material's own lobes use
+            return l;
+        }
+    }
     float r = m.albedo_r.w;
     float t = m.emission_t.w;
     float xi = rng_next(rng);

@@ -100,7 +100,7 @@ Primitive world_primitive(Hit hit) {
     return p;
 }
 
-// Material at the surface, with the albedo and emission textures applied, and the glTF
+// Material at the surface, with the albedo, emission and clear coat textures applied, and the glTF
 // metallic-roughness texture (G = roughness, B = metallic) turned into R, T and alpha as the loader
 // does factors.
 Material surface_material(Surface s) {
@@ -117,6 +117,13 @@ Material surface_material(Surface s) {
         m.emission_t.w = (1.0 - metallic) * m.metallic_roughness.w;
         m.params.w = roughness * roughness;
     }
+#endif
+#if SCENE_CLEARCOAT && SCENE_TEXTURES
+    // The clear coat's factor from a texture's R channel, its roughness from one's G (glTF).
+    uint coat_index = floatBitsToUint(m.coat.z);
+    if (coat_index != NO_TEXTURE) m.coat.x *= texture_rgb(coat_index, s.uv).r;
+    uint coat_roughness_index = floatBitsToUint(m.coat.w);
+    if (coat_roughness_index != NO_TEXTURE) m.coat.y *= texture_rgb(coat_roughness_index, s.uv).g;
 #endif
 #if SCENE_EMISSIVE_TEXTURES
     uint emission_index = floatBitsToUint(m.maps.x);

@@ -11,7 +11,8 @@
 //! both (p = 0 in all four dielectric cases); taking the half-disk warp out of sample_vndf, which
 //! leaves every weight equal to eval / pdf, fails only the chi-square (p = 0 in 9 of the 12 GGX
 //! lobes; near-normal incidence at low alpha barely feels it). The lobe tests are conditioned on
-//! the lobe picked: the plastic's choice between coat and base is not tested here.
+//! the lobe picked: the plastic's choice between coat and base, and a clear coat's over the
+//! material, are not tested here (tests/coat_and_volume.rs renders them against closed forms).
 
 mod common;
 
@@ -108,7 +109,7 @@ const PHI_BINS: usize = 160;
 const GL_NODES: [f64; 5] = [-0.906_179_845_938_664, -0.538_469_310_105_683_1, 0.0, 0.538_469_310_105_683_1, 0.906_179_845_938_664];
 const GL_WEIGHTS: [f64; 5] = [0.236_926_885_056_189_1, 0.478_628_670_499_366_5, 0.568_888_888_888_888_9, 0.478_628_670_499_366_5, 0.236_926_885_056_189_1];
 /// Number of chi-square tests in this file (lobes tested), for the Bonferroni correction.
-const TESTS: f64 = 18.0;
+const TESTS: f64 = 21.0;
 const SIGNIFICANCE: f64 = 1e-4 / TESTS;
 /// Cells with fewer expected samples are pooled, as the textbook test requires.
 const MIN_EXPECTED: f64 = 5.0;
@@ -397,6 +398,8 @@ fn material(albedo: f32, r: f32, t: f32, ior: f32, alpha: f32) -> GpuMaterial {
         metallic_roughness: [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
         maps: [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
         alpha: [f32::from_bits(NO_TEXTURE), 1.0, 0.0, f32::from_bits(ALPHA_OPAQUE)],
+        coat: [0.0, 0.0, f32::from_bits(NO_TEXTURE), f32::from_bits(NO_TEXTURE)],
+        volume: [0.0; 4],
     }
 }
 
@@ -477,11 +480,18 @@ fn dielectric_cases() -> Vec<Case> {
     cases
 }
 
-/// A plastic: its coated base, and its coat (a reflector lobe with the coat's Fresnel).
+/// A plastic: its coated base, and its coat (a reflector lobe with the coat's Fresnel). Then the
+/// same plastic under a glTF clear coat of roughness 0.5 (a reflector lobe without a Fresnel of
+/// its own, at its own alpha): three lobes, each tested given its pick.
 fn coated_diffuse_cases() -> Vec<Case> {
     let mut plastic = material(0.5, 0.0, 0.0, 1.5, 0.2 * 0.2);
     plastic.conductor_k[3] = 1.0 / (1.0 - average_fresnel(1.5));
-    vec![Case { name: "plastic ior 1.5, roughness 0.2 (cos 0.6)".into(), material: plastic, cos_o: 0.6, entering: true }]
+    let mut clearcoated = plastic;
+    clearcoated.coat[..2].copy_from_slice(&[1.0, 0.5]);
+    vec![
+        Case { name: "plastic ior 1.5, roughness 0.2 (cos 0.6)".into(), material: plastic, cos_o: 0.6, entering: true },
+        Case { name: "clear coat roughness 0.5 over that plastic (cos 0.3)".into(), material: clearcoated, cos_o: 0.3, entering: true },
+    ]
 }
 
 /// The kernel's lobe kinds: every `const uint LOBE_<NAME> = <n>u;` of materials.glsl (as the
@@ -506,8 +516,8 @@ fn every_lobe_of_the_kernel_has_chi_square_cases() {
     tested.sort();
     assert_eq!(kernel, tested, "the lobes of materials.glsl and the lobes with chi-square cases here differ");
     let cases: usize = LOBES.iter().map(|(_, cases)| cases().len()).sum();
-    // The plastic case tests two lobes (its coat and its base).
-    assert_eq!(cases as f64 + 1.0, TESTS, "TESTS (the Bonferroni correction) counts the lobes tested");
+    // The plastic case tests two lobes (its coat and its base), the clear-coated one three.
+    assert_eq!(cases as f64 + 3.0, TESTS, "TESTS (the Bonferroni correction) counts the lobes tested");
 }
 
 /// Runs the cases of `lobe` (a LOBE_* name); each must pick that lobe among those it tests.

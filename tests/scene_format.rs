@@ -71,6 +71,10 @@ emission = [0.0, 0.0, 0.0]
 [materials.c]
 eta = [0.2, 0.9, 1.1]
 k = [3.9, 2.4, 2.1]
+[materials.g]
+transparency = 1.0
+attenuation_color = [0.5, 0.6, 0.7]
+attenuation_distance = 2.0
 [[spheres]]
 center = [0.0, 0.0, 0.0]
 radius = 1.0
@@ -108,6 +112,7 @@ fn every_array_key_refuses_a_wrong_number_of_elements() {
         ("emission = [0.0, 0.0, 0.0]", "materials.m.emission"),
         ("eta = [0.2, 0.9, 1.1]", "materials.c.eta"),
         ("k = [3.9, 2.4, 2.1]", "materials.c.k"),
+        ("attenuation_color = [0.5, 0.6, 0.7]", "materials.g.attenuation_color"),
         ("center = [0.0, 0.0, 0.0]", "spheres.center"),
         ("origin = [0.0, 0.0, 0.0]", "quads.origin"),
         ("edge_u = [1.0, 0.0, 0.0]", "quads.edge_u"),
@@ -157,6 +162,31 @@ fn nesting_beyond_the_parser_limit_is_an_error_with_its_line() {
         assert!(e.starts_with("test.toml: line 5, column "), "{}", &e[..e.len().min(2000)]);
         assert!(e.len() < 1500, "{} bytes for one error", e.len());
     }
+}
+
+/// Absorption inside a dielectric: both keys or neither, only with transparency, a colour in
+/// (0, 1] per channel and a finite distance > 0; each error names its key.
+#[test]
+fn attenuation_keys_are_checked_naming_the_key() {
+    let glass = |keys: &str| format!("{MINIMAL}[materials.g]\ntransparency = 1.0\n{keys}\n");
+    let scene = parse_result(&glass("attenuation_color = [0.5, 0.25, 1.0]\nattenuation_distance = 2.0")).expect("valid attenuation");
+    let attenuation = scene.materials[0].attenuation.expect("parsed");
+    let sigma_a = attenuation.sigma_a();
+    assert!((sigma_a - glam::Vec3::new(2f32.ln() / 2.0, 4f32.ln() / 2.0, 0.0)).abs().max_element() < 1e-6, "{sigma_a}");
+    for (keys, error) in [
+        ("attenuation_color = [0.0, 0.5, 0.5]\nattenuation_distance = 1.0", "materials.g.attenuation_color must be in (0, 1] per channel"),
+        ("attenuation_color = [1.5, 0.5, 0.5]\nattenuation_distance = 1.0", "materials.g.attenuation_color must be in (0, 1] per channel"),
+        ("attenuation_color = [nan, 0.5, 0.5]\nattenuation_distance = 1.0", "materials.g.attenuation_color must be finite"),
+        ("attenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = 0.0", "materials.g.attenuation_distance must be > 0"),
+        ("attenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = inf", "materials.g.attenuation_distance must be finite"),
+        ("attenuation_color = [0.5, 0.5, 0.5]", "materials.g.attenuation_color needs materials.g.attenuation_distance"),
+        ("attenuation_distance = 1.0", "materials.g.attenuation_distance needs materials.g.attenuation_color"),
+    ] {
+        let e = error_of(&glass(keys));
+        assert!(e.contains(error), "{keys}: expected '{error}', got: {e}");
+    }
+    let e = error_of(&format!("{MINIMAL}[materials.g]\nattenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = 1.0\n"));
+    assert!(e.contains("materials.g.attenuation_color needs materials.g.transparency > 0"), "{e}");
 }
 
 #[test]

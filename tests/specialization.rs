@@ -8,7 +8,7 @@ mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
 use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures};
-use caustica::scene::{Alpha, AlphaMode, Instance, Mesh, NormalMap, Scene, Texture};
+use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Texture};
 use common::{gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::Path;
@@ -63,12 +63,12 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
     assert!(specialized >= 3, "only {specialized} scenes got a kernel of their own");
 }
 
-/// A textured, instanced mesh with a rough metal (GGX and Beckmann), a one-sided plastic, a thin pane and
-/// spheres under an environment map,
+/// A textured, instanced mesh with a rough metal (GGX and Beckmann), a one-sided clear-coated
+/// plastic, a thin pane and a sphere of absorbing glass under an environment map,
 /// lit by a mesh lamp with an emission texture, the floor normal-mapped, and two squares with
 /// alpha over it (a textured BLEND and a textured MASK): every feature on, which the checked-in
 /// scenes without the shared data lack (textures, several instances, textured emitters, normal
-/// maps, alpha).
+/// maps, alpha, clear coats, absorption).
 #[test]
 fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     let mut scene = parse(
@@ -101,6 +101,14 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         [materials.pane]
         transparency = 1.0
         thin = true
+        [materials.smoky_glass]
+        transparency = 1.0
+        attenuation_color = [0.6, 0.7, 0.9]
+        attenuation_distance = 0.2
+        [[spheres]]
+        center = [0.0, 0.25, 0.4]
+        radius = 0.25
+        material = "smoky_glass"
         [[spheres]]
         center = [0.8, 0.3, 0.0]
         radius = 0.3
@@ -133,6 +141,9 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     scene.textures.push(Texture { name: "holes".into(), width: 4, height: 4, texels: holes, srgb: true, wrap: Default::default() });
     let lace = scene.materials.iter().position(|m| m.name == "lace").unwrap() as u32;
     scene.materials[lace as usize].maps.alpha = Some(Alpha { factor: 0.9, texture: Some(2), mode: AlphaMode::Blend });
+    // A rough glTF clear coat over the plastic, its factor from the texture's R.
+    let plastic = scene.materials.iter().position(|m| m.name == "plastic").unwrap();
+    scene.materials[plastic].clearcoat = Some(Clearcoat { factor: 0.8, roughness: 0.3, texture: Some(0), roughness_texture: None });
     let stencil = scene.materials.iter().position(|m| m.name == "stencil").unwrap() as u32;
     scene.materials[stencil as usize].maps.alpha = Some(Alpha { factor: 1.0, texture: Some(2), mode: AlphaMode::Mask { cutoff: 0.5 } });
     let corners = [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)];

@@ -1,7 +1,7 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
 //! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
-//! Beckmann lobes, thin dielectrics, one-sided surfaces) is left out by `#if` and by constants
+//! clear coats, absorption, Beckmann lobes, thin dielectrics, one-sided surfaces) is left out by `#if` and by constants
 //! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
@@ -46,12 +46,17 @@ pub struct SceneFeatures {
     pub thin_dielectrics: bool,
     /// Surfaces black from behind (the MATERIAL_ONE_SIDED flag).
     pub one_sided: bool,
+    /// glTF clear coats (a factor above 0): the coat's pick in pick_lobe and its textures.
+    pub clearcoat: bool,
+    /// Absorbing dielectrics (Beer-Lambert, KHR_materials_volume): the attenuation of each path
+    /// segment that ends on such a surface from inside.
+    pub absorption: bool,
 }
 
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, thin_dielectrics: true, one_sided: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -68,16 +73,18 @@ impl SceneFeatures {
             normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
             alpha: has_instance(INSTANCE_MESH) && data.materials.iter().any(|m| m.alpha[3].to_bits() != ALPHA_OPAQUE),
             environment_map: data.env_kind != ENV_CONSTANT,
-            rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA),
+            rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
             beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && (m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE)),
             thin_dielectrics: data.materials.iter().any(|m| flags(m) & MATERIAL_THIN != 0),
             one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
+            clearcoat: data.materials.iter().any(|m| m.coat[0] > 0.0),
+            absorption: data.materials.iter().any(|m| m.volume[..3].iter().any(|&s| s > 0.0)),
         }
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 13] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 15] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -92,6 +99,8 @@ impl SceneFeatures {
             ("beckmann", "SCENE_BECKMANN", self.beckmann),
             ("thin_dielectrics", "SCENE_THIN_DIELECTRICS", self.thin_dielectrics),
             ("one_sided", "SCENE_ONE_SIDED", self.one_sided),
+            ("clearcoat", "SCENE_CLEARCOAT", self.clearcoat),
+            ("absorption", "SCENE_ABSORPTION", self.absorption),
         ]
     }
 

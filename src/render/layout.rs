@@ -82,6 +82,11 @@ pub struct GpuMaterial {
     pub maps: [f32; 4],
     /// alpha texture (u32 bits), opacity factor, MASK cutoff, ALPHA_* mode (u32 bits)
     pub alpha: [f32; 4],
+    /// clear coat factor (0: none), its perceptual roughness, their textures (u32 bits: R
+    /// multiplies the factor, G the roughness)
+    pub coat: [f32; 4],
+    /// absorption coefficient sigma_a per world unit inside (0: clear), unused
+    pub volume: [f32; 4],
 }
 
 /// `struct Instance`: rows of the two 3x4 affine maps, then kind, BVH root node and flags.
@@ -305,7 +310,7 @@ mod tests {
 
     #[test]
     fn material_matches_glsl_std430() {
-        assert_eq!(size_of::<GpuMaterial>(), 128);
+        assert_eq!(size_of::<GpuMaterial>(), 160);
         assert_eq!(offset_of!(GpuMaterial, emission_t), 16);
         assert_eq!(offset_of!(GpuMaterial, params), 32);
         assert_eq!(offset_of!(GpuMaterial, conductor_eta), 48);
@@ -313,8 +318,10 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, metallic_roughness), 80);
         assert_eq!(offset_of!(GpuMaterial, maps), 96);
         assert_eq!(offset_of!(GpuMaterial, alpha), 112);
+        assert_eq!(offset_of!(GpuMaterial, coat), 128);
+        assert_eq!(offset_of!(GpuMaterial, volume), 144);
         let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n    vec4 maps;\n    vec4 alpha;\n};";
+        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n    vec4 maps;\n    vec4 alpha;\n    vec4 coat;\n    vec4 volume;\n};";
         assert!(glsl.contains(members), "struct Material members differ from GpuMaterial");
     }
 

@@ -202,6 +202,8 @@ mod tests {
             one_sided: false,
             metallic_roughness: None,
             maps: Default::default(),
+            clearcoat: None,
+            attenuation: None,
         }
     }
 

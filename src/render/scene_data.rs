@@ -168,6 +168,11 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         metallic_roughness,
         maps: [texture_bits(m.maps.emission), texture_bits(m.maps.normal.map(|n| n.texture)), m.maps.normal.map_or(0.0, |n| n.scale), f32::from_bits(material_flags(m))],
         alpha: gpu_alpha(m.maps.alpha),
+        coat: match m.clearcoat {
+            Some(c) => [c.factor, c.roughness, texture_bits(c.texture), texture_bits(c.roughness_texture)],
+            None => [0.0, 0.0, texture_bits(None), texture_bits(None)],
+        },
+        volume: m.attenuation.map_or(Vec3::ZERO, |a| a.sigma_a()).extend(0.0).into(),
     }
 }
 

@@ -226,6 +226,10 @@ pub struct MaterialFile {
     /// A texture whose colour multiplies `albedo` (on meshes, which carry texture coordinates).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub albedo_texture: Option<AlbedoTextureFile>,
+    /// Beer-Lambert absorption inside a dielectric (transparency > 0): the share of white light
+    /// left, per channel in (0, 1], after travelling `attenuation_distance` inside. Both or neither.
+    pub attenuation_color: Option<Triple>,
+    pub attenuation_distance: Option<f32>,
 }
 
 /// The microfacet distribution of a material's rough lobes (shaders/microfacet.glsl).
@@ -273,6 +277,8 @@ impl Default for MaterialFile {
             thin: false,
             one_sided: false,
             albedo_texture: None,
+            attenuation_color: None,
+            attenuation_distance: None,
         }
     }
 }

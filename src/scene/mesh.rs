@@ -173,5 +173,7 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         one_sided: false,
         metallic_roughness: m.metallic_roughness.map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
         maps: m.maps.rebased(texture_base),
+        clearcoat: m.clearcoat.map(|c| c.rebased(texture_base)),
+        attenuation: m.attenuation,
     })
 }

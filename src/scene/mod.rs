@@ -100,6 +100,44 @@ pub struct Material {
     pub metallic_roughness: Option<MetallicRoughness>,
     /// Emission, normal and alpha textures (mesh files only).
     pub maps: TextureMaps,
+    /// A clear coat over the whole material (glTF `KHR_materials_clearcoat`); None: uncoated.
+    pub clearcoat: Option<Clearcoat>,
+    /// Absorption inside the material, a dielectric (`transparency` > 0); None: clear.
+    pub attenuation: Option<Attenuation>,
+}
+
+/// glTF's clear coat (`KHR_materials_clearcoat`): a smooth or GGX-rough dielectric layer of index
+/// 1.5 over the material, which reflects `factor` x F(cos of the viewing angle) of the light and
+/// leaves the rest to the material beneath (glTF's `fresnel_coat` mix).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clearcoat {
+    /// `clearcoatFactor`, in [0, 1]; 0 is no coat.
+    pub factor: f32,
+    /// `clearcoatRoughnessFactor`: perceptual GGX roughness in [0, 1] (alpha is its square).
+    pub roughness: f32,
+    /// `clearcoatTexture` (linear): its R channel multiplies `factor` per texel.
+    pub texture: Option<u32>,
+    /// `clearcoatRoughnessTexture` (linear): its G channel multiplies `roughness` per texel.
+    pub roughness_texture: Option<u32>,
+}
+
+/// Beer-Lambert absorption inside a dielectric (glTF `KHR_materials_volume`, the scene format's
+/// `attenuation_color` and `attenuation_distance`): white light that travels `distance` inside
+/// is left with `color`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attenuation {
+    /// Per channel in (0, 1].
+    pub color: Vec3,
+    /// Finite and > 0, in world units.
+    pub distance: f32,
+}
+
+impl Attenuation {
+    /// The absorption coefficient per world unit, sigma_a = -ln(color) / distance, so that a
+    /// path of length t inside keeps exp(-sigma_a t) = color^(t / distance).
+    pub fn sigma_a(&self) -> Vec3 {
+        Vec3::from(self.color.to_array().map(|c| -c.ln() / self.distance))
+    }
 }
 
 /// The textures of a material beyond albedo and metallic-roughness, each an index into the
@@ -154,6 +192,13 @@ impl TextureMaps {
             normal: self.normal.map(|n| NormalMap { texture: n.texture + base, ..n }),
             alpha: self.alpha.map(|a| Alpha { texture: a.texture.map(|t| t + base), ..a }),
         }
+    }
+}
+
+impl Clearcoat {
+    /// The same coat with its texture indices moved up by `base` (as [`TextureMaps::rebased`]).
+    pub fn rebased(self, base: u32) -> Clearcoat {
+        Clearcoat { texture: self.texture.map(|t| t + base), roughness_texture: self.roughness_texture.map(|t| t + base), ..self }
     }
 }
 
@@ -464,6 +509,8 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         one_sided: m.one_sided,
         metallic_roughness: None,
         maps: TextureMaps::default(),
+        clearcoat: None,
+        attenuation: attenuation_from(m, &key)?,
     };
     if !(0.0..=1.0).contains(&material.roughness) {
         bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);
@@ -484,7 +531,29 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
     if material.one_sided && material.transparency > 0.0 {
         bail!("{}: a one-sided material cannot be transparent (light it lets in must leave through its back), got transparency {}", key("one_sided"), material.transparency);
     }
+    if material.attenuation.is_some() && material.transparency <= 0.0 {
+        bail!("{} needs {} > 0: absorption happens inside a dielectric", key("attenuation_color"), key("transparency"));
+    }
     Ok(material)
+}
+
+/// `attenuation_color` and `attenuation_distance`, given together: the share of white light left
+/// after that distance inside, per channel in (0, 1] (0 would absorb everything at once; above 1
+/// would amplify), and a finite distance > 0.
+fn attenuation_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Option<Attenuation>> {
+    let (color, distance) = match (m.attenuation_color, m.attenuation_distance) {
+        (None, None) => return Ok(None),
+        (Some(color), Some(distance)) => (vec3(&key("attenuation_color"), color)?, finite(&key("attenuation_distance"), distance)?),
+        (Some(_), None) => bail!("{} needs {}", key("attenuation_color"), key("attenuation_distance")),
+        (None, Some(_)) => bail!("{} needs {}", key("attenuation_distance"), key("attenuation_color")),
+    };
+    if color.min_element() <= 0.0 || color.max_element() > 1.0 {
+        bail!("{} must be in (0, 1] per channel, got {:?}", key("attenuation_color"), color.to_array());
+    }
+    if distance <= 0.0 {
+        bail!("{} must be > 0, got {distance}", key("attenuation_distance"));
+    }
+    Ok(Some(Attenuation { color, distance }))
 }
 
 /// `[[spheres]]`, `[[quads]]` and `[[triangles]]`, in that order.

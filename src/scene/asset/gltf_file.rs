@@ -28,6 +28,15 @@
 //! - `metallicRoughnessTexture` (linear, B = metallic, G = roughness) scales the two
 //!   factors per texel: the kernel recomputes R, T and roughness there as above.
 //! - The rest (1 − R − T) is a plastic: the base colour under a dielectric coat of that ior.
+//! - `KHR_materials_clearcoat` → [`Clearcoat`]: `clearcoatFactor` and `clearcoatRoughnessFactor`,
+//!   `clearcoatTexture` (R) and `clearcoatRoughnessTexture` (G) scaling them per texel, read
+//!   through the material's one texture mapping. The coat is glTF's `fresnel_coat` layer (index
+//!   1.5, Fresnel on the viewing direction) over everything above. `clearcoatNormalTexture` is not
+//!   read: the coat uses the material's normal (a warning).
+//! - `KHR_materials_volume` → [`Attenuation`] of a transmissive material: `attenuationColor` and
+//!   `attenuationDistance` (world units) as Beer–Lambert absorption along each path inside.
+//!   `thicknessFactor` and `thicknessTexture` are ignored: they stand in for the thickness a
+//!   rasterizer cannot trace, and a path tracer has the real one.
 //! - Primitives without a material get [`AssetMaterial::default_grey`].
 //!
 //! `KHR_lights_punctual` lights become [`Light`]s, converted from glTF's photometric units to
@@ -39,8 +48,9 @@
 //! the cosine; the ends agree. `range` is ignored (a note on stderr): the light falls off by the
 //! inverse square without a cut-off, which the extension allows as the physical limit.
 //!
-//! Extensions: the five above (`KHR_lights_punctual`, `KHR_materials_emissive_strength`,
-//! `KHR_materials_transmission`, `KHR_materials_ior`, `KHR_texture_transform`) are read. A file that requires any other is
+//! Extensions: the seven above (`KHR_lights_punctual`, `KHR_materials_emissive_strength`,
+//! `KHR_materials_transmission`, `KHR_materials_ior`, `KHR_texture_transform`,
+//! `KHR_materials_clearcoat`, `KHR_materials_volume`) are read. A file that requires any other is
 //! an error naming the file and the extension; one that merely uses another renders without it,
 //! with one warning per extension. Occlusion textures are ignored (a path tracer computes
 //! occlusion), with one warning per file that has them.
@@ -61,7 +71,7 @@ use gltf::{Document, Semantic};
 
 use super::gltf_accessors::AccessorLimits;
 use super::{
-    texture, unit_normals, Alpha, AlphaMode, Wrap, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
+    texture, unit_normals, Alpha, AlphaMode, Attenuation, Clearcoat, Wrap, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
     MeshData, MetallicRoughness, NormalMap, TextureMaps,
 };
 use crate::input_file::{InputFiles, InputKind};
@@ -71,12 +81,14 @@ use crate::input_file::{InputFiles, InputKind};
 const LUMENS_PER_WATT: f32 = 683.0;
 
 /// The glTF extensions caustica reads (see the mapping above).
-const IMPLEMENTED_EXTENSIONS: [&str; 5] = [
+const IMPLEMENTED_EXTENSIONS: [&str; 7] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_texture_transform",
+    "KHR_materials_clearcoat",
+    "KHR_materials_volume",
 ];
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
@@ -101,13 +113,17 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     // gltf-json 1.4's validation indexes `accessors` with a primitive's POSITION accessor before
     // checking that it exists, and panics on an out-of-range one (found by fuzzing), so check
     // that first and validate afterwards.
-    let json = document.into_json();
+    let mut json = document.into_json();
     if let Some(required) = unimplemented_required_extension(&json) {
         return Err(AssetError::invalid(
             path,
             format!("requires the glTF extension {required}, which caustica does not implement"),
         ));
     }
+    // Every required extension is one caustica reads; the crate's validation would refuse those
+    // it does not list itself (gltf 1.4.1 lists neither KHR_materials_clearcoat, which it leaves
+    // as JSON, nor KHR_materials_volume, which it parses).
+    json.extensions_required.retain(|e| gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
     for warning in ignored_features(&json) {
         eprintln!("caustica: warning: {}: {warning}", path.display());
     }
@@ -146,6 +162,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     for material in document.materials() {
         let (converted, uv_mapping) = convert_material(
             &material,
+            &document,
             &buffers,
             &sources,
             &mut decoded_images,
@@ -223,6 +240,13 @@ fn ignored_features(json: &gltf::json::Root) -> Vec<String> {
         .collect();
     if json.materials.iter().any(|m| m.occlusion_texture.is_some()) {
         ignored.push("occlusion textures are ignored (a path tracer computes occlusion)".to_owned());
+    }
+    let coat_normal = |m: &gltf::json::Material| {
+        let coat = m.extensions.as_ref().and_then(|e| e.others.get("KHR_materials_clearcoat"));
+        coat.is_some_and(|c| c.get("clearcoatNormalTexture").is_some())
+    };
+    if json.materials.iter().any(coat_normal) {
+        ignored.push("KHR_materials_clearcoat clearcoatNormalTexture is not implemented: clear coats use the material's normal".to_owned());
     }
     ignored
 }
@@ -406,19 +430,32 @@ impl UvMapping {
 
     /// The mapping a texture reference names.
     fn of(tex_coord: u32, transform: Option<gltf::texture::TextureTransform>) -> UvMapping {
-        let Some(t) = transform else {
+        UvMapping::of_parts(tex_coord, transform.map(|t| (t.offset(), t.rotation(), t.scale(), t.tex_coord())))
+    }
+
+    /// The mapping of a texture reference read from the JSON (an extension's, which the gltf
+    /// crate does not parse).
+    fn of_json(tex_coord: u32, transform: Option<&gltf::json::extensions::texture::TextureTransform>) -> UvMapping {
+        UvMapping::of_parts(tex_coord, transform.map(|t| (t.offset.0, t.rotation.0, t.scale.0, t.tex_coord)))
+    }
+
+    fn of_parts(tex_coord: u32, transform: Option<TransformParts>) -> UvMapping {
+        let Some((offset, rotation, scale, set)) = transform else {
             return UvMapping { set: tex_coord, ..UvMapping::PLAIN };
         };
-        let (sin, cos) = t.rotation().sin_cos();
+        let (sin, cos) = rotation.sin_cos();
         // The extension's rotation matrix has rows (cos, sin) and (-sin, cos); glam's columns.
         let rotation = Mat2::from_cols(Vec2::new(cos, -sin), Vec2::new(sin, cos));
-        let scale = Mat2::from_diagonal(Vec2::from(t.scale()));
+        let scale = Mat2::from_diagonal(Vec2::from(scale));
         UvMapping {
-            set: t.tex_coord().unwrap_or(tex_coord),
-            transform: Affine2::from_mat2_translation(rotation * scale, Vec2::from(t.offset())),
+            set: set.unwrap_or(tex_coord),
+            transform: Affine2::from_mat2_translation(rotation * scale, Vec2::from(offset)),
         }
     }
 }
+
+/// A `KHR_texture_transform`'s offset, rotation, scale and texCoord override.
+type TransformParts = ([f32; 2], f32, [f32; 2], Option<u32>);
 
 /// A material's one [`UvMapping`], and whether its textures named others (which it replaces).
 struct MaterialUvs {
@@ -426,21 +463,120 @@ struct MaterialUvs {
     mixed: bool,
 }
 
-/// The mapping of the material's first texture among base colour, emissive, metallic-roughness
-/// and normal (normal textures carry no transform the gltf crate reads).
-fn material_uvs(material: &gltf::Material) -> MaterialUvs {
+/// The mapping of the material's first texture among base colour, emissive, metallic-roughness,
+/// normal (normal textures carry no transform the gltf crate reads) and the clear coat's.
+fn material_uvs(material: &gltf::Material, clearcoat: Option<&ClearcoatJson>) -> MaterialUvs {
     let pbr = material.pbr_metallic_roughness();
     let info = |i: Option<gltf::texture::Info>| i.map(|i| UvMapping::of(i.tex_coord(), i.texture_transform()));
+    let coat_textures = clearcoat.map_or([None, None], |c| [c.clearcoat_texture.as_ref(), c.clearcoat_roughness_texture.as_ref()]);
     let mappings: Vec<UvMapping> = [info(pbr.base_color_texture()), info(material.emissive_texture()), info(pbr.metallic_roughness_texture()), material.normal_texture().map(|n| UvMapping::of(n.tex_coord(), None))]
         .into_iter()
+        .chain(coat_textures.map(|t| t.map(TextureRefJson::mapping)))
         .flatten()
         .collect();
     let mapping = mappings.first().copied().unwrap_or(UvMapping::PLAIN);
     MaterialUvs { mapping, mixed: mappings.iter().any(|m| *m != mapping) }
 }
 
+/// `KHR_materials_clearcoat` as the file gives it (the gltf crate does not parse it).
+#[derive(serde::Deserialize, Default)]
+#[serde(rename_all = "camelCase", default)]
+struct ClearcoatJson {
+    clearcoat_factor: f32,
+    clearcoat_texture: Option<TextureRefJson>,
+    clearcoat_roughness_factor: f32,
+    clearcoat_roughness_texture: Option<TextureRefJson>,
+}
+
+/// A `textureInfo` inside an extension the gltf crate does not parse.
+#[derive(serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+struct TextureRefJson {
+    index: usize,
+    #[serde(default)]
+    tex_coord: u32,
+    #[serde(default)]
+    extensions: TextureRefExtensionsJson,
+}
+
+#[derive(serde::Deserialize, Default)]
+struct TextureRefExtensionsJson {
+    #[serde(rename = "KHR_texture_transform")]
+    texture_transform: Option<gltf::json::extensions::texture::TextureTransform>,
+}
+
+impl TextureRefJson {
+    fn mapping(&self) -> UvMapping {
+        UvMapping::of_json(self.tex_coord, self.extensions.texture_transform.as_ref())
+    }
+}
+
+/// The material's `KHR_materials_clearcoat`, if it has one; an error for one that is malformed.
+fn clearcoat_json(material: &gltf::Material) -> Result<Option<ClearcoatJson>, String> {
+    let Some(value) = material.extensions().and_then(|e| e.get("KHR_materials_clearcoat")) else {
+        return Ok(None);
+    };
+    let index = material.index().unwrap_or(0);
+    serde_json::from_value(value.clone()).map(Some).map_err(|e| format!("material {index}: KHR_materials_clearcoat: {e}"))
+}
+
+/// The material's clear coat: factors checked, textures decoded (linear data: R scales the factor,
+/// G the roughness). A coat of factor 0 is none. `clearcoatNormalTexture` is not read: the coat
+/// shares the material's shading normal (a warning per file, from `ignored_features`).
+fn convert_clearcoat(
+    index: usize,
+    coat: &ClearcoatJson,
+    document: &Document,
+    buffers: &[Rc<Vec<u8>>],
+    sources: &Sources,
+    decoded_images: &mut DecodedImages,
+    asset: &mut Asset,
+) -> Result<Option<Clearcoat>, String> {
+    let (factor, roughness) = (coat.clearcoat_factor, coat.clearcoat_roughness_factor);
+    if !factor.is_finite() || !roughness.is_finite() {
+        return Err(format!("material {index}: KHR_materials_clearcoat clearcoatFactor or clearcoatRoughnessFactor is not finite"));
+    }
+    if factor <= 0.0 {
+        return Ok(None);
+    }
+    let mut texture = |reference: &Option<TextureRefJson>, what: &str| -> Result<Option<u32>, String> {
+        let Some(reference) = reference else { return Ok(None) };
+        let texture = document
+            .textures()
+            .nth(reference.index)
+            .ok_or_else(|| format!("material {index}: KHR_materials_clearcoat {what}: texture {} does not exist", reference.index))?;
+        Ok(Some(image_texture(texture, false, buffers, sources, decoded_images, asset)? as u32))
+    };
+    Ok(Some(Clearcoat {
+        factor: factor.min(1.0),
+        roughness: roughness.clamp(0.0, 1.0),
+        texture: texture(&coat.clearcoat_texture, "clearcoatTexture")?,
+        roughness_texture: texture(&coat.clearcoat_roughness_texture, "clearcoatRoughnessTexture")?,
+    }))
+}
+
+/// The material's `KHR_materials_volume` absorption, for a transmissive material (no light
+/// enters any other). `thicknessFactor` and `thicknessTexture` are ignored: they stand in for the
+/// thickness that rasterizers cannot trace, and a path tracer measures the real one along each
+/// ray (every transmissive mesh refracts at its faces in caustica, so it is always a volume).
+fn convert_volume(index: usize, material: &gltf::Material, transmission: f32) -> Result<Option<Attenuation>, String> {
+    let Some(volume) = material.volume() else { return Ok(None) };
+    let (color, distance) = (Vec3::from(volume.attenuation_color()), volume.attenuation_distance());
+    if !color.is_finite() || distance.is_nan() || distance <= 0.0 {
+        return Err(format!("material {index}: KHR_materials_volume attenuationColor is not finite or attenuationDistance is not > 0"));
+    }
+    // The default distance is infinite: no absorption.
+    if transmission <= 0.0 || distance == f32::INFINITY || color.min_element() >= 1.0 {
+        return Ok(None);
+    }
+    // glTF's colours lie in [0, 1]; 0 (all absorbed at once) is kept finite.
+    Ok(Some(Attenuation { color: color.clamp(Vec3::splat(1e-6), Vec3::ONE), distance }))
+}
+
+#[allow(clippy::too_many_arguments)]
 fn convert_material(
     material: &gltf::Material,
+    document: &Document,
     buffers: &[Rc<Vec<u8>>],
     sources: &Sources,
     decoded_images: &mut DecodedImages,
@@ -529,7 +665,13 @@ fn convert_material(
         texture: albedo_texture.map(|t| t as u32),
         mode,
     });
-    let uvs = material_uvs(material);
+    let clearcoat_json = clearcoat_json(material)?;
+    let clearcoat = match &clearcoat_json {
+        Some(coat) => convert_clearcoat(index, coat, document, buffers, sources, decoded_images, asset)?,
+        None => None,
+    };
+    let attenuation = convert_volume(index, material, transmission)?;
+    let uvs = material_uvs(material, clearcoat_json.as_ref().filter(|_| clearcoat.is_some()));
     if !uvs.mapping.transform.is_finite() {
         return Err(format!("material {index}: KHR_texture_transform is not finite"));
     }
@@ -548,6 +690,8 @@ fn convert_material(
         coat: true,
         metallic_roughness,
         maps: TextureMaps { emission: emission_texture, normal, alpha },
+        clearcoat,
+        attenuation,
     };
     Ok((converted, uvs))
 }
@@ -1178,6 +1322,73 @@ mod tests {
         );
         let path = write("gltf-used-extension", "used.gltf", used.as_bytes());
         assert!(load_asset(&path).is_ok(), "a used extension caustica lacks is no error");
+    }
+
+    /// The test document with `extensions` (JSON members) added to material 0's, which has
+    /// transmission 0.5 (`transmission` replaces it), and both clear coat and volume required.
+    fn document_with_material_extensions(extensions: &str, transmission: &str) -> String {
+        let encode = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
+        let buffer = format!(r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#, triangle_bin().len(), encode(&triangle_bin()));
+        let png = format!(r#"{{"uri": "data:image/png;base64,{}"}}"#, encode(&png_bytes()));
+        document(&buffer, &format!("[{png}, {png}]"))
+            .replacen(r#""KHR_materials_ior": {"ior": 1.4}"#, &format!(r#""KHR_materials_ior": {{"ior": 1.4}}, {extensions}"#), 1)
+            .replacen(r#""transmissionFactor": 0.5"#, &format!(r#""transmissionFactor": {transmission}"#), 1)
+            .replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_materials_clearcoat", "KHR_materials_volume"], "scene": 0,"#, 1)
+    }
+
+    /// KHR_materials_clearcoat (which the gltf crate leaves as JSON) and KHR_materials_volume are
+    /// read, and may be required: factors, the coat's two textures (decoded as linear data, the
+    /// roughness one shared with the normal map that reads the same texture linearly), and the
+    /// attenuation with thicknessFactor ignored.
+    #[test]
+    fn clearcoat_and_volume_are_read() {
+        let coat = r#""KHR_materials_clearcoat": {"clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.5, "clearcoatTexture": {"index": 1}, "clearcoatRoughnessTexture": {"index": 0}}"#;
+        let volume = r#""KHR_materials_volume": {"thicknessFactor": 3, "attenuationColor": [0.5, 0.25, 1], "attenuationDistance": 2}"#;
+        let path = write("gltf-coat-volume", "coated.gltf", document_with_material_extensions(&format!("{coat}, {volume}"), "0.5").as_bytes());
+        let asset = load_asset(&path).unwrap_or_else(|e| panic!("{e}"));
+        let m = &asset.materials[0];
+        let normal_texture = m.maps.normal.expect("the normal map").texture;
+        let coat = m.clearcoat.expect("the clear coat");
+        assert_eq!((coat.factor, coat.roughness, coat.roughness_texture), (0.75, 0.5, Some(normal_texture)));
+        let texture = coat.texture.expect("the clear coat texture") as usize;
+        assert!(texture != normal_texture as usize && !asset.textures[texture].srgb, "texture 1, decoded as data: {texture}");
+        assert_eq!(m.attenuation, Some(Attenuation { color: Vec3::new(0.5, 0.25, 1.0), distance: 2.0 }));
+        assert!((m.attenuation.unwrap().sigma_a() - Vec3::new(2f32.ln() / 2.0, 4f32.ln() / 2.0, 0.0)).abs().max_element() < 1e-6);
+
+        // No coat at factor 0 (its default), no absorption at the default infinite distance or
+        // without transmission.
+        for (extensions, transmission) in [
+            (r#""KHR_materials_clearcoat": {"clearcoatRoughnessFactor": 0.5}, "KHR_materials_volume": {"thicknessFactor": 1}"#, "0.5"),
+            (volume, "0"),
+        ] {
+            let path = write("gltf-no-coat-volume", "plain.gltf", document_with_material_extensions(extensions, transmission).as_bytes());
+            let asset = load_asset(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!((asset.materials[0].clearcoat, asset.materials[0].attenuation), (None, None), "{extensions}");
+        }
+    }
+
+    /// A malformed clear coat or volume is an error naming the file, the material and the fault.
+    #[test]
+    fn malformed_clearcoat_and_volume_are_errors() {
+        for (extensions, fault) in [
+            (r#""KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatTexture": {"index": 7}}"#, "clearcoatTexture: texture 7 does not exist"),
+            (r#""KHR_materials_clearcoat": {"clearcoatFactor": "thick"}"#, "material 0: KHR_materials_clearcoat: invalid type"),
+            (r#""KHR_materials_clearcoat": {"clearcoatFactor": 1e39}"#, "clearcoatFactor or clearcoatRoughnessFactor is not finite"),
+            (r#""KHR_materials_volume": {"attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 0}"#, "attenuationDistance is not > 0"),
+        ] {
+            let path = write("gltf-bad-coat-volume", "bad.gltf", document_with_material_extensions(extensions, "0.5").as_bytes());
+            let err = load_asset(&path).unwrap_err().to_string();
+            assert!(err.contains("bad.gltf") && err.contains(fault), "{extensions}: {err}");
+        }
+    }
+
+    /// The coat's own normal map is not read: a warning says the material's normal serves.
+    #[test]
+    fn clearcoat_normal_texture_is_warned_about() {
+        let json = document_with_material_extensions(r#""KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatNormalTexture": {"index": 0}}"#, "0.5");
+        let json = gltf::Gltf::from_slice_without_validation(json.as_bytes()).unwrap().document.into_json();
+        assert_eq!(unimplemented_required_extension(&json), None);
+        assert_eq!(ignored_features(&json), ["KHR_materials_clearcoat clearcoatNormalTexture is not implemented: clear coats use the material's normal"]);
     }
 
     #[test]

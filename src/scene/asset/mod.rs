@@ -13,7 +13,7 @@ mod texture;
 pub use texture::{downsample_to_fit, load_texture, srgb_to_linear};
 
 
-use super::{Alpha, AlphaMode, Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
+use super::{Alpha, AlphaMode, Attenuation, Clearcoat, Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
 use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::{Path, PathBuf};
@@ -82,6 +82,10 @@ pub struct AssetMaterial {
     pub metallic_roughness: Option<MetallicRoughness>,
     /// Emission, normal and alpha textures (indices into [`Asset::textures`]).
     pub maps: TextureMaps,
+    /// glTF `KHR_materials_clearcoat` (texture indices into [`Asset::textures`]).
+    pub clearcoat: Option<Clearcoat>,
+    /// glTF `KHR_materials_volume`: absorption inside (a transmissive material only).
+    pub attenuation: Option<Attenuation>,
 }
 
 impl AssetMaterial {
@@ -100,6 +104,8 @@ impl AssetMaterial {
             coat: false,
             metallic_roughness: None,
             maps: TextureMaps::default(),
+            clearcoat: None,
+            attenuation: None,
         }
     }
 }
