@@ -156,16 +156,15 @@ fn a_uniform_opacity_of_three_tenths_lets_seven_tenths_through() {
     }
 }
 
-/// Shadow rays respect alpha: a diffuse floor (albedo 0.5, half side 1) seen from 0.5 above, under
-/// a directional light of irradiance 2 straight down, with the square file `file` (half side 2, at
-/// height 1, above the camera) between them: the whole floor lies in its shadow.
-fn floor_under_square(ctx: &caustica::gpu::GpuContext, dir: &Path, file: &str) -> RgbImage {
-    let scene = parse_in(
+/// A diffuse floor (albedo 0.5, half side 1) seen from 0.5 above, the square file `file` (half side
+/// 2, at height 1, above the camera) over it, and `lights` (scene-file text) at `spp`.
+fn floor_scene(dir: &Path, file: &str, lights: &str, spp: u32) -> Scene {
+    parse_in(
         dir,
         &format!(
             r#"
             camera = {{ position = [0.0, 0.5, 0.0], look_at = [0.0, 0.0, 0.0], up = [0.0, 0.0, -1.0], fov = 60.0 }}
-            film = {{ width = 32, height = 32, spp = 64 }}
+            film = {{ width = 32, height = 32, spp = {spp} }}
             [materials.floor]
             albedo = [0.5, 0.5, 0.5]
             [[quads]]
@@ -175,14 +174,17 @@ fn floor_under_square(ctx: &caustica::gpu::GpuContext, dir: &Path, file: &str) -
             material = "floor"
             [[meshes]]
             file = "{file}"
-            [[lights]]
-            type = "directional"
-            direction = [0.0, -1.0, 0.0]
-            irradiance = [2.0, 2.0, 2.0]
+            {lights}
             "#
         ),
-    );
-    render(ctx, &scene, 11)
+    )
+}
+
+/// Shadow rays respect alpha: the floor under a directional light of irradiance 2 straight down,
+/// with the square between them: the whole floor lies in its shadow.
+fn floor_under_square(ctx: &caustica::gpu::GpuContext, dir: &Path, file: &str) -> RgbImage {
+    let light = "[[lights]]\ntype = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = [2.0, 2.0, 2.0]";
+    render(ctx, &floor_scene(dir, file, light, 64), 11)
 }
 
 /// Under a square of opacity 0.3 (MTL `d`) the floor is albedo / pi x E x 0.7, to the resolution
@@ -208,28 +210,11 @@ fn shadow_rays_respect_alpha() {
     }
 }
 
-/// The floor of `floor_under_square` lit only by the square file `file` above it, an emitter,
-/// with next-event estimation on or off (pure BSDF sampling, which finds the emitter only where
-/// its rays meet it).
+/// The floor of `floor_scene` lit only by the square file `file` above it, an emitter, with
+/// next-event estimation on or off (pure BSDF sampling, which finds the emitter only where its
+/// rays meet it).
 fn floor_under_emitter(ctx: &caustica::gpu::GpuContext, dir: &Path, file: &str, nee: bool, spp: u32) -> RgbImage {
-    let mut scene = parse_in(
-        dir,
-        &format!(
-            r#"
-            camera = {{ position = [0.0, 0.5, 0.0], look_at = [0.0, 0.0, 0.0], up = [0.0, 0.0, -1.0], fov = 60.0 }}
-            film = {{ width = 32, height = 32, spp = {spp} }}
-            [materials.floor]
-            albedo = [0.5, 0.5, 0.5]
-            [[quads]]
-            origin = [-1.0, 0.0, 1.0]
-            edge_u = [2.0, 0.0, 0.0]
-            edge_v = [0.0, 0.0, -2.0]
-            material = "floor"
-            [[meshes]]
-            file = "{file}"
-            "#
-        ),
-    );
+    let mut scene = floor_scene(dir, file, "", spp);
     scene.integrator.nee = nee;
     render(ctx, &scene, 17)
 }
