@@ -6,7 +6,7 @@ mod common;
 
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
-use caustica::scene::{metal, Conductor, Filter, Light, Microfacet, Sampler, Scene, Shape};
+use caustica::scene::{metal, Conductor, Filter, Light, LightSelection, Microfacet, Sampler, Scene, Shape};
 use common::{gpu, render, temp_dir};
 use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};
@@ -133,6 +133,7 @@ fn max_depth_is_the_longest_path_in_segments_and_rr_depth_where_roulette_starts(
     assert_eq!(depth(r#"<integrator type="path"><integer name="max_depth" value="3"/><integer name="rr_depth" value="2"/></integrator>"#), (3, 2));
     assert_eq!(depth(r#"<integrator type="path"><integer name="max_depth" value="-1"/></integrator>"#), (1024, 5));
     assert_eq!(depth(""), (1024, 5), "a scene without an integrator gets path's defaults");
+    assert_eq!(scene("selection", SENSOR).integrator.light_selection, LightSelection::Uniform, "Mitsuba picks emitters uniformly");
     assert!(error("depth0", &format!(r#"{SENSOR}<integrator type="path"><integer name="max_depth" value="0"/></integrator>"#)).contains("max_depth 0"));
 }
 
@@ -330,11 +331,14 @@ filter = "box"
 max_bounces = 5
 rr_start = 5
 sampler = "independent"
+light_selection = "uniform"
 [materials.white]
 albedo = [0.8, 0.7, 0.6]
+one_sided = true
 [materials."white + emitter"]
 albedo = [0.8, 0.7, 0.6]
 emission = [8.0, 8.0, 8.0]
+one_sided = true
 [materials.glass]
 transparency = 1.0
 ior = 1.5041833
