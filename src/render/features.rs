@@ -62,7 +62,9 @@ impl SceneFeatures {
     pub fn of(data: &SceneData) -> Self {
         let instances = &data.acceleration.instances;
         let has_instance = |kind| instances.iter().any(|i| i.info[0] == kind);
-        let has_mr_texture = data.materials.iter().any(|m| m.metallic_roughness[0].to_bits() != NO_TEXTURE);
+        // A material's own R and T lobes are rough: by its roughness, or per texel by a
+        // metallic-roughness texture.
+        let rough = |m: &GpuMaterial| m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE;
         let flags = |m: &GpuMaterial| m.maps[3].to_bits();
         Self {
             top_level: instances.len() > 1,
@@ -73,9 +75,9 @@ impl SceneFeatures {
             normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
             alpha: has_instance(INSTANCE_MESH) && data.materials.iter().any(|m| m.alpha[3].to_bits() != ALPHA_OPAQUE),
             environment_map: data.env_kind != ENV_CONSTANT,
-            rough_lobes: has_mr_texture || data.materials.iter().any(|m| m.params[3] >= ALPHA_DELTA || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
+            rough_lobes: data.materials.iter().any(|m| rough(m) || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
-            beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && (m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE)),
+            beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && rough(m)),
             thin_dielectrics: data.materials.iter().any(|m| flags(m) & MATERIAL_THIN != 0),
             one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
             clearcoat: data.materials.iter().any(|m| m.coat[0] > 0.0),
