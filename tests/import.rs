@@ -638,9 +638,9 @@ fn an_envmap_turned_off_the_y_axis_is_resampled_to_its_axes() {
     }
 }
 
-/// A unit square in z = 0 facing +z with vertex normals and texture coordinates u along +x, v
-/// (in the file) along +y.
-const SQUARE_OBJ: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
+/// A square in z = 0 facing +z with vertex normals and a mirrored texture: u grows along -x, v
+/// (in the file) along +y. MikkTSpace's bitangent follows v there, Mitsuba's cross(n, t) does not.
+const SQUARE_OBJ: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 1 0\nvt 0 0\nvt 0 1\nvt 1 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
 
 /// Writes a 2 x 2 PNG of one 8-bit colour, byte for byte.
 fn solid_png(path: &Path, rgb: [u8; 3]) {
@@ -688,9 +688,9 @@ fn normalmap_and_mask_map_onto_normal_and_opacity_textures_in_mitsubas_frame() {
     let decode = |b: u8| caustica::scene::srgb_to_linear(b);
     let luminance = 0.2126 * decode(200) + 0.7152 * decode(100) + 0.0722 * decode(50);
     assert_eq!(s.textures[alpha.texture.unwrap() as usize].texels[0][3], (luminance * 255.0).round() as u8);
-    // Mitsuba's frame whichever way v grows: the tangent along +x (growing u) and the bitangent
-    // cross(n, t) = +y, though OBJ's v is turned upside down on load (a glTF frame would be -y).
-    assert!(s.meshes[0].tangents.iter().all(|t| (t.truncate() - Vec3::X).length() < 1e-5 && t.w == 1.0), "{:?}", s.meshes[0].tangents);
+    // Mitsuba's frame whichever way v grows: the tangent along -x (growing u) and the bitangent
+    // cross(n, t) = -y, though v grows along +y (MikkTSpace's bitangent would follow it).
+    assert!(s.meshes[0].tangents.iter().all(|t| (t.truncate() + Vec3::X).length() < 1e-5 && t.w == 1.0), "{:?}", s.meshes[0].tangents);
 
     // `convert` writes both textures out, and its TOML loads to the same scene.
     let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&temp_dir("normalmap-out")).unwrap();
@@ -700,17 +700,17 @@ fn normalmap_and_mask_map_onto_normal_and_opacity_textures_in_mitsubas_frame() {
     assert_eq!(t.materials[0].maps, m.maps);
 }
 
-/// A diffuse square whose normal map tilts every normal 30 degrees towards tangent-space +y, lit
-/// along (0, -1, -1) / sqrt(2): each pixel is exactly (albedo / pi) E n'.l, the light being a
-/// delta and the sky black. Read along -y (the frame a v-up convention would give), n'.l falls
-/// from 0.965 to 0.259: a frame turned either way fails.
+/// A diffuse square whose normal map tilts every normal 30 degrees towards tangent-space +y, which
+/// on SQUARE_OBJ is cross(n, t) = -y, lit along (0, -1, -1) / sqrt(2): each pixel is exactly
+/// (albedo / pi) E n'.l, the light being a delta and the sky black. Read along +y (MikkTSpace's
+/// bitangent, following v), n'.l rises from 0.259 to 0.965: a frame turned either way fails.
 #[test]
 fn a_normal_mapped_square_shades_with_the_bent_normal_mitsuba_would() {
     let path = write_scene("normalmap-render", &[("scene.xml", &mapped_square_xml(r#"<float name="opacity" value="1"/>"#)), ("square.obj", SQUARE_OBJ)]);
     solid_png(&path.parent().unwrap().join("tilt.png"), TILT_TEXEL);
     let s = scene_at(&path);
     let texel = Vec3::from(TILT_TEXEL.map(|b| f32::from(b) / 255.0 * 2.0 - 1.0));
-    let bent = Vec3::new(texel.x, texel.y, texel.z).normalize();
+    let bent = Vec3::new(-texel.x, -texel.y, texel.z).normalize();
     let light = Vec3::new(0.0, 1.0, 1.0).normalize();
     let expected = 0.5 / std::f32::consts::PI * 2.0 * bent.dot(light);
     let (_lock, ctx) = gpu();
