@@ -6,7 +6,7 @@ mod common;
 
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
-use caustica::scene::{metal, Conductor, Filter, Light, LightSelection, Microfacet, Sampler, Scene, Shape};
+use caustica::scene::{metal, AlphaMode, Conductor, Filter, Light, LightSelection, Microfacet, Sampler, Scene, Shape};
 use common::{gpu, render, temp_dir};
 use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};
@@ -267,7 +267,7 @@ fn unsupported_or_bad_input_is_an_error_naming_file_line_and_element() {
         (format!("{SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>"), vec!["scene.xml:8:", "$r"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"conductor\"><string name=\"material\" value=\"Cr\"/></bsdf></shape>"), vec!["scene.xml:8:", "'Cr'", "Au"]),
         (format!("{SENSOR}\n<shape type=\"serialized\"/>"), vec!["scene.xml:8:", "<shape type=\"serialized\">"]),
-        (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"><string name=\"filename\" value=\"a.png\"/></texture></bsdf></shape>"), vec!["scene.xml:8:", "<shape type=\"sphere\">", "textured"]),
+        (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"><string name=\"filename\" value=\"a.png\"/></texture></bsdf></shape>"), vec!["scene.xml:8:", "<shape type=\"sphere\">", "albedo_texture on this shape"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"mesh_attribute\" name=\"reflectance\"/></bsdf></shape>"), vec!["scene.xml:8:", "<texture type=\"mesh_attribute\">", "not supported"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"plastic\"><texture type=\"checkerboard\" name=\"diffuse_reflectance\"/></bsdf></shape>"), vec!["scene.xml:8:", "textures ('diffuse_reflectance') are not supported"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"1.2, 0.5, 0.5\"/></bsdf></shape>"), vec!["scene.xml:8:", "reflectance must be in [0, 1]"]),
@@ -636,4 +636,114 @@ fn an_envmap_turned_off_the_y_axis_is_resampled_to_its_axes() {
     for x in 0..16 {
         assert_eq!((m.image.get(x, 0), m.image.get(x, 7)), ([0.0; 3], [1.0; 3]), "column {x}");
     }
+}
+
+/// A square in z = 0 facing +z with vertex normals and a mirrored texture: u grows along -x, v
+/// (in the file) along +y. MikkTSpace's bitangent follows v there, Mitsuba's cross(n, t) does not.
+const SQUARE_OBJ: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 1 0\nvt 0 0\nvt 0 1\nvt 1 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
+
+/// Writes a 2 x 2 PNG of one 8-bit colour, byte for byte.
+fn solid_png(path: &Path, rgb: [u8; 3]) {
+    image::RgbImage::from_pixel(2, 2, image::Rgb(rgb)).save(path).unwrap();
+}
+
+/// The square under a normalmap and a mask, lit by a directional light, seen from above.
+fn mapped_square_xml(opacity: &str) -> String {
+    xml(&format!(
+        r#"<sensor type="perspective">
+            <float name="fov" value="20"/>
+            <transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
+            <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+        </sensor>
+        <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+        <emitter type="directional"><vector name="direction" x="0" y="-0.70710678" z="-0.70710678"/><rgb name="irradiance" value="2"/></emitter>
+        <shape type="obj"><string name="filename" value="square.obj"/>
+            <bsdf type="mask">{opacity}
+                <bsdf type="normalmap">
+                    <texture name="normalmap" type="bitmap"><string name="filename" value="tilt.png"/><boolean name="raw" value="true"/></texture>
+                    <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
+                </bsdf>
+            </bsdf>
+        </shape>"#
+    ))
+}
+
+/// The tilted normal's texel: 30 degrees towards tangent-space +y.
+const TILT_TEXEL: [u8; 3] = [128, 191, 238];
+
+#[test]
+fn normalmap_and_mask_map_onto_normal_and_opacity_textures_in_mitsubas_frame() {
+    let path = write_scene("normalmap", &[("scene.xml", &mapped_square_xml(r#"<texture name="opacity" type="bitmap"><string name="filename" value="holes.png"/></texture>"#)), ("square.obj", SQUARE_OBJ)]);
+    let dir = path.parent().unwrap();
+    solid_png(&dir.join("tilt.png"), TILT_TEXEL);
+    solid_png(&dir.join("holes.png"), [200, 100, 50]);
+    let s = scene_at(&path);
+    let m = &s.materials[s.meshes[0].triangle_materials[0] as usize];
+    let normal = m.maps.normal.expect("the normalmap is the material's normal map");
+    assert!(!s.textures[normal.texture as usize].srgb, "raw: read as stored");
+    let alpha = m.maps.alpha.expect("the mask is the material's opacity");
+    assert_eq!((alpha.factor, alpha.mode), (1.0, AlphaMode::Blend), "Mitsuba's mask is met with probability equal to its opacity");
+    // The opacity is the colour's luminance after sRGB decoding (Mitsuba's eval_1 of a bitmap).
+    let decode = |b: u8| caustica::scene::srgb_to_linear(b);
+    let luminance = 0.2126 * decode(200) + 0.7152 * decode(100) + 0.0722 * decode(50);
+    assert_eq!(s.textures[alpha.texture.unwrap() as usize].texels[0][3], (luminance * 255.0).round() as u8);
+    // Mitsuba's frame whichever way v grows: the tangent along -x (growing u) and the bitangent
+    // cross(n, t) = -y, though v grows along +y (MikkTSpace's bitangent would follow it).
+    assert!(s.meshes[0].tangents.iter().all(|t| (t.truncate() + Vec3::X).length() < 1e-5 && t.w == 1.0), "{:?}", s.meshes[0].tangents);
+
+    // `convert` writes both textures out, and its TOML loads to the same scene.
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&temp_dir("normalmap-out")).unwrap();
+    assert!(toml.contains("normal_texture") && toml.contains("opacity_texture") && toml.contains("encoding = \"linear\""), "{toml}");
+    let t = Scene::parse(&toml, "converted.toml", &temp_dir("normalmap-out")).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    assert_eq!((&t.textures, &t.meshes[0].tangents), (&s.textures, &s.meshes[0].tangents));
+    assert_eq!(t.materials[0].maps, m.maps);
+}
+
+/// A diffuse square whose normal map tilts every normal 30 degrees towards tangent-space +y, which
+/// on SQUARE_OBJ is cross(n, t) = -y, lit along (0, -1, -1) / sqrt(2): each pixel is exactly
+/// (albedo / pi) E n'.l, the light being a delta and the sky black. Read along +y (MikkTSpace's
+/// bitangent, following v), n'.l rises from 0.259 to 0.965: a frame turned either way fails.
+#[test]
+fn a_normal_mapped_square_shades_with_the_bent_normal_mitsuba_would() {
+    let path = write_scene("normalmap-render", &[("scene.xml", &mapped_square_xml(r#"<float name="opacity" value="1"/>"#)), ("square.obj", SQUARE_OBJ)]);
+    solid_png(&path.parent().unwrap().join("tilt.png"), TILT_TEXEL);
+    let s = scene_at(&path);
+    let texel = Vec3::from(TILT_TEXEL.map(|b| f32::from(b) / 255.0 * 2.0 - 1.0));
+    let bent = Vec3::new(-texel.x, -texel.y, texel.z).normalize();
+    let light = Vec3::new(0.0, 1.0, 1.0).normalize();
+    let expected = 0.5 / std::f32::consts::PI * 2.0 * bent.dot(light);
+    let (_lock, ctx) = gpu();
+    let image = render(&ctx, &s, 3);
+    for p in &image.pixels {
+        assert!((p[0] - expected).abs() < 2e-3 * expected, "pixel {p:?}, expected {expected} (with the bitangent along -y: {})", 0.5 / std::f32::consts::PI * 2.0 * Vec3::new(bent.x, -bent.y, bent.z).dot(light));
+    }
+}
+
+#[test]
+fn masks_and_normal_maps_need_meshes_and_one_texture_map() {
+    let sphere = format!("{SENSOR}<shape type=\"sphere\"><bsdf type=\"mask\"><float name=\"opacity\" value=\"0.5\"/><bsdf type=\"diffuse\"/></bsdf></shape>");
+    let e = error("mask-sphere", &sphere);
+    assert!(e.contains("scene.xml:") && e.contains("opacity") && e.contains("<shape type=\"sphere\">"), "{e}");
+    let dir = temp_dir("maps-toml");
+    std::fs::write(dir.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap();
+    solid_png(&dir.join("n.png"), TILT_TEXEL);
+    let head = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n";
+    let refused = |toml: &str, needles: &[&str]| {
+        let e = format!("{:#}", Scene::parse(&format!("{head}{toml}"), "t.toml", &dir).expect_err("refused"));
+        for needle in needles {
+            assert!(e.contains(needle), "'{needle}' missing from: {e}");
+        }
+    };
+    refused("[materials.m]\nnormal_texture = { file = \"n.png\" }\n[[meshes]]\nfile = \"flat.obj\"\nmaterial = \"m\"\n", &["flat.obj", "no vertex normals", "normal_texture"]);
+    refused("[materials.m]\nopacity = 0.5\n[[quads]]\norigin = [0, 0, 0]\nedge_u = [1, 0, 0]\nedge_v = [0, 1, 0]\nmaterial = \"m\"\n", &["materials.m.opacity", "needs a mesh"]);
+    refused("[materials.m]\nopacity = 1.5\n", &["materials.m.opacity", "[0, 1]"]);
+    refused(
+        "[materials.m]\nalbedo_texture = { file = \"n.png\", to_uv = [[2, 0, 0], [0, 2, 0]] }\nopacity_texture = { file = \"n.png\" }\n",
+        &["materials.m.opacity_texture.to_uv differs from materials.m.albedo_texture.to_uv"],
+    );
+}
+
+fn scene_at(path: &Path) -> Scene {
+    import(&InputFiles::anywhere(), path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).unwrap_or_else(|e| panic!("{e:#}"))
 }

@@ -3,7 +3,7 @@
 //! material (so any affine map is exact, and the kernel reads textures as it always does).
 
 use super::asset::load_texture;
-use super::format::{AlbedoTextureFile, Array};
+use super::format::{AlbedoTextureFile, Array, Triple};
 use super::{srgb_to_linear, Texture, Wrap};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
@@ -27,17 +27,21 @@ pub fn load(t: &AlbedoTextureFile, key: &str, base: &Path, files: &InputFiles) -
         }
         _ => bail!("{key}: give one of file and checkerboard"),
     };
-    let to_uv = match t.to_uv {
-        None => Affine2::IDENTITY,
+    Ok((texture, to_uv(t.to_uv, key)?))
+}
+
+/// A texture's `to_uv` rows (`key`.to_uv) as an affine map; absent: the identity.
+pub(super) fn to_uv(rows: Option<Array<Triple, 2>>, key: &str) -> Result<Affine2> {
+    match rows {
+        None => Ok(Affine2::IDENTITY),
         Some(Array([Array([a, b, c]), Array([d, e, f])])) => {
             let m = Affine2::from_mat2_translation(Mat2::from_cols(Vec2::new(a, d), Vec2::new(b, e)), Vec2::new(c, f));
             if !m.is_finite() {
-                bail!("{key}.to_uv must be finite, got {:?}", t.to_uv);
+                bail!("{key}.to_uv must be finite, got {rows:?}");
             }
-            m
+            Ok(m)
         }
-    };
-    Ok((texture, to_uv))
+    }
 }
 
 /// Mitsuba's checkerboard over [0, 1]^2 (colour 0 where u and v are on the same side of 1/2), in

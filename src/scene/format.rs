@@ -230,6 +230,42 @@ pub struct MaterialFile {
     /// left, per channel in (0, 1], after travelling `attenuation_distance` inside. Both or neither.
     pub attenuation_color: Option<Triple>,
     pub attenuation_distance: Option<f32>,
+    /// How much of the surface is there, in [0, 1] (times `opacity_texture`'s): a ray meets it
+    /// with that probability (Mitsuba's `mask`, glTF's BLEND). Meshes only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opacity: Option<f32>,
+    /// An image whose luminance is the opacity (its alpha channel is not read, as in Mitsuba).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub opacity_texture: Option<ImageTextureFile>,
+    /// A tangent-space normal map, (normal + 1) / 2 per texel, in Mitsuba's frame: x along the
+    /// direction u grows, y along cross(normal, x), z the interpolated normal. Meshes with vertex
+    /// normals and texture coordinates only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normal_texture: Option<ImageTextureFile>,
+}
+
+/// A material's image texture of data (opacity, normals), read at texture coordinates mapped by
+/// `to_uv` as `albedo_texture`'s are; a material's textures must share one `to_uv`.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImageTextureFile {
+    /// A PNG or JPEG image.
+    pub file: String,
+    /// As `albedo_texture.to_uv`. Absent: the identity.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub to_uv: Option<Array<Triple, 2>>,
+    /// How the file stores its values: "linear" or "srgb" (decoded before use). Absent: "srgb" for
+    /// `opacity_texture` (an image as painted), "linear" for `normal_texture` (data).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub encoding: Option<Encoding>,
+}
+
+/// How an image stores its values.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Encoding {
+    Linear,
+    Srgb,
 }
 
 /// The microfacet distribution of a material's rough lobes (shaders/microfacet.glsl).
@@ -279,6 +315,9 @@ impl Default for MaterialFile {
             albedo_texture: None,
             attenuation_color: None,
             attenuation_distance: None,
+            opacity: None,
+            opacity_texture: None,
+            normal_texture: None,
         }
     }
 }

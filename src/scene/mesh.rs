@@ -88,6 +88,10 @@ impl<'a> MeshImporter<'a> {
             if asset.dropped_triangles > 0 {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }
+            if let Some(m) = material.filter(|&m| scene.materials[m as usize].maps.normal.is_some()) {
+                // Before the texture coordinates are mapped: Mitsuba's frame follows the mesh's own u.
+                cross_bitangent_frames(scene, path, &mut asset, m)?;
+            }
             if let Some(to_uv) = material.and_then(|m| self.uv_maps.get(&m)) {
                 map_uvs(scene, path, &mut asset, material.expect("set"), *to_uv)?;
             }
@@ -116,9 +120,29 @@ impl<'a> MeshImporter<'a> {
 fn map_uvs(scene: &Scene, path: &Path, asset: &mut Asset, material: u32, to_uv: Affine2) -> Result<()> {
     for (k, mesh) in asset.meshes.iter_mut().enumerate() {
         if mesh.uvs.is_empty() {
-            bail!("{}: mesh {k} has no texture coordinates, which material '{}' needs for its albedo_texture", path.display(), scene.materials[material as usize].name);
+            bail!("{}: mesh {k} has no texture coordinates, which material '{}' needs for its textures", path.display(), scene.materials[material as usize].name);
         }
         mesh.uvs.iter_mut().for_each(|uv| *uv = to_uv.transform_point2(*uv));
+    }
+    Ok(())
+}
+
+/// Gives every mesh of `asset`, which is to wear the TOML `normal_texture` of `material`, the
+/// frame that map is read in: the tangent along growing u (MikkTSpace's, unless the file has its
+/// own) and the bitangent cross(normal, tangent) (w = +1) whichever way v grows, as Mitsuba's
+/// `normalmap` reads its maps.
+fn cross_bitangent_frames(scene: &Scene, path: &Path, asset: &mut Asset, material: u32) -> Result<()> {
+    for (k, mesh) in asset.meshes.iter_mut().enumerate() {
+        let missing = match (mesh.normals.is_empty(), mesh.uvs.is_empty()) {
+            (false, false) if !mesh.tangents.is_empty() || asset::generate_tangents(mesh) => None,
+            (false, false) => Some("a tangent frame MikkTSpace can build"),
+            (true, _) => Some("vertex normals"),
+            (false, true) => Some("texture coordinates"),
+        };
+        if let Some(missing) = missing {
+            bail!("{}: mesh {k} has no {missing}, which material '{}' needs for its normal_texture", path.display(), scene.materials[material as usize].name);
+        }
+        mesh.tangents.iter_mut().for_each(|t| t.w = 1.0);
     }
     Ok(())
 }

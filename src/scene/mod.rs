@@ -8,6 +8,7 @@ mod equal_area_map;
 mod format;
 pub mod import;
 mod light;
+mod material_maps;
 mod mesh;
 mod optics;
 mod toml_error;
@@ -420,10 +421,7 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
     let mut textures = vec![];
     let mut uv_maps = HashMap::new();
     for (index, (mname, m)) in file.materials.iter().enumerate() {
-        if let Some(t) = &m.albedo_texture {
-            let (texture, to_uv) = albedo_texture::load(t, &format!("materials.{mname}.albedo_texture"), base, files)?;
-            materials[index].albedo_texture = Some(textures.len() as u32);
-            textures.push(texture);
+        if let Some(to_uv) = material_maps::attach(mname, m, &mut materials[index], &mut textures, base, files)? {
             uv_maps.insert(index as u32, to_uv);
         }
     }
@@ -436,9 +434,11 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
         })
     };
     let shapes = shapes_from(&file, &material)?;
-    if let Some(shape) = shapes.iter().find(|s| uv_maps.contains_key(&s.material())) {
-        let m = &materials[shape.material() as usize];
-        bail!("materials.{}.albedo_texture needs a mesh's texture coordinates; spheres, quads and triangles have none ({shape:?})", m.name);
+    for shape in &shapes {
+        let name = &materials[shape.material() as usize].name;
+        if let Some(field) = material_maps::needs_mesh(&file.materials[name]) {
+            bail!("materials.{name}.{field} needs a mesh (its texture coordinates and triangles); spheres, quads and triangles have none ({shape:?})");
+        }
     }
     let environment = match &file.environment {
         None => Environment::Constant(Vec3::ZERO),

@@ -10,6 +10,7 @@ mod serialized;
 mod tangents;
 mod texture;
 
+pub use tangents::generate as generate_tangents;
 pub use texture::{downsample_to_fit, load_texture, srgb_to_linear};
 
 

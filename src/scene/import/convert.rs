@@ -48,8 +48,10 @@ fn absolute_paths(value: &mut toml::Value, base: &Path) {
     }
     if let Some(materials) = value.get_mut("materials").and_then(|m| m.as_table_mut()) {
         for (_, material) in materials.iter_mut() {
-            if let Some(toml::Value::String(s)) = material.get_mut("albedo_texture").and_then(|t| t.get_mut("file")) {
-                absolute(s);
+            for key in ["albedo_texture", "opacity_texture", "normal_texture"] {
+                if let Some(toml::Value::String(s)) = material.get_mut(key).and_then(|t| t.get_mut("file")) {
+                    absolute(s);
+                }
             }
         }
     }

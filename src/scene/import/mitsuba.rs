@@ -4,9 +4,10 @@
 //! parameter is documented in the README's "Scenes from other renderers" section.
 
 use super::super::format::{
-    AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler, SceneFile,
-    SphereFile, SpotLightFile, TriangleFile,
+    AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, Encoding, EnvironmentFile, FilmFile, Filter, ImageTextureFile, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler, SceneFile,
+    SphereFile, SpotLightFile, TriangleFile, Triple,
 };
+use super::super::material_maps::needs_mesh;
 use super::mitsuba_xml::{self, Object, Resolver};
 use super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
 use super::{transform, Location, Notes};
@@ -339,10 +340,11 @@ impl Mapper<'_> {
         // A mirroring transform turns the winding, so Mitsuba's normals (transformed as normals)
         // face the other way round the edges.
         let reverse = flip != (m.determinant() < 0.0);
-        let textured = self.materials[&material].albedo_texture.is_some();
+        let mesh_only = needs_mesh(&self.materials[&material]);
+        let textured = mesh_only.is_some();
         let mesh = matches!(s.plugin.as_str(), "obj" | "ply" | "serialized");
-        if textured && !mesh {
-            return Err(s.error("a textured BSDF on this shape is not supported (caustica's spheres and quads have no texture coordinates; meshes do)"));
+        if let (Some(what), false) = (mesh_only, mesh) {
+            return Err(s.error(format!("a BSDF with {what} on this shape is not supported (caustica's spheres and quads have no texture coordinates or alpha tests; meshes do)")));
         }
         match s.plugin.as_str() {
             "obj" | "ply" | "serialized" => {
@@ -466,12 +468,26 @@ impl Mapper<'_> {
         let see_through = MaterialFile::default();
         let material = match b.plugin.as_str() {
             "twosided" if two_sided => return Err(b.error("a twosided inside a twosided")),
-            "twosided" => {
-                let inner = b.children_tagged("bsdf")?;
-                match inner.as_slice() {
-                    [inner] => self.bsdf(inner, true)?,
-                    _ => return Err(b.error("only a twosided with one nested BSDF (the same on both sides) is supported")),
+            "twosided" => self.bsdf(&*nested_bsdf(b, "only a twosided with one nested BSDF (the same on both sides) is supported")?, true)?,
+            "mask" => {
+                let mut material = self.bsdf(&*nested_bsdf(b, "a mask needs one nested BSDF")?, two_sided)?;
+                if material.opacity.is_some() || material.opacity_texture.is_some() {
+                    return Err(b.error("a mask inside a mask is not supported"));
                 }
+                match b.texture("opacity")? {
+                    Some(t) => material.opacity_texture = Some(self.data_texture(&t)?),
+                    None => material.opacity = Some(b.float("opacity", 0.5)? as f32),
+                }
+                material
+            }
+            "normalmap" => {
+                let mut material = self.bsdf(&*nested_bsdf(b, "a normalmap needs one nested BSDF")?, two_sided)?;
+                if material.normal_texture.is_some() {
+                    return Err(b.error("a normalmap inside a normalmap is not supported"));
+                }
+                let Some(t) = b.texture("normalmap")? else { return Err(b.error("needs a normalmap texture")) };
+                material.normal_texture = Some(self.data_texture(&t)?);
+                material
             }
             "diffuse" => {
                 match b.texture("reflectance")? {
@@ -522,7 +538,7 @@ impl Mapper<'_> {
                 let albedo = f32x3(self.reflectance(b, "diffuse_reflectance", 0.5)?);
                 MaterialFile { albedo, coat: true, ior: relative_ior(b, "polypropylene")?, roughness, distribution, ..defaults }
             }
-            _ => return Err(b.error("this BSDF is not supported (diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, twosided)")),
+            _ => return Err(b.error("this BSDF is not supported (diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, twosided, mask, normalmap)")),
         };
         b.check_all_used()?;
         Ok(material)
@@ -536,35 +552,48 @@ impl Mapper<'_> {
                 AlbedoTextureFile { file: None, checkerboard: Some(Array(colors.map(f32x3))), to_uv: None }
             }
             "bitmap" => {
-                let Some(name) = t.string("filename")?.map(str::to_owned) else { return Err(t.error("needs a filename")) };
-                // What Mitsuba does by default, and caustica always: bilinear lookups of sRGB
-                // colour that tile.
-                if t.string("filter_type")?.is_some_and(|f| f != "bilinear") {
-                    return Err(t.error("only filter_type bilinear is supported"));
+                let (file, raw) = self.bitmap(t)?;
+                if raw {
+                    return Err(t.error("raw (linear) bitmaps are not supported for a reflectance; caustica reads colour images as sRGB"));
                 }
-                if t.string("wrap_mode")?.is_some_and(|w| w != "repeat") {
-                    return Err(t.error("only wrap_mode repeat is supported"));
-                }
-                if t.boolean("raw", false)? {
-                    return Err(t.error("raw (linear) bitmaps are not supported; caustica reads colour images as sRGB"));
-                }
-                let path = self.resolver.resolve(&name, Path::new(&*t.at.file));
-                let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-                if !matches!(extension.as_str(), "png" | "jpg" | "jpeg") {
-                    return Err(t.error(format!("'{name}': only PNG and JPEG bitmaps are supported")));
-                }
-                AlbedoTextureFile { file: Some(relative_to(&path, &self.base)), checkerboard: None, to_uv: None }
+                AlbedoTextureFile { file: Some(file), checkerboard: None, to_uv: None }
             }
             _ => return Err(t.error("this texture is not supported for a diffuse reflectance (checkerboard, bitmap)")),
         };
-        if let Some(m) = t.transform("to_uv")? {
-            // Mitsuba keeps the 2D affine part of a 4x4 to_uv: its upper-left 2x2 and the
-            // translation's first two components.
-            let row = |r: usize| Array([m.col(0)[r] as f32, m.col(1)[r] as f32, m.col(3)[r] as f32]);
-            texture.to_uv = Some(Array([row(0), row(1)]));
-        }
+        texture.to_uv = to_uv(t)?;
         t.check_all_used()?;
         Ok(texture)
+    }
+
+    /// A `bitmap` of data (a mask's opacity, a normal map), decoded from sRGB unless `raw` as
+    /// Mitsuba does.
+    fn data_texture(&mut self, t: &Object) -> Result<ImageTextureFile> {
+        if t.plugin != "bitmap" {
+            return Err(t.error("only bitmap textures are supported here"));
+        }
+        let (file, raw) = self.bitmap(t)?;
+        let texture = ImageTextureFile { file, to_uv: to_uv(t)?, encoding: Some(if raw { Encoding::Linear } else { Encoding::Srgb }) };
+        t.check_all_used()?;
+        Ok(texture)
+    }
+
+    /// A `bitmap` texture's file (relative to the scene's folder) and whether it is `raw`.
+    fn bitmap(&mut self, t: &Object) -> Result<(String, bool)> {
+        let Some(name) = t.string("filename")?.map(str::to_owned) else { return Err(t.error("needs a filename")) };
+        // What Mitsuba does by default, and caustica always: bilinear lookups that tile.
+        if t.string("filter_type")?.is_some_and(|f| f != "bilinear") {
+            return Err(t.error("only filter_type bilinear is supported"));
+        }
+        if t.string("wrap_mode")?.is_some_and(|w| w != "repeat") {
+            return Err(t.error("only wrap_mode repeat is supported"));
+        }
+        let raw = t.boolean("raw", false)?;
+        let path = self.resolver.resolve(&name, Path::new(&*t.at.file));
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        if !matches!(extension.as_str(), "png" | "jpg" | "jpeg") {
+            return Err(t.error(format!("'{name}': only PNG and JPEG bitmaps are supported")));
+        }
+        Ok((relative_to(&path, &self.base), raw))
     }
 
     /// caustica's roughness (sqrt(alpha), alpha defaulting to Mitsuba's 0.1) and distribution
@@ -682,6 +711,23 @@ impl Mapper<'_> {
 }
 
 /// The id of an object, or where it was written.
+/// The one BSDF nested in an adapter (`twosided`, `mask`, `normalmap`); `error` if not one.
+fn nested_bsdf(b: &Object, error: &str) -> Result<Rc<Object>> {
+    match b.children_tagged("bsdf")?.as_slice() {
+        [inner] => Ok(inner.clone()),
+        _ => Err(b.error(error)),
+    }
+}
+
+/// A texture's `to_uv` as caustica's rows. Mitsuba keeps the 2D affine part of a 4x4 to_uv: its
+/// upper-left 2x2 and the translation's first two components.
+fn to_uv(t: &Object) -> Result<Option<Array<Triple, 2>>> {
+    Ok(t.transform("to_uv")?.map(|m| {
+        let row = |r: usize| Array([m.col(0)[r] as f32, m.col(1)[r] as f32, m.col(3)[r] as f32]);
+        Array([row(0), row(1)])
+    }))
+}
+
 fn object_name(o: &Object) -> String {
     let file = Path::new(&*o.at.file).file_name().map_or(String::new(), |f| f.to_string_lossy().into_owned());
     o.id.clone().unwrap_or_else(|| format!("{} {} at {file}:{}", o.plugin, o.tag, o.at.line))
