@@ -747,3 +747,24 @@ fn masks_and_normal_maps_need_meshes_and_one_texture_map() {
 fn scene_at(path: &Path) -> Scene {
     import(&InputFiles::anywhere(), path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).unwrap_or_else(|e| panic!("{e:#}"))
 }
+
+#[test]
+fn flip_normals_and_face_normals_turn_and_flatten_meshes() {
+    let shape = |params: &str| format!(r#"<shape type="obj"><string name="filename" value="square.obj"/>{params}<bsdf type="diffuse"/></shape>"#);
+    let body = xml(&format!("{SENSOR}{}{}{}", shape(""), shape(r#"<boolean name="flip_normals" value="true"/>"#), shape(r#"<boolean name="face_normals" value="true"/>"#)));
+    let path = write_scene("sides", &[("scene.xml", &body), ("square.obj", SQUARE_OBJ)]);
+    let s = scene_at(&path);
+    let [plain, flipped, flat] = [0, 1, 2].map(|k| &s.meshes[k]);
+    assert_eq!(flipped.triangles, plain.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect::<Vec<_>>(), "the winding turns round");
+    assert_eq!(flipped.normals, plain.normals.iter().map(|n| -*n).collect::<Vec<_>>(), "and the normals with it");
+    assert!(flat.normals.is_empty() && flat.triangles == plain.triangles, "face_normals drops the vertex normals");
+    // One-sided (no twosided): the flipped square is black from the front, which the camera sees.
+    assert!(s.materials[flipped.triangle_materials[0] as usize].one_sided);
+
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&temp_dir("sides-out")).unwrap();
+    assert!(toml.contains("flip_normals = true") && toml.contains("face_normals = true"), "{toml}");
+    let t = Scene::parse(&toml, "converted.toml", &temp_dir("sides-out")).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    for k in 0..3 {
+        assert_eq!((&t.meshes[k].triangles, &t.meshes[k].normals), (&s.meshes[k].triangles, &s.meshes[k].normals), "mesh {k}");
+    }
+}

@@ -356,6 +356,14 @@ pub struct MeshFile {
     /// Which mesh of a Mitsuba `.serialized` file (default: the first).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape_index: Option<u32>,
+    /// The back of every triangle becomes its front (the normals turn round; Mitsuba's
+    /// `flip_normals`).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub flip_normals: bool,
+    /// Shade flat, with each triangle's own normal, ignoring the file's vertex normals (Mitsuba's
+    /// `face_normals`).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub face_normals: bool,
     /// Where the file's meshes go (after the file's own node transforms). Listed here rather than
     /// as a flattened `Placement`, which serde cannot combine with deny_unknown_fields.
     #[serde(default)]
@@ -451,6 +459,10 @@ pub struct EnvironmentFile {
     /// Degrees about +y.
     #[serde(default)]
     pub rotation: f32,
+}
+
+fn is_false(b: &bool) -> bool {
+    !b
 }
 
 fn one() -> f32 {

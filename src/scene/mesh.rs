@@ -54,8 +54,8 @@ pub struct MeshImporter<'a> {
     /// How the files are read (and from where).
     files: &'a InputFiles,
     /// The file's own placements of its meshes, as scene mesh indices, by (file, mesh of the file,
-    /// material override).
-    loaded: HashMap<(PathBuf, Option<u32>, Option<u32>), LoadedFile>,
+    /// material override, sides).
+    loaded: HashMap<(PathBuf, Option<u32>, Option<u32>, Sides), LoadedFile>,
     /// Textured scene materials and the maps of texture coordinates (their `to_uv`) of the meshes
     /// they replace the materials of.
     uv_maps: HashMap<u32, Affine2>,
@@ -76,18 +76,19 @@ impl<'a> MeshImporter<'a> {
     /// Places the meshes of `path` with `transform` applied after the file's own node transforms.
     /// `material` replaces every material of the file. Returns the file's camera, if it has one.
     pub fn place(&mut self, scene: &mut Scene, path: &Path, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
-        self.place_part(scene, path, None, material, transform)
+        self.place_part(scene, path, None, material, Sides::default(), transform)
     }
 
     /// As [`MeshImporter::place`], for mesh `shape_index` of a file that holds several (Mitsuba's
     /// `.serialized`; `asset::load_asset_part`).
-    pub fn place_part(&mut self, scene: &mut Scene, path: &Path, shape_index: Option<u32>, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
-        let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), shape_index, material);
+    pub fn place_part(&mut self, scene: &mut Scene, path: &Path, shape_index: Option<u32>, material: Option<u32>, sides: Sides, transform: Mat4) -> Result<Option<AssetCamera>> {
+        let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), shape_index, material, sides);
         if !self.loaded.contains_key(&key) {
             let mut asset = asset::load_asset_part(self.files, path, shape_index)?;
             if asset.dropped_triangles > 0 {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }
+            sides.apply(&mut asset);
             if let Some(m) = material.filter(|&m| scene.materials[m as usize].maps.normal.is_some()) {
                 // Before the texture coordinates are mapped: Mitsuba's frame follows the mesh's own u.
                 cross_bitangent_frames(scene, path, &mut asset, m)?;
@@ -112,6 +113,33 @@ impl<'a> MeshImporter<'a> {
             scene.lights.push(placed);
         }
         Ok(file.camera)
+    }
+}
+
+/// How a `[[meshes]]` entry turns its file's surfaces (Mitsuba's `flip_normals` and
+/// `face_normals`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Sides {
+    /// The back becomes the front: the winding and the normals turn round.
+    pub flip_normals: bool,
+    /// Shaded flat with each triangle's own normal: the file's vertex normals are dropped.
+    pub face_normals: bool,
+}
+
+impl Sides {
+    fn apply(self, asset: &mut Asset) {
+        for mesh in &mut asset.meshes {
+            if self.face_normals {
+                mesh.normals.clear();
+                mesh.tangents.clear();
+            }
+            if self.flip_normals {
+                mesh.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+                mesh.normals.iter_mut().for_each(|n| *n = -*n);
+                // The bitangent cross(n, t) x w keeps its direction with n turned round.
+                mesh.tangents.iter_mut().for_each(|t| t.w = -t.w);
+            }
+        }
     }
 }
 

@@ -18,7 +18,7 @@ pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, 
 pub use camera_toml::camera_toml;
 pub use format::{Filter, LightSelection, Microfacet, Sampler};
 pub use light::Light;
-pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Texture};
+pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Sides, Texture};
 pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 
 use crate::input_file::{InputFiles, InputKind};
@@ -602,11 +602,12 @@ fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLooku
         let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;
         let outer = placement(&key, &m.placement())?;
         let path = resolve(base, &m.file);
+        let sides = Sides { flip_normals: m.flip_normals, face_normals: m.face_normals };
         if m.instances.is_empty() {
-            importer.place_part(scene, &path, m.shape_index, override_material, outer)?;
+            importer.place_part(scene, &path, m.shape_index, override_material, sides, outer)?;
         }
         for (j, p) in m.instances.iter().enumerate() {
-            importer.place_part(scene, &path, m.shape_index, override_material, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
+            importer.place_part(scene, &path, m.shape_index, override_material, sides, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
         }
     }
     Ok(())

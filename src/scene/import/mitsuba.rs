@@ -349,12 +349,9 @@ impl Mapper<'_> {
         match s.plugin.as_str() {
             "obj" | "ply" | "serialized" => {
                 let Some(name) = s.string("filename")?.map(str::to_owned) else { return Err(s.error("needs a filename")) };
-                if flip {
-                    return Err(s.error("flip_normals on a mesh is not supported"));
-                }
-                if s.boolean("face_normals", false)? {
-                    return Err(s.error("face_normals is not supported (caustica shades with the file's vertex normals)"));
-                }
+                // A mirroring to_world turns the winding with the normals (Mitsuba transforms
+                // normals as normals), so only flip_normals turns the front round.
+                let face_normals = s.boolean("face_normals", false)?;
                 let shape_index = if s.plugin == "serialized" {
                     let index = s.integer("shape_index", 0)?;
                     Some(u32::try_from(index).map_err(|_| s.error(format!("shape_index must be >= 0, got {index}")))?)
@@ -373,6 +370,8 @@ impl Mapper<'_> {
                     file,
                     material: Some(material),
                     shape_index,
+                    flip_normals: flip,
+                    face_normals,
                     translate: placement.translate,
                     scale: placement.scale,
                     rotate: placement.rotate,

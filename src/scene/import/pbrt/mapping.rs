@@ -342,7 +342,7 @@ impl Mapper<'_> {
                     let placement = transform::placement(m).map_err(|e| d.error(e))?;
                     let file = relative_to(&path, self.base);
                     self.count_shape(d, &material)?;
-                    self.out.meshes.push(MeshFile { file, material: Some(material), shape_index: None, translate: placement.translate, scale: placement.scale, rotate: placement.rotate, instances: vec![] });
+                    self.out.meshes.push(MeshFile { file, material: Some(material), shape_index: None, flip_normals: false, face_normals: false, translate: placement.translate, scale: placement.scale, rotate: placement.rotate, instances: vec![] });
                 }
             }
             _ => return Err(d.error("this shape is not supported (sphere, trianglemesh, bilinearmesh, plymesh)")),
