@@ -230,6 +230,13 @@ pub struct MaterialFile {
     /// left, per channel in (0, 1], after travelling `attenuation_distance` inside. Both or neither.
     pub attenuation_color: Option<Triple>,
     pub attenuation_distance: Option<f32>,
+    /// A clear coat over the whole material (glTF's `KHR_materials_clearcoat`): a dielectric layer
+    /// of index 1.5 that reflects `clearcoat` x Fresnel of the light; the factor in [0, 1].
+    /// Absent: no coat.
+    pub clearcoat: Option<f32>,
+    /// The clear coat's perceptual GGX roughness in [0, 1] (default 0, smooth); only with
+    /// `clearcoat`.
+    pub clearcoat_roughness: Option<f32>,
 }
 
 /// The microfacet distribution of a material's rough lobes (shaders/microfacet.glsl).
@@ -279,6 +286,8 @@ impl Default for MaterialFile {
             albedo_texture: None,
             attenuation_color: None,
             attenuation_distance: None,
+            clearcoat: None,
+            clearcoat_roughness: None,
         }
     }
 }

@@ -509,7 +509,7 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         one_sided: m.one_sided,
         metallic_roughness: None,
         maps: TextureMaps::default(),
-        clearcoat: None,
+        clearcoat: clearcoat_from(m, &key)?,
         attenuation: attenuation_from(m, &key)?,
     };
     if !(0.0..=1.0).contains(&material.roughness) {
@@ -554,6 +554,23 @@ fn attenuation_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Op
         bail!("{} must be > 0, got {distance}", key("attenuation_distance"));
     }
     Ok(Some(Attenuation { color, distance }))
+}
+
+/// `clearcoat` (the factor) and `clearcoat_roughness`, each in [0, 1]; the roughness only with a
+/// factor. A factor of 0 is kept (it renders exactly as no coat).
+fn clearcoat_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Option<Clearcoat>> {
+    let factor = match (m.clearcoat, m.clearcoat_roughness) {
+        (None, None) => return Ok(None),
+        (None, Some(_)) => bail!("{} needs {}", key("clearcoat_roughness"), key("clearcoat")),
+        (Some(factor), _) => finite(&key("clearcoat"), factor)?,
+    };
+    let roughness = finite(&key("clearcoat_roughness"), m.clearcoat_roughness.unwrap_or(0.0))?;
+    for (name, v) in [("clearcoat", factor), ("clearcoat_roughness", roughness)] {
+        if !(0.0..=1.0).contains(&v) {
+            bail!("{} must be in [0, 1], got {v}", key(name));
+        }
+    }
+    Ok(Some(Clearcoat { factor, roughness, texture: None, roughness_texture: None }))
 }
 
 /// `[[spheres]]`, `[[quads]]` and `[[triangles]]`, in that order.

@@ -21,8 +21,11 @@ use super::params::Directive;
 use super::parser::{MaterialRef, Model, ShapeUse};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
-use glam::{DMat4, DVec3, Vec3};
+use crate::image::RgbImage;
+use glam::{DMat4, DVec2, DVec3, Vec3};
+use crate::scene::equal_area_map;
 use std::collections::HashMap;
+use std::f64::consts::PI;
 use std::path::Path;
 use std::rc::Rc;
 
@@ -44,7 +47,7 @@ pub struct Mapper<'a> {
     notes: &'a mut Notes,
     files: &'a InputFiles,
     /// The main scene's folder: pbrt resolves every relative file name against it.
-    base: &'a Path,
+    pub(super) base: &'a Path,
     out: SceneFile,
     /// caustica's world from pbrt's: the mirror across x = 0, or the identity (module docs).
     world: DMat4,
@@ -309,6 +312,12 @@ impl Mapper<'_> {
                 return Err(alpha.error("cut-outs (alpha other than 1) are not supported"));
             }
         }
+        // Textures need texture coordinates, which only mesh files bring to caustica (its
+        // spheres, quads and triangles have none); an emitting mesh is written as triangles.
+        let textured = self.out.materials[&material].albedo_texture.is_some();
+        if textured && (d.kind != "plymesh" || self.out.materials[&material].emission != Array([0.0; 3])) {
+            return Err(d.error("a textured material is supported on a plymesh that does not emit only (caustica's spheres, quads and triangles have no texture coordinates)"));
+        }
         match d.kind.as_str() {
             "sphere" => self.sphere(s, to_world, m, &material)?,
             "trianglemesh" => {
@@ -510,9 +519,6 @@ impl Mapper<'_> {
     }
 
     fn light_scale(&mut self, d: &Directive) -> Result<f64> {
-        if d.param("power").is_some() {
-            return Err(d.error("power (an emitter given by its total power) is not supported; give L or I with scale"));
-        }
         let scale = d.float_or("scale", 1.0)?;
         if scale.is_nan() || scale < 0.0 {
             return Err(d.error(format!("scale must be >= 0, got {scale}")));
@@ -520,21 +526,41 @@ impl Mapper<'_> {
         Ok(scale)
     }
 
+    /// A light's `power` (pbrt-v4's `power` and `illuminance` read alike): Some(value) when given
+    /// and > 0, as pbrt only then scales to it.
+    fn light_target(d: &Directive, name: &str) -> Result<Option<f64>> {
+        match d.float(name)? {
+            Some(v) if !v.is_finite() => Err(d.error(format!("{name} must be finite, got {v}"))),
+            v => Ok(v.filter(|&v| v > 0.0)),
+        }
+    }
+
     fn light(&mut self, d: &Directive, to_world: DMat4) -> Result<()> {
         let m = self.world * to_world;
         let from = |d: &Directive| -> Result<DVec3> { Ok(d.point("from")?.unwrap_or(DVec3::ZERO)) };
         let light = match d.kind.as_str() {
             "point" => {
-                let intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                let mut intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                // pbrt-v4's PointLight::Create: the unit-luminance spectrum (light_color) times
+                // power / 4 pi, whatever the RGB's own brightness.
+                if let Some(power) = Self::light_target(d, "power")? {
+                    intensity *= power / (4.0 * PI);
+                }
                 Some(LightFile::Point(PointLightFile { position: f32x3(m.transform_point3(from(d)?)), intensity: f32x3(intensity) }))
             }
             "spot" => {
-                let intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                let mut intensity = self.light_color(d, "I")? * self.light_scale(d)?;
                 let from = from(d)?;
                 let to = d.point("to")?.unwrap_or(DVec3::Z);
-                let (cone, delta) = (d.float_or("coneangle", 30.0)?, d.float_or("conedelta", 5.0)?);
+                let (cone, delta) = (d.float_or("coneangle", 30.0)?, d.float_or("conedeltaangle", 5.0)?);
                 if !(cone > 0.0 && cone <= 180.0 && (0.0..=cone).contains(&delta)) || (to - from).length() == 0.0 {
-                    return Err(d.error(format!("needs 0 < coneangle <= 180, 0 <= conedelta <= coneangle and from != to, got {cone} and {delta}")));
+                    return Err(d.error(format!("needs 0 < coneangle <= 180, 0 <= conedeltaangle <= coneangle and from != to, got {cone} and {delta}")));
+                }
+                // pbrt-v4's SpotLight::Create: power over the solid angle of the full cone plus
+                // half that of the falloff ring.
+                if let Some(power) = Self::light_target(d, "power")? {
+                    let (cos_end, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
+                    intensity *= power / (2.0 * PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0));
                 }
                 self.warn("spot", || format!("{}: {}: pbrt's spot falls off smoothly in the cosine between coneangle - conedelta and coneangle; caustica's falls off linearly in the angle", d.at, d.describe()));
                 Some(LightFile::Spot(SpotLightFile {
@@ -546,7 +572,11 @@ impl Mapper<'_> {
                 }))
             }
             "distant" => {
-                let irradiance = self.light_color(d, "L")? * self.light_scale(d)?;
+                let mut irradiance = self.light_color(d, "L")? * self.light_scale(d)?;
+                // pbrt-v4's DistantLight::Create: illuminance on a patch facing the light.
+                if let Some(illuminance) = Self::light_target(d, "illuminance")? {
+                    irradiance *= illuminance;
+                }
                 let from = from(d)?;
                 let to = d.point("to")?.unwrap_or(DVec3::Z);
                 let direction = m.transform_vector3(to - from);
@@ -561,7 +591,11 @@ impl Mapper<'_> {
                 }
                 let environment = match d.string("filename")?.map(str::to_owned) {
                     None => {
-                        let color = self.light_color(d, "L")? * self.light_scale(d)?;
+                        let mut color = self.light_color(d, "L")? * self.light_scale(d)?;
+                        // pbrt-v4: the illuminance of uniform radiance over a hemisphere is pi L.
+                        if let Some(illuminance) = Self::light_target(d, "illuminance")? {
+                            color *= illuminance / PI;
+                        }
                         EnvironmentFile { color: Some(f32x3(color)), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 }
                     }
                     Some(name) => {
@@ -569,8 +603,19 @@ impl Mapper<'_> {
                             return Err(d.error("give L or filename, not both"));
                         }
                         // pbrt scales an image's RGB to radiance as it does a constant L's.
-                        let scale = self.light_scale(d)?;
+                        let mut scale = self.light_scale(d)?;
                         let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+                        if let Some(illuminance) = Self::light_target(d, "illuminance")? {
+                            let image = crate::image::read_image_from(self.files, &path).map_err(|e| d.error(e))?;
+                            if image.width != image.height {
+                                return Err(d.error(format!("\"{name}\": an equal-area octahedral map must be square, got {} x {}", image.width, image.height)));
+                            }
+                            let own = upper_hemisphere_illuminance(&image);
+                            if !(own > 0.0 && own.is_finite()) {
+                                return Err(d.error(format!("\"{name}\": the map sends no light onto its upper hemisphere (+z), so no scale gives it an illuminance")));
+                            }
+                            scale *= illuminance / own;
+                        }
                         // Where the map's axes point in caustica's world: the light's rotation,
                         // through the mirror.
                         let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a));
@@ -594,4 +639,24 @@ impl Mapper<'_> {
         }
         Ok(())
     }
+}
+
+/// The illuminance the equal-area map `image` sends onto a patch facing its +z, computed as
+/// pbrt-v4 does to scale a map to an `illuminance` (lights.cpp, the image `infinite` light): the
+/// luminance times cos(theta) at each texel centre above the horizon, summed, times 2 pi / texels.
+/// Each texel covers 4 pi / texels of solid angle, so this is half the map's illuminance, and the
+/// map comes out twice as bright as the illuminance asks; following pbrt gives pbrt's image.
+fn upper_hemisphere_illuminance(image: &RgbImage) -> f64 {
+    let (w, h) = (image.width, image.height);
+    let mut sum = 0.0;
+    for y in 0..h {
+        let v = (f64::from(y) + 0.5) / f64::from(h);
+        for x in 0..w {
+            let d = equal_area_map::square_to_sphere(DVec2::new((f64::from(x) + 0.5) / f64::from(w), v));
+            if d.z > 0.0 {
+                sum += spectrum::luminance(DVec3::from(image.get(x, y).map(f64::from))) * d.z;
+            }
+        }
+    }
+    sum * 2.0 * PI / (f64::from(w) * f64::from(h))
 }
