@@ -54,6 +54,12 @@ pub struct Mapper<'a> {
     /// (material, area light) by address, to the caustica material made of them (None: an
     /// `interface` without emission, which is no surface).
     material_names: HashMap<(usize, usize), Option<String>>,
+    /// Materials of area lights given by their `power`, emitting per unit of `scale`: the power
+    /// and whether both sides emit. pbrt-v4 gives each shape (each triangle of a mesh) that
+    /// power, so each area has its own material ([`Mapper::emitter_of_area`]).
+    powered: HashMap<String, (f64, bool)>,
+    /// (powered material, area's bits) to its material of that area.
+    powered_names: HashMap<(String, u64), String>,
     /// Shapes written so far, and an estimate of their bytes (for MAX_SHAPES, MAX_SHAPE_BYTES).
     shapes: usize,
     shape_bytes: usize,
@@ -63,7 +69,7 @@ pub struct Mapper<'a> {
 pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: &mut Notes) -> Result<SceneFile> {
     let camera = CameraFile { position: Array([0.0; 3]), look_at: Array([0.0, 0.0, -1.0]), up: Array([0.0, 1.0, 0.0]), fov: 90.0, aperture: 0.0, focus_distance: None };
     let out = SceneFile::empty(camera, FilmFile::default(), IntegratorFile::default());
-    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
+    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), powered: HashMap::new(), powered_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
     let start = Location { file: Rc::from(scene.display().to_string().as_str()), line: 1 };
     let absent = |directive: &'static str, kind: &str| Directive { directive, kind: kind.to_owned(), at: start.clone(), params: vec![] };
     let film = mapper.film(model.film.as_ref().unwrap_or(&absent("Film", "rgb")))?;
@@ -89,6 +95,10 @@ pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: 
     }
     for (light, transform) in &model.lights {
         mapper.light(light, *transform)?;
+    }
+    // A powered area light's own material only stands for its copies of each area.
+    for name in mapper.powered.keys() {
+        mapper.out.materials.remove(name);
     }
     Ok(mapper.out)
 }
@@ -288,8 +298,16 @@ impl Mapper<'_> {
             }
             material.emission = f32x3(self.light_color(light, "L")? * self.light_scale(light)?);
             material.two_sided = light.boolean("twosided", false)?;
+            let power = Self::light_target(light, "power")?;
             light.check_all_used()?;
             name = format!("{name} + area light at {}", short(&light.at));
+            if let Some(power) = power {
+                let name = unique_name(&self.out.materials, name);
+                self.powered.insert(name.clone(), (power, material.two_sided));
+                self.out.materials.insert(name.clone(), material);
+                self.material_names.insert(key, Some(name.clone()));
+                return Ok(Some(name));
+            }
         }
         let name = unique_name(&self.out.materials, name);
         self.out.materials.insert(name.clone(), material);
@@ -328,7 +346,7 @@ impl Mapper<'_> {
                         Some(n) => (v[1] - v[0]).cross(v[2] - v[0]).dot(n[t[0]] + n[t[1]] + n[t[2]]) < 0.0,
                         None => s.reverse_orientation,
                     };
-                    self.triangle(d, m, v, reversed, &material)?;
+                    self.lone_triangle(d, m, v, reversed, &material)?;
                 }
             }
             "bilinearmesh" => {
@@ -377,8 +395,10 @@ impl Mapper<'_> {
         if sided && s.reverse_orientation != (to_world.determinant() < 0.0) {
             return Err(d.error("a sphere turned inside out (ReverseOrientation or a mirroring transformation) that emits or refracts is not supported"));
         }
-        self.count_shape(d, material)?;
-        self.out.spheres.push(SphereFile { center: f32x3(m.transform_point3(DVec3::ZERO)), radius: (radius * scale) as f32, material: material.to_owned() });
+        // pbrt-v4's Sphere::Area is in the sphere's own space: its transformation's scale is left out.
+        let material = self.emitter_of_area(material, 4.0 * PI * radius * radius);
+        self.count_shape(d, &material)?;
+        self.out.spheres.push(SphereFile { center: f32x3(m.transform_point3(DVec3::ZERO)), radius: (radius * scale) as f32, material });
         Ok(())
     }
 
@@ -443,6 +463,13 @@ impl Mapper<'_> {
         Ok(())
     }
 
+    /// A triangle of its own, emitting (when its area light gives a power) by its own area.
+    fn lone_triangle(&mut self, d: &Directive, m: DMat4, v: [DVec3; 3], reversed: bool, material: &str) -> Result<()> {
+        let w = v.map(|p| m.transform_point3(p));
+        let material = self.emitter_of_area(material, 0.5 * (w[1] - w[0]).cross(w[2] - w[0]).length());
+        self.triangle(d, m, v, reversed, &material)
+    }
+
     /// A bilinear patch (p00, p10, p01, p11), front (p10 - p00) x (p01 - p00): a quad when it
     /// is a parallelogram, else two triangles (exact when it is planar, warned when not).
     fn bilinear_patch(&mut self, d: &Directive, m: DMat4, p: [DVec3; 4], reversed: bool, material: &str) -> Result<()> {
@@ -457,16 +484,47 @@ impl Mapper<'_> {
                 self.warn("degenerate", || format!("{}: {}: patches without area are left out", d.at, d.describe()));
                 return Ok(());
             }
-            self.count_shape(d, material)?;
-            self.out.quads.push(QuadFile { origin: f32x3(m.transform_point3(p00)), edge_u: f32x3(u), edge_v: f32x3(v), material: material.to_owned() });
+            let material = self.emitter_of_area(material, u.cross(v).length());
+            self.count_shape(d, &material)?;
+            self.out.quads.push(QuadFile { origin: f32x3(m.transform_point3(p00)), edge_u: f32x3(u), edge_v: f32x3(v), material });
             return Ok(());
         }
         let normal = u.cross(v);
         if (p11 - p00).dot(normal).abs() > 1e-6 * extent * normal.length() {
+            if self.powered.contains_key(material) {
+                return Err(d.error("an area light given by its power on a patch that is not planar is not supported (its area is pbrt's integral over the curved patch)"));
+            }
             self.warn("bilinear", || format!("{}: {}: patches that are not planar become two triangles each", d.at, d.describe()));
         }
-        self.triangle(d, m, [p00, p10, p11], reversed, material)?;
-        self.triangle(d, m, [p00, p11, p01], reversed, material)
+        // A planar patch covers its quadrilateral, the two triangles' areas together.
+        let w = [p00, p10, p01, p11].map(|p| m.transform_point3(p));
+        let area = 0.5 * ((w[1] - w[0]).cross(w[3] - w[0]).length() + (w[3] - w[0]).cross(w[2] - w[0]).length());
+        let material = self.emitter_of_area(material, area);
+        self.triangle(d, m, [p00, p10, p11], reversed, &material)?;
+        self.triangle(d, m, [p00, p11, p01], reversed, &material)
+    }
+
+    /// The material of a shape of `area` (in caustica's world, which the mirror leaves pbrt's
+    /// render space's size) with `material`: itself, or, when its area light gives a power, a copy
+    /// emitting pbrt-v4's L = power / (pi area), halved when both sides emit
+    /// (DiffuseAreaLight::Create).
+    fn emitter_of_area(&mut self, material: &str, area: f64) -> String {
+        let Some(&(power, two_sided)) = self.powered.get(material) else { return material.to_owned() };
+        if !(area > 0.0 && area.is_finite()) {
+            // Left out as degenerate by the caller.
+            return material.to_owned();
+        }
+        let key = (material.to_owned(), area.to_bits());
+        if let Some(name) = self.powered_names.get(&key) {
+            return name.clone();
+        }
+        let mut emitter = self.out.materials[material].clone();
+        let unit = DVec3::from(emitter.emission.0.map(f64::from));
+        emitter.emission = f32x3(unit * power / (PI * area * if two_sided { 2.0 } else { 1.0 }));
+        let name = unique_name(&self.out.materials, format!("{material}, {power} over area {area}"));
+        self.out.materials.insert(name.clone(), emitter);
+        self.powered_names.insert(key, name.clone());
+        name
     }
 
     /// An emitting PLY mesh, written out triangle by triangle: caustica's mesh files emit from
@@ -485,7 +543,7 @@ impl Mapper<'_> {
                     let n: Vec3 = t.iter().map(|&k| mesh.normals[k as usize]).sum();
                     (b - a).cross(c - a).dot(n.as_dvec3()) < 0.0
                 };
-                self.triangle(d, m, [a, b, c], reversed, material)?;
+                self.lone_triangle(d, m, [a, b, c], reversed, material)?;
             }
         }
         Ok(())
