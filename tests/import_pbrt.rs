@@ -555,14 +555,15 @@ fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them
     // What caustica cannot texture is an error naming the line.
     let refused = |tag: &str, world: &str, needles: &[&str]| {
         let path = write_scene(tag, &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}\n")), ("square.ply", UV_SQUARE_PLY)]);
-        let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).err().expect("refused"));
+        let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).expect_err("refused"));
         for needle in needles {
             assert!(e.contains(needle), "{tag}: '{needle}' missing from: {e}");
         }
     };
     let checks = "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4]";
     refused("tex-sphere", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"sphere\""), &["scene.pbrt:9: Shape \"sphere\"", "texture coordinates"]);
-    refused("tex-triangles", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]"), &["scene.pbrt:9: Shape \"trianglemesh\"", "textured"]);
+    refused("tex-patch", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]"), &["scene.pbrt:9: Shape \"bilinearmesh\"", "textured"]);
+    refused("tex-emitting", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nAreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]"), &["scene.pbrt:10: Shape \"trianglemesh\"", "does not emit"]);
     refused("tex-exr", "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.exr\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"plymesh\" \"string filename\" \"square.ply\"", &["scene.pbrt:7: Texture \"imagemap\"", "a.exr", "PNG and JPEG"]);
     refused("tex-jpeg", "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.jpg\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"plymesh\" \"string filename\" \"square.ply\"", &["scene.pbrt:7:", "encoding \"linear\""]);
     refused("tex-spherical", &format!("{checks} \"string mapping\" \"spherical\"\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"plymesh\" \"string filename\" \"square.ply\""), &["scene.pbrt:7:", "mapping \"spherical\""]);
@@ -668,4 +669,45 @@ fn power_and_illuminance_scale_lights_as_pbrt_v4_does() {
     assert!(e.contains("scene.pbrt:7: LightSource \"infinite\"") && e.contains("no light onto its upper hemisphere"), "{e}");
     let e = error("power-curved", &format!("{OPTIONS}WorldBegin\nAreaLightSource \"diffuse\" \"float power\" 1\nShape \"bilinearmesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0  1 1 1]\n"));
     assert!(e.contains("scene.pbrt:8: Shape \"bilinearmesh\"") && e.contains("not planar"), "{e}");
+}
+
+#[test]
+fn a_textured_trianglemesh_keeps_its_texture_coordinates_and_convert_writes_it_as_ply() {
+    let world = "Texture \"checks\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4] \"rgb tex2\" [0.2 0.2 0.2] \"float uscale\" 4\n\
+                 Material \"diffuse\" \"texture reflectance\" \"checks\"\n\
+                 Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0.1 0.1  0.3 0.1  0.1 0.3]\n\
+                 Texture \"wood\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.png\"\n\
+                 Material \"diffuse\" \"texture reflectance\" \"wood\"\n\
+                 Shape \"trianglemesh\" \"point3 P\" [0 0 1  1 0 1  0 1 1]\n\
+                 Material \"diffuse\"\n\
+                 Shape \"trianglemesh\" \"point3 P\" [0 0 2  1 0 2  0 1 2] \"float uv\" [0 0 1 0 1 1]\n";
+    let path = write_scene("textured-trianglemesh", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}"))]);
+    caustica::image::png::write(&path.with_file_name("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default()).unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!((s.meshes.len(), s.shapes.len()), (2, 1), "the textured meshes are meshes, the untextured one a triangle");
+    // The mirror turns the winding, which the import turns back: corners 0, 2, 1, at the world
+    // points pbrt has mirrored in x.
+    let positions: Vec<Vec3> = s.meshes[0].positions.clone();
+    assert_eq!(positions, vec![Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)]);
+    assert_eq!(s.instances.iter().map(|i| i.transform).collect::<Vec<_>>(), vec![glam::Mat4::IDENTITY; 2]);
+    // pbrt's checkerboard: tex1 where floor(4 u) + floor(v) is even (u = 0.1), tex2 at u = 0.3.
+    let checker = &s.textures[s.materials[s.meshes[0].triangle_materials[0] as usize].albedo_texture.unwrap() as usize];
+    let texel = |uv: glam::Vec2| checker.texels[(uv.y.rem_euclid(1.0) * checker.height as f32) as usize * checker.width as usize + (uv.x.rem_euclid(1.0) * checker.width as f32) as usize];
+    assert_eq!(s.meshes[0].uvs.iter().map(|&uv| texel(uv)[0]).collect::<Vec<_>>(), vec![102, 102, 51]);
+    // Without uv, pbrt's (0, 0), (1, 0), (1, 1) at the corners (here in the order 0, 2, 1), v
+    // turned down for caustica.
+    let uvs: Vec<(f32, f32)> = s.meshes[1].uvs.iter().map(|uv| (uv.x, uv.y)).collect();
+    assert_eq!(uvs, vec![(0.0, 1.0), (1.0, 0.0), (1.0, 1.0)]);
+
+    // convert writes each as a PLY beside the TOML, which loads to the same meshes and textures.
+    let out = temp_dir("textured-trianglemesh-out");
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&out).unwrap();
+    assert!(toml.contains("scene-mesh-0.ply") && toml.contains("scene-mesh-1.ply") && out.join("scene-mesh-1.ply").is_file(), "{toml}");
+    let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    assert_eq!(t.textures, s.textures);
+    let meshes = |s: &Scene| s.meshes.iter().map(|m| format!("{:?} {:?} {:?} {:?}", m.positions, m.uvs, m.triangles, s.materials[m.triangle_materials[0] as usize].albedo_texture)).collect::<Vec<_>>();
+    assert_eq!(meshes(&t), meshes(&s));
+
+    let e = error("bad-uv", &format!("{OPTIONS}WorldBegin\nTexture \"c\" \"spectrum\" \"checkerboard\"\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0 0 1 0]\n"));
+    assert!(e.contains("scene.pbrt:9: 'point2 uv'") && e.contains("needs a point2 a vertex (6 numbers)"), "{e}");
 }

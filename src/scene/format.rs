@@ -86,13 +86,28 @@ pub struct SceneFile {
     /// Lights without a surface: point, spot and directional (radiometric units).
     #[serde(default)]
     pub lights: Vec<LightFile>,
+    /// Meshes an importer found written in its scene and keeps as meshes (they need texture
+    /// coordinates, which `[[triangles]]` lack). No key of the TOML format: `caustica convert`
+    /// writes each as a PLY file and lists it in `[[meshes]]`.
+    #[serde(skip)]
+    pub inline_meshes: Vec<InlineMesh>,
+}
+
+/// A mesh written in an imported scene: the ASCII PLY text of its world-space triangles, read as
+/// the PLY file `convert` writes of it would be, and its material.
+#[derive(Debug, Clone)]
+pub struct InlineMesh {
+    /// Where it was written (`scene.pbrt:12`), which names it in messages.
+    pub name: String,
+    pub ply: String,
+    pub material: String,
 }
 
 impl SceneFile {
     /// A scene with this camera, film and integrator and nothing in it yet: what the importers
     /// fill.
     pub fn empty(camera: CameraFile, film: FilmFile, integrator: IntegratorFile) -> Self {
-        Self { camera, film, integrator, materials: Default::default(), spheres: vec![], quads: vec![], triangles: vec![], meshes: vec![], environment: None, lights: vec![] }
+        Self { camera, film, integrator, materials: Default::default(), spheres: vec![], quads: vec![], triangles: vec![], meshes: vec![], environment: None, lights: vec![], inline_meshes: vec![] }
     }
 }
 

@@ -2,6 +2,7 @@
 //! mesh files (OBJ + MTL, PLY, glTF) into the scene's materials, meshes and textures.
 
 use super::asset::{self, Asset, AssetMaterial};
+use super::format::InlineMesh;
 use super::{Light, Material, MetallicRoughness, Microfacet, Scene};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Context as _, Result};
@@ -83,8 +84,24 @@ impl<'a> MeshImporter<'a> {
     /// `.serialized`; `asset::load_asset_part`).
     pub fn place_part(&mut self, scene: &mut Scene, path: &Path, shape_index: Option<u32>, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
         let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), shape_index, material);
+        let files = self.files;
+        self.place_loaded(scene, key, path, || Ok(asset::load_asset_part(files, path, shape_index)?), material, transform)
+    }
+
+    /// Places a mesh written in the scene (an importer's, as PLY text: [`InlineMesh`]) as
+    /// [`MeshImporter::place`] places a PLY file of that text.
+    pub fn place_inline(&mut self, scene: &mut Scene, mesh: &InlineMesh, material: u32) -> Result<()> {
+        let name = Path::new(&mesh.name);
+        let key = (name.to_path_buf(), None, Some(material));
+        self.place_loaded(scene, key, name, || Ok(asset::load_ply_bytes(mesh.ply.as_bytes(), name)?), Some(material), Mat4::IDENTITY)?;
+        Ok(())
+    }
+
+    /// Places the meshes `load` gives (loaded once per `key`) as [`MeshImporter::place_part`]
+    /// describes; `path` names them in messages.
+    fn place_loaded(&mut self, scene: &mut Scene, key: (PathBuf, Option<u32>, Option<u32>), path: &Path, load: impl FnOnce() -> Result<Asset>, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
         if !self.loaded.contains_key(&key) {
-            let mut asset = asset::load_asset_part(self.files, path, shape_index)?;
+            let mut asset = load()?;
             if asset.dropped_triangles > 0 {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }

@@ -446,7 +446,12 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
     };
     let lights = light::lights_from(&file.lights)?;
     let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures, environment, lights };
-    place_meshes(&mut scene, &file.meshes, &material, base, MeshImporter::new(files).with_uv_maps(uv_maps))?;
+    let mut importer = MeshImporter::new(files).with_uv_maps(uv_maps);
+    place_meshes(&mut scene, &file.meshes, &material, base, &mut importer)?;
+    for m in &file.inline_meshes {
+        let index = material(format!("the mesh written at {}", m.name), &m.material)?;
+        importer.place_inline(&mut scene, m, index)?;
+    }
     Ok(scene)
 }
 
@@ -613,7 +618,7 @@ fn shapes_from(file: &SceneFile, material: &MaterialLookup) -> Result<Vec<Shape>
 }
 
 /// Loads every `[[meshes]]` file and places it once, or at each of its instances.
-fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, mut importer: MeshImporter) -> Result<()> {
+fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, importer: &mut MeshImporter) -> Result<()> {
     for (k, m) in meshes.iter().enumerate() {
         let key = format!("meshes[{k}]");
         let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;

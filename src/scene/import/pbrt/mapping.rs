@@ -12,7 +12,7 @@
 //! has them.
 
 use crate::scene::format::{
-    Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
+    Array, CameraFile, DirectionalLightFile, InlineMesh, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
     SceneFile, SphereFile, SpotLightFile, TriangleFile,
 };
 use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
@@ -35,11 +35,14 @@ use std::rc::Rc;
 const MAX_SHAPES: usize = 4_000_000;
 const MAX_SHAPE_BYTES: usize = 1 << 30;
 
-/// A mesh written in the scene: vertices, polygon corners (indices into them) and normals.
+/// A mesh written in the scene: vertices, polygon corners (indices into them), normals and
+/// texture coordinates (pbrt's, v up).
 struct MeshArrays {
     positions: Vec<DVec3>,
     indices: Vec<usize>,
     normals: Option<Vec<DVec3>>,
+    /// Read only where a texture needs them (an error then).
+    uvs: Result<Option<Vec<[f64; 2]>>>,
 }
 
 pub struct Mapper<'a> {
@@ -330,16 +333,17 @@ impl Mapper<'_> {
                 return Err(alpha.error("cut-outs (alpha other than 1) are not supported"));
             }
         }
-        // Textures need texture coordinates, which only mesh files bring to caustica (its
-        // spheres, quads and triangles have none); an emitting mesh is written as triangles.
+        // Textures need texture coordinates, which caustica's meshes have and its spheres, quads
+        // and triangles have not; an emitting mesh is written as triangles.
         let textured = self.out.materials[&material].albedo_texture.is_some();
-        if textured && (d.kind != "plymesh" || self.out.materials[&material].emission != Array([0.0; 3])) {
-            return Err(d.error("a textured material is supported on a plymesh that does not emit only (caustica's spheres, quads and triangles have no texture coordinates)"));
+        if textured && (!matches!(d.kind.as_str(), "plymesh" | "trianglemesh") || self.out.materials[&material].emission != Array([0.0; 3])) {
+            return Err(d.error("a textured material is supported on a plymesh or trianglemesh that does not emit only (caustica's spheres, quads and triangles have no texture coordinates)"));
         }
         match d.kind.as_str() {
             "sphere" => self.sphere(s, to_world, m, &material)?,
+            "trianglemesh" if textured => self.textured_triangle_mesh(s, m, &material)?,
             "trianglemesh" => {
-                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 3)?;
+                let MeshArrays { positions, indices, normals, .. } = self.mesh_arrays(d, 3)?;
                 for t in indices.chunks_exact(3) {
                     let v = [positions[t[0]], positions[t[1]], positions[t[2]]];
                     let reversed = match &normals {
@@ -350,7 +354,7 @@ impl Mapper<'_> {
                 }
             }
             "bilinearmesh" => {
-                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 4)?;
+                let MeshArrays { positions, indices, normals, .. } = self.mesh_arrays(d, 4)?;
                 for q in indices.chunks_exact(4) {
                     let [p00, p10, p01, p11] = [0, 1, 2, 3].map(|k| positions[q[k]]);
                     let reversed = match &normals {
@@ -402,6 +406,48 @@ impl Mapper<'_> {
         Ok(())
     }
 
+    /// A `trianglemesh` with a textured material: a mesh (its PLY text, `SceneFile::inline_meshes`)
+    /// rather than triangles, to keep its texture coordinates, `uv` or pbrt's default (0, 0),
+    /// (1, 0), (1, 1) at each triangle's corners. Each triangle gets corners of its own, fronts as
+    /// [`Mapper::triangle`] gives them.
+    fn textured_triangle_mesh(&mut self, s: &ShapeUse, m: DMat4, material: &str) -> Result<()> {
+        use std::fmt::Write as _;
+        let d = &*s.shape;
+        let MeshArrays { positions, indices, normals, uvs } = self.mesh_arrays(d, 3)?;
+        let uvs = uvs?;
+        let mut vertices = String::new();
+        let mut faces = String::new();
+        for (k, t) in indices.chunks_exact(3).enumerate() {
+            let v = [positions[t[0]], positions[t[1]], positions[t[2]]];
+            let reversed = match &normals {
+                Some(n) => (v[1] - v[0]).cross(v[2] - v[0]).dot(n[t[0]] + n[t[1]] + n[t[2]]) < 0.0,
+                None => s.reverse_orientation,
+            };
+            let uv = match &uvs {
+                Some(uv) => [uv[t[0]], uv[t[1]], uv[t[2]]],
+                None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+            };
+            let mut corners = [0, 1, 2];
+            if reversed != (m.determinant() < 0.0) {
+                corners.swap(1, 2);
+            }
+            self.count_shape(d, material)?;
+            for c in corners {
+                let p = m.transform_point3(v[c]).as_vec3();
+                let [u, w] = uv[c].map(|x| x as f32);
+                writeln!(vertices, "{} {} {} {u} {w}", p.x, p.y, p.z).expect("writing to a String");
+            }
+            writeln!(faces, "3 {} {} {}", 3 * k, 3 * k + 1, 3 * k + 2).expect("writing to a String");
+        }
+        let count = indices.len() / 3;
+        let ply = format!(
+            "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face {count}\nproperty list uchar int vertex_indices\nend_header\n{vertices}{faces}",
+            3 * count
+        );
+        self.out.inline_meshes.push(InlineMesh { name: format!("{}: {} (mesh {})", d.at, d.describe(), self.out.inline_meshes.len()), ply, material: material.to_owned() });
+        Ok(())
+    }
+
     /// A mesh's vertices (`P`), its polygons of `corners` vertices (`indices`, which may be left
     /// out for a single polygon) and its normals (`N`); texture coordinates, tangents and face
     /// indices, which only textures use, are read and left.
@@ -430,10 +476,16 @@ impl Mapper<'_> {
             }
             self.warn("normals", || format!("{}: {}: the vertex normals of meshes written in the scene are not kept (caustica's own triangles are flat); they decide the front side only", d.at, d.describe()));
         }
-        for name in ["uv", "S", "faceIndices"] {
+        let uvs = match d.param("uv") {
+            None => Ok(None),
+            Some(p) if p.ty == "point2" && p.numbers().len() == 2 * positions.len() => Ok(Some(p.numbers().chunks_exact(2).map(|c| [c[0], c[1]]).collect())),
+            Some(p) => Err(p.error(format!("{}: needs a point2 a vertex ({} numbers)", d.describe(), 2 * positions.len()))),
+        };
+        // Tangents and face indices, which only textures' filtering and Ptex use.
+        for name in ["S", "faceIndices"] {
             d.param(name);
         }
-        Ok(MeshArrays { positions, indices, normals })
+        Ok(MeshArrays { positions, indices, normals, uvs })
     }
 
     /// Counts one more shape entry of `material` against the caps.
