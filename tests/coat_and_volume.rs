@@ -167,6 +167,30 @@ fn a_smooth_clear_coat_over_black_reflects_factor_times_fresnel() {
     assert_channel_means(&image, [0.6 * fresnel_dielectric(0.5, 1.5); 3], 0.05, "clear coat 0.6 over black, at 60 degrees");
 }
 
+/// The scene file's `clearcoat` and `clearcoat_roughness` keys give the material glTF's clear coat
+/// gives (the same `Clearcoat`), and the kernel renders it: the black base under a key-made coat of
+/// 0.6 gives the closed form of the test above, bit for bit the image of the coat set directly.
+#[test]
+fn the_clearcoat_keys_are_the_gltf_clear_coat() {
+    let keyed = parse(&view_up([1.0; 3], 48, 64, &format!("[materials.m]\nalbedo = [0.0, 0.0, 0.0]\nclearcoat = 0.6\n{FACING_QUAD}")));
+    assert_eq!(keyed.materials[0].clearcoat, smooth_coat(0.6));
+    let rough = parse(&view_up([1.0; 3], 8, 1, &format!("[materials.m]\nclearcoat = 0.25\nclearcoat_roughness = 0.5\n{FACING_QUAD}")));
+    assert_eq!(rough.materials[0].clearcoat, Some(Clearcoat { factor: 0.25, roughness: 0.5, texture: None, roughness_texture: None }));
+    let (_lock, ctx) = gpu();
+    let image = render(&ctx, &keyed, 7);
+    assert_channel_means(&image, [0.6 * F0; 3], 0.05, "clear coat 0.6 from the scene file's key over black, head-on");
+    assert!(image.pixels == render(&ctx, &coated_quad(0.0, smooth_coat(0.6), 48, 64), 7).pixels, "the key and the coat set directly render alike");
+    for (keys, needle) in [
+        ("clearcoat = 1.5", "materials.m.clearcoat must be in [0, 1], got 1.5"),
+        ("clearcoat = 0.5\nclearcoat_roughness = -0.1", "materials.m.clearcoat_roughness must be in [0, 1], got -0.1"),
+        ("clearcoat_roughness = 0.5", "materials.m.clearcoat_roughness needs materials.m.clearcoat"),
+    ] {
+        let text = view_up([1.0; 3], 8, 1, &format!("[materials.m]\n{keys}\n{FACING_QUAD}"));
+        let e = format!("{:#}", Scene::parse(&text, "coat.toml", Path::new(".")).expect_err("refused"));
+        assert!(e.contains(needle), "{keys}: {e}");
+    }
+}
+
 /// Over a white diffuse base the same coat conserves energy exactly: every path returns the white
 /// sky, whether the coat (weight factor x F) or the base (the rest, 1 - factor x F) takes it, so
 /// every pixel is 1. A base weighted 1 instead (a coat that only adds) gives 1.024; a base whose

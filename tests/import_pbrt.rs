@@ -220,9 +220,9 @@ fn materials_map_with_named_spectra_roughness_and_constant_textures() {
     let warnings = imported("warn", &format!("{OPTIONS}WorldBegin\nMaterial \"dielectric\" \"spectrum eta\" \"glass-F11\"\nShape \"sphere\"\nMaterial \"coateddiffuse\"\nShape \"sphere\"\n")).unwrap().warnings;
     assert!(warnings.iter().any(|w| w.contains("scene.pbrt:7:") && w.contains("587.6 nm")), "{warnings:?}");
     assert!(warnings.iter().any(|w| w.contains("coateddiffuse")), "{warnings:?}");
-    // What caustica's constant materials cannot hold is an error naming the line.
-    let e = error("imagemap", &format!("{OPTIONS}WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\"\n"));
-    assert!(e.contains("scene.pbrt:7: Texture \"t\" \"imagemap\""), "{e}");
+    // An image where caustica's materials take a constant is an error naming the line.
+    let e = error("imagemap", &format!("{OPTIONS}WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\"\nMaterial \"conductor\" \"texture reflectance\" \"t\"\nShape \"sphere\"\n"));
+    assert!(e.contains("scene.pbrt:8: 'texture reflectance': the texture varies over the surface"), "{e}");
     let s = scene("thin", "Material \"thindielectric\" \"float eta\" 1.33\nShape \"sphere\"");
     assert!(s.materials[0].thin && s.materials[0].transparency == 1.0 && s.materials[0].ior == 1.33, "{:?}", s.materials[0]);
 }
@@ -290,7 +290,7 @@ fn lights_map_to_caustica_lights_in_the_mirrored_world() {
     let s = scene(
         "lights",
         "LightSource \"point\" \"point3 from\" [1 2 3] \"rgb I\" [1 2 3] \"float scale\" 2\n\
-         LightSource \"spot\" \"point3 from\" [1 0 0] \"point3 to\" [1 -1 0] \"float coneangle\" 30 \"float conedelta\" 10\n\
+         LightSource \"spot\" \"point3 from\" [1 0 0] \"point3 to\" [1 -1 0] \"float coneangle\" 30 \"float conedeltaangle\" 10\n\
          LightSource \"distant\" \"point3 from\" [1 1 0] \"point3 to\" [0 0 0] \"blackbody L\" [6500]\n\
          LightSource \"infinite\" \"rgb L\" [0.1 0.2 0.3]\n",
     );
@@ -497,4 +497,217 @@ fn scenes_cornell_pbrt_is_the_cornell_box_of_scenes_cornell_toml() {
             assert_eq!(a.albedo, b.albedo, "{}", b.name);
         }
     }
+}
+
+/// A PLY square of four vertices with pbrt texture coordinates (0.1, 0.1), (0.3, 0.1), (0.1, 0.3)
+/// and (0.3, 0.3).
+const UV_SQUARE_PLY: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0.1 0.1\n1 0 0 0.3 0.1\n0 1 0 0.1 0.3\n1 1 0 0.3 0.3\n3 0 1 3\n3 0 3 2\n";
+
+#[test]
+fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them() {
+    let world = "Texture \"wood\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.png\" \"float uscale\" 2 \"float vdelta\" 0.25 \"float scale\" 0.5\n\
+                 Texture \"half\" \"spectrum\" \"scale\" \"texture tex\" \"wood\" \"float scale\" 0.5\n\
+                 Material \"diffuse\" \"texture reflectance\" \"half\"\n\
+                 Shape \"plymesh\" \"string filename\" \"square.ply\"\n\
+                 Texture \"checks\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4] \"rgb tex2\" [0.2 0.2 0.2] \"float uscale\" 4\n\
+                 Material \"coateddiffuse\" \"texture reflectance\" \"checks\"\n\
+                 Shape \"plymesh\" \"string filename\" \"square.ply\"\n";
+    let path = write_scene("textures", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}")), ("square.ply", UV_SQUARE_PLY)]);
+    let dir = path.parent().unwrap();
+    caustica::image::png::write(&dir.join("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default()).unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    let material = |mesh: usize| &s.materials[s.meshes[mesh].triangle_materials[0] as usize];
+    let (wood, checks) = (material(0), material(1));
+    assert_eq!((wood.albedo, checks.albedo), (Vec3::splat(0.25), Vec3::ONE), "the image's scale and the scale texture's multiply it");
+    assert!(checks.coat);
+    assert_eq!(&s.textures[wood.albedo_texture.unwrap() as usize].name, "wood.png");
+    // pbrt reads the image at (s, 1 - t) = (2 u, 1 - (v + 0.25)) from its top-left corner.
+    let uv = |mesh: usize| -> Vec<(f32, f32)> { s.meshes[mesh].uvs.iter().map(|uv| (uv.x, uv.y)).collect() };
+    let expected = [(0.1f32, 0.1f32), (0.3, 0.1), (0.1, 0.3), (0.3, 0.3)].map(|(u, v)| (2.0 * u, 1.0 - (v + 0.25)));
+    assert!(uv(0).iter().zip(expected).all(|(a, b)| (a.0 - b.0).abs() < 1e-6 && (a.1 - b.1).abs() < 1e-6), "{:?} against {expected:?}", uv(0));
+    // pbrt's checkerboard: tex1 where floor(4 u) + floor(v) is even, so at the vertices of u = 0.1
+    // (4 u = 0.4), tex2 at those of u = 0.3 (4 u = 1.2).
+    let checker = &s.textures[checks.albedo_texture.unwrap() as usize];
+    let texel = |(u, v): (f32, f32)| {
+        let (x, y) = (u.rem_euclid(1.0) * checker.width as f32, v.rem_euclid(1.0) * checker.height as f32);
+        checker.texels[y as usize * checker.width as usize + x as usize]
+    };
+    let colours: Vec<_> = uv(1).into_iter().map(texel).collect();
+    assert_eq!(colours, vec![[102, 102, 102, 255], [51, 51, 51, 255], [102, 102, 102, 255], [51, 51, 51, 255]]);
+
+    // The hand-written TOML twin: the same materials, textures and mapped coordinates (the
+    // placement, which the mirror decides, is another test's).
+    let twin = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n\
+                [materials.wood]\nalbedo = [0.25, 0.25, 0.25]\nalbedo_texture = { file = \"wood.png\", to_uv = [[2, 0, 0], [0, 1, -0.25]] }\n\
+                [materials.checks]\nalbedo = [1, 1, 1]\ncoat = true\nalbedo_texture = { checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]], to_uv = [[2, 0, 0], [0, -0.5, 0.5]] }\n\
+                [[meshes]]\nfile = \"square.ply\"\nmaterial = \"wood\"\n\
+                [[meshes]]\nfile = \"square.ply\"\nmaterial = \"checks\"\n";
+    let t = Scene::parse(twin, "twin.toml", dir).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(t.textures, s.textures);
+    assert_eq!(format!("{:?}", t.meshes.iter().map(|m| &m.uvs).collect::<Vec<_>>()), format!("{:?}", s.meshes.iter().map(|m| &m.uvs).collect::<Vec<_>>()));
+    let unnamed = |s: &Scene, mesh: usize| {
+        let mut m = s.materials[s.meshes[mesh].triangle_materials[0] as usize].clone();
+        m.name = String::new();
+        format!("{m:?}")
+    };
+    assert_eq!((unnamed(&t, 0), unnamed(&t, 1)), (unnamed(&s, 0), unnamed(&s, 1)));
+
+    // What caustica cannot texture is an error naming the line.
+    let refused = |tag: &str, world: &str, needles: &[&str]| {
+        let path = write_scene(tag, &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}\n")), ("square.ply", UV_SQUARE_PLY)]);
+        let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).expect_err("refused"));
+        for needle in needles {
+            assert!(e.contains(needle), "{tag}: '{needle}' missing from: {e}");
+        }
+    };
+    let checks = "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4]";
+    refused("tex-sphere", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"sphere\""), &["scene.pbrt:9: Shape \"sphere\"", "texture coordinates"]);
+    refused("tex-patch", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]"), &["scene.pbrt:9: Shape \"bilinearmesh\"", "textured"]);
+    refused("tex-emitting", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nAreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]"), &["scene.pbrt:10: Shape \"trianglemesh\"", "does not emit"]);
+    refused("tex-exr", "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.exr\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"plymesh\" \"string filename\" \"square.ply\"", &["scene.pbrt:7: Texture \"imagemap\"", "a.exr", "PNG and JPEG"]);
+    refused("tex-jpeg", "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.jpg\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"plymesh\" \"string filename\" \"square.ply\"", &["scene.pbrt:7:", "encoding \"linear\""]);
+    refused("tex-spherical", &format!("{checks} \"string mapping\" \"spherical\"\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"plymesh\" \"string filename\" \"square.ply\""), &["scene.pbrt:7:", "mapping \"spherical\""]);
+    refused("tex-3d", &format!("{checks} \"integer dimension\" 3\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"plymesh\" \"string filename\" \"square.ply\""), &["scene.pbrt:7:", "dimension 2"]);
+    refused("tex-bright", &format!("{checks} \"rgb tex2\" [2 2 2]\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"plymesh\" \"string filename\" \"square.ply\""), &["scene.pbrt:8:", "energy conservation"]);
+    refused("tex-roughness", "Texture \"r\" \"float\" \"checkerboard\"\nMaterial \"conductor\" \"texture roughness\" \"r\"\nShape \"sphere\"", &["scene.pbrt:7: Texture \"r\" \"checkerboard\"", "float"]);
+    refused("tex-conductor", &format!("{checks}\nMaterial \"conductor\" \"texture reflectance\" \"c\"\nShape \"sphere\""), &["scene.pbrt:8:", "varies over the surface"]);
+}
+
+#[test]
+fn coatedconductor_is_causticas_clear_coat_over_the_conductor() {
+    let s = scene(
+        "coatedconductor",
+        "Material \"coatedconductor\" \"float interface.roughness\" 0.01 \"spectrum conductor.eta\" \"metal-Au-eta\" \"spectrum conductor.k\" \"metal-Au-k\" \"float conductor.roughness\" 0.0625\nShape \"sphere\"\n\
+         Material \"coatedconductor\" \"rgb reflectance\" [0.5 0.5 0.5]\nShape \"sphere\"\n",
+    );
+    let m = |k: usize| s.materials[s.shapes[k].material() as usize].clone();
+    let gold = caustica::scene::metal("gold").unwrap();
+    assert_eq!(m(0).conductor, Conductor::Complex { eta: gold.0, k: gold.1 });
+    // alpha = sqrt(roughness), caustica's roughness sqrt(alpha): the coat's 0.01 -> 0.1^0.5, the
+    // conductor's 0.0625 -> 0.5.
+    let coat = m(0).clearcoat.expect("a clear coat");
+    assert!((coat.factor, coat.texture, coat.roughness_texture) == (1.0, None, None) && (coat.roughness - 0.1f32.sqrt()).abs() < 1e-6, "{coat:?}");
+    assert!((m(0).roughness - 0.5).abs() < 1e-6 && m(0).reflectivity == 1.0);
+    let Conductor::Complex { eta, k } = m(1).conductor else { panic!("a complex conductor") };
+    assert!(close(eta, Vec3::ONE) && ((k.x * k.x) / (4.0 + k.x * k.x) - 0.5).abs() < 1e-5);
+    assert_eq!(m(1).clearcoat.map(|c| (c.factor, c.roughness)), Some((1.0, 0.0)), "a smooth coat by default");
+    let warnings = imported("coat-warn", &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"float interface.eta\" 1.33\nShape \"sphere\"\n")).unwrap().warnings;
+    assert!(warnings.iter().any(|w| w.contains("scene.pbrt:7:") && w.contains("coatedconductor becomes caustica's clear coat")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.contains("interface.eta 1.33 becomes 1.5")), "{warnings:?}");
+    // The TOML twin: the same material from the scene file's clearcoat keys.
+    let twin = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.m]\nmetal = \"gold\"\nroughness = 0.5\nclearcoat = 1.0\nclearcoat_roughness = 0.31622776\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n";
+    let mut t = Scene::parse(twin, "twin.toml", Path::new(".")).unwrap().materials[0].clone();
+    t.name = m(0).name.clone();
+    assert_eq!(format!("{t:?}"), format!("{:?}", m(0)));
+    let e = error("coat-albedo", &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"rgb albedo\" [0.5 0.5 0.5]\nShape \"sphere\"\n"));
+    assert!(e.contains("scene.pbrt:7: Material \"coatedconductor\": a scattering coat"), "{e}");
+    let e = error("coat-both", &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"rgb reflectance\" [0.5 0.5 0.5] \"rgb conductor.eta\" [1 1 1]\nShape \"sphere\"\n"));
+    assert!(e.contains("scene.pbrt:7:") && e.contains("reflectance or conductor.eta and conductor.k"), "{e}");
+}
+
+#[test]
+fn power_and_illuminance_scale_lights_as_pbrt_v4_does() {
+    use std::f32::consts::PI;
+    let s = scene(
+        "power",
+        "LightSource \"point\" \"rgb I\" [0.5 1 1] \"float scale\" 2 \"float power\" 100\n\
+         LightSource \"spot\" \"float coneangle\" 60 \"float conedeltaangle\" 60 \"float power\" 10\n\
+         LightSource \"distant\" \"float illuminance\" 3\n\
+         LightSource \"infinite\" \"rgb L\" [1 0.5 0.5] \"float illuminance\" 2\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"float power\" 8 \"bool twosided\" true\n\
+         Shape \"bilinearmesh\" \"point3 P\" [0 0 0  2 0 0  0 1 0  2 1 0]\nAttributeEnd\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 0.5 0.5] \"float power\" 6\n\
+         Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0  3 0 0] \"integer indices\" [0 1 2  1 3 2]\n\
+         Scale 2 2 2\nShape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n",
+    );
+    // pbrt scales the spectrum at unit luminance (the RGB as given) by power / k_e, whatever
+    // the RGB's own brightness.
+    match s.lights[0] {
+        Light::Point { intensity, .. } => assert!(close(intensity, Vec3::new(0.5, 1.0, 1.0) * 2.0 * 100.0 / (4.0 * PI)), "{intensity}"),
+        ref other => panic!("{other:?}"),
+    }
+    // coneangle = conedeltaangle = 60: the falloff starts at the axis, k_e = 2 pi (1 - cos 60) / 2.
+    match s.lights[1] {
+        Light::Spot { intensity, falloff_start, .. } => assert!(close(intensity, Vec3::splat(10.0 / (PI * 0.5))) && falloff_start == 0.0, "{intensity}"),
+        ref other => panic!("{other:?}"),
+    }
+    match s.lights[2] {
+        Light::Directional { irradiance, .. } => assert!(close(irradiance, Vec3::splat(3.0)), "{irradiance}"),
+        ref other => panic!("{other:?}"),
+    }
+    assert!(matches!(s.environment, Environment::Constant(c) if close(c, Vec3::new(1.0, 0.5, 0.5) * 2.0 / PI)), "{:?}", s.environment);
+    // Each shape (each triangle of a mesh) emits the whole power: L = power / (pi area), halved
+    // on two sides; a sphere's area is pbrt's, without its transformation's scale.
+    let emission = |k: usize| s.materials[s.shapes[k].material() as usize].emission;
+    let Shape::Sphere { radius, .. } = s.shapes[0] else { panic!("the sphere first: {:?}", s.shapes[0]) };
+    assert_eq!(radius, 1.0);
+    assert!(close(emission(0), Vec3::new(1.0, 0.5, 0.5) * 6.0 / (PI * PI)), "sphere: {}", emission(0));
+    assert!(close(emission(1), Vec3::splat(8.0 / (PI * 2.0 * 2.0))), "two-sided quad: {}", emission(1));
+    assert!(close(emission(2), Vec3::new(1.0, 0.5, 0.5) * 6.0 / (PI * 0.5)), "triangle of area 1/2: {}", emission(2));
+    assert!(close(emission(3), Vec3::new(1.0, 0.5, 0.5) * 6.0 / (PI * 1.0)), "triangle of area 1: {}", emission(3));
+    assert_eq!(s.materials.len(), 4, "one material per area, none left over: {:?}", s.materials.iter().map(|m| &m.name).collect::<Vec<_>>());
+
+    // An equal-area map of constant radiance c: pbrt's own illuminance is c pi / 2 (its 2 pi /
+    // texels; the true one is c pi), so the map is scaled by E / (c pi / 2).
+    let mut sky = caustica::image::RgbImage::new(64, 64);
+    for y in 0..64 {
+        for x in 0..64 {
+            sky.set(x, y, [0.5; 3]);
+        }
+    }
+    let dir = temp_dir("pbrt-illuminance");
+    caustica::image::pfm::write(&dir.join("sky.pfm"), &sky).unwrap();
+    let path = dir.join("scene.pbrt");
+    std::fs::write(&path, format!("{OPTIONS}WorldBegin\nLightSource \"infinite\" \"string filename\" \"sky.pfm\" \"float scale\" 3 \"float illuminance\" 10\n")).unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
+    let Environment::Map(map) = &s.environment else { panic!("an environment map") };
+    let expected = 3.0 * 10.0 / (0.5 * PI / 2.0);
+    assert!((map.intensity / expected - 1.0).abs() < 5e-3, "{} against {expected}", map.intensity);
+    // A map dark above its horizon cannot be scaled to an illuminance.
+    caustica::image::pfm::write(&dir.join("sky.pfm"), &caustica::image::RgbImage::new(8, 8)).unwrap();
+    let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).err().unwrap());
+    assert!(e.contains("scene.pbrt:7: LightSource \"infinite\"") && e.contains("no light onto its upper hemisphere"), "{e}");
+    let e = error("power-curved", &format!("{OPTIONS}WorldBegin\nAreaLightSource \"diffuse\" \"float power\" 1\nShape \"bilinearmesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0  1 1 1]\n"));
+    assert!(e.contains("scene.pbrt:8: Shape \"bilinearmesh\"") && e.contains("not planar"), "{e}");
+}
+
+#[test]
+fn a_textured_trianglemesh_keeps_its_texture_coordinates_and_convert_writes_it_as_ply() {
+    let world = "Texture \"checks\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4] \"rgb tex2\" [0.2 0.2 0.2] \"float uscale\" 4\n\
+                 Material \"diffuse\" \"texture reflectance\" \"checks\"\n\
+                 Shape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0.1 0.1  0.3 0.1  0.1 0.3]\n\
+                 Texture \"wood\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.png\"\n\
+                 Material \"diffuse\" \"texture reflectance\" \"wood\"\n\
+                 Shape \"trianglemesh\" \"point3 P\" [0 0 1  1 0 1  0 1 1]\n\
+                 Material \"diffuse\"\n\
+                 Shape \"trianglemesh\" \"point3 P\" [0 0 2  1 0 2  0 1 2] \"float uv\" [0 0 1 0 1 1]\n";
+    let path = write_scene("textured-trianglemesh", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}"))]);
+    caustica::image::png::write(&path.with_file_name("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default()).unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!((s.meshes.len(), s.shapes.len()), (2, 1), "the textured meshes are meshes, the untextured one a triangle");
+    // The mirror turns the winding, which the import turns back: corners 0, 2, 1, at the world
+    // points pbrt has mirrored in x.
+    let positions: Vec<Vec3> = s.meshes[0].positions.clone();
+    assert_eq!(positions, vec![Vec3::ZERO, Vec3::new(0.0, 1.0, 0.0), Vec3::new(-1.0, 0.0, 0.0)]);
+    assert_eq!(s.instances.iter().map(|i| i.transform).collect::<Vec<_>>(), vec![glam::Mat4::IDENTITY; 2]);
+    // pbrt's checkerboard: tex1 where floor(4 u) + floor(v) is even (u = 0.1), tex2 at u = 0.3.
+    let checker = &s.textures[s.materials[s.meshes[0].triangle_materials[0] as usize].albedo_texture.unwrap() as usize];
+    let texel = |uv: glam::Vec2| checker.texels[(uv.y.rem_euclid(1.0) * checker.height as f32) as usize * checker.width as usize + (uv.x.rem_euclid(1.0) * checker.width as f32) as usize];
+    assert_eq!(s.meshes[0].uvs.iter().map(|&uv| texel(uv)[0]).collect::<Vec<_>>(), vec![102, 102, 51]);
+    // Without uv, pbrt's (0, 0), (1, 0), (1, 1) at the corners (here in the order 0, 2, 1), v
+    // turned down for caustica.
+    let uvs: Vec<(f32, f32)> = s.meshes[1].uvs.iter().map(|uv| (uv.x, uv.y)).collect();
+    assert_eq!(uvs, vec![(0.0, 1.0), (1.0, 0.0), (1.0, 1.0)]);
+
+    // convert writes each as a PLY beside the TOML, which loads to the same meshes and textures.
+    let out = temp_dir("textured-trianglemesh-out");
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&out).unwrap();
+    assert!(toml.contains("scene-mesh-0.ply") && toml.contains("scene-mesh-1.ply") && out.join("scene-mesh-1.ply").is_file(), "{toml}");
+    let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    assert_eq!(t.textures, s.textures);
+    let meshes = |s: &Scene| s.meshes.iter().map(|m| format!("{:?} {:?} {:?} {:?}", m.positions, m.uvs, m.triangles, s.materials[m.triangle_materials[0] as usize].albedo_texture)).collect::<Vec<_>>();
+    assert_eq!(meshes(&t), meshes(&s));
+
+    let e = error("bad-uv", &format!("{OPTIONS}WorldBegin\nTexture \"c\" \"spectrum\" \"checkerboard\"\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0 0 1 0]\n"));
+    assert!(e.contains("scene.pbrt:9: 'point2 uv'") && e.contains("needs a point2 a vertex (6 numbers)"), "{e}");
 }

@@ -31,10 +31,9 @@ pub fn sphere_to_square(d: DVec3) -> DVec2 {
     DVec2::new(0.5 * (u.copysign(d.x) + 1.0), 0.5 * (v.copysign(d.y) + 1.0))
 }
 
-/// The unit direction of a point of the square (the inverse of [`sphere_to_square`]), which
-/// the tests check the mapping with.
-#[cfg(test)]
-fn square_to_sphere(p: DVec2) -> DVec3 {
+/// The unit direction of a point of the square (the inverse of [`sphere_to_square`]; pbrt's
+/// `EqualAreaSquareToSphere`).
+pub fn square_to_sphere(p: DVec2) -> DVec3 {
     let (u, v) = (2.0 * p.x - 1.0, 2.0 * p.y - 1.0);
     let (up, vp) = (u.abs(), v.abs());
     let signed_distance = 1.0 - (up + vp);

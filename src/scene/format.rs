@@ -86,13 +86,28 @@ pub struct SceneFile {
     /// Lights without a surface: point, spot and directional (radiometric units).
     #[serde(default)]
     pub lights: Vec<LightFile>,
+    /// Meshes an importer found written in its scene and keeps as meshes (they need texture
+    /// coordinates, which `[[triangles]]` lack). No key of the TOML format: `caustica convert`
+    /// writes each as a PLY file and lists it in `[[meshes]]`.
+    #[serde(skip)]
+    pub inline_meshes: Vec<InlineMesh>,
+}
+
+/// A mesh written in an imported scene: the ASCII PLY text of its world-space triangles, read as
+/// the PLY file `convert` writes of it would be, and its material.
+#[derive(Debug, Clone)]
+pub struct InlineMesh {
+    /// Where it was written (`scene.pbrt:12`), which names it in messages.
+    pub name: String,
+    pub ply: String,
+    pub material: String,
 }
 
 impl SceneFile {
     /// A scene with this camera, film and integrator and nothing in it yet: what the importers
     /// fill.
     pub fn empty(camera: CameraFile, film: FilmFile, integrator: IntegratorFile) -> Self {
-        Self { camera, film, integrator, materials: Default::default(), spheres: vec![], quads: vec![], triangles: vec![], meshes: vec![], environment: None, lights: vec![] }
+        Self { camera, film, integrator, materials: Default::default(), spheres: vec![], quads: vec![], triangles: vec![], meshes: vec![], environment: None, lights: vec![], inline_meshes: vec![] }
     }
 }
 
@@ -230,6 +245,13 @@ pub struct MaterialFile {
     /// left, per channel in (0, 1], after travelling `attenuation_distance` inside. Both or neither.
     pub attenuation_color: Option<Triple>,
     pub attenuation_distance: Option<f32>,
+    /// A clear coat over the whole material (glTF's `KHR_materials_clearcoat`): a dielectric layer
+    /// of index 1.5 that reflects `clearcoat` x Fresnel of the light; the factor in [0, 1].
+    /// Absent: no coat.
+    pub clearcoat: Option<f32>,
+    /// The clear coat's perceptual GGX roughness in [0, 1] (default 0, smooth); only with
+    /// `clearcoat`.
+    pub clearcoat_roughness: Option<f32>,
     /// How much of the surface is there, in [0, 1] (times `opacity_texture`'s): a ray meets it
     /// with that probability (Mitsuba's `mask`, glTF's BLEND). Meshes only.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -315,6 +337,8 @@ impl Default for MaterialFile {
             albedo_texture: None,
             attenuation_color: None,
             attenuation_distance: None,
+            clearcoat: None,
+            clearcoat_roughness: None,
             opacity: None,
             opacity_texture: None,
             normal_texture: None,

@@ -2,6 +2,7 @@
 //! mesh files (OBJ + MTL, PLY, glTF) into the scene's materials, meshes and textures.
 
 use super::asset::{self, Asset, AssetMaterial};
+use super::format::InlineMesh;
 use super::{Light, Material, MetallicRoughness, Microfacet, Scene};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Context as _, Result};
@@ -48,6 +49,9 @@ struct LoadedFile {
     lights: Vec<Light>,
 }
 
+/// What a loaded file is known by: (file, mesh of the file, material override, sides).
+type LoadKey = (PathBuf, Option<u32>, Option<u32>, Sides);
+
 /// Loads each (file, material override) once: later placements of the same file share its
 /// meshes, materials and textures.
 pub struct MeshImporter<'a> {
@@ -55,7 +59,7 @@ pub struct MeshImporter<'a> {
     files: &'a InputFiles,
     /// The file's own placements of its meshes, as scene mesh indices, by (file, mesh of the file,
     /// material override, sides).
-    loaded: HashMap<(PathBuf, Option<u32>, Option<u32>, Sides), LoadedFile>,
+    loaded: HashMap<LoadKey, LoadedFile>,
     /// Textured scene materials and the maps of texture coordinates (their `to_uv`) of the meshes
     /// they replace the materials of.
     uv_maps: HashMap<u32, Affine2>,
@@ -83,8 +87,25 @@ impl<'a> MeshImporter<'a> {
     /// `.serialized`; `asset::load_asset_part`).
     pub fn place_part(&mut self, scene: &mut Scene, path: &Path, shape_index: Option<u32>, material: Option<u32>, sides: Sides, transform: Mat4) -> Result<Option<AssetCamera>> {
         let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), shape_index, material, sides);
+        let files = self.files;
+        self.place_loaded(scene, key, path, || Ok(asset::load_asset_part(files, path, shape_index)?), material, sides, transform)
+    }
+
+    /// Places a mesh written in the scene (an importer's, as PLY text: [`InlineMesh`]) as
+    /// [`MeshImporter::place`] places a PLY file of that text.
+    pub fn place_inline(&mut self, scene: &mut Scene, mesh: &InlineMesh, material: u32) -> Result<()> {
+        let name = Path::new(&mesh.name);
+        let key = (name.to_path_buf(), None, Some(material), Sides::default());
+        self.place_loaded(scene, key, name, || Ok(asset::load_ply_bytes(mesh.ply.as_bytes(), name)?), Some(material), Sides::default(), Mat4::IDENTITY)?;
+        Ok(())
+    }
+
+    /// Places the meshes `load` gives (loaded once per `key`) as [`MeshImporter::place_part`]
+    /// describes; `path` names them in messages.
+    #[allow(clippy::too_many_arguments)]
+    fn place_loaded(&mut self, scene: &mut Scene, key: LoadKey, path: &Path, load: impl FnOnce() -> Result<Asset>, material: Option<u32>, sides: Sides, transform: Mat4) -> Result<Option<AssetCamera>> {
         if !self.loaded.contains_key(&key) {
-            let mut asset = asset::load_asset_part(self.files, path, shape_index)?;
+            let mut asset = load()?;
             if asset.dropped_triangles > 0 {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }

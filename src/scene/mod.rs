@@ -446,7 +446,12 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
     };
     let lights = light::lights_from(&file.lights)?;
     let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures, environment, lights };
-    place_meshes(&mut scene, &file.meshes, &material, base, MeshImporter::new(files).with_uv_maps(uv_maps))?;
+    let mut importer = MeshImporter::new(files).with_uv_maps(uv_maps);
+    place_meshes(&mut scene, &file.meshes, &material, base, &mut importer)?;
+    for m in &file.inline_meshes {
+        let index = material(format!("the mesh written at {}", m.name), &m.material)?;
+        importer.place_inline(&mut scene, m, index)?;
+    }
     Ok(scene)
 }
 
@@ -509,7 +514,7 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         one_sided: m.one_sided,
         metallic_roughness: None,
         maps: TextureMaps::default(),
-        clearcoat: None,
+        clearcoat: clearcoat_from(m, &key)?,
         attenuation: attenuation_from(m, &key)?,
     };
     if !(0.0..=1.0).contains(&material.roughness) {
@@ -556,6 +561,23 @@ fn attenuation_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Op
     Ok(Some(Attenuation { color, distance }))
 }
 
+/// `clearcoat` (the factor) and `clearcoat_roughness`, each in [0, 1]; the roughness only with a
+/// factor. A factor of 0 is kept (it renders exactly as no coat).
+fn clearcoat_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Option<Clearcoat>> {
+    let factor = match (m.clearcoat, m.clearcoat_roughness) {
+        (None, None) => return Ok(None),
+        (None, Some(_)) => bail!("{} needs {}", key("clearcoat_roughness"), key("clearcoat")),
+        (Some(factor), _) => finite(&key("clearcoat"), factor)?,
+    };
+    let roughness = finite(&key("clearcoat_roughness"), m.clearcoat_roughness.unwrap_or(0.0))?;
+    for (name, v) in [("clearcoat", factor), ("clearcoat_roughness", roughness)] {
+        if !(0.0..=1.0).contains(&v) {
+            bail!("{} must be in [0, 1], got {v}", key(name));
+        }
+    }
+    Ok(Some(Clearcoat { factor, roughness, texture: None, roughness_texture: None }))
+}
+
 /// `[[spheres]]`, `[[quads]]` and `[[triangles]]`, in that order.
 fn shapes_from(file: &SceneFile, material: &MaterialLookup) -> Result<Vec<Shape>> {
     let mut shapes = Vec::new();
@@ -596,7 +618,7 @@ fn shapes_from(file: &SceneFile, material: &MaterialLookup) -> Result<Vec<Shape>
 }
 
 /// Loads every `[[meshes]]` file and places it once, or at each of its instances.
-fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, mut importer: MeshImporter) -> Result<()> {
+fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, importer: &mut MeshImporter) -> Result<()> {
     for (k, m) in meshes.iter().enumerate() {
         let key = format!("meshes[{k}]");
         let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;

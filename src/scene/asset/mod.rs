@@ -219,6 +219,13 @@ pub fn load_asset_part(files: &InputFiles, path: &Path, shape_index: Option<u32>
     Ok(asset)
 }
 
+/// The mesh of an ASCII or binary PLY held in memory (an importer's mesh written in its scene,
+/// which `caustica convert` writes out as this very file), read exactly as a PLY file is;
+/// `name` stands for the file in messages.
+pub fn load_ply_bytes(bytes: &[u8], name: &Path) -> Result<Asset, AssetError> {
+    ply::parse(bytes, name)
+}
+
 /// Gives every mesh with a normal-mapped material the tangents its map is read along: MikkTSpace's
 /// (tangents.rs) where the file has none. A mesh without normals or texture coordinates has no
 /// tangent frame: its normal maps are ignored, with a note on stderr.

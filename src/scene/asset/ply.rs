@@ -20,8 +20,13 @@ use crate::input_file::{InputFiles, InputKind};
 /// Loads a PLY file as one mesh with the default material.
 pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
     let bytes = files.read(path, InputKind::Mesh)?;
+    parse(&bytes, path)
+}
+
+/// The PLY mesh held in `bytes`, read as [`load`] reads a file (`path` names it in messages).
+pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Asset, AssetError> {
     let error = |message: String| AssetError::invalid(path, message);
-    let mut reader = Reader::new(Cursor::new(bytes.as_slice()));
+    let mut reader = Reader::new(Cursor::new(bytes));
     let header = Parser::<Vertex>::new()
         .read_header(&mut reader)
         .map_err(|e| error(format!("bad header: {e}")))?;

@@ -1,11 +1,14 @@
 //! `caustica convert`: an imported scene file written out as caustica TOML, which loads to the
 //! same `Scene` as the import itself (tests/import.rs checks it).
 
-use super::super::format::SceneFile;
+use super::super::format::{MeshFile, SceneFile};
 use anyhow::{Context as _, Result};
 use std::path::Path;
 
 /// The TOML of `file`, whose relative paths are relative to `base`, for a file in `output_folder`.
+/// The meshes written in the scene (`SceneFile::inline_meshes`) are written into `output_folder`
+/// as PLY files named after the scene (`NAME-mesh-K.ply`, replacing any there) and listed in
+/// `[[meshes]]`.
 pub fn to_toml(file: &SceneFile, base: &Path, output_folder: &Path, name: &str) -> Result<String> {
     let mut value = toml::Value::try_from(file).with_context(|| format!("{name}: writing the scene as TOML"))?;
     let same_folder = match (base_or_dot(base).canonicalize(), base_or_dot(output_folder).canonicalize()) {
@@ -14,6 +17,19 @@ pub fn to_toml(file: &SceneFile, base: &Path, output_folder: &Path, name: &str) 
     };
     if !same_folder {
         absolute_paths(&mut value, base);
+    }
+    let stem = Path::new(name).file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    for (k, mesh) in file.inline_meshes.iter().enumerate() {
+        let ply = format!("{stem}-mesh-{k}.ply");
+        let path = base_or_dot(output_folder).join(&ply);
+        std::fs::write(&path, &mesh.ply).with_context(|| format!("{name}: writing the mesh written at {} as {}", mesh.name, path.display()))?;
+        let entry = MeshFile { file: ply, material: Some(mesh.material.clone()), shape_index: None, flip_normals: false, face_normals: false, translate: Default::default(), scale: None, rotate: Default::default(), instances: vec![] };
+        let entry = toml::Value::try_from(entry).with_context(|| format!("{name}: writing the scene as TOML"))?;
+        let table = value.as_table_mut().expect("a scene is a table");
+        match table.entry("meshes").or_insert_with(|| toml::Value::Array(vec![])) {
+            toml::Value::Array(meshes) => meshes.push(entry),
+            _ => unreachable!("meshes is a list"),
+        }
     }
     shortest_floats(&mut value);
     drop_empty_lists(&mut value);

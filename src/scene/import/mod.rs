@@ -58,7 +58,8 @@ impl Imported {
     }
 
     /// The equivalent caustica TOML, to be written into `output_folder`: paths are kept relative
-    /// when that is the scene's own folder and made absolute otherwise.
+    /// when that is the scene's own folder and made absolute otherwise; meshes written in the
+    /// scene are written into `output_folder` as PLY files, which the TOML lists.
     pub fn to_toml(&self, output_folder: &Path) -> Result<String> {
         convert::to_toml(&self.file, &self.base, output_folder, &self.name)
     }

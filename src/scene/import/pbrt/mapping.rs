@@ -12,7 +12,7 @@
 //! has them.
 
 use crate::scene::format::{
-    Array, CameraFile, DirectionalLightFile, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
+    Array, CameraFile, DirectionalLightFile, InlineMesh, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
     SceneFile, SphereFile, SpotLightFile, TriangleFile,
 };
 use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
@@ -21,8 +21,11 @@ use super::params::Directive;
 use super::parser::{MaterialRef, Model, ShapeUse};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
-use glam::{DMat4, DVec3, Vec3};
+use crate::image::RgbImage;
+use glam::{DMat4, DVec2, DVec3, Vec3};
+use crate::scene::equal_area_map;
 use std::collections::HashMap;
+use std::f64::consts::PI;
 use std::path::Path;
 use std::rc::Rc;
 
@@ -32,11 +35,14 @@ use std::rc::Rc;
 const MAX_SHAPES: usize = 4_000_000;
 const MAX_SHAPE_BYTES: usize = 1 << 30;
 
-/// A mesh written in the scene: vertices, polygon corners (indices into them) and normals.
+/// A mesh written in the scene: vertices, polygon corners (indices into them), normals and
+/// texture coordinates (pbrt's, v up).
 struct MeshArrays {
     positions: Vec<DVec3>,
     indices: Vec<usize>,
     normals: Option<Vec<DVec3>>,
+    /// Read only where a texture needs them (an error then).
+    uvs: Result<Option<Vec<[f64; 2]>>>,
 }
 
 pub struct Mapper<'a> {
@@ -44,13 +50,19 @@ pub struct Mapper<'a> {
     notes: &'a mut Notes,
     files: &'a InputFiles,
     /// The main scene's folder: pbrt resolves every relative file name against it.
-    base: &'a Path,
+    pub(super) base: &'a Path,
     out: SceneFile,
     /// caustica's world from pbrt's: the mirror across x = 0, or the identity (module docs).
     world: DMat4,
     /// (material, area light) by address, to the caustica material made of them (None: an
     /// `interface` without emission, which is no surface).
     material_names: HashMap<(usize, usize), Option<String>>,
+    /// Materials of area lights given by their `power`, emitting per unit of `scale`: the power
+    /// and whether both sides emit. pbrt-v4 gives each shape (each triangle of a mesh) that
+    /// power, so each area has its own material ([`Mapper::emitter_of_area`]).
+    powered: HashMap<String, (f64, bool)>,
+    /// (powered material, area's bits) to its material of that area.
+    powered_names: HashMap<(String, u64), String>,
     /// Shapes written so far, and an estimate of their bytes (for MAX_SHAPES, MAX_SHAPE_BYTES).
     shapes: usize,
     shape_bytes: usize,
@@ -60,7 +72,7 @@ pub struct Mapper<'a> {
 pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: &mut Notes) -> Result<SceneFile> {
     let camera = CameraFile { position: Array([0.0; 3]), look_at: Array([0.0, 0.0, -1.0]), up: Array([0.0, 1.0, 0.0]), fov: 90.0, aperture: 0.0, focus_distance: None };
     let out = SceneFile::empty(camera, FilmFile::default(), IntegratorFile::default());
-    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
+    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), powered: HashMap::new(), powered_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
     let start = Location { file: Rc::from(scene.display().to_string().as_str()), line: 1 };
     let absent = |directive: &'static str, kind: &str| Directive { directive, kind: kind.to_owned(), at: start.clone(), params: vec![] };
     let film = mapper.film(model.film.as_ref().unwrap_or(&absent("Film", "rgb")))?;
@@ -86,6 +98,10 @@ pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: 
     }
     for (light, transform) in &model.lights {
         mapper.light(light, *transform)?;
+    }
+    // A powered area light's own material only stands for its copies of each area.
+    for name in mapper.powered.keys() {
+        mapper.out.materials.remove(name);
     }
     Ok(mapper.out)
 }
@@ -285,8 +301,16 @@ impl Mapper<'_> {
             }
             material.emission = f32x3(self.light_color(light, "L")? * self.light_scale(light)?);
             material.two_sided = light.boolean("twosided", false)?;
+            let power = Self::light_target(light, "power")?;
             light.check_all_used()?;
             name = format!("{name} + area light at {}", short(&light.at));
+            if let Some(power) = power {
+                let name = unique_name(&self.out.materials, name);
+                self.powered.insert(name.clone(), (power, material.two_sided));
+                self.out.materials.insert(name.clone(), material);
+                self.material_names.insert(key, Some(name.clone()));
+                return Ok(Some(name));
+            }
         }
         let name = unique_name(&self.out.materials, name);
         self.out.materials.insert(name.clone(), material);
@@ -309,21 +333,28 @@ impl Mapper<'_> {
                 return Err(alpha.error("cut-outs (alpha other than 1) are not supported"));
             }
         }
+        // Textures need texture coordinates, which caustica's meshes have and its spheres, quads
+        // and triangles have not; an emitting mesh is written as triangles.
+        let textured = self.out.materials[&material].albedo_texture.is_some();
+        if textured && (!matches!(d.kind.as_str(), "plymesh" | "trianglemesh") || self.out.materials[&material].emission != Array([0.0; 3])) {
+            return Err(d.error("a textured material is supported on a plymesh or trianglemesh that does not emit only (caustica's spheres, quads and triangles have no texture coordinates)"));
+        }
         match d.kind.as_str() {
             "sphere" => self.sphere(s, to_world, m, &material)?,
+            "trianglemesh" if textured => self.textured_triangle_mesh(s, m, &material)?,
             "trianglemesh" => {
-                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 3)?;
+                let MeshArrays { positions, indices, normals, .. } = self.mesh_arrays(d, 3)?;
                 for t in indices.chunks_exact(3) {
                     let v = [positions[t[0]], positions[t[1]], positions[t[2]]];
                     let reversed = match &normals {
                         Some(n) => (v[1] - v[0]).cross(v[2] - v[0]).dot(n[t[0]] + n[t[1]] + n[t[2]]) < 0.0,
                         None => s.reverse_orientation,
                     };
-                    self.triangle(d, m, v, reversed, &material)?;
+                    self.lone_triangle(d, m, v, reversed, &material)?;
                 }
             }
             "bilinearmesh" => {
-                let MeshArrays { positions, indices, normals } = self.mesh_arrays(d, 4)?;
+                let MeshArrays { positions, indices, normals, .. } = self.mesh_arrays(d, 4)?;
                 for q in indices.chunks_exact(4) {
                     let [p00, p10, p01, p11] = [0, 1, 2, 3].map(|k| positions[q[k]]);
                     let reversed = match &normals {
@@ -368,8 +399,52 @@ impl Mapper<'_> {
         if sided && s.reverse_orientation != (to_world.determinant() < 0.0) {
             return Err(d.error("a sphere turned inside out (ReverseOrientation or a mirroring transformation) that emits or refracts is not supported"));
         }
-        self.count_shape(d, material)?;
-        self.out.spheres.push(SphereFile { center: f32x3(m.transform_point3(DVec3::ZERO)), radius: (radius * scale) as f32, material: material.to_owned() });
+        // pbrt-v4's Sphere::Area is in the sphere's own space: its transformation's scale is left out.
+        let material = self.emitter_of_area(material, 4.0 * PI * radius * radius);
+        self.count_shape(d, &material)?;
+        self.out.spheres.push(SphereFile { center: f32x3(m.transform_point3(DVec3::ZERO)), radius: (radius * scale) as f32, material });
+        Ok(())
+    }
+
+    /// A `trianglemesh` with a textured material: a mesh (its PLY text, `SceneFile::inline_meshes`)
+    /// rather than triangles, to keep its texture coordinates, `uv` or pbrt's default (0, 0),
+    /// (1, 0), (1, 1) at each triangle's corners. Each triangle gets corners of its own, fronts as
+    /// [`Mapper::triangle`] gives them.
+    fn textured_triangle_mesh(&mut self, s: &ShapeUse, m: DMat4, material: &str) -> Result<()> {
+        use std::fmt::Write as _;
+        let d = &*s.shape;
+        let MeshArrays { positions, indices, normals, uvs } = self.mesh_arrays(d, 3)?;
+        let uvs = uvs?;
+        let mut vertices = String::new();
+        let mut faces = String::new();
+        for (k, t) in indices.chunks_exact(3).enumerate() {
+            let v = [positions[t[0]], positions[t[1]], positions[t[2]]];
+            let reversed = match &normals {
+                Some(n) => (v[1] - v[0]).cross(v[2] - v[0]).dot(n[t[0]] + n[t[1]] + n[t[2]]) < 0.0,
+                None => s.reverse_orientation,
+            };
+            let uv = match &uvs {
+                Some(uv) => [uv[t[0]], uv[t[1]], uv[t[2]]],
+                None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+            };
+            let mut corners = [0, 1, 2];
+            if reversed != (m.determinant() < 0.0) {
+                corners.swap(1, 2);
+            }
+            self.count_shape(d, material)?;
+            for c in corners {
+                let p = m.transform_point3(v[c]).as_vec3();
+                let [u, w] = uv[c].map(|x| x as f32);
+                writeln!(vertices, "{} {} {} {u} {w}", p.x, p.y, p.z).expect("writing to a String");
+            }
+            writeln!(faces, "3 {} {} {}", 3 * k, 3 * k + 1, 3 * k + 2).expect("writing to a String");
+        }
+        let count = indices.len() / 3;
+        let ply = format!(
+            "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face {count}\nproperty list uchar int vertex_indices\nend_header\n{vertices}{faces}",
+            3 * count
+        );
+        self.out.inline_meshes.push(InlineMesh { name: format!("{}: {} (mesh {})", d.at, d.describe(), self.out.inline_meshes.len()), ply, material: material.to_owned() });
         Ok(())
     }
 
@@ -401,10 +476,16 @@ impl Mapper<'_> {
             }
             self.warn("normals", || format!("{}: {}: the vertex normals of meshes written in the scene are not kept (caustica's own triangles are flat); they decide the front side only", d.at, d.describe()));
         }
-        for name in ["uv", "S", "faceIndices"] {
+        let uvs = match d.param("uv") {
+            None => Ok(None),
+            Some(p) if p.ty == "point2" && p.numbers().len() == 2 * positions.len() => Ok(Some(p.numbers().chunks_exact(2).map(|c| [c[0], c[1]]).collect())),
+            Some(p) => Err(p.error(format!("{}: needs a point2 a vertex ({} numbers)", d.describe(), 2 * positions.len()))),
+        };
+        // Tangents and face indices, which only textures' filtering and Ptex use.
+        for name in ["S", "faceIndices"] {
             d.param(name);
         }
-        Ok(MeshArrays { positions, indices, normals })
+        Ok(MeshArrays { positions, indices, normals, uvs })
     }
 
     /// Counts one more shape entry of `material` against the caps.
@@ -434,6 +515,13 @@ impl Mapper<'_> {
         Ok(())
     }
 
+    /// A triangle of its own, emitting (when its area light gives a power) by its own area.
+    fn lone_triangle(&mut self, d: &Directive, m: DMat4, v: [DVec3; 3], reversed: bool, material: &str) -> Result<()> {
+        let w = v.map(|p| m.transform_point3(p));
+        let material = self.emitter_of_area(material, 0.5 * (w[1] - w[0]).cross(w[2] - w[0]).length());
+        self.triangle(d, m, v, reversed, &material)
+    }
+
     /// A bilinear patch (p00, p10, p01, p11), front (p10 - p00) x (p01 - p00): a quad when it
     /// is a parallelogram, else two triangles (exact when it is planar, warned when not).
     fn bilinear_patch(&mut self, d: &Directive, m: DMat4, p: [DVec3; 4], reversed: bool, material: &str) -> Result<()> {
@@ -448,16 +536,47 @@ impl Mapper<'_> {
                 self.warn("degenerate", || format!("{}: {}: patches without area are left out", d.at, d.describe()));
                 return Ok(());
             }
-            self.count_shape(d, material)?;
-            self.out.quads.push(QuadFile { origin: f32x3(m.transform_point3(p00)), edge_u: f32x3(u), edge_v: f32x3(v), material: material.to_owned() });
+            let material = self.emitter_of_area(material, u.cross(v).length());
+            self.count_shape(d, &material)?;
+            self.out.quads.push(QuadFile { origin: f32x3(m.transform_point3(p00)), edge_u: f32x3(u), edge_v: f32x3(v), material });
             return Ok(());
         }
         let normal = u.cross(v);
         if (p11 - p00).dot(normal).abs() > 1e-6 * extent * normal.length() {
+            if self.powered.contains_key(material) {
+                return Err(d.error("an area light given by its power on a patch that is not planar is not supported (its area is pbrt's integral over the curved patch)"));
+            }
             self.warn("bilinear", || format!("{}: {}: patches that are not planar become two triangles each", d.at, d.describe()));
         }
-        self.triangle(d, m, [p00, p10, p11], reversed, material)?;
-        self.triangle(d, m, [p00, p11, p01], reversed, material)
+        // A planar patch covers its quadrilateral, the two triangles' areas together.
+        let w = [p00, p10, p01, p11].map(|p| m.transform_point3(p));
+        let area = 0.5 * ((w[1] - w[0]).cross(w[3] - w[0]).length() + (w[3] - w[0]).cross(w[2] - w[0]).length());
+        let material = self.emitter_of_area(material, area);
+        self.triangle(d, m, [p00, p10, p11], reversed, &material)?;
+        self.triangle(d, m, [p00, p11, p01], reversed, &material)
+    }
+
+    /// The material of a shape of `area` (in caustica's world, which the mirror leaves pbrt's
+    /// render space's size) with `material`: itself, or, when its area light gives a power, a copy
+    /// emitting pbrt-v4's L = power / (pi area), halved when both sides emit
+    /// (DiffuseAreaLight::Create).
+    fn emitter_of_area(&mut self, material: &str, area: f64) -> String {
+        let Some(&(power, two_sided)) = self.powered.get(material) else { return material.to_owned() };
+        if !(area > 0.0 && area.is_finite()) {
+            // Left out as degenerate by the caller.
+            return material.to_owned();
+        }
+        let key = (material.to_owned(), area.to_bits());
+        if let Some(name) = self.powered_names.get(&key) {
+            return name.clone();
+        }
+        let mut emitter = self.out.materials[material].clone();
+        let unit = DVec3::from(emitter.emission.0.map(f64::from));
+        emitter.emission = f32x3(unit * power / (PI * area * if two_sided { 2.0 } else { 1.0 }));
+        let name = unique_name(&self.out.materials, format!("{material}, {power} over area {area}"));
+        self.out.materials.insert(name.clone(), emitter);
+        self.powered_names.insert(key, name.clone());
+        name
     }
 
     /// An emitting PLY mesh, written out triangle by triangle: caustica's mesh files emit from
@@ -476,7 +595,7 @@ impl Mapper<'_> {
                     let n: Vec3 = t.iter().map(|&k| mesh.normals[k as usize]).sum();
                     (b - a).cross(c - a).dot(n.as_dvec3()) < 0.0
                 };
-                self.triangle(d, m, [a, b, c], reversed, material)?;
+                self.lone_triangle(d, m, [a, b, c], reversed, material)?;
             }
         }
         Ok(())
@@ -510,9 +629,6 @@ impl Mapper<'_> {
     }
 
     fn light_scale(&mut self, d: &Directive) -> Result<f64> {
-        if d.param("power").is_some() {
-            return Err(d.error("power (an emitter given by its total power) is not supported; give L or I with scale"));
-        }
         let scale = d.float_or("scale", 1.0)?;
         if scale.is_nan() || scale < 0.0 {
             return Err(d.error(format!("scale must be >= 0, got {scale}")));
@@ -520,21 +636,41 @@ impl Mapper<'_> {
         Ok(scale)
     }
 
+    /// A light's `power` (pbrt-v4's `power` and `illuminance` read alike): Some(value) when given
+    /// and > 0, as pbrt only then scales to it.
+    fn light_target(d: &Directive, name: &str) -> Result<Option<f64>> {
+        match d.float(name)? {
+            Some(v) if !v.is_finite() => Err(d.error(format!("{name} must be finite, got {v}"))),
+            v => Ok(v.filter(|&v| v > 0.0)),
+        }
+    }
+
     fn light(&mut self, d: &Directive, to_world: DMat4) -> Result<()> {
         let m = self.world * to_world;
         let from = |d: &Directive| -> Result<DVec3> { Ok(d.point("from")?.unwrap_or(DVec3::ZERO)) };
         let light = match d.kind.as_str() {
             "point" => {
-                let intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                let mut intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                // pbrt-v4's PointLight::Create: the unit-luminance spectrum (light_color) times
+                // power / 4 pi, whatever the RGB's own brightness.
+                if let Some(power) = Self::light_target(d, "power")? {
+                    intensity *= power / (4.0 * PI);
+                }
                 Some(LightFile::Point(PointLightFile { position: f32x3(m.transform_point3(from(d)?)), intensity: f32x3(intensity) }))
             }
             "spot" => {
-                let intensity = self.light_color(d, "I")? * self.light_scale(d)?;
+                let mut intensity = self.light_color(d, "I")? * self.light_scale(d)?;
                 let from = from(d)?;
                 let to = d.point("to")?.unwrap_or(DVec3::Z);
-                let (cone, delta) = (d.float_or("coneangle", 30.0)?, d.float_or("conedelta", 5.0)?);
+                let (cone, delta) = (d.float_or("coneangle", 30.0)?, d.float_or("conedeltaangle", 5.0)?);
                 if !(cone > 0.0 && cone <= 180.0 && (0.0..=cone).contains(&delta)) || (to - from).length() == 0.0 {
-                    return Err(d.error(format!("needs 0 < coneangle <= 180, 0 <= conedelta <= coneangle and from != to, got {cone} and {delta}")));
+                    return Err(d.error(format!("needs 0 < coneangle <= 180, 0 <= conedeltaangle <= coneangle and from != to, got {cone} and {delta}")));
+                }
+                // pbrt-v4's SpotLight::Create: power over the solid angle of the full cone plus
+                // half that of the falloff ring.
+                if let Some(power) = Self::light_target(d, "power")? {
+                    let (cos_end, cos_start) = (cone.to_radians().cos(), (cone - delta).to_radians().cos());
+                    intensity *= power / (2.0 * PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0));
                 }
                 self.warn("spot", || format!("{}: {}: pbrt's spot falls off smoothly in the cosine between coneangle - conedelta and coneangle; caustica's falls off linearly in the angle", d.at, d.describe()));
                 Some(LightFile::Spot(SpotLightFile {
@@ -546,7 +682,11 @@ impl Mapper<'_> {
                 }))
             }
             "distant" => {
-                let irradiance = self.light_color(d, "L")? * self.light_scale(d)?;
+                let mut irradiance = self.light_color(d, "L")? * self.light_scale(d)?;
+                // pbrt-v4's DistantLight::Create: illuminance on a patch facing the light.
+                if let Some(illuminance) = Self::light_target(d, "illuminance")? {
+                    irradiance *= illuminance;
+                }
                 let from = from(d)?;
                 let to = d.point("to")?.unwrap_or(DVec3::Z);
                 let direction = m.transform_vector3(to - from);
@@ -561,7 +701,11 @@ impl Mapper<'_> {
                 }
                 let environment = match d.string("filename")?.map(str::to_owned) {
                     None => {
-                        let color = self.light_color(d, "L")? * self.light_scale(d)?;
+                        let mut color = self.light_color(d, "L")? * self.light_scale(d)?;
+                        // pbrt-v4: the illuminance of uniform radiance over a hemisphere is pi L.
+                        if let Some(illuminance) = Self::light_target(d, "illuminance")? {
+                            color *= illuminance / PI;
+                        }
                         EnvironmentFile { color: Some(f32x3(color)), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 }
                     }
                     Some(name) => {
@@ -569,8 +713,19 @@ impl Mapper<'_> {
                             return Err(d.error("give L or filename, not both"));
                         }
                         // pbrt scales an image's RGB to radiance as it does a constant L's.
-                        let scale = self.light_scale(d)?;
+                        let mut scale = self.light_scale(d)?;
                         let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+                        if let Some(illuminance) = Self::light_target(d, "illuminance")? {
+                            let image = crate::image::read_image_from(self.files, &path).map_err(|e| d.error(e))?;
+                            if image.width != image.height {
+                                return Err(d.error(format!("\"{name}\": an equal-area octahedral map must be square, got {} x {}", image.width, image.height)));
+                            }
+                            let own = upper_hemisphere_illuminance(&image);
+                            if !(own > 0.0 && own.is_finite()) {
+                                return Err(d.error(format!("\"{name}\": the map sends no light onto its upper hemisphere (+z), so no scale gives it an illuminance")));
+                            }
+                            scale *= illuminance / own;
+                        }
                         // Where the map's axes point in caustica's world: the light's rotation,
                         // through the mirror.
                         let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a));
@@ -594,4 +749,24 @@ impl Mapper<'_> {
         }
         Ok(())
     }
+}
+
+/// The illuminance the equal-area map `image` sends onto a patch facing its +z, computed as
+/// pbrt-v4 does to scale a map to an `illuminance` (lights.cpp, the image `infinite` light): the
+/// luminance times cos(theta) at each texel centre above the horizon, summed, times 2 pi / texels.
+/// Each texel covers 4 pi / texels of solid angle, so this is half the map's illuminance, and the
+/// map comes out twice as bright as the illuminance asks; following pbrt gives pbrt's image.
+fn upper_hemisphere_illuminance(image: &RgbImage) -> f64 {
+    let (w, h) = (image.width, image.height);
+    let mut sum = 0.0;
+    for y in 0..h {
+        let v = (f64::from(y) + 0.5) / f64::from(h);
+        for x in 0..w {
+            let d = equal_area_map::square_to_sphere(DVec2::new((f64::from(x) + 0.5) / f64::from(w), v));
+            if d.z > 0.0 {
+                sum += spectrum::luminance(DVec3::from(image.get(x, y).map(f64::from))) * d.z;
+            }
+        }
+    }
+    sum * 2.0 * PI / (f64::from(w) * f64::from(h))
 }

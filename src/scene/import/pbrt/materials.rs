@@ -1,14 +1,14 @@
-//! pbrt-v4 materials and textures as caustica materials. caustica's materials take constant
-//! values, so a texture is accepted where it is constant (`constant`, and `scale`, `mix` and
-//! `checkerboard` of constants that do not vary); an image or a pattern is an error naming the
-//! file and line. The README's "pbrt-v4" section lists each mapping.
+//! pbrt-v4 materials as caustica materials. caustica's materials take constant values but for the
+//! diffuse reflectance, which may be a texture (`textures.rs`): a texture that varies anywhere
+//! else is an error naming the file and line. The README's "pbrt-v4" section lists each mapping.
 
-use crate::scene::format::MaterialFile;
+use crate::scene::format::{AlbedoTextureFile, Array, MaterialFile, Triple};
 use super::super::scene_parts::f32x3;
 use super::super::spectrum;
 use super::mapping::Mapper;
 use super::params::{Directive, Param};
-use super::parser::{MaterialDef, TextureDef};
+use super::parser::MaterialDef;
+use super::textures::TextureValue;
 use crate::scene::METALS;
 use anyhow::{anyhow, Result};
 use glam::DVec3;
@@ -19,9 +19,6 @@ const NAMED_METALS: [(&str, &str); 4] = [("Au", "gold"), ("Ag", "silver"), ("Cu"
 /// pbrt's named glasses and their index at the helium d line (587.6 nm), from the Schott catalogue.
 const NAMED_GLASSES: [(&str, f64); 7] =
     [("glass-BK7", 1.5168), ("glass-BAF10", 1.67003), ("glass-FK51A", 1.48656), ("glass-LASF9", 1.85025), ("glass-F5", 1.6727), ("glass-F10", 1.72825), ("glass-F11", 1.78472)];
-
-/// Texture references deeper than this are a cycle.
-const MAX_TEXTURE_DEPTH: usize = 32;
 
 /// A conductor's index: one of caustica's named metals, or eta and k per channel.
 enum Conductor {
@@ -35,17 +32,16 @@ impl Mapper<'_> {
         let d = &def.directive;
         let defaults = MaterialFile::default();
         let material = match def.ty.as_str() {
-            "diffuse" => MaterialFile { albedo: f32x3(self.reflectance(d, "reflectance", 0.5)?), ..defaults },
+            "diffuse" => {
+                let (albedo, albedo_texture) = self.albedo(d)?;
+                MaterialFile { albedo: f32x3(albedo), albedo_texture, ..defaults }
+            }
             "conductor" => {
                 let roughness = self.roughness(d)?;
-                let (metal, eta, k) = match self.conductor(d)? {
-                    None => (None, None, None),
-                    Some(Conductor::Named(name)) => (Some(name.to_owned()), None, None),
-                    Some(Conductor::Complex(eta, k)) => (None, Some(f32x3(eta)), Some(f32x3(k))),
-                };
+                let (metal, eta, k) = self.conductor(d, "")?;
                 MaterialFile { reflectivity: Some(1.0), roughness, metal, eta, k, ..defaults }
             }
-            "dielectric" => MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d)?, roughness: self.roughness(d)?, ..defaults },
+            "dielectric" => MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d, "eta")?, roughness: self.roughness(d)?, ..defaults },
             "coateddiffuse" => {
                 self.warn("coated", || {
                     format!(
@@ -54,27 +50,35 @@ impl Mapper<'_> {
                         d.describe()
                     )
                 });
-                let albedo = self.color(d, "albedo", 0.0, "spectrum")?;
-                if albedo != DVec3::ZERO {
-                    return Err(d.error("a scattering coat (albedo > 0) is not supported"));
-                }
-                // Parameters of the coat's medium and of pbrt's stochastic evaluation, which
-                // caustica's closed-form coat has no use for.
-                self.scalar(d, "thickness", 0.01)?;
-                self.scalar(d, "g", 0.0)?;
-                d.integer("maxdepth")?;
-                d.integer("nsamples")?;
-                let albedo = f32x3(self.reflectance(d, "reflectance", 0.5)?);
-                MaterialFile { albedo, coat: true, ior: self.dielectric_eta(d)?, roughness: self.roughness(d)?, ..defaults }
+                self.clear_layer(d)?;
+                let (albedo, albedo_texture) = self.albedo(d)?;
+                MaterialFile { albedo: f32x3(albedo), albedo_texture, coat: true, ior: self.dielectric_eta(d, "eta")?, roughness: self.roughness(d)?, ..defaults }
             }
             "interface" => {
                 d.check_all_used()?;
                 return Ok(None);
             }
             // pbrt-v4's thindielectric is smooth: it has no roughness parameters.
-            "thindielectric" => MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d)?, thin: true, ..defaults },
-            "coatedconductor" => return Err(d.error("caustica's coat covers a diffuse base only, not a conductor")),
-            _ => return Err(d.error("this material is not supported (diffuse, conductor, dielectric, thindielectric, coateddiffuse, interface)")),
+            "thindielectric" => MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d, "eta")?, thin: true, ..defaults },
+            "coatedconductor" => {
+                self.warn("coatedconductor", || {
+                    format!(
+                        "{}: {}: coatedconductor becomes caustica's clear coat (glTF's KHR_materials_clearcoat, factor 1) over the conductor: the coat reflects by its Fresnel term and the conductor, as seen from air, takes the rest; pbrt follows light between the two layers by random walks, with the conductor's index relative to the coat's",
+                        d.at,
+                        d.describe()
+                    )
+                });
+                self.clear_layer(d)?;
+                let coat_eta = self.dielectric_eta(d, "interface.eta")?;
+                if coat_eta != 1.5 {
+                    self.warn("coat eta", || format!("{}: {}: the coat's interface.eta {coat_eta} becomes 1.5, the index of caustica's clear coat", d.at, d.describe()));
+                }
+                let clearcoat_roughness = self.roughness_of(d, "interface.")?;
+                let roughness = self.roughness_of(d, "conductor.")?;
+                let (metal, eta, k) = self.conductor(d, "conductor.")?;
+                MaterialFile { reflectivity: Some(1.0), roughness, metal, eta, k, clearcoat: Some(1.0), clearcoat_roughness: Some(clearcoat_roughness), ..defaults }
+            }
+            _ => return Err(d.error("this material is not supported (diffuse, conductor, dielectric, thindielectric, coateddiffuse, coatedconductor, interface)")),
         };
         d.check_all_used()?;
         Ok(Some(material))
@@ -85,8 +89,14 @@ impl Mapper<'_> {
     /// pbrt's alpha is sqrt(roughness), else the roughness itself; caustica's roughness is
     /// sqrt(alpha), the same Trowbridge-Reitz (GGX) distribution.
     fn roughness(&mut self, d: &Directive) -> Result<f32> {
-        let r = self.scalar(d, "roughness", 0.0)?;
-        let (u, v) = (self.scalar_if_given(d, "uroughness")?, self.scalar_if_given(d, "vroughness")?);
+        self.roughness_of(d, "")
+    }
+
+    /// [`Mapper::roughness`] of one layer of a layered material: `prefix` is `interface.` or
+    /// `conductor.` (pbrt's `remaproughness` is the material's, for both).
+    fn roughness_of(&mut self, d: &Directive, prefix: &str) -> Result<f32> {
+        let r = self.scalar(d, &format!("{prefix}roughness"), 0.0)?;
+        let (u, v) = (self.scalar_if_given(d, &format!("{prefix}uroughness"))?, self.scalar_if_given(d, &format!("{prefix}vroughness"))?);
         let r = match (u.or(Some(r)), v.or(Some(r))) {
             (Some(u), Some(v)) if u == v => u,
             _ => return Err(d.error("anisotropic roughness (uroughness != vroughness) is not supported")),
@@ -98,10 +108,11 @@ impl Mapper<'_> {
         Ok(alpha.sqrt() as f32)
     }
 
-    /// A dielectric's `eta`: a number, or a named glass at its d-line index (a warning: pbrt
-    /// disperses light through a spectral index, caustica does not).
-    fn dielectric_eta(&mut self, d: &Directive) -> Result<f32> {
-        let eta = match d.param("eta") {
+    /// A dielectric's index, the parameter `name` (`eta`, a coat's `interface.eta`): a number, or
+    /// a named glass at its d-line index (a warning: pbrt disperses light through a spectral
+    /// index, caustica does not).
+    fn dielectric_eta(&mut self, d: &Directive, name: &str) -> Result<f32> {
+        let eta = match d.param(name) {
             None => 1.5,
             Some(p) if p.ty == "spectrum" => match p.strings() {
                 [name] => {
@@ -117,7 +128,7 @@ impl Mapper<'_> {
             Some(p) => self.scalar_param(p)?,
         };
         if !(eta > 0.0 && eta.is_finite()) {
-            return Err(d.error(format!("eta must be > 0, got {eta}")));
+            return Err(d.error(format!("{name} must be > 0, got {eta}")));
         }
         Ok(eta as f32)
     }
@@ -125,10 +136,21 @@ impl Mapper<'_> {
     /// A conductor's index: `reflectance` (pbrt's eta 1 and the k that gives that reflectance at
     /// normal incidence, caustica's eta and k exactly; 1 in every channel is the perfect mirror,
     /// None), or `eta` and `k` (default pbrt's copper), named metals taken by caustica's name.
-    fn conductor(&mut self, d: &Directive) -> Result<Option<Conductor>> {
+    /// `prefix` is that of the `eta` and `k` parameters (`conductor.` in a coatedconductor).
+    /// As the scene file's (metal, eta, k).
+    fn conductor(&mut self, d: &Directive, prefix: &str) -> Result<(Option<String>, Option<Triple>, Option<Triple>)> {
+        Ok(match self.conductor_index(d, prefix)? {
+            None => (None, None, None),
+            Some(Conductor::Named(name)) => (Some(name.to_owned()), None, None),
+            Some(Conductor::Complex(eta, k)) => (None, Some(f32x3(eta)), Some(f32x3(k))),
+        })
+    }
+
+    fn conductor_index(&mut self, d: &Directive, prefix: &str) -> Result<Option<Conductor>> {
+        let (eta_name, k_name) = (format!("{prefix}eta"), format!("{prefix}k"));
         if d.params.iter().any(|p| p.name == "reflectance") {
-            if d.param("eta").is_some() || d.param("k").is_some() {
-                return Err(d.error("give reflectance or eta and k, not both"));
+            if d.param(&eta_name).is_some() || d.param(&k_name).is_some() {
+                return Err(d.error(format!("give reflectance or {eta_name} and {k_name}, not both")));
             }
             let r = self.reflectance(d, "reflectance", 1.0)?;
             if r.min_element() >= 1.0 {
@@ -139,8 +161,8 @@ impl Mapper<'_> {
             let k = DVec3::new(r.x, r.y, r.z).map(|r| 2.0 * r.sqrt() / (1.0 - r).sqrt());
             return Ok(Some(Conductor::Complex(DVec3::ONE, k)));
         }
-        let eta = self.metal_spectrum(d, "eta", "metal-Cu-eta")?;
-        let k = self.metal_spectrum(d, "k", "metal-Cu-k")?;
+        let eta = self.metal_spectrum(d, &eta_name, "eta")?;
+        let k = self.metal_spectrum(d, &k_name, "k")?;
         Ok(Some(match (eta, k) {
             (Ok(a), Ok(b)) if a == b => Conductor::Named(a),
             (eta, k) => {
@@ -155,11 +177,11 @@ impl Mapper<'_> {
         }))
     }
 
-    /// A conductor's `eta` or `k`: Ok(caustica's metal name) for a named spectrum, Err(the values)
-    /// for a colour.
-    fn metal_spectrum(&mut self, d: &Directive, name: &str, default: &str) -> Result<std::result::Result<&'static str, DVec3>> {
+    /// A conductor's `eta` or `k` (`which`), the parameter `name`: Ok(caustica's metal name) for a
+    /// named spectrum (pbrt's copper by default), Err(the values) for a colour.
+    fn metal_spectrum(&mut self, d: &Directive, name: &str, which: &str) -> Result<std::result::Result<&'static str, DVec3>> {
         let named = match d.param(name) {
-            None => default.to_owned(),
+            None => format!("metal-Cu-{which}"),
             Some(p) if p.ty == "spectrum" && !p.strings().is_empty() => p.strings()[0].clone(),
             Some(p) => {
                 let v = self.color_param(p, "spectrum", 0)?;
@@ -169,7 +191,7 @@ impl Mapper<'_> {
                 return Ok(Err(v));
             }
         };
-        let suffix = format!("-{name}");
+        let suffix = format!("-{which}");
         let metal = named.strip_prefix("metal-").and_then(|m| m.strip_suffix(suffix.as_str()));
         match metal.and_then(|m| NAMED_METALS.iter().find(|(n, _)| *n == m)) {
             Some((_, caustica)) => Ok(Ok(caustica)),
@@ -178,6 +200,38 @@ impl Mapper<'_> {
                 Err(anyhow!("{}: {}: the spectrum \"{named}\" for {name} is not supported (known: {})", d.at, d.describe(), known.join(", ")))
             }
         }
+    }
+
+    /// The parameters of a coat's medium and of pbrt's stochastic evaluation of a layered material,
+    /// which caustica's closed-form coats have no use for; a scattering medium (`albedo` > 0) is an
+    /// error.
+    fn clear_layer(&mut self, d: &Directive) -> Result<()> {
+        let albedo = self.color(d, "albedo", 0.0, "spectrum")?;
+        if albedo != DVec3::ZERO {
+            return Err(d.error("a scattering coat (albedo > 0) is not supported"));
+        }
+        self.scalar(d, "thickness", 0.01)?;
+        self.scalar(d, "g", 0.0)?;
+        d.integer("maxdepth")?;
+        d.integer("nsamples")?;
+        Ok(())
+    }
+
+    /// A diffuse `reflectance` (default 0.5): a constant, or a texture and the constant that
+    /// multiplies it, each channel of which lies in [0, 1] (pbrt clamps a textured albedo there).
+    fn albedo(&mut self, d: &Directive) -> Result<(DVec3, Option<AlbedoTextureFile>)> {
+        let Some(p) = d.param("reflectance") else { return Ok((DVec3::splat(0.5), None)) };
+        let (factor, texture) = match self.texture_param(p, "spectrum", 0)? {
+            TextureValue::Constant(c) => (c, None),
+            TextureValue::Varying { texture, factor } => (factor, Some(texture)),
+        };
+        let colors = texture.as_ref().and_then(|t| t.checkerboard).map_or(vec![], |Array(c)| c.map(|c| DVec3::from(c.0.map(f64::from))).to_vec());
+        for c in colors.iter().chain([&factor]) {
+            if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
+                return Err(p.error(format!("must be in [0, 1] per channel (energy conservation), got {c}")));
+            }
+        }
+        Ok((factor, texture))
     }
 
     /// A colour each channel of which lies in [0, 1].
@@ -211,11 +265,11 @@ impl Mapper<'_> {
     }
 
     /// The constant value of a parameter of `value_type` (spectrum or float; a float is a grey).
-    fn color_param(&mut self, p: &Param, value_type: &str, depth: usize) -> Result<DVec3> {
+    pub(super) fn color_param(&mut self, p: &Param, value_type: &str, depth: usize) -> Result<DVec3> {
         match (p.ty.as_str(), value_type) {
-            ("texture", _) => match p.strings() {
-                [name] => self.texture(value_type, name, p, depth),
-                _ => Err(p.error("names one texture")),
+            ("texture", _) => match self.texture_param(p, value_type, depth)? {
+                TextureValue::Constant(v) => Ok(v),
+                TextureValue::Varying { .. } => Err(p.error("the texture varies over the surface; caustica takes a varying texture only as a diffuse or coateddiffuse reflectance")),
             },
             ("float", "float") => match p.numbers() {
                 [v] => Ok(DVec3::splat(*v)),
@@ -246,54 +300,6 @@ impl Mapper<'_> {
         }
         self.warn("spectrum", || format!("{}: spectra given as wavelengths are reduced to linear sRGB (CIE 1931 fit)", p.at));
         Ok(spectrum::to_rgb(&pairs))
-    }
-
-    /// The value of the texture `name` (of `value_type`), which must be constant.
-    fn texture(&mut self, value_type: &str, name: &str, used_by: &Param, depth: usize) -> Result<DVec3> {
-        if depth > MAX_TEXTURE_DEPTH {
-            return Err(used_by.error(format!("textures refer to each other more than {MAX_TEXTURE_DEPTH} deep (a cycle?)")));
-        }
-        let model = self.model;
-        let Some(t) = model.textures.get(&(value_type.to_owned(), name.to_owned())) else {
-            return Err(used_by.error(format!("no {value_type} texture named \"{name}\"")));
-        };
-        let value = self.texture_value(t, depth)?;
-        t.class.check_all_used()?;
-        Ok(value)
-    }
-
-    fn texture_value(&mut self, t: &TextureDef, depth: usize) -> Result<DVec3> {
-        let c = &t.class;
-        let ty = t.value_type.as_str();
-        let get = |this: &mut Self, name: &str, value_type: &str, default: f64| -> Result<DVec3> {
-            match c.param(name) {
-                None => Ok(DVec3::splat(default)),
-                Some(p) => this.color_param(p, value_type, depth + 1),
-            }
-        };
-        let varies = |why: &str| anyhow!("{}: Texture \"{}\" \"{}\": {why}; caustica's materials take constant values", c.at, t.name, c.kind);
-        match c.kind.as_str() {
-            "constant" => get(self, "value", ty, 1.0),
-            "scale" => Ok(get(self, "tex", ty, 1.0)? * get(self, "scale", "float", 1.0)?.x),
-            "mix" => {
-                let (a, b) = (get(self, "tex1", ty, 0.0)?, get(self, "tex2", ty, 1.0)?);
-                let amount = get(self, "amount", "float", 0.5)?.x;
-                Ok(a + (b - a) * amount)
-            }
-            "checkerboard" => {
-                let (a, b) = (get(self, "tex1", ty, 1.0)?, get(self, "tex2", ty, 0.0)?);
-                if a != b {
-                    return Err(varies("a checkerboard of two different values varies over the surface"));
-                }
-                // Where the squares lie does not matter when they are all the same.
-                for name in ["mapping", "uscale", "vscale", "udelta", "vdelta", "dimension"] {
-                    c.param(name);
-                }
-                Ok(a)
-            }
-            "imagemap" => Err(varies("an image map varies over the surface")),
-            _ => Err(varies("this texture is not supported (constant, scale, mix, checkerboard of equal values)")),
-        }
     }
 }
 
