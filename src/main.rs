@@ -505,8 +505,9 @@ fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<
     }
     let folder = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let text = imported.to_toml(folder)?;
-    // The TOML must stand on its own before it replaces anything.
-    Scene::parse(&text, &output.display().to_string(), folder).context("the converted scene does not load (a bug in convert)")?;
+    // The TOML must stand on its own before it replaces anything; what stops it is most often a
+    // file the scene names (a mesh, a map) that is missing or unreadable, which the error names.
+    Scene::parse(&text, &output.display().to_string(), folder).with_context(|| format!("{}: the converted scene does not load", input.display()))?;
     std::fs::write(output, text).with_context(|| format!("writing {}", output.display()))?;
     eprintln!("wrote {}", output.display());
     Ok(())

@@ -8,7 +8,7 @@ mod common;
 
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
-use caustica::scene::{Conductor, Environment, Filter, Light, LightSelection, Sampler, Scene, Shape};
+use caustica::scene::{AlphaMode, Conductor, Environment, Filter, Light, LightSelection, Sampler, Scene, Shape};
 use common::{gpu, render, temp_dir};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -562,7 +562,7 @@ fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them
     };
     let checks = "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4]";
     refused("tex-sphere", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"sphere\""), &["scene.pbrt:9: Shape \"sphere\"", "texture coordinates"]);
-    refused("tex-patch", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]"), &["scene.pbrt:9: Shape \"bilinearmesh\"", "textured"]);
+    refused("tex-patch", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]"), &["scene.pbrt:9: Shape \"bilinearmesh\"", "albedo_texture is supported on a plymesh"]);
     refused("tex-emitting", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nAreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]"), &["scene.pbrt:10: Shape \"trianglemesh\"", "does not emit"]);
     refused("tex-exr", "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.exr\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"plymesh\" \"string filename\" \"square.ply\"", &["scene.pbrt:7: Texture \"imagemap\"", "a.exr", "PNG and JPEG"]);
     refused("tex-jpeg", "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.jpg\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"plymesh\" \"string filename\" \"square.ply\"", &["scene.pbrt:7:", "encoding \"linear\""]);
@@ -710,4 +710,39 @@ fn a_textured_trianglemesh_keeps_its_texture_coordinates_and_convert_writes_it_a
 
     let e = error("bad-uv", &format!("{OPTIONS}WorldBegin\nTexture \"c\" \"spectrum\" \"checkerboard\"\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0 0 1 0]\n"));
     assert!(e.contains("scene.pbrt:9: 'point2 uv'") && e.contains("needs a point2 a vertex (6 numbers)"), "{e}");
+}
+
+/// UV_SQUARE_PLY with vertex normals (+z), which a normal map needs.
+const NORMAL_SQUARE_PLY: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0 1 0.1 0.1\n1 0 0 0 0 1 0.3 0.1\n0 1 0 0 0 1 0.1 0.3\n1 1 0 0 0 1 0.3 0.3\n3 0 1 3\n3 0 3 2\n";
+
+#[test]
+fn normalmaps_and_alpha_cut_outs_become_normal_textures_and_opacity() {
+    let world = "Material \"diffuse\" \"string normalmap\" \"bumps.png\"\n\
+                 Shape \"plymesh\" \"string filename\" \"square.ply\" \"float alpha\" 0.4\n\
+                 Texture \"leaf\" \"float\" \"imagemap\" \"string filename\" \"leaf.png\"\n\
+                 Shape \"plymesh\" \"string filename\" \"square.ply\" \"texture alpha\" \"leaf\"\n\
+                 Shape \"plymesh\" \"string filename\" \"square.ply\" \"float alpha\" 1\n";
+    let path = write_scene("alpha", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}")), ("square.ply", NORMAL_SQUARE_PLY)]);
+    let dir = path.parent().unwrap();
+    for name in ["bumps.png", "leaf.png"] {
+        image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255])).save(dir.join(name)).unwrap();
+    }
+    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    let material = |mesh: usize| &s.materials[s.meshes[mesh].triangle_materials[0] as usize];
+    let [faded, leaf, whole] = [0, 1, 2].map(material);
+    for m in [faded, leaf, whole] {
+        let normal = m.maps.normal.expect("every shape wears the normal-mapped material");
+        assert!(!s.textures[normal.texture as usize].srgb, "pbrt reads normal maps as linear");
+    }
+    let faded_alpha = faded.maps.alpha.expect("alpha 0.4 is an opacity");
+    assert_eq!((faded_alpha.factor, faded_alpha.texture, faded_alpha.mode), (0.4, None, AlphaMode::Blend), "pbrt's alpha is stochastic");
+    let leaf_alpha = leaf.maps.alpha.expect("an alpha texture is an opacity texture");
+    assert_eq!(s.textures[leaf_alpha.texture.unwrap() as usize].name, "leaf.png");
+    assert_eq!(whole.maps.alpha, None, "alpha 1 is a whole surface, sharing the material");
+    assert!(s.meshes[0].tangents.iter().all(|t| t.w == 1.0), "pbrt's frame is Mitsuba's: (dp/du, cross(n, dp/du))");
+
+    let e = error("alpha-sphere", &format!("{OPTIONS}WorldBegin\nShape \"sphere\" \"float alpha\" 0.5\n"));
+    assert!(e.contains("scene.pbrt:7") && e.contains("opacity") && e.contains("Shape \"sphere\""), "{e}");
+    let e = error("alpha-range", &format!("{OPTIONS}WorldBegin\nShape \"plymesh\" \"string filename\" \"square.ply\" \"float alpha\" -0.5\n"));
+    assert!(e.contains("scene.pbrt:7") && e.contains("alpha must be in [0, 1]"), "{e}");
 }

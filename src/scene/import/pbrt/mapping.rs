@@ -12,12 +12,14 @@
 //! has them.
 
 use crate::scene::format::{
-    Array, CameraFile, DirectionalLightFile, InlineMesh, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
+    Array, CameraFile, DirectionalLightFile, Encoding, ImageTextureFile, InlineMesh, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
     SceneFile, SphereFile, SpotLightFile, TriangleFile,
 };
 use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
 use super::super::{spectrum, transform, Location, Notes};
 use super::params::Directive;
+use super::textures::TextureValue;
+use super::super::super::material_maps::needs_mesh;
 use super::parser::{MaterialRef, Model, ShapeUse};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
@@ -328,17 +330,15 @@ impl Mapper<'_> {
         };
         let to_world = instance * s.transform;
         let m = self.world * to_world;
-        if let Some(alpha) = d.param("alpha") {
-            if !(alpha.ty == "float" && alpha.numbers() == [1.0]) {
-                return Err(alpha.error("cut-outs (alpha other than 1) are not supported"));
-            }
-        }
+        let material = self.with_alpha(d, material)?;
         // Textures need texture coordinates, which caustica's meshes have and its spheres, quads
-        // and triangles have not; an emitting mesh is written as triangles.
-        let textured = self.out.materials[&material].albedo_texture.is_some();
-        if textured && (!matches!(d.kind.as_str(), "plymesh" | "trianglemesh") || self.out.materials[&material].emission != Array([0.0; 3])) {
-            return Err(d.error("a textured material is supported on a plymesh or trianglemesh that does not emit only (caustica's spheres, quads and triangles have no texture coordinates)"));
+        // and triangles have not, and opacity is tested on mesh triangles; an emitting mesh is
+        // written as triangles.
+        let textured = needs_mesh(&self.out.materials[&material]);
+        if let Some(what) = textured.filter(|_| !matches!(d.kind.as_str(), "plymesh" | "trianglemesh") || self.out.materials[&material].emission != Array([0.0; 3])) {
+            return Err(d.error(format!("a material with {what} is supported on a plymesh or trianglemesh that does not emit only (caustica's spheres, quads and triangles have no texture coordinates or alpha tests)")));
         }
+        let textured = textured.is_some();
         match d.kind.as_str() {
             "sphere" => self.sphere(s, to_world, m, &material)?,
             "trianglemesh" if textured => self.textured_triangle_mesh(s, m, &material)?,
@@ -379,6 +379,40 @@ impl Mapper<'_> {
             _ => return Err(d.error("this shape is not supported (sphere, trianglemesh, bilinearmesh, plymesh)")),
         }
         d.check_all_used()
+    }
+
+    /// `material` as the shape `d` wears it: with the opacity of its `alpha` (pbrt's stochastic
+    /// cut-out: a ray meets the surface with probability alpha, caustica's `opacity`), a constant
+    /// or a float `imagemap` (whose luminance caustica reads, where pbrt averages the channels:
+    /// the same for the grey images cut-outs are). A material of its own per shape with alpha.
+    fn with_alpha(&mut self, d: &Directive, material: String) -> Result<String> {
+        let Some(p) = d.param("alpha") else { return Ok(material) };
+        let model = self.model;
+        let image = match (p.ty.as_str(), p.strings()) {
+            ("texture", [name]) => model.textures.get(&("float".to_owned(), name.clone())).filter(|t| t.class.kind == "imagemap"),
+            _ => None,
+        };
+        let (opacity, texture) = match image {
+            Some(t) => {
+                let TextureValue::Varying { texture, factor } = self.imagemap(&t.class)? else { unreachable!("an imagemap varies") };
+                t.class.check_all_used()?;
+                let file = texture.file.expect("an imagemap has a file");
+                (factor.x, Some(ImageTextureFile { file, to_uv: texture.to_uv, encoding: Some(Encoding::Srgb) }))
+            }
+            _ => (self.scalar_param(p)?, None),
+        };
+        if opacity >= 1.0 && texture.is_none() {
+            return Ok(material);
+        }
+        if !(0.0..=1.0).contains(&opacity) {
+            return Err(p.error(format!("alpha must be in [0, 1], got {opacity}")));
+        }
+        let mut m = self.out.materials[&material].clone();
+        m.opacity = Some(opacity as f32);
+        m.opacity_texture = texture;
+        let name = unique_name(&self.out.materials, format!("{material} + alpha at {}", d.at));
+        self.out.materials.insert(name.clone(), m);
+        Ok(name)
     }
 
     fn sphere(&mut self, s: &ShapeUse, to_world: DMat4, m: DMat4, material: &str) -> Result<()> {

@@ -2,8 +2,8 @@
 //! diffuse reflectance, which may be a texture (`textures.rs`): a texture that varies anywhere
 //! else is an error naming the file and line. The README's "pbrt-v4" section lists each mapping.
 
-use crate::scene::format::{AlbedoTextureFile, Array, MaterialFile, Triple};
-use super::super::scene_parts::f32x3;
+use crate::scene::format::{AlbedoTextureFile, Array, Encoding, ImageTextureFile, MaterialFile, Triple};
+use super::super::scene_parts::{f32x3, relative_to};
 use super::super::spectrum;
 use super::mapping::Mapper;
 use super::params::{Directive, Param};
@@ -12,6 +12,7 @@ use super::textures::TextureValue;
 use crate::scene::METALS;
 use anyhow::{anyhow, Result};
 use glam::DVec3;
+use std::path::Path;
 
 /// pbrt's named conductor spectra that caustica has measured indices of (`optics::METALS`).
 const NAMED_METALS: [(&str, &str); 4] = [("Au", "gold"), ("Ag", "silver"), ("Cu", "copper"), ("Al", "aluminium")];
@@ -80,8 +81,22 @@ impl Mapper<'_> {
             }
             _ => return Err(d.error("this material is not supported (diffuse, conductor, dielectric, thindielectric, coateddiffuse, coatedconductor, interface)")),
         };
+        let material = MaterialFile { normal_texture: self.normal_map(d)?, ..material };
         d.check_all_used()?;
         Ok(Some(material))
+    }
+
+    /// A material's `normalmap`: pbrt reads the image as linear RGB at (u, 1 - v), which is
+    /// caustica's (u, w) on a PLY (whose v it turns into w = 1 - v as it reads it), in the frame of
+    /// dp/du and cross(n, dp/du): caustica's `normal_texture` as it stands.
+    fn normal_map(&mut self, d: &Directive) -> Result<Option<ImageTextureFile>> {
+        let Some(name) = d.string("normalmap")?.map(str::to_owned) else { return Ok(None) };
+        let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        if !matches!(extension.as_str(), "png" | "jpg" | "jpeg") {
+            return Err(d.error(format!("normalmap \"{name}\": only PNG and JPEG images are supported")));
+        }
+        Ok(Some(ImageTextureFile { file: relative_to(&path, self.base), to_uv: None, encoding: Some(Encoding::Linear) }))
     }
 
     /// caustica's roughness from pbrt's `roughness` (or equal `uroughness` and `vroughness`):
@@ -260,7 +275,7 @@ impl Mapper<'_> {
     }
 
     /// A float-valued parameter (a float or a constant float texture).
-    fn scalar_param(&mut self, p: &Param) -> Result<f64> {
+    pub(super) fn scalar_param(&mut self, p: &Param) -> Result<f64> {
         Ok(self.color_param(p, "float", 0)?.x)
     }
 

@@ -137,7 +137,7 @@ impl Mapper<'_> {
     }
 
     /// An `imagemap`: its image read at pbrt's (s, 1 - t), times its `scale`.
-    fn imagemap(&mut self, c: &Directive) -> Result<TextureValue> {
+    pub(super) fn imagemap(&mut self, c: &Directive) -> Result<TextureValue> {
         let Some(name) = c.string("filename")?.map(str::to_owned) else { return Err(c.error("needs a filename")) };
         let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
         let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
