@@ -62,6 +62,7 @@ struct Material {
 const uint MATERIAL_BECKMANN = 1u;
 const uint MATERIAL_THIN = 2u;
 const uint MATERIAL_ONE_SIDED = 4u;
+const uint MATERIAL_COAT_INTERNAL = 16u;
 
 uint material_flags(Material m) {
     return floatBitsToUint(m.maps.w);

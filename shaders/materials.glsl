@@ -116,6 +116,14 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
         // base; pick by the share each carries, so that a dark base is rarely sampled.
         l.eta = 1.0 / m.params.x;
         l.coat_norm = m.conductor_k.w;
+        if ((material_flags(m) & MATERIAL_COAT_INTERNAL) != 0u) {
+            // Light the coat reflects back down scatters off the base again: of what the base
+            // sends up, the share 1 - Fin leaves (Fin the coat's average internal reflectance,
+            // 1 - Fin = (1 - Fout) / ior^2 by reciprocity) and the rest returns, so the base's
+            // albedo becomes rho (1 - Fin) / (1 - rho Fin) (Mitsuba's nonlinear plastic).
+            float leaves = 1.0 / (l.coat_norm * m.params.x * m.params.x);
+            l.color = l.color * leaves / (1.0 - l.color * (1.0 - leaves));
+        }
         float f = fresnel_dielectric(clamp(-dot(d, l.n), 0.0, 1.0), l.eta);
         float share = f + (1.0 - f) * max3(l.color);
         float p_coat = share > 0.0 ? f / share : 1.0;

@@ -214,7 +214,7 @@ fn materials_map_with_named_spectra_roughness_and_constant_textures() {
     let Conductor::Complex { eta, k } = m(2).conductor else { panic!("a complex conductor") };
     assert!(close(eta, Vec3::ONE) && ((k.x * k.x) / (4.0 + k.x * k.x) - 0.5).abs() < 1e-5);
     assert_eq!((m(3).transparency, m(3).ior), (1.0, 1.5168));
-    assert!(m(4).coat && close(m(4).albedo, Vec3::splat(0.375)) && m(4).ior == 1.4);
+    assert!(m(4).coat && m(4).coat_internal_reflections && close(m(4).albedo, Vec3::splat(0.375)) && m(4).ior == 1.4);
     let copper = caustica::scene::metal("copper").unwrap();
     assert_eq!(m(5).conductor, Conductor::Complex { eta: copper.0, k: copper.1 }, "pbrt's default conductor is copper");
     let warnings = imported("warn", &format!("{OPTIONS}WorldBegin\nMaterial \"dielectric\" \"spectrum eta\" \"glass-F11\"\nShape \"sphere\"\nMaterial \"coateddiffuse\"\nShape \"sphere\"\n")).unwrap().warnings;
@@ -539,7 +539,7 @@ fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them
     // placement, which the mirror decides, is another test's).
     let twin = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n\
                 [materials.wood]\nalbedo = [0.25, 0.25, 0.25]\nalbedo_texture = { file = \"wood.png\", to_uv = [[2, 0, 0], [0, 1, -0.25]] }\n\
-                [materials.checks]\nalbedo = [1, 1, 1]\ncoat = true\nalbedo_texture = { checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]], to_uv = [[2, 0, 0], [0, -0.5, 0.5]] }\n\
+                [materials.checks]\nalbedo = [1, 1, 1]\ncoat = true\ncoat_internal_reflections = true\nalbedo_texture = { checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]], to_uv = [[2, 0, 0], [0, -0.5, 0.5]] }\n\
                 [[meshes]]\nfile = \"square.ply\"\nmaterial = \"wood\"\n\
                 [[meshes]]\nfile = \"square.ply\"\nmaterial = \"checks\"\n";
     let t = Scene::parse(twin, "twin.toml", dir).unwrap_or_else(|e| panic!("{e:#}"));

@@ -27,10 +27,12 @@ pub const TEXTURE_WRAP_CLAMP: u32 = 1;
 pub const TEXTURE_WRAP_MIRROR: u32 = 2;
 
 /// Material flags in `maps[3]` (u32 bits): Beckmann rather than GGX rough lobes and coat; a thin
-/// sheet rather than a solid's surface for the T lobe; black from behind.
+/// sheet rather than a solid's surface for the T lobe; black from behind; a plastic whose coat
+/// reflects light back down onto its base.
 pub const MATERIAL_BECKMANN: u32 = 1;
 pub const MATERIAL_THIN: u32 = 2;
 pub const MATERIAL_ONE_SIDED: u32 = 4;
+pub const MATERIAL_COAT_INTERNAL: u32 = 16;
 
 pub const ALPHA_OPAQUE: u32 = 0;
 pub const ALPHA_MASK: u32 = 1;
@@ -453,6 +455,7 @@ mod tests {
             ("MATERIAL_BECKMANN", MATERIAL_BECKMANN),
             ("MATERIAL_THIN", MATERIAL_THIN),
             ("MATERIAL_ONE_SIDED", MATERIAL_ONE_SIDED),
+            ("MATERIAL_COAT_INTERNAL", MATERIAL_COAT_INTERNAL),
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
             ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
             ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),

@@ -181,7 +181,8 @@ fn material_flags(m: &Material) -> u32 {
     let beckmann = if m.microfacet == Microfacet::Beckmann { MATERIAL_BECKMANN } else { 0 };
     let thin = if m.thin { MATERIAL_THIN } else { 0 };
     let one_sided = if m.one_sided { MATERIAL_ONE_SIDED } else { 0 };
-    beckmann | thin | one_sided
+    let coat_internal = if m.coat_internal_reflections { MATERIAL_COAT_INTERNAL } else { 0 };
+    beckmann | thin | one_sided | coat_internal
 }
 
 /// A material's `alpha` row: texture, factor, cutoff and mode (layout.glsl).

@@ -230,6 +230,11 @@ pub struct MaterialFile {
     pub k: Option<Triple>,
     /// The base is a plastic: the albedo under a dielectric coat of index `ior`.
     pub coat: bool,
+    /// The coat's internal reflections scatter off the base again: albedo rho acts as
+    /// rho (1 - Fin) / (1 - rho Fin), Fin the coat's average internal reflectance (darker and more
+    /// saturated; Mitsuba's `nonlinear`, pbrt's `coateddiffuse`). Only with `coat`.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub coat_internal_reflections: bool,
     /// The microfacet distribution of the rough R and T lobes and of the coat.
     pub distribution: Microfacet,
     /// The T lobe is a thin sheet (a window pane, a soap film) rather than the surface of a solid:
@@ -331,6 +336,7 @@ impl Default for MaterialFile {
             eta: None,
             k: None,
             coat: false,
+            coat_internal_reflections: false,
             distribution: Microfacet::Ggx,
             thin: false,
             one_sided: false,

@@ -241,6 +241,7 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         roughness: m.roughness.clamp(0.0, 1.0),
         conductor: m.conductor,
         coat: m.coat,
+        coat_internal_reflections: false,
         microfacet: Microfacet::Ggx,
         thin: false,
         one_sided: false,

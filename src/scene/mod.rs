@@ -91,6 +91,9 @@ pub struct Material {
     /// The base (1 - R - T) is a plastic: the albedo under a dielectric coat of index `ior` and
     /// roughness `roughness`; false: plain diffuse.
     pub coat: bool,
+    /// The coat reflects light back down onto the base, which scatters it again (Mitsuba's
+    /// `nonlinear` plastic; pbrt's `coateddiffuse` follows it by random walks).
+    pub coat_internal_reflections: bool,
     /// The microfacet distribution of the rough R and T lobes and of the coat.
     pub microfacet: Microfacet,
     /// The T lobe is a thin sheet: reflects 2F / (1 + F), passes the rest straight through.
@@ -509,6 +512,7 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         roughness: finite(&key("roughness"), m.roughness)?,
         conductor,
         coat: m.coat,
+        coat_internal_reflections: m.coat_internal_reflections,
         microfacet: m.distribution,
         thin: m.thin,
         one_sided: m.one_sided,
@@ -517,6 +521,9 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         clearcoat: clearcoat_from(m, &key)?,
         attenuation: attenuation_from(m, &key)?,
     };
+    if material.coat_internal_reflections && !material.coat {
+        bail!("{} needs coat = true (it describes the coat of a plastic)", key("coat_internal_reflections"));
+    }
     if !(0.0..=1.0).contains(&material.roughness) {
         bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);
     }

@@ -526,16 +526,18 @@ impl Mapper<'_> {
                 MaterialFile { transparency: 1.0, ior: relative_ior(b, "bk7")?, thin: true, ..see_through }
             }
             "plastic" | "roughplastic" => {
-                self.warn("plastic", || {
-                    format!("{}: {}: plastic becomes caustica's coated diffuse, which does not model light reflected inside the coat (a little brighter and less saturated than Mitsuba's)", b.at, b.describe())
-                });
+                // A smooth plastic is Mitsuba's model exactly: its diffuse term
+                // rho / (1 - Fdr_in) / eta^2 is caustica's rho / (1 - Fdr_out), by reciprocity.
+                if b.plugin == "roughplastic" {
+                    self.warn("roughplastic", || {
+                        format!("{}: {}: roughplastic's base is seen through the smooth coat's Fresnel terms (Mitsuba tabulates the rough coat's transmittance: a little brighter at grazing angles)", b.at, b.describe())
+                    });
+                }
                 let (roughness, distribution) = self.microfacet(b, b.plugin == "roughplastic")?;
                 self.unit_factor(b, "specular_reflectance")?;
-                if b.boolean("nonlinear", false)? {
-                    return Err(b.error("nonlinear is not supported"));
-                }
+                let coat_internal_reflections = b.boolean("nonlinear", false)?;
                 let albedo = f32x3(self.reflectance(b, "diffuse_reflectance", 0.5)?);
-                MaterialFile { albedo, coat: true, ior: relative_ior(b, "polypropylene")?, roughness, distribution, ..defaults }
+                MaterialFile { albedo, coat: true, coat_internal_reflections, ior: relative_ior(b, "polypropylene")?, roughness, distribution, ..defaults }
             }
             _ => return Err(b.error("this BSDF is not supported (diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, twosided, mask, normalmap)")),
         };

@@ -46,14 +46,15 @@ impl Mapper<'_> {
             "coateddiffuse" => {
                 self.warn("coated", || {
                     format!(
-                        "{}: {}: coateddiffuse becomes caustica's coat over a diffuse base, which does not model light reflected inside the coat nor the coat's thickness (a little brighter than pbrt's)",
+                        "{}: {}: coateddiffuse becomes caustica's coat over a diffuse base, the light the coat reflects back down summed in closed form (rho (1 - Fin) / (1 - rho Fin)) where pbrt follows it by random walks through a coat of some thickness",
                         d.at,
                         d.describe()
                     )
                 });
                 self.clear_layer(d)?;
                 let (albedo, albedo_texture) = self.albedo(d)?;
-                MaterialFile { albedo: f32x3(albedo), albedo_texture, coat: true, ior: self.dielectric_eta(d, "eta")?, roughness: self.roughness(d)?, ..defaults }
+                // pbrt's random walk follows the light the coat reflects back down onto the base.
+                MaterialFile { albedo: f32x3(albedo), albedo_texture, coat: true, coat_internal_reflections: true, ior: self.dielectric_eta(d, "eta")?, roughness: self.roughness(d)?, ..defaults }
             }
             "interface" => {
                 d.check_all_used()?;
