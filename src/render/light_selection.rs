@@ -195,6 +195,7 @@ mod tests {
             two_sided,
             albedo_texture: None,
             roughness: 0.0,
+            roughness_v: None,
             conductor: Conductor::Mirror,
             coat: false,
             microfacet: Default::default(),

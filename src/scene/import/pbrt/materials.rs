@@ -37,15 +37,18 @@ impl Mapper<'_> {
         let material = match def.ty.as_str() {
             "diffuse" => MaterialFile { albedo: f32x3(self.reflectance(d, "reflectance", 0.5)?), ..defaults },
             "conductor" => {
-                let roughness = self.roughness(d)?;
+                let (roughness, roughness_v) = self.roughness(d)?;
                 let (metal, eta, k) = match self.conductor(d)? {
                     None => (None, None, None),
                     Some(Conductor::Named(name)) => (Some(name.to_owned()), None, None),
                     Some(Conductor::Complex(eta, k)) => (None, Some(f32x3(eta)), Some(f32x3(k))),
                 };
-                MaterialFile { reflectivity: Some(1.0), roughness, metal, eta, k, ..defaults }
+                MaterialFile { reflectivity: Some(1.0), roughness, roughness_v, metal, eta, k, ..defaults }
             }
-            "dielectric" => MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d)?, roughness: self.roughness(d)?, ..defaults },
+            "dielectric" => {
+                let (roughness, roughness_v) = self.roughness(d)?;
+                MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d)?, roughness, roughness_v, ..defaults }
+            }
             "coateddiffuse" => {
                 self.warn("coated", || {
                     format!(
@@ -65,7 +68,8 @@ impl Mapper<'_> {
                 d.integer("maxdepth")?;
                 d.integer("nsamples")?;
                 let albedo = f32x3(self.reflectance(d, "reflectance", 0.5)?);
-                MaterialFile { albedo, coat: true, ior: self.dielectric_eta(d)?, roughness: self.roughness(d)?, ..defaults }
+                let (roughness, roughness_v) = self.roughness(d)?;
+                MaterialFile { albedo, coat: true, ior: self.dielectric_eta(d)?, roughness, roughness_v, ..defaults }
             }
             "interface" => {
                 d.check_all_used()?;
@@ -80,22 +84,26 @@ impl Mapper<'_> {
         Ok(Some(material))
     }
 
-    /// caustica's roughness from pbrt's `roughness` (or equal `uroughness` and `vroughness`):
-    /// with `remaproughness` (the default)
-    /// pbrt's alpha is sqrt(roughness), else the roughness itself; caustica's roughness is
-    /// sqrt(alpha), the same Trowbridge-Reitz (GGX) distribution.
-    fn roughness(&mut self, d: &Directive) -> Result<f32> {
+    /// caustica's roughness and roughness_v from pbrt's `uroughness` and `vroughness` (each
+    /// defaulting to `roughness`): with `remaproughness` (the default) pbrt's alpha is
+    /// sqrt(roughness) (TrowbridgeReitzDistribution::RoughnessToAlpha), else the roughness
+    /// itself; caustica's roughness is sqrt(alpha), the same Trowbridge-Reitz (GGX) distribution.
+    /// pbrt's alpha_x lies along dp/du as caustica's roughness does; roughness_v is None where
+    /// the two are equal (isotropic).
+    fn roughness(&mut self, d: &Directive) -> Result<(f32, Option<f32>)> {
         let r = self.scalar(d, "roughness", 0.0)?;
-        let (u, v) = (self.scalar_if_given(d, "uroughness")?, self.scalar_if_given(d, "vroughness")?);
-        let r = match (u.or(Some(r)), v.or(Some(r))) {
-            (Some(u), Some(v)) if u == v => u,
-            _ => return Err(d.error("anisotropic roughness (uroughness != vroughness) is not supported")),
+        let (u, v) = (self.scalar_if_given(d, "uroughness")?.unwrap_or(r), self.scalar_if_given(d, "vroughness")?.unwrap_or(r));
+        let remap = d.boolean("remaproughness", true)?;
+        let roughness = |name: &str, r: f64| {
+            let alpha = if remap { r.max(0.0).sqrt() } else { r };
+            if !(0.0..=1.0).contains(&alpha) || r < 0.0 {
+                return Err(d.error(format!("the {name} must give an alpha in [0, 1], got {name} {r} (alpha {alpha})")));
+            }
+            Ok(alpha.sqrt() as f32)
         };
-        let alpha = if d.boolean("remaproughness", true)? { r.max(0.0).sqrt() } else { r };
-        if !(0.0..=1.0).contains(&alpha) || r < 0.0 {
-            return Err(d.error(format!("the roughness must give an alpha in [0, 1], got roughness {r} (alpha {alpha})")));
-        }
-        Ok(alpha.sqrt() as f32)
+        let along_u = roughness(if u == r { "roughness" } else { "uroughness" }, u)?;
+        let along_v = roughness(if v == r { "roughness" } else { "vroughness" }, v)?;
+        Ok((along_u, (u != v).then_some(along_v)))
     }
 
     /// A dielectric's `eta`: a number, or a named glass at its d-line index (a warning: pbrt
