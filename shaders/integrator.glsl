@@ -155,7 +155,7 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
         path.throughput /= q;
     }
 
-    Lobe lobe = pick_lobe(m, path.dir, surface.ns, front, rng);
+    Lobe lobe = pick_lobe(m, path.dir, surface.ns, surface.tangent, front, rng);
     if (!lobe_is_delta(lobe)) first.open = false;
     BsdfSample s;
     bool sampled = sample_lobe(lobe, path.dir, rng, s);

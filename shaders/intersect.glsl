@@ -72,6 +72,20 @@ vec3 primitive_normal(Primitive p, vec3 point) {
     }
 }
 
+// The surface's u direction, which an anisotropic lobe's x axis follows (not unit): a sphere's
+// is that of increasing longitude phi about the world z axis through its centre, as Mitsuba's
+// sphere about its local z (caustica's spheres have no rotation of their own), zero at the poles;
+// a quad's is edge u; a triangle of the scene's own has no texture coordinates and so none (the
+// lobe keeps an arbitrary frame, as Mitsuba's coordinate_system(n) for meshes without them).
+vec3 primitive_tangent(Primitive p, vec3 point) {
+    switch (prim_kind(p)) {
+        case PRIM_SPHERE: return vec3(p.a.y - point.y, point.x - p.a.x, 0.0);
+        case PRIM_QUAD: return p.b.xyz;
+        case PRIM_TRIANGLE: return vec3(0.0);
+        default: return vec3(0.0);
+    }
+}
+
 float primitive_area(Primitive p) {
     switch (prim_kind(p)) {
         case PRIM_SPHERE: return 4.0 * PI * p.a.w * p.a.w;

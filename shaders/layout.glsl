@@ -42,7 +42,9 @@ const uint CONDUCTOR_ALBEDO = 2u;
 // coat (glTF KHR_materials_clearcoat, pick_lobe): .x = the clear coat's factor (0: none), .y its
 // perceptual roughness (GGX alpha is its square), .z / .w = textures whose R / G channel multiplies
 // .x / .y per texel (uint bits; NO_TEXTURE for none). volume.rgb = the absorption coefficient
-// sigma_a per world unit inside the material (Beer-Lambert, path_step; 0: clear); volume.w unused.
+// sigma_a per world unit inside the material (Beer-Lambert, path_step; 0: clear); volume.w = the
+// alpha along v of an anisotropic material's R and T lobes and coat, params.w being the one along
+// u (0: isotropic, params.w along both).
 struct Material {
     vec4 albedo_r;
     vec4 emission_t;

@@ -3,7 +3,7 @@
 // plastic: diffuse under a dielectric coat); a glTF clear coat over all of them comes first. A lobe's weight equals the probability of picking it,
 // so the two cancel; the path then samples, evaluates and MIS-weights that lobe alone, which keeps
 // delta lobes (roughness ~0) and rough lobes in one scheme. Rough lobes are GGX or Beckmann
-// (microfacet.glsl).
+// (microfacet.glsl), anisotropic where the material's alpha along v differs from its alpha along u.
 
 #include "fresnel.glsl"
 #include "microfacet.glsl"
@@ -23,14 +23,15 @@ const float CLEARCOAT_IOR = 1.5;
 struct Lobe {
     uint kind;
     uint fresnel;     // LOBE_REFLECT: CONDUCTOR_* or FRESNEL_COAT
-    float alpha;      // microfacet alpha; below ALPHA_DELTA the lobe is smooth (a delta lobe)
+    vec2 alpha;       // microfacet alpha along t and b; below ALPHA_DELTA the lobe is smooth (a delta lobe)
     uint distribution;  // MICROFACET_* of the rough R and T lobes and the coat
     float eta;        // eta_i / eta_t across the interface (dielectric and coat)
     vec3 color;       // diffuse albedo, F0 (CONDUCTOR_ALBEDO) or eta (CONDUCTOR_COMPLEX)
     vec3 k;           // CONDUCTOR_COMPLEX: extinction coefficient
     float scale;      // the lobe's weight over the probability of picking it
     float coat_norm;  // coated diffuse: 1 / (1 - the coat's cosine-weighted average Fresnel)
-    vec3 t;           // shading frame; n faces the side the ray came from
+    vec3 t;           // shading frame; n faces the side the ray came from, t is the surface's u
+                      // direction where the lobe is anisotropic (else any)
     vec3 b;
     vec3 n;
 };
@@ -51,7 +52,7 @@ vec3 from_local(Lobe l, vec3 w) {
 }
 
 bool lobe_is_delta(Lobe l) {
-    return ((l.kind == LOBE_REFLECT || l.kind == LOBE_DIELECTRIC) && l.alpha < ALPHA_DELTA) || l.kind == LOBE_THIN_DIELECTRIC;
+    return ((l.kind == LOBE_REFLECT || l.kind == LOBE_DIELECTRIC) && max(l.alpha.x, l.alpha.y) < ALPHA_DELTA) || l.kind == LOBE_THIN_DIELECTRIC;
 }
 
 vec3 lobe_fresnel(Lobe l, float cos_i) {
@@ -63,14 +64,27 @@ vec3 lobe_fresnel(Lobe l, float cos_i) {
 }
 
 // Picks the lobe for a ray arriving along `d` at a surface with unit shading normal `ns` (on the
-// front side), at which the ray is `entering` (coming from the front side).
-Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
+// front side) and `tangent` (the surface's u direction, not necessarily unit nor normal to ns;
+// zero where the surface has none), at which the ray is `entering` (coming from the front side).
+Lobe pick_lobe(Material m, vec3 d, vec3 ns, vec3 tangent, bool entering, inout Rng rng) {
     Lobe l;
     l.n = entering ? ns : -ns;
     onb(l.n, l.t, l.b);
     // A scene without rough lobes (SCENE_ROUGH_LOBES, src/render/features.rs) has every R and T lobe
     // smooth: the constant lets the compiler drop the GGX code.
-    l.alpha = SCENE_ROUGH_LOBES == 1 ? m.params.w : 0.0;
+    l.alpha = vec2(SCENE_ROUGH_LOBES == 1 ? m.params.w : 0.0);
+    // An anisotropic material (its alpha along v in volume.w) lays its lobes' x axis along the
+    // surface's u direction, made normal to the shading normal (Mitsuba's and pbrt-v4's shading
+    // frame). Without a tangent the arbitrary frame above stays (Mitsuba's coordinate_system(n)).
+    // The sign of b does not matter: D and Lambda depend on the squares of x and y alone.
+    if (SCENE_ANISOTROPIC == 1 && m.volume.w > 0.0) {
+        l.alpha.y = m.volume.w;
+        vec3 t = tangent - dot(tangent, l.n) * l.n;
+        if (dot(t, t) > 1e-12) {
+            l.t = normalize(t);
+            l.b = cross(l.n, l.t);
+        }
+    }
     l.distribution = (material_flags(m) & MATERIAL_BECKMANN) != 0u ? MICROFACET_BECKMANN : MICROFACET_GGX;
     l.eta = 1.0;
     l.color = m.albedo_r.rgb;
@@ -89,7 +103,7 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, bool entering, inout Rng rng) {
         float f = fresnel_dielectric(clamp(-dot(d, l.n), 0.0, 1.0), 1.0 / CLEARCOAT_IOR);
         if (rng_next(rng) < m.coat.x * f) {
             l.kind = LOBE_REFLECT;
-            l.alpha = SCENE_ROUGH_LOBES == 1 ? m.coat.y * m.coat.y : 0.0;
+            l.alpha = vec2(SCENE_ROUGH_LOBES == 1 ? m.coat.y * m.coat.y : 0.0);
             l.distribution = MICROFACET_GGX;  // glTF's, whatever the material's own lobes use
             return l;
         }

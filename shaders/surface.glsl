@@ -6,6 +6,9 @@ struct Surface {
     vec3 ng;        // unit geometric normal on the front side (outward, or by winding)
     vec3 ns;        // unit shading normal: interpolated vertex normals, turned to ng's side (and
                     // bent by a normal map)
+    vec3 tangent;   // the surface's u direction in the world, for anisotropic lobes (not unit,
+                    // not normal to ns; zero where there is none). Kernels without anisotropic
+                    // materials (SCENE_ANISOTROPIC) leave it zero.
     vec2 uv;
     uint material;
 };
@@ -52,6 +55,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
         Primitive p = prims[hit.prim];
         s.ng = primitive_normal(p, s.point);
         s.ns = s.ng;
+        s.tangent = SCENE_ANISOTROPIC == 1 ? primitive_tangent(p, s.point) : vec3(0.0);
         s.uv = vec2(0.0);
         s.material = prim_material(p);
         return s;
@@ -62,7 +66,14 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     vec3 w = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
     s.ng = normal_to_world(world_to_object, cross(triangle.e1.xyz, triangle.e2.xyz));
     s.ns = s.ng;
+    s.tangent = vec3(0.0);
     s.uv = vec2(0.0);
+    // A mesh with an anisotropic material carries tangents where it has texture coordinates
+    // (src/scene/asset/mod.rs): MikkTSpace's, along growing u, carried to the world as directions.
+    if (SCENE_ANISOTROPIC == 1 && (info.z & INSTANCE_HAS_TANGENTS) != 0u) {
+        vec4 t = w.x * load_vertex_tangents(tri.x) + w.y * load_vertex_tangents(tri.y) + w.z * load_vertex_tangents(tri.z);
+        s.tangent = affine_vector(instances[hit.instance].object_to_world, t.xyz);
+    }
     // Texture coordinates serve textures alone.
     if (SCENE_TEXTURES == 1 && (info.z & INSTANCE_HAS_UVS) != 0u) {
         s.uv = w.x * load_vertex_uvs(tri.x) + w.y * load_vertex_uvs(tri.y) + w.z * load_vertex_uvs(tri.z);

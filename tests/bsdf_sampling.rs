@@ -34,7 +34,9 @@ use std::f64::consts::PI;
 /// Mode 1: finds the lobe with the requested code (pick_lobe with successive streams) and writes
 ///   eval_lobe's pdf for every direction of `dirs`.
 /// Mode 2: writes the weak white furnace integrand D(h) G1(wo) / (4 wo.z) of the material's
-///   microfacet distribution for every direction wi of `dirs` (h the half vector, wo = -d).
+///   microfacet distribution for every direction wi of `dirs` (h the half vector, wo = -d), in
+///   the frame whose x axis is the query's tangent (that of an anisotropic lobe).
+/// Every lobe is given the query's tangent as the surface's u direction.
 /// A lobe's code is kind * 4 + fresnel, which tells the plastic's coat from a conductor.
 const TEST_KERNEL: &str = r#"#version 460
 layout(local_size_x = 64) in;
@@ -43,8 +45,9 @@ layout(local_size_x = 64) in;
 #include "sampling.glsl"
 #include "materials.glsl"
 // d.xyz = the incoming ray direction (towards the surface), d.w = 1 when the ray enters (comes
-// from the front side); info = mode, invocation count, lobe code (mode 1), seed.
-layout(std430, set = 0, binding = 30) readonly buffer Query { vec4 d; uvec4 info; } query;
+// from the front side); info = mode, invocation count, lobe code (mode 1), seed; tangent.xyz =
+// the surface's u direction.
+layout(std430, set = 0, binding = 30) readonly buffer Query { vec4 d; uvec4 info; vec4 tangent; } query;
 layout(std430, set = 0, binding = 31) readonly buffer Dirs { vec4 dirs[]; };
 layout(std430, set = 0, binding = 32) writeonly buffer Results { vec4 results[]; };
 
@@ -52,7 +55,7 @@ layout(std430, set = 0, binding = 32) writeonly buffer Results { vec4 results[];
 // entering ray and -z for a leaving one (pick_lobe flips it).
 Lobe lobe_for(inout Rng rng) {
     bool entering = query.d.w > 0.5;
-    return pick_lobe(materials[0], query.d.xyz, vec3(0.0, 0.0, entering ? 1.0 : -1.0), entering, rng);
+    return pick_lobe(materials[0], query.d.xyz, vec3(0.0, 0.0, entering ? 1.0 : -1.0), query.tangent.xyz, entering, rng);
 }
 
 uint lobe_code(Lobe l) { return l.kind * 4u + l.fresnel; }
@@ -64,12 +67,16 @@ void main() {
     if (query.info.x == 2u) {
         Material m = materials[0];
         uint distribution = (material_flags(m) & MATERIAL_BECKMANN) != 0u ? MICROFACET_BECKMANN : MICROFACET_GGX;
-        vec3 wo = -d;
-        vec3 h = wo + dirs[id].xyz;
+        vec2 alpha = vec2(m.params.w, m.volume.w > 0.0 ? m.volume.w : m.params.w);
+        vec3 t = normalize(vec3(query.tangent.xy, 0.0));
+        vec3 b = cross(vec3(0.0, 0.0, 1.0), t);
+        vec3 wo = vec3(dot(-d, t), dot(-d, b), -d.z);
+        vec3 wi = dirs[id].xyz;
+        vec3 h = wo + vec3(dot(wi, t), dot(wi, b), wi.z);
         float value = 0.0;
         if (dot(h, h) > 0.0 && dot(wo, normalize(h)) > 0.0) {
             h = normalize(h);
-            value = microfacet_d(h, m.params.w, distribution) * microfacet_g1(wo, m.params.w, distribution) / (4.0 * wo.z);
+            value = microfacet_d(h, alpha, distribution) * microfacet_g1(wo, alpha, distribution) / (4.0 * wo.z);
         }
         results[id] = vec4(value);
         return;
@@ -101,6 +108,10 @@ void main() {
 "#;
 
 const SAMPLES: u32 = 1 << 20;
+/// The surface's u direction given to every lobe: 30 degrees from x and not normal to the lobe's
+/// normal (+-z), so an anisotropic lobe must make it normal, and its frame differs from the
+/// arbitrary one onb() builds about +-z (whose x axis is +x).
+const TANGENT: [f64; 4] = [0.866_025_403_784_438_6, 0.5, 0.4, 0.0];
 /// Bins over the whole sphere: theta in [0, pi] (uniform in angle, which resolves the narrow
 /// near-specular peaks better than uniform cos theta), phi in [0, 2 pi).
 const THETA_BINS: usize = 80;
@@ -109,7 +120,7 @@ const PHI_BINS: usize = 160;
 const GL_NODES: [f64; 5] = [-0.906_179_845_938_664, -0.538_469_310_105_683_1, 0.0, 0.538_469_310_105_683_1, 0.906_179_845_938_664];
 const GL_WEIGHTS: [f64; 5] = [0.236_926_885_056_189_1, 0.478_628_670_499_366_5, 0.568_888_888_888_888_9, 0.478_628_670_499_366_5, 0.236_926_885_056_189_1];
 /// Number of chi-square tests in this file (lobes tested), for the Bonferroni correction.
-const TESTS: f64 = 21.0;
+const TESTS: f64 = 28.0;
 const SIGNIFICANCE: f64 = 1e-4 / TESTS;
 /// Cells with fewer expected samples are pooled, as the textbook test requires.
 const MIN_EXPECTED: f64 = 5.0;
@@ -180,7 +191,7 @@ impl<'a> Kernel<'a> {
         let dirs_len = THETA_BINS * PHI_BINS * GL_NODES.len() * GL_NODES.len();
         let results_len = (3 * SAMPLES as usize).max(dirs_len);
         let material = Buffer::with_data(ctx, "material", BufferKind::HostStorage, bytemuck::bytes_of(&GpuMaterial::zeroed())).unwrap();
-        let query = Buffer::with_data(ctx, "query", BufferKind::HostStorage, &[0u8; 32]).unwrap();
+        let query = Buffer::with_data(ctx, "query", BufferKind::HostStorage, &[0u8; 48]).unwrap();
         let dirs = Buffer::with_data(ctx, "dirs", BufferKind::HostStorage, bytemuck::cast_slice(&quadrature().0)).unwrap();
         let results = Buffer::with_data(ctx, "results", BufferKind::HostStorage, &vec![0u8; results_len * 16]).unwrap();
         let bindings = [Binding::whole(KernelBuffer::Materials.entry().binding, &material), Binding::whole(30, &query), Binding::whole(31, &dirs), Binding::whole(32, &results)];
@@ -194,6 +205,7 @@ impl<'a> Kernel<'a> {
         let d = [-sin_o as f32, 0.0, -case.cos_o as f32, if case.entering { 1.0 } else { 0.0 }];
         let mut query: Vec<u8> = bytemuck::cast_slice(&d).to_vec();
         query.extend(bytemuck::cast_slice(&[mode, count, lobe, 12345u32]));
+        query.extend(bytemuck::cast_slice(&TANGENT.map(|c| c as f32)));
         self.query.write(&query).unwrap();
         self.material.write(bytemuck::bytes_of(&case.material)).unwrap();
         self.kernel.dispatch(self.ctx, &[0u8; 16], [count.div_ceil(64), 1, 1]).unwrap();
@@ -409,6 +421,12 @@ fn beckmann(mut m: GpuMaterial) -> GpuMaterial {
     m
 }
 
+/// `m` anisotropic: alpha `alpha_v` along v (across the tangent), its own alpha along u.
+fn anisotropic(mut m: GpuMaterial, alpha_v: f32) -> GpuMaterial {
+    m.volume[3] = alpha_v;
+    m
+}
+
 /// Gold's complex index (roughly, at R, G, B).
 fn gold(alpha: f32) -> GpuMaterial {
     let mut m = material(1.0, 1.0, 0.0, 1.0, alpha);
@@ -462,6 +480,12 @@ fn reflector_cases() -> Vec<Case> {
     for (alpha, cos_o) in [(0.05, 0.2), (0.3, 0.9), (1.0, 0.2)] {
         cases.push(Case { name: format!("Beckmann conductor, alpha {alpha} (cos {cos_o})"), material: beckmann(gold(alpha)), cos_o, entering: true });
     }
+    // Anisotropic, the viewer at 30 degrees from the tangent's azimuth (TANGENT): narrow along u
+    // and wide along v, or the other way round for Beckmann.
+    for cos_o in [0.9, 0.2] {
+        cases.push(Case { name: format!("anisotropic conductor, alpha 0.05 along u, 0.5 along v (cos {cos_o})"), material: anisotropic(gold(0.05), 0.5), cos_o, entering: true });
+    }
+    cases.push(Case { name: "anisotropic Beckmann conductor, alpha 0.5 along u, 0.05 along v (cos 0.2)".into(), material: anisotropic(beckmann(gold(0.5)), 0.05), cos_o: 0.2, entering: true });
     cases
 }
 
@@ -476,6 +500,13 @@ fn dielectric_cases() -> Vec<Case> {
     for (entering, side) in [(true, "from outside"), (false, "from inside")] {
         let name = format!("Beckmann dielectric ior 1.5, alpha 0.3, {side} (cos 0.7)");
         cases.push(Case { name, material: beckmann(material(1.0, 0.0, 1.0, 1.5, 0.3)), cos_o: 0.7, entering });
+    }
+    for (entering, side) in [(true, "from outside"), (false, "from inside")] {
+        let glass = material(1.0, 0.0, 1.0, 1.5, 0.1);
+        let name = format!("anisotropic dielectric ior 1.5, alpha 0.1 along u, 0.6 along v, {side} (cos 0.7)");
+        cases.push(Case { name, material: anisotropic(glass, 0.6), cos_o: 0.7, entering });
+        let name = format!("anisotropic Beckmann dielectric ior 1.5, alpha 0.6 along u, 0.1 along v, {side} (cos 0.7)");
+        cases.push(Case { name, material: anisotropic(beckmann(material(1.0, 0.0, 1.0, 1.5, 0.6)), 0.1), cos_o: 0.7, entering });
     }
     cases
 }
@@ -595,6 +626,9 @@ fn a_thin_sheet_reflects_two_f_over_one_plus_f_and_passes_the_rest_straight() {
 /// Smith's Lambda to D, which the sampling tests cannot (sample and eval share both), so a wrong
 /// Lambda or an unnormalised D fails: the tolerance, 2e-3, is ten times the quadrature's error at
 /// these alphas, and GGX's Lambda with alpha in place of alpha^2 is off by 8 % at alpha 0.3.
+/// The anisotropic distributions (alpha 0.6 along u, 0.15 along v) are seen from 30 degrees off
+/// the tangent's azimuth, so their Lambda must weigh both alphas by that azimuth: an isotropic
+/// Lambda of either alpha, or the alphas swapped in Lambda alone, is off by far more than 2e-3.
 #[test]
 fn visible_normals_integrate_to_one_for_ggx_and_beckmann() {
     let (_lock, ctx) = gpu();
@@ -602,11 +636,11 @@ fn visible_normals_integrate_to_one_for_ggx_and_beckmann() {
     let (_, weights) = quadrature();
     let mut failures = Vec::new();
     for (name, distribution) in [("GGX", 0), ("Beckmann", MATERIAL_BECKMANN)] {
-        for alpha in [0.3f32, 0.6] {
+        for (alpha, alpha_v) in [(0.3f32, 0.0), (0.6, 0.0), (0.6, 0.15)] {
             for cos_o in [0.9, 0.3] {
-                let mut m = material(1.0, 1.0, 0.0, 1.0, alpha);
+                let mut m = anisotropic(material(1.0, 1.0, 0.0, 1.0, alpha), alpha_v);
                 m.maps[3] = f32::from_bits(distribution);
-                let case = Case { name: format!("{name}, alpha {alpha}, cos {cos_o}"), material: m, cos_o, entering: true };
+                let case = Case { name: format!("{name}, alpha {alpha} along u, {} along v, cos {cos_o}", if alpha_v > 0.0 { alpha_v } else { alpha }), material: m, cos_o, entering: true };
                 let values = kernel.run(&case, 2, weights.len() as u32, 0);
                 let integral: f64 = values.iter().zip(&weights).map(|(v, w)| v[0] as f64 * w).sum();
                 eprintln!("{}: the visible normals integrate to {integral:.5}", case.name);
@@ -614,6 +648,86 @@ fn visible_normals_integrate_to_one_for_ggx_and_beckmann() {
                     failures.push(format!("{}: the visible normals integrate to {integral:.5}, not 1", case.name));
                 }
             }
+        }
+    }
+    kernel.destroy();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Of the microfacet normals an anisotropic lobe (alpha `ax` along u, `ay` along v; `beckmann` or
+/// GGX) reflects a ray at normal incidence by, those that send it above the horizon (slope below
+/// 1), measured in a frame turned by `turn` radians from the lobe's: the share whose slope is
+/// steeper along x than along y, and the share in the first and third quadrants. At normal
+/// incidence both samplers draw the slopes' density P22 (GGX's visible normals are D cos there),
+/// which in polar coordinates (r, phi) is f(k r^2) / (pi ax ay), k = cos^2 phi / ax^2 +
+/// sin^2 phi / ay^2, f(s) = 1 / (1 + s)^2 (GGX) or exp(-s) (Beckmann); over r in [0, 1] that
+/// leaves 1 / (2 (1 + k)) and (1 - exp(-k)) / (2 k), integrated over phi here.
+fn slope_shares(ax: f64, ay: f64, turn: f64, beckmann: bool) -> (f64, f64) {
+    const STEPS: usize = 100_000;
+    let (mut steeper_along_x, mut first_and_third, mut total) = (0.0, 0.0, 0.0);
+    for i in 0..STEPS {
+        let theta = (i as f64 + 0.5) / STEPS as f64 * 2.0 * PI;
+        let (s, c) = (theta - turn).sin_cos();
+        let k = c * c / (ax * ax) + s * s / (ay * ay);
+        let w = if beckmann { (1.0 - (-k).exp()) / k } else { 1.0 / (1.0 + k) };
+        let (s, c) = theta.sin_cos();
+        total += w;
+        if c.abs() > s.abs() {
+            steeper_along_x += w;
+        }
+        if c * s > 0.0 {
+            first_and_third += w;
+        }
+    }
+    (steeper_along_x / total, first_and_third / total)
+}
+
+/// An anisotropic lobe lies along the surface's tangent, rough by alpha_u along it and alpha_v
+/// across it, which the chi-square tests cannot see (sampling and eval_lobe share the frame and
+/// the alphas). A conductor with alpha 0.5 along u and 0.1 along v is sampled at normal incidence,
+/// the tangent given 30 degrees from x and tilted out of the surface (TANGENT); each reflected
+/// direction's half vector is the microfacet normal, whose slopes along the tangent made normal
+/// and across it are compared with the closed form of slope_shares: the share steeper along the
+/// tangent (0.861 for GGX, 0.874 for Beckmann; 0.139 and 0.126 with the alphas swapped) and the
+/// share in the first and third quadrants (exactly 1/2 by symmetry; 0.84 and 0.86 with the
+/// arbitrary frame of an ignored tangent). The tolerance is five binomial standard errors (about
+/// 0.002 and 0.003); the test checks here that an alpha off by 3 % or a tangent turned by a
+/// quarter of a degree moves a share by more than that.
+#[test]
+fn anisotropic_lobes_are_rough_by_alpha_u_along_the_tangent_and_alpha_v_across() {
+    let (_lock, ctx) = gpu();
+    let mut kernel = Kernel::new(&ctx);
+    let kind = kernel_lobes().into_iter().find(|(name, _)| name == "LOBE_REFLECT").expect("materials.glsl has LOBE_REFLECT").1;
+    let (alpha_u, alpha_v) = (0.5f32, 0.1f32);
+    let tangent_length = TANGENT[0].hypot(TANGENT[1]);
+    let (t, b) = ([TANGENT[0] / tangent_length, TANGENT[1] / tangent_length], [-TANGENT[1] / tangent_length, TANGENT[0] / tangent_length]);
+    let mut failures = Vec::new();
+    for (name, beckmann_lobe) in [("GGX", false), ("Beckmann", true)] {
+        let conductor = anisotropic(material(1.0, 1.0, 0.0, 1.0, alpha_u), alpha_v);
+        let case = Case { name: format!("{name} anisotropic conductor"), material: if beckmann_lobe { beckmann(conductor) } else { conductor }, cos_o: 1.0, entering: true };
+        let (mut steeper_along_x, mut first_and_third, mut n) = (0usize, 0usize, 0usize);
+        for s in kernel.samples(&case).iter().filter(|s| s.ok) {
+            assert_eq!(s.lobe / 4, kind, "{}: picked lobe {}", case.name, s.lobe);
+            // The half vector of wo = +z and the reflected direction, as slopes.
+            let h = [s.dir[0] as f64, s.dir[1] as f64, s.dir[2] as f64 + 1.0];
+            let x = (h[0] * t[0] + h[1] * t[1]) / h[2];
+            let y = (h[0] * b[0] + h[1] * b[1]) / h[2];
+            steeper_along_x += usize::from(x.abs() > y.abs());
+            first_and_third += usize::from(x * y > 0.0);
+            n += 1;
+        }
+        let (ax, ay) = (alpha_u as f64, alpha_v as f64);
+        let expected = slope_shares(ax, ay, 0.0, beckmann_lobe);
+        let measured = (steeper_along_x as f64 / n as f64, first_and_third as f64 / n as f64);
+        let tolerance = |p: f64| 5.0 * (p * (1.0 - p) / n as f64).sqrt();
+        let tolerances = (tolerance(expected.0), tolerance(expected.1));
+        // What the tolerances let through is smaller than these errors.
+        let alpha_off = slope_shares(ax, ay * 1.03, 0.0, beckmann_lobe).0;
+        let turned = slope_shares(ax, ay, 0.25f64.to_radians(), beckmann_lobe).1;
+        assert!((alpha_off - expected.0).abs() > tolerances.0 && (turned - expected.1).abs() > tolerances.1, "{}: the tolerances {tolerances:?} would pass alpha_v off by 3 % ({alpha_off}) or a tangent turned by 0.25 degrees ({turned})", case.name);
+        eprintln!("{}: steeper along the tangent {:.4} (expected {:.4} +- {:.4}), first and third quadrants {:.4} (expected {:.4} +- {:.4}), of {n} samples", case.name, measured.0, expected.0, tolerances.0, measured.1, expected.1, tolerances.1);
+        if !((measured.0 - expected.0).abs() <= tolerances.0 && (measured.1 - expected.1).abs() <= tolerances.1) {
+            failures.push(format!("{}: slope shares {measured:?}, expected {expected:?} within {tolerances:?}", case.name));
         }
     }
     kernel.destroy();

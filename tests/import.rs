@@ -768,3 +768,34 @@ fn flip_normals_and_face_normals_turn_and_flatten_meshes() {
         assert_eq!((&t.meshes[k].triangles, &t.meshes[k].normals), (&s.meshes[k].triangles, &s.meshes[k].normals), "mesh {k}");
     }
 }
+
+/// alpha_u and alpha_v of roughconductor, roughdielectric and roughplastic become roughness
+/// (along u) and roughness_v, each sqrt(alpha); equal ones are isotropic (no roughness_v), and an
+/// alpha_v outside [0, 1] is an error naming it. Swapping the two, or dropping alpha_v, fails.
+#[test]
+fn alpha_u_and_alpha_v_map_onto_roughness_and_roughness_v() {
+    let s = scene(
+        "anisotropic",
+        &format!(
+            r#"{SENSOR}
+            <bsdf type="roughconductor" id="brushed"><float name="alpha_u" value="0.04"/><float name="alpha_v" value="0.25"/><string name="distribution" value="ggx"/></bsdf>
+            <bsdf type="roughdielectric" id="frosted"><float name="alpha_u" value="0.36"/><float name="alpha_v" value="0.01"/></bsdf>
+            <bsdf type="roughplastic" id="satin"><float name="alpha_u" value="0.09"/><float name="alpha_v" value="0.16"/></bsdf>
+            <bsdf type="roughconductor" id="even"><float name="alpha_u" value="0.09"/><float name="alpha_v" value="0.09"/></bsdf>
+            <shape type="sphere"><ref id="brushed"/></shape>
+            <shape type="sphere"><ref id="frosted"/></shape>
+            <shape type="sphere"><ref id="satin"/></shape>
+            <shape type="sphere"><ref id="even"/></shape>"#
+        ),
+    );
+    let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no material {name}")).clone();
+    let near = |a: f32, b: f32| (a - b).abs() < 1e-6;
+    for (name, u, v, distribution) in [("brushed", 0.2, 0.5, Microfacet::Ggx), ("frosted", 0.6, 0.1, Microfacet::Beckmann), ("satin", 0.3, 0.4, Microfacet::Beckmann)] {
+        let material = m(name);
+        assert!(near(material.roughness, u) && material.roughness_v.is_some_and(|r| near(r, v)) && material.microfacet == distribution, "{name}: {material:?}");
+        assert!(material.is_anisotropic(), "{name}");
+    }
+    assert!(near(m("even").roughness, 0.3) && m("even").roughness_v.is_none() && !m("even").is_anisotropic());
+    let e = error("anisotropic-range", &format!(r#"{SENSOR}<bsdf type="roughconductor" id="b"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="1.5"/></bsdf><shape type="sphere"><ref id="b"/></shape>"#));
+    assert!(e.contains("alpha_v must be in [0, 1], got 1.5"), "{e}");
+}

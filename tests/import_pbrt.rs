@@ -746,3 +746,29 @@ fn normalmaps_and_alpha_cut_outs_become_normal_textures_and_opacity() {
     let e = error("alpha-range", &format!("{OPTIONS}WorldBegin\nShape \"plymesh\" \"string filename\" \"square.ply\" \"float alpha\" -0.5\n"));
     assert!(e.contains("scene.pbrt:7") && e.contains("alpha must be in [0, 1]"), "{e}");
 }
+
+/// pbrt-v4's `uroughness` and `vroughness` (each defaulting to `roughness`) become roughness
+/// (along u) and roughness_v: with remaproughness, alpha = sqrt(r) and caustica's roughness
+/// sqrt(alpha); without, alpha = r. Equal ones are isotropic; a vroughness outside what gives an
+/// alpha in [0, 1] is an error naming it. Swapping u and v, or skipping the remap, fails.
+#[test]
+fn uroughness_and_vroughness_map_onto_roughness_and_roughness_v() {
+    let s = scene(
+        "anisotropic",
+        "Material \"conductor\" \"float uroughness\" 0.0001 \"float vroughness\" 0.0625\nShape \"sphere\"\n\
+         Material \"dielectric\" \"float uroughness\" 0.04 \"float vroughness\" 0.25 \"bool remaproughness\" false\nShape \"sphere\"\n\
+         Material \"coateddiffuse\" \"float roughness\" 0.0081 \"float vroughness\" 0.0256\nShape \"sphere\"\n\
+         Material \"conductor\" \"float uroughness\" 0.01 \"float vroughness\" 0.01\nShape \"sphere\"\n",
+    );
+    let m = |k: usize| s.materials[s.shapes[k].material() as usize].clone();
+    let near = |a: f32, b: f32| (a - b).abs() < 1e-6;
+    // remapped: alpha 0.01 and 0.25, roughness 0.1 and 0.5; not remapped: alpha 0.04 and 0.25;
+    // roughness stands for uroughness: alpha 0.09 along u, 0.16 along v.
+    for (k, u, v) in [(0, 0.1, 0.5), (1, 0.2, 0.5), (2, 0.3, 0.4)] {
+        let material = m(k);
+        assert!(near(material.roughness, u) && material.roughness_v.is_some_and(|r| near(r, v)), "material {k}: {material:?}");
+    }
+    assert!(near(m(3).roughness, 0.1f32.sqrt()) && m(3).roughness_v.is_none());
+    let e = error("anisotropic-range", &format!("{OPTIONS}WorldBegin\nMaterial \"conductor\" \"float uroughness\" 0.1 \"float vroughness\" -1\nShape \"sphere\"\n"));
+    assert!(e.contains("scene.pbrt:7:") && e.contains("vroughness"), "{e}");
+}

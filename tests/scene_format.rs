@@ -330,3 +330,25 @@ fn malformed_obj_is_rejected_with_the_file_name() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A mesh placed with an anisotropic material (`roughness_v` differing from `roughness`) gets
+/// MikkTSpace tangents, which orient its lobes, along growing u (+x here); with an isotropic
+/// material it gets none. `roughness_v` outside [0, 1] is an error naming the key.
+#[test]
+fn anisotropic_mesh_materials_give_their_meshes_tangents_along_u() {
+    let dir = temp_dir("anisotropic");
+    std::fs::write(dir.join("square.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n").unwrap();
+    let text = format!(
+        "{MINIMAL}[materials.brushed]\nreflectivity = 1.0\nroughness = 0.2\nroughness_v = 0.6\n[materials.even]\nreflectivity = 1.0\nroughness = 0.2\nroughness_v = 0.2\n\
+         [[meshes]]\nfile = \"square.obj\"\nmaterial = \"brushed\"\n[[meshes]]\nfile = \"square.obj\"\nmaterial = \"even\"\n"
+    );
+    let scene = Scene::parse(&text, "anisotropic.toml", &dir).unwrap();
+    let brushed = &scene.meshes[scene.meshes.iter().position(|m| scene.materials[m.triangle_materials[0] as usize].name == "brushed").unwrap()];
+    let even = &scene.meshes[scene.meshes.iter().position(|m| scene.materials[m.triangle_materials[0] as usize].name == "even").unwrap()];
+    assert_eq!(brushed.tangents.len(), brushed.positions.len(), "one tangent a vertex");
+    assert!(brushed.tangents.iter().all(|t| (t.truncate() - glam::Vec3::X).length() < 1e-5), "{:?}", brushed.tangents);
+    assert!(even.tangents.is_empty(), "an isotropic material needs no tangents");
+    let e = error_of(&format!("{MINIMAL}[materials.m]\nroughness_v = 1.5\n"));
+    assert!(e.contains("materials.m.roughness_v must be in [0, 1], got 1.5"), "{e}");
+    std::fs::remove_dir_all(dir).ok();
+}

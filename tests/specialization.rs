@@ -63,12 +63,13 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
     assert!(specialized >= 3, "only {specialized} scenes got a kernel of their own");
 }
 
-/// A textured, instanced mesh with a rough metal (GGX and Beckmann), a one-sided clear-coated
-/// plastic, a thin pane and a sphere of absorbing glass under an environment map,
-/// lit by a mesh lamp with an emission texture, the floor normal-mapped, and two squares with
+/// A textured, instanced mesh with a rough metal (GGX and Beckmann, both anisotropic: oriented
+/// by the spheres' longitude), a one-sided clear-coated plastic, a thin pane and a sphere of
+/// absorbing glass under an environment map, lit by a mesh lamp with an emission texture, the
+/// floor normal-mapped and anisotropically glossy along its tangents, and two squares with
 /// alpha over it (a textured BLEND and a textured MASK): every feature on, which the checked-in
 /// scenes without the shared data lack (textures, several instances, textured emitters, normal
-/// maps, alpha, clear coats, absorption).
+/// maps, alpha, clear coats, absorption, anisotropy).
 #[test]
 fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     let mut scene = parse(
@@ -78,10 +79,14 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         environment = { probe = "scenes/probes/sky_probe.pfm" }
         [materials.textured]
         albedo = [1, 1, 1]
+        reflectivity = 0.5
+        roughness = 0.2
+        roughness_v = 0.6
         [materials.metal]
         albedo = [0.9, 0.6, 0.3]
         reflectivity = 1.0
         roughness = 0.3
+        roughness_v = 0.7
         [materials.plastic]
         albedo = [0.2, 0.5, 0.8]
         coat = true
@@ -97,6 +102,7 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         albedo = [0.9, 0.9, 0.9]
         reflectivity = 1.0
         roughness = 0.4
+        roughness_v = 0.15
         distribution = "beckmann"
         [materials.pane]
         transparency = 1.0

@@ -1,7 +1,7 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
 //! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
-//! clear coats, absorption, Beckmann lobes, thin dielectrics, one-sided surfaces) is left out by `#if` and by constants
+//! clear coats, absorption, Beckmann lobes, anisotropic lobes, thin dielectrics, one-sided surfaces) is left out by `#if` and by constants
 //! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
@@ -42,6 +42,9 @@ pub struct SceneFeatures {
     pub coated: bool,
     /// Rough lobes of Beckmann's distribution (the MATERIAL_BECKMANN flag).
     pub beckmann: bool,
+    /// Anisotropic rough lobes (an alpha along v in `volume[3]`): the anisotropic forms of the
+    /// microfacet distributions and the surface's tangent, which orients them.
+    pub anisotropic: bool,
     /// Thin dielectric sheets (the MATERIAL_THIN flag).
     pub thin_dielectrics: bool,
     /// Surfaces black from behind (the MATERIAL_ONE_SIDED flag).
@@ -56,7 +59,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -78,6 +81,7 @@ impl SceneFeatures {
             rough_lobes: data.materials.iter().any(|m| rough(m) || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
             coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
             beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && rough(m)),
+            anisotropic: data.materials.iter().any(|m| m.volume[3] > 0.0 && rough(m)),
             thin_dielectrics: data.materials.iter().any(|m| flags(m) & MATERIAL_THIN != 0),
             one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
             clearcoat: data.materials.iter().any(|m| m.coat[0] > 0.0),
@@ -86,7 +90,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 15] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 16] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -99,6 +103,7 @@ impl SceneFeatures {
             ("rough_lobes", "SCENE_ROUGH_LOBES", self.rough_lobes),
             ("coated", "SCENE_COATED", self.coated),
             ("beckmann", "SCENE_BECKMANN", self.beckmann),
+            ("anisotropic", "SCENE_ANISOTROPIC", self.anisotropic),
             ("thin_dielectrics", "SCENE_THIN_DIELECTRICS", self.thin_dielectrics),
             ("one_sided", "SCENE_ONE_SIDED", self.one_sided),
             ("clearcoat", "SCENE_CLEARCOAT", self.clearcoat),

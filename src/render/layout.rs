@@ -72,7 +72,7 @@ pub struct GpuPrimitive {
 pub struct GpuMaterial {
     pub albedo_r: [f32; 4],
     pub emission_t: [f32; 4],
-    /// ior, two-sided (0/1), albedo texture (u32 bits), GGX alpha
+    /// ior, two-sided (0/1), albedo texture (u32 bits), microfacet alpha (along u where anisotropic)
     pub params: [f32; 4],
     /// conductor eta, CONDUCTOR_* (u32 bits)
     pub conductor_eta: [f32; 4],
@@ -87,7 +87,8 @@ pub struct GpuMaterial {
     /// clear coat factor (0: none), its perceptual roughness, their textures (u32 bits: R
     /// multiplies the factor, G the roughness)
     pub coat: [f32; 4],
-    /// absorption coefficient sigma_a per world unit inside (0: clear), unused
+    /// absorption coefficient sigma_a per world unit inside (0: clear), alpha along v of an
+    /// anisotropic material (0: isotropic)
     pub volume: [f32; 4],
 }
 

@@ -159,10 +159,11 @@ fn gpu_material(m: &Material) -> GpuMaterial {
         Some(mr) => [f32::from_bits(mr.texture), mr.metallic, mr.roughness, mr.transmission],
         None => [f32::from_bits(NO_TEXTURE), 0.0, 0.0, 0.0],
     };
+    let (alpha_u, alpha_v) = m.microfacet_alphas();
     GpuMaterial {
         albedo_r: m.albedo.extend(m.reflectivity).into(),
         emission_t: m.emission.extend(m.transparency).into(),
-        params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)), m.roughness * m.roughness],
+        params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)), alpha_u],
         conductor_eta: eta.extend(f32::from_bits(kind)).into(),
         conductor_k: k.extend(coat_norm).into(),
         metallic_roughness,
@@ -172,7 +173,7 @@ fn gpu_material(m: &Material) -> GpuMaterial {
             Some(c) => [c.factor, c.roughness, texture_bits(c.texture), texture_bits(c.roughness_texture)],
             None => [0.0, 0.0, texture_bits(None), texture_bits(None)],
         },
-        volume: m.attenuation.map_or(Vec3::ZERO, |a| a.sigma_a()).extend(0.0).into(),
+        volume: m.attenuation.map_or(Vec3::ZERO, |a| a.sigma_a()).extend(alpha_v.unwrap_or(0.0)).into(),
     }
 }
 

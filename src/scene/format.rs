@@ -220,8 +220,13 @@ pub struct MaterialFile {
     pub ior: f32,
     pub emission: Triple,
     pub two_sided: bool,
-    /// Perceptual GGX roughness of the R and T lobes and the coat, in [0, 1].
+    /// Perceptual GGX roughness of the R and T lobes and the coat, in [0, 1]; along the surface's
+    /// u direction where `roughness_v` differs.
     pub roughness: f32,
+    /// Perceptual roughness along the surface's v direction, in [0, 1] (alpha_v = roughness_v^2):
+    /// anisotropic lobes. Absent: `roughness` (isotropic).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub roughness_v: Option<f32>,
     /// A named conductor for the R lobe (see `optics::METALS`), or "albedo" for Schlick's form
     /// with the albedo as F0.
     pub metal: Option<String>,
@@ -332,6 +337,7 @@ impl Default for MaterialFile {
             emission: Array([0.0; 3]),
             two_sided: false,
             roughness: 0.0,
+            roughness_v: None,
             metal: None,
             eta: None,
             k: None,

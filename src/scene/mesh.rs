@@ -24,7 +24,7 @@ pub struct Mesh {
     /// Empty, or one a vertex; (0, 0) is the texture's top-left corner.
     pub uvs: Vec<Vec2>,
     /// Empty, or one a vertex (with normals and texture coordinates) where a material has a normal
-    /// map: the unit tangent along which u grows, and in w the sign (+-1) that makes
+    /// map or is anisotropic (its lobes' x axis): the unit tangent along which u grows, and in w the sign (+-1) that makes
     /// cross(normal, tangent) x w the bitangent (glTF's TANGENT).
     pub tangents: Vec<Vec4>,
     /// Front side faces (v1 - v0) x (v2 - v0).
@@ -116,6 +116,9 @@ impl<'a> MeshImporter<'a> {
             }
             if let Some(to_uv) = material.and_then(|m| self.uv_maps.get(&m)) {
                 map_uvs(scene, path, &mut asset, material.expect("set"), *to_uv)?;
+            }
+            if material.is_some_and(|m| scene.materials[m as usize].is_anisotropic()) {
+                asset::add_anisotropy_tangents(path, &mut asset);
             }
             let (camera, lights) = (asset.camera, asset.lights.clone());
             let placements = add_asset(scene, path, asset, material)?;
@@ -239,6 +242,7 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         two_sided: false,
         albedo_texture: m.albedo_texture.map(|t| texture_base + t as u32),
         roughness: m.roughness.clamp(0.0, 1.0),
+        roughness_v: None,
         conductor: m.conductor,
         coat: m.coat,
         coat_internal_reflections: false,

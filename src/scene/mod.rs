@@ -22,6 +22,7 @@ pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Sides, Texture};
 pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 
 use crate::input_file::{InputFiles, InputKind};
+use crate::render::ALPHA_DELTA;
 use anyhow::{bail, Context as _, Result};
 use format::{Array, CameraFile, FilmFile, IntegratorFile, MaterialFile, MeshFile, Placement, Scale, SceneFile, Triple};
 use glam::{Mat4, Quat, Vec3};
@@ -84,8 +85,12 @@ pub struct Material {
     /// Index into `Scene::textures`; multiplies `albedo`.
     pub albedo_texture: Option<u32>,
     /// Perceptual GGX roughness in [0, 1] of the R and T lobes and of the coat (alpha is its
-    /// square); 0 is a perfect mirror and smooth glass.
+    /// square); 0 is a perfect mirror and smooth glass. Along the surface's u direction where
+    /// `roughness_v` differs.
     pub roughness: f32,
+    /// Perceptual roughness along the surface's v direction, in [0, 1]: anisotropic lobes (the
+    /// scene format's `roughness_v`, Mitsuba's `alpha_v`, pbrt's `vroughness`); None: `roughness`.
+    pub roughness_v: Option<f32>,
     /// Fresnel of the R lobe.
     pub conductor: Conductor,
     /// The base (1 - R - T) is a plastic: the albedo under a dielectric coat of index `ior` and
@@ -232,6 +237,31 @@ pub enum Conductor {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+
+    /// The microfacet alphas (roughness squared) along u and v of the R and T lobes and the coat;
+    /// None for v where the lobes are isotropic. A material rough along one direction only is
+    /// given ALPHA_DELTA along the other, the least alpha the kernel does not take for a delta
+    /// lobe (a lobe cannot be smooth along one axis and rough along the other); one smooth
+    /// along both is a delta lobe, isotropic.
+    pub fn microfacet_alphas(&self) -> (f32, Option<f32>) {
+        let alpha_u = self.roughness * self.roughness;
+        match self.roughness_v {
+            Some(v) if v != self.roughness => {
+                let alpha_v = v * v;
+                if alpha_u.max(alpha_v) < ALPHA_DELTA {
+                    (alpha_u, None)
+                } else {
+                    (alpha_u.max(ALPHA_DELTA), Some(alpha_v.max(ALPHA_DELTA)))
+                }
+            }
+            _ => (alpha_u, None),
+        }
+    }
+
+    /// Whether its rough lobes are anisotropic, oriented by the surface's tangent.
+    pub fn is_anisotropic(&self) -> bool {
+        self.microfacet_alphas().1.is_some()
     }
 }
 
@@ -510,6 +540,7 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         two_sided: m.two_sided,
         albedo_texture: None,
         roughness: finite(&key("roughness"), m.roughness)?,
+        roughness_v: m.roughness_v.map(|r| finite(&key("roughness_v"), r)).transpose()?,
         conductor,
         coat: m.coat,
         coat_internal_reflections: m.coat_internal_reflections,
@@ -526,6 +557,9 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
     }
     if !(0.0..=1.0).contains(&material.roughness) {
         bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);
+    }
+    if let Some(v) = material.roughness_v.filter(|v| !(0.0..=1.0).contains(v)) {
+        bail!("{} must be in [0, 1], got {v}", key("roughness_v"));
     }
     if material.albedo.max_element() > 1.0 {
         bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);

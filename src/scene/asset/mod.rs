@@ -232,18 +232,36 @@ pub fn load_ply_bytes(bytes: &[u8], name: &Path) -> Result<Asset, AssetError> {
 fn add_tangents(path: &Path, asset: &mut Asset) {
     let normal_mapped: Vec<bool> = asset.materials.iter().map(|m| m.maps.normal.is_some()).collect();
     for (k, mesh) in asset.meshes.iter_mut().enumerate() {
-        if !mesh.tangents.is_empty() || !mesh.triangle_materials.iter().any(|&m| normal_mapped[m as usize]) {
-            continue;
+        if mesh.triangle_materials.iter().any(|&m| normal_mapped[m as usize]) {
+            give_tangents(path, k, mesh, "its normal maps are ignored");
         }
-        let missing = match (mesh.normals.is_empty(), mesh.uvs.is_empty()) {
-            (true, true) => "normals and texture coordinates",
-            (true, false) => "normals",
-            (false, true) => "texture coordinates",
-            (false, false) if tangents::generate(mesh) => continue,
-            (false, false) => "a tangent frame MikkTSpace can build",
-        };
-        eprintln!("caustica: {}: mesh {k} has no {missing}: its normal maps are ignored", path.display());
     }
+}
+
+/// Gives every mesh of `asset` tangents, for the anisotropic material that replaces the file's:
+/// its lobes' x axis is the surface's u direction, MikkTSpace's tangent. A mesh without normals
+/// or texture coordinates keeps an arbitrary frame about the normal (as Mitsuba's
+/// coordinate_system(n) for meshes without texture coordinates), with a note on stderr.
+pub fn add_anisotropy_tangents(path: &Path, asset: &mut Asset) {
+    for (k, mesh) in asset.meshes.iter_mut().enumerate() {
+        give_tangents(path, k, mesh, "its anisotropic material is oriented arbitrarily about the normal");
+    }
+}
+
+/// MikkTSpace tangents for mesh `k` unless it has tangents; where it cannot have them, a note on
+/// stderr naming what is missing and, in `consequence`, what that does.
+fn give_tangents(path: &Path, k: usize, mesh: &mut MeshData, consequence: &str) {
+    if !mesh.tangents.is_empty() {
+        return;
+    }
+    let missing = match (mesh.normals.is_empty(), mesh.uvs.is_empty()) {
+        (true, true) => "normals and texture coordinates",
+        (true, false) => "normals",
+        (false, true) => "texture coordinates",
+        (false, false) if tangents::generate(mesh) => return,
+        (false, false) => "a tangent frame MikkTSpace can build",
+    };
+    eprintln!("caustica: {}: mesh {k} has no {missing}: {consequence}", path.display());
 }
 
 /// Wraps a single object-space mesh (OBJ, PLY) as an asset with one identity instance.

@@ -495,7 +495,7 @@ impl Mapper<'_> {
                 }
             }
             "conductor" | "roughconductor" => {
-                let (roughness, distribution) = self.microfacet(b, b.plugin == "roughconductor")?;
+                let (roughness, roughness_v, distribution) = self.microfacet(b, b.plugin == "roughconductor")?;
                 self.unit_factor(b, "specular_reflectance")?;
                 let given = (b.color("eta", &mut |_| {})?, b.color("k", &mut |_| {})?);
                 let (metal, eta, k) = match (b.string("material")?, given) {
@@ -511,14 +511,14 @@ impl Mapper<'_> {
                         }
                     },
                 };
-                MaterialFile { reflectivity: Some(1.0), roughness, distribution, metal, eta, k, ..defaults }
+                MaterialFile { reflectivity: Some(1.0), roughness, roughness_v, distribution, metal, eta, k, ..defaults }
             }
             "dielectric" | "roughdielectric" => {
-                let (roughness, distribution) = self.microfacet(b, b.plugin == "roughdielectric")?;
+                let (roughness, roughness_v, distribution) = self.microfacet(b, b.plugin == "roughdielectric")?;
                 self.unit_factor(b, "specular_reflectance")?;
                 self.unit_factor(b, "specular_transmittance")?;
                 let ior = relative_ior(b, "bk7")?;
-                MaterialFile { transparency: 1.0, ior, roughness, distribution, ..see_through }
+                MaterialFile { transparency: 1.0, ior, roughness, roughness_v, distribution, ..see_through }
             }
             "thindielectric" => {
                 self.unit_factor(b, "specular_reflectance")?;
@@ -533,11 +533,11 @@ impl Mapper<'_> {
                         format!("{}: {}: roughplastic's base is seen through the smooth coat's Fresnel terms (Mitsuba tabulates the rough coat's transmittance: a little brighter at grazing angles)", b.at, b.describe())
                     });
                 }
-                let (roughness, distribution) = self.microfacet(b, b.plugin == "roughplastic")?;
+                let (roughness, roughness_v, distribution) = self.microfacet(b, b.plugin == "roughplastic")?;
                 self.unit_factor(b, "specular_reflectance")?;
                 let coat_internal_reflections = b.boolean("nonlinear", false)?;
                 let albedo = f32x3(self.reflectance(b, "diffuse_reflectance", 0.5)?);
-                MaterialFile { albedo, coat: true, coat_internal_reflections, ior: relative_ior(b, "polypropylene")?, roughness, distribution, ..defaults }
+                MaterialFile { albedo, coat: true, coat_internal_reflections, ior: relative_ior(b, "polypropylene")?, roughness, roughness_v, distribution, ..defaults }
             }
             _ => return Err(b.error("this BSDF is not supported (diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, twosided, mask, normalmap)")),
         };
@@ -597,11 +597,12 @@ impl Mapper<'_> {
         Ok((relative_to(&path, &self.base), raw))
     }
 
-    /// caustica's roughness (sqrt(alpha), alpha defaulting to Mitsuba's 0.1) and distribution
-    /// (Mitsuba's default Beckmann, or GGX) of a rough BSDF.
-    fn microfacet(&mut self, b: &Object, rough: bool) -> Result<(f32, Microfacet)> {
+    /// caustica's roughness (sqrt(alpha), alpha defaulting to Mitsuba's 0.1), its roughness_v
+    /// (sqrt(alpha_v) where alpha_u and alpha_v differ; alpha_u is then along u, the roughness)
+    /// and distribution (Mitsuba's default Beckmann, or GGX) of a rough BSDF.
+    fn microfacet(&mut self, b: &Object, rough: bool) -> Result<(f32, Option<f32>, Microfacet)> {
         if !rough {
-            return Ok((0.0, Microfacet::Ggx));
+            return Ok((0.0, None, Microfacet::Ggx));
         }
         let distribution = match b.string("distribution")?.unwrap_or("beckmann") {
             "ggx" => Microfacet::Ggx,
@@ -609,17 +610,20 @@ impl Mapper<'_> {
             other => return Err(b.error(format!("distribution '{other}' is not supported (beckmann, ggx)"))),
         };
         b.boolean("sample_visible", true)?;
-        let alpha = match (b.float_if_given("alpha")?, b.float_if_given("alpha_u")?, b.float_if_given("alpha_v")?) {
-            (Some(a), None, None) => a,
-            (None, None, None) => 0.1,
-            (None, Some(u), Some(v)) if u == v => u,
-            (None, Some(_), Some(_)) => return Err(b.error("anisotropic roughness (alpha_u != alpha_v) is not supported")),
+        let (alpha, alpha_v) = match (b.float_if_given("alpha")?, b.float_if_given("alpha_u")?, b.float_if_given("alpha_v")?) {
+            (Some(a), None, None) => (a, None),
+            (None, None, None) => (0.1, None),
+            (None, Some(u), Some(v)) if u == v => (u, None),
+            (None, Some(u), Some(v)) => (u, Some(v)),
             _ => return Err(b.error("give alpha, or alpha_u and alpha_v")),
         };
-        if !(0.0..=1.0).contains(&alpha) {
-            return Err(b.error(format!("alpha must be in [0, 1], got {alpha}")));
+        for (name, a) in [("alpha", Some(alpha)), ("alpha_v", alpha_v)] {
+            match a {
+                Some(a) if !(0.0..=1.0).contains(&a) => return Err(b.error(format!("{name} must be in [0, 1], got {a}"))),
+                _ => {}
+            }
         }
-        Ok((alpha.sqrt() as f32, distribution))
+        Ok((alpha.sqrt() as f32, alpha_v.map(|v| v.sqrt() as f32), distribution))
     }
 
     /// A scale factor caustica has no place for: only its default, 1, is accepted.

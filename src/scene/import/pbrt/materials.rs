@@ -38,11 +38,14 @@ impl Mapper<'_> {
                 MaterialFile { albedo: f32x3(albedo), albedo_texture, ..defaults }
             }
             "conductor" => {
-                let roughness = self.roughness(d)?;
+                let (roughness, roughness_v) = self.roughness(d)?;
                 let (metal, eta, k) = self.conductor(d, "")?;
-                MaterialFile { reflectivity: Some(1.0), roughness, metal, eta, k, ..defaults }
+                MaterialFile { reflectivity: Some(1.0), roughness, roughness_v, metal, eta, k, ..defaults }
             }
-            "dielectric" => MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d, "eta")?, roughness: self.roughness(d)?, ..defaults },
+            "dielectric" => {
+                let (roughness, roughness_v) = self.roughness(d)?;
+                MaterialFile { transparency: 1.0, ior: self.dielectric_eta(d, "eta")?, roughness, roughness_v, ..defaults }
+            }
             "coateddiffuse" => {
                 self.warn("coated", || {
                     format!(
@@ -53,8 +56,9 @@ impl Mapper<'_> {
                 });
                 self.clear_layer(d)?;
                 let (albedo, albedo_texture) = self.albedo(d)?;
+                let (roughness, roughness_v) = self.roughness(d)?;
                 // pbrt's random walk follows the light the coat reflects back down onto the base.
-                MaterialFile { albedo: f32x3(albedo), albedo_texture, coat: true, coat_internal_reflections: true, ior: self.dielectric_eta(d, "eta")?, roughness: self.roughness(d)?, ..defaults }
+                MaterialFile { albedo: f32x3(albedo), albedo_texture, coat: true, coat_internal_reflections: true, ior: self.dielectric_eta(d, "eta")?, roughness, roughness_v, ..defaults }
             }
             "interface" => {
                 d.check_all_used()?;
@@ -75,10 +79,13 @@ impl Mapper<'_> {
                 if coat_eta != 1.5 {
                     self.warn("coat eta", || format!("{}: {}: the coat's interface.eta {coat_eta} becomes 1.5, the index of caustica's clear coat", d.at, d.describe()));
                 }
-                let clearcoat_roughness = self.roughness_of(d, "interface.")?;
-                let roughness = self.roughness_of(d, "conductor.")?;
+                let (clearcoat_roughness, coat_v) = self.roughness_of(d, "interface.")?;
+                if coat_v.is_some() {
+                    return Err(d.error("an anisotropic coat (interface.uroughness != interface.vroughness) is not supported: caustica's clear coat is isotropic"));
+                }
+                let (roughness, roughness_v) = self.roughness_of(d, "conductor.")?;
                 let (metal, eta, k) = self.conductor(d, "conductor.")?;
-                MaterialFile { reflectivity: Some(1.0), roughness, metal, eta, k, clearcoat: Some(1.0), clearcoat_roughness: Some(clearcoat_roughness), ..defaults }
+                MaterialFile { reflectivity: Some(1.0), roughness, roughness_v, metal, eta, k, clearcoat: Some(1.0), clearcoat_roughness: Some(clearcoat_roughness), ..defaults }
             }
             _ => return Err(d.error("this material is not supported (diffuse, conductor, dielectric, thindielectric, coateddiffuse, coatedconductor, interface)")),
         };
@@ -100,28 +107,33 @@ impl Mapper<'_> {
         Ok(Some(ImageTextureFile { file: relative_to(&path, self.base), to_uv: None, encoding: Some(Encoding::Linear) }))
     }
 
-    /// caustica's roughness from pbrt's `roughness` (or equal `uroughness` and `vroughness`):
-    /// with `remaproughness` (the default)
-    /// pbrt's alpha is sqrt(roughness), else the roughness itself; caustica's roughness is
-    /// sqrt(alpha), the same Trowbridge-Reitz (GGX) distribution.
-    fn roughness(&mut self, d: &Directive) -> Result<f32> {
+    /// caustica's roughness and roughness_v from pbrt's `uroughness` and `vroughness` (each
+    /// defaulting to `roughness`): with `remaproughness` (the default) pbrt's alpha is
+    /// sqrt(roughness) (TrowbridgeReitzDistribution::RoughnessToAlpha), else the roughness
+    /// itself; caustica's roughness is sqrt(alpha), the same Trowbridge-Reitz (GGX) distribution.
+    /// pbrt's alpha_x lies along dp/du as caustica's roughness does; roughness_v is None where
+    /// the two are equal (isotropic).
+    fn roughness(&mut self, d: &Directive) -> Result<(f32, Option<f32>)> {
         self.roughness_of(d, "")
     }
 
     /// [`Mapper::roughness`] of one layer of a layered material: `prefix` is `interface.` or
     /// `conductor.` (pbrt's `remaproughness` is the material's, for both).
-    fn roughness_of(&mut self, d: &Directive, prefix: &str) -> Result<f32> {
-        let r = self.scalar(d, &format!("{prefix}roughness"), 0.0)?;
-        let (u, v) = (self.scalar_if_given(d, &format!("{prefix}uroughness"))?, self.scalar_if_given(d, &format!("{prefix}vroughness"))?);
-        let r = match (u.or(Some(r)), v.or(Some(r))) {
-            (Some(u), Some(v)) if u == v => u,
-            _ => return Err(d.error("anisotropic roughness (uroughness != vroughness) is not supported")),
+    fn roughness_of(&mut self, d: &Directive, prefix: &str) -> Result<(f32, Option<f32>)> {
+        let key = |name: &str| format!("{prefix}{name}");
+        let r = self.scalar(d, &key("roughness"), 0.0)?;
+        let (u, v) = (self.scalar_if_given(d, &key("uroughness"))?.unwrap_or(r), self.scalar_if_given(d, &key("vroughness"))?.unwrap_or(r));
+        let remap = d.boolean("remaproughness", true)?;
+        let roughness = |name: &str, r: f64| {
+            let alpha = if remap { r.max(0.0).sqrt() } else { r };
+            if !(0.0..=1.0).contains(&alpha) || r < 0.0 {
+                return Err(d.error(format!("the {name} must give an alpha in [0, 1], got {name} {r} (alpha {alpha})")));
+            }
+            Ok(alpha.sqrt() as f32)
         };
-        let alpha = if d.boolean("remaproughness", true)? { r.max(0.0).sqrt() } else { r };
-        if !(0.0..=1.0).contains(&alpha) || r < 0.0 {
-            return Err(d.error(format!("the roughness must give an alpha in [0, 1], got roughness {r} (alpha {alpha})")));
-        }
-        Ok(alpha.sqrt() as f32)
+        let along_u = roughness(&key(if u == r { "roughness" } else { "uroughness" }), u)?;
+        let along_v = roughness(&key(if v == r { "roughness" } else { "vroughness" }), v)?;
+        Ok((along_u, (u != v).then_some(along_v)))
     }
 
     /// A dielectric's index, the parameter `name` (`eta`, a coat's `interface.eta`): a number, or
