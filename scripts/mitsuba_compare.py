@@ -517,8 +517,14 @@ def compare_xml(args, scene_path, out):
 def print_xml_result(result):
     print(f"scene:      {result['scene']} at {result['width']}x{result['height']}, {result['spp']} spp")
     print(f"reference:  {result['reference']['image']} ({result['reference']['spp']} spp, {result['reference']['renderer']})")
+    print_error_table(result, ("caustica", "mitsuba"))
+
+
+def print_error_table(result, renderers):
+    """Each renderer's errors against the reference, a row each, then its warnings (scripts/pbrt_compare.py
+    prints its results through this too)."""
     print(f"{'renderer':<10}  {'relative MSE':>12}  {f'{BLOCK}x{BLOCK} blocks':>12}  {'ratio of means':>14}  {'seconds':>8}")
-    for name in ("caustica", "mitsuba"):
+    for name in renderers:
         r = result[name]
         ratio = "-" if r["ratio_of_means"] is None else f"{r['ratio_of_means']:.4f}"
         print(f"{name:<10}  {r['relative_mse']:>12.5f}  {r['block_relative_mse']:>12.5f}  {ratio:>14}  {r['seconds']:>8.1f}")

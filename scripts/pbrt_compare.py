@@ -41,8 +41,9 @@ import time
 import zlib
 from pathlib import Path
 
+from mitsuba_compare import BLOCK, print_error_table
+
 REPO = Path(__file__).resolve().parent.parent
-BLOCK = 8
 # pbrt-v4's RGBFilm default resolution (film.cpp).
 PBRT_DEFAULT_RESOLUTION = (1280, 720)
 
@@ -274,13 +275,7 @@ def print_result(r):
     print(f"reference:  {ref['image']} ({ref['spp']} spp, pbrt-v4, {took})")
     for n in r["notes"]:
         print(f"note:       {n}")
-    print(f"{'renderer':<10}  {'relative MSE':>12}  {f'{BLOCK}x{BLOCK} blocks':>12}  {'ratio of means':>14}  {'seconds':>8}")
-    for name in ("caustica", "pbrt"):
-        x = r[name]
-        ratio = "-" if x["ratio_of_means"] is None else f"{x['ratio_of_means']:.4f}"
-        print(f"{name:<10}  {x['relative_mse']:>12.5f}  {x['block_relative_mse']:>12.5f}  {ratio:>14}  {x['seconds']:>8.1f}")
-        for w in x["warnings"]:
-            print(f"  warning: {w}")
+    print_error_table(r, ("caustica", "pbrt"))
 
 
 def main():
