@@ -185,13 +185,7 @@ fn map_uvs(scene: &Scene, path: &Path, asset: &mut Asset, material: u32, to_uv: 
 /// `normalmap` reads its maps.
 fn cross_bitangent_frames(scene: &Scene, path: &Path, asset: &mut Asset, material: u32) -> Result<()> {
     for (k, mesh) in asset.meshes.iter_mut().enumerate() {
-        let missing = match (mesh.normals.is_empty(), mesh.uvs.is_empty()) {
-            (false, false) if !mesh.tangents.is_empty() || asset::generate_tangents(mesh) => None,
-            (false, false) => Some("a tangent frame MikkTSpace can build"),
-            (true, _) => Some("vertex normals"),
-            (false, true) => Some("texture coordinates"),
-        };
-        if let Some(missing) = missing {
+        if let Err(missing) = asset::ensure_tangents(mesh) {
             bail!("{}: mesh {k} has no {missing}, which material '{}' needs for its normal_texture", path.display(), scene.materials[material as usize].name);
         }
         mesh.tangents.iter_mut().for_each(|t| t.w = 1.0);

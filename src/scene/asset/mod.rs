@@ -10,7 +10,6 @@ mod serialized;
 mod tangents;
 mod texture;
 
-pub use tangents::generate as generate_tangents;
 pub use texture::{downsample_to_fit, load_texture, srgb_to_linear};
 
 
@@ -251,17 +250,24 @@ pub fn add_anisotropy_tangents(path: &Path, asset: &mut Asset) {
 /// MikkTSpace tangents for mesh `k` unless it has tangents; where it cannot have them, a note on
 /// stderr naming what is missing and, in `consequence`, what that does.
 fn give_tangents(path: &Path, k: usize, mesh: &mut MeshData, consequence: &str) {
-    if !mesh.tangents.is_empty() {
-        return;
+    if let Err(missing) = ensure_tangents(mesh) {
+        eprintln!("caustica: {}: mesh {k} has no {missing}: {consequence}", path.display());
     }
-    let missing = match (mesh.normals.is_empty(), mesh.uvs.is_empty()) {
-        (true, true) => "normals and texture coordinates",
-        (true, false) => "normals",
-        (false, true) => "texture coordinates",
-        (false, false) if tangents::generate(mesh) => return,
-        (false, false) => "a tangent frame MikkTSpace can build",
-    };
-    eprintln!("caustica: {}: mesh {k} has no {missing}: {consequence}", path.display());
+}
+
+/// Gives `mesh` MikkTSpace tangents (tangents.rs) unless it has some; the error names what it
+/// lacks for them.
+pub fn ensure_tangents(mesh: &mut MeshData) -> Result<(), &'static str> {
+    if !mesh.tangents.is_empty() {
+        return Ok(());
+    }
+    match (mesh.normals.is_empty(), mesh.uvs.is_empty()) {
+        (true, true) => Err("vertex normals and texture coordinates"),
+        (true, false) => Err("vertex normals"),
+        (false, true) => Err("texture coordinates"),
+        (false, false) if tangents::generate(mesh) => Ok(()),
+        (false, false) => Err("a tangent frame MikkTSpace can build"),
+    }
 }
 
 /// Wraps a single object-space mesh (OBJ, PLY) as an asset with one identity instance.
