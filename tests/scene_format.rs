@@ -348,6 +348,15 @@ fn anisotropic_mesh_materials_give_their_meshes_tangents_along_u() {
     assert_eq!(brushed.tangents.len(), brushed.positions.len(), "one tangent a vertex");
     assert!(brushed.tangents.iter().all(|t| (t.truncate() - glam::Vec3::X).length() < 1e-5), "{:?}", brushed.tangents);
     assert!(even.tangents.is_empty(), "an isotropic material needs no tangents");
+    // A texture's to_uv (here swapping u and v) moves where the texture is read, not the lobes:
+    // their frame is the mesh's own u, as Mitsuba's and pbrt's dp/du.
+    let textured = format!(
+        "{MINIMAL}[materials.brushed]\nreflectivity = 1.0\nroughness = 0.2\nroughness_v = 0.6\n\
+         albedo_texture = {{ checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]], to_uv = [[0, 1, 0], [1, 0, 0]] }}\n\
+         [[meshes]]\nfile = \"square.obj\"\nmaterial = \"brushed\"\n"
+    );
+    let scene = Scene::parse(&textured, "anisotropic-textured.toml", &dir).unwrap();
+    assert!(scene.meshes[0].tangents.iter().all(|t| (t.truncate() - glam::Vec3::X).length() < 1e-5), "{:?}", scene.meshes[0].tangents);
     let e = error_of(&format!("{MINIMAL}[materials.m]\nroughness_v = 1.5\n"));
     assert!(e.contains("materials.m.roughness_v must be in [0, 1], got 1.5"), "{e}");
     std::fs::remove_dir_all(dir).ok();

@@ -110,15 +110,16 @@ impl<'a> MeshImporter<'a> {
                 eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }
             sides.apply(&mut asset);
+            // Tangents before the texture coordinates are mapped: Mitsuba's and pbrt's frames (of
+            // normal maps and anisotropic lobes alike) follow the mesh's own u, not a texture's.
             if let Some(m) = material.filter(|&m| scene.materials[m as usize].maps.normal.is_some()) {
-                // Before the texture coordinates are mapped: Mitsuba's frame follows the mesh's own u.
                 cross_bitangent_frames(scene, path, &mut asset, m)?;
-            }
-            if let Some(to_uv) = material.and_then(|m| self.uv_maps.get(&m)) {
-                map_uvs(scene, path, &mut asset, material.expect("set"), *to_uv)?;
             }
             if material.is_some_and(|m| scene.materials[m as usize].is_anisotropic()) {
                 asset::add_anisotropy_tangents(path, &mut asset);
+            }
+            if let Some(to_uv) = material.and_then(|m| self.uv_maps.get(&m)) {
+                map_uvs(scene, path, &mut asset, material.expect("set"), *to_uv)?;
             }
             let (camera, lights) = (asset.camera, asset.lights.clone());
             let placements = add_asset(scene, path, asset, material)?;
