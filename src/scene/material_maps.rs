@@ -30,10 +30,7 @@ pub fn attach(mname: &str, m: &MaterialFile, material: &mut Material, textures: 
         }
         None => None,
     };
-    let opacity = m.opacity.unwrap_or(1.0);
-    if !(0.0..=1.0).contains(&opacity) {
-        bail!("{} must be in [0, 1], got {opacity}", key("opacity"));
-    }
+    let opacity = super::unit_interval(&key("opacity"), m.opacity.unwrap_or(1.0))?;
     if opacity < 1.0 || opacity_texture.is_some() {
         material.maps.alpha = Some(Alpha { factor: opacity, texture: opacity_texture, mode: AlphaMode::Blend });
     }

@@ -435,6 +435,15 @@ fn finite(key: &str, v: f32) -> Result<f32> {
     Ok(v)
 }
 
+/// A finite value in [0, 1] (a roughness, a factor, an opacity), or an error naming `key`.
+fn unit_interval(key: &str, v: f32) -> Result<f32> {
+    let v = finite(key, v)?;
+    if !(0.0..=1.0).contains(&v) {
+        bail!("{key} must be in [0, 1], got {v}");
+    }
+    Ok(v)
+}
+
 fn non_negative3(key: &str, v: Triple) -> Result<Vec3> {
     let v = vec3(key, v)?;
     if v.min_element() < 0.0 {
@@ -539,8 +548,8 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         emission: non_negative3(&key("emission"), m.emission)?,
         two_sided: m.two_sided,
         albedo_texture: None,
-        roughness: finite(&key("roughness"), m.roughness)?,
-        roughness_v: m.roughness_v.map(|r| finite(&key("roughness_v"), r)).transpose()?,
+        roughness: unit_interval(&key("roughness"), m.roughness)?,
+        roughness_v: m.roughness_v.map(|r| unit_interval(&key("roughness_v"), r)).transpose()?,
         conductor,
         coat: m.coat,
         coat_internal_reflections: m.coat_internal_reflections,
@@ -554,12 +563,6 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
     };
     if material.coat_internal_reflections && !material.coat {
         bail!("{} needs coat = true (it describes the coat of a plastic)", key("coat_internal_reflections"));
-    }
-    if !(0.0..=1.0).contains(&material.roughness) {
-        bail!("{} must be in [0, 1], got {}", key("roughness"), material.roughness);
-    }
-    if let Some(v) = material.roughness_v.filter(|v| !(0.0..=1.0).contains(v)) {
-        bail!("{} must be in [0, 1], got {v}", key("roughness_v"));
     }
     if material.albedo.max_element() > 1.0 {
         bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);
@@ -608,14 +611,9 @@ fn clearcoat_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Opti
     let factor = match (m.clearcoat, m.clearcoat_roughness) {
         (None, None) => return Ok(None),
         (None, Some(_)) => bail!("{} needs {}", key("clearcoat_roughness"), key("clearcoat")),
-        (Some(factor), _) => finite(&key("clearcoat"), factor)?,
+        (Some(factor), _) => unit_interval(&key("clearcoat"), factor)?,
     };
-    let roughness = finite(&key("clearcoat_roughness"), m.clearcoat_roughness.unwrap_or(0.0))?;
-    for (name, v) in [("clearcoat", factor), ("clearcoat_roughness", roughness)] {
-        if !(0.0..=1.0).contains(&v) {
-            bail!("{} must be in [0, 1], got {v}", key(name));
-        }
-    }
+    let roughness = unit_interval(&key("clearcoat_roughness"), m.clearcoat_roughness.unwrap_or(0.0))?;
     Ok(Some(Clearcoat { factor, roughness, texture: None, roughness_texture: None }))
 }
 
