@@ -28,7 +28,7 @@ use glam::{DMat4, DVec2, DVec3, Vec3};
 use crate::scene::equal_area_map;
 use std::collections::HashMap;
 use std::f64::consts::PI;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 /// The most shapes the scene file may get (spheres, quads, triangles, mesh placements), and the
@@ -111,6 +111,11 @@ pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: 
 impl Mapper<'_> {
     pub(super) fn warn(&mut self, kind: &'static str, message: impl FnOnce() -> String) {
         self.notes.warn_once(kind, message);
+    }
+
+    /// A file the scene names: relative to the scene's folder, or absolute (which `join` keeps).
+    pub(super) fn scene_file(&self, name: &str) -> PathBuf {
+        self.base.join(name)
     }
 
     /// The camera, and with it the mirror caustica reads pbrt's world through.
@@ -366,7 +371,7 @@ impl Mapper<'_> {
             }
             "plymesh" => {
                 let Some(name) = d.string("filename")?.map(str::to_owned) else { return Err(d.error("needs a filename")) };
-                let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+                let path = self.scene_file(&name);
                 if self.out.materials[&material].emission != Array([0.0; 3]) {
                     self.emitting_ply(d, &path, m, s.reverse_orientation, &material)?;
                 } else {
@@ -748,7 +753,7 @@ impl Mapper<'_> {
                         }
                         // pbrt scales an image's RGB to radiance as it does a constant L's.
                         let mut scale = self.light_scale(d)?;
-                        let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
+                        let path = self.scene_file(&name);
                         if let Some(illuminance) = Self::light_target(d, "illuminance")? {
                             let image = crate::image::read_image_from(self.files, &path).map_err(|e| d.error(e))?;
                             if image.width != image.height {

@@ -12,7 +12,6 @@ use super::textures::TextureValue;
 use crate::scene::METALS;
 use anyhow::{anyhow, Result};
 use glam::DVec3;
-use std::path::Path;
 
 /// pbrt's named conductor spectra that caustica has measured indices of (`optics::METALS`).
 const NAMED_METALS: [(&str, &str); 4] = [("Au", "gold"), ("Ag", "silver"), ("Cu", "copper"), ("Al", "aluminium")];
@@ -99,11 +98,7 @@ impl Mapper<'_> {
     /// dp/du and cross(n, dp/du): caustica's `normal_texture` as it stands.
     fn normal_map(&mut self, d: &Directive) -> Result<Option<ImageTextureFile>> {
         let Some(name) = d.string("normalmap")?.map(str::to_owned) else { return Ok(None) };
-        let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
-        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        if !matches!(extension.as_str(), "png" | "jpg" | "jpeg") {
-            return Err(d.error(format!("normalmap \"{name}\": only PNG and JPEG images are supported")));
-        }
+        let (path, _) = self.texture_image(d, &name)?;
         Ok(Some(ImageTextureFile { file: relative_to(&path, self.base), to_uv: None, encoding: Some(Encoding::Linear) }))
     }
 

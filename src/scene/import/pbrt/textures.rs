@@ -15,7 +15,7 @@ use super::params::{Directive, Param};
 use super::parser::TextureDef;
 use anyhow::{anyhow, Result};
 use glam::DVec3;
-use std::path::Path;
+use std::path::PathBuf;
 
 /// Texture references deeper than this are a cycle.
 const MAX_TEXTURE_DEPTH: usize = 32;
@@ -139,11 +139,7 @@ impl Mapper<'_> {
     /// An `imagemap`: its image read at pbrt's (s, 1 - t), times its `scale`.
     pub(super) fn imagemap(&mut self, c: &Directive) -> Result<TextureValue> {
         let Some(name) = c.string("filename")?.map(str::to_owned) else { return Err(c.error("needs a filename")) };
-        let path = if Path::new(&name).is_absolute() { Path::new(&name).to_path_buf() } else { self.base.join(&name) };
-        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        if !matches!(extension.as_str(), "png" | "jpg" | "jpeg") {
-            return Err(c.error(format!("\"{name}\": only PNG and JPEG images are supported as textures")));
-        }
+        let (path, extension) = self.texture_image(c, &name)?;
         // pbrt reads a PNG as sRGB and any other image as linear unless told.
         let encoding = c.string("encoding")?.unwrap_or(if extension == "png" { "sRGB" } else { "linear" });
         if encoding != "sRGB" {
@@ -172,6 +168,19 @@ impl Mapper<'_> {
         let identity = to_uv == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let texture = AlbedoTextureFile { file: Some(relative_to(&path, self.base)), checkerboard: None, to_uv: (!identity).then(|| Array(to_uv.map(|r| Array(r.map(|x| x as f32))))) };
         Ok(TextureValue::Varying { texture, factor: DVec3::splat(scale) })
+    }
+}
+
+impl Mapper<'_> {
+    /// The image file `name` that `d` names, with its extension in lower case: caustica reads PNG
+    /// and JPEG textures only.
+    pub(super) fn texture_image(&self, d: &Directive, name: &str) -> Result<(PathBuf, String)> {
+        let path = self.scene_file(name);
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        if !matches!(extension.as_str(), "png" | "jpg" | "jpeg") {
+            return Err(d.error(format!("\"{name}\": only PNG and JPEG images are supported as textures")));
+        }
+        Ok((path, extension))
     }
 }
 
