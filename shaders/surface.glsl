@@ -47,6 +47,12 @@ vec3 normal_mapped(uint map, float scale, vec2 uv, vec3 n, vec4 t, vec4 object_t
 }
 #endif
 
+// The object-space tangent (w: the bitangent's sign) of mesh triangle `tri` at barycentrics `w`,
+// for a normal map and for an anisotropic lobe alike.
+vec4 interpolated_tangent(uvec3 tri, vec3 w) {
+    return w.x * load_vertex_tangents(tri.x) + w.y * load_vertex_tangents(tri.y) + w.z * load_vertex_tangents(tri.z);
+}
+
 Surface surface_at(Hit hit, vec3 o, vec3 d) {
     Surface s;
     s.point = o + hit.t * d;
@@ -71,7 +77,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     // A mesh with an anisotropic material carries tangents where it has texture coordinates
     // (src/scene/asset/mod.rs): MikkTSpace's, along growing u, carried to the world as directions.
     if (SCENE_ANISOTROPIC == 1 && (info.z & INSTANCE_HAS_TANGENTS) != 0u) {
-        vec4 t = w.x * load_vertex_tangents(tri.x) + w.y * load_vertex_tangents(tri.y) + w.z * load_vertex_tangents(tri.z);
+        vec4 t = interpolated_tangent(tri, w);
         s.tangent = affine_vector(instances[hit.instance].object_to_world, t.xyz);
     }
     // Texture coordinates serve textures alone.
@@ -89,7 +95,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 #if SCENE_NORMAL_MAPS
             uint normal_map = floatBitsToUint(materials[s.material].maps.y);
             if (normal_map != NO_TEXTURE && (info.z & INSTANCE_HAS_TANGENTS) != 0u) {
-                vec4 t = w.x * load_vertex_tangents(tri.x) + w.y * load_vertex_tangents(tri.y) + w.z * load_vertex_tangents(tri.z);
+                vec4 t = interpolated_tangent(tri, w);
                 ns = normal_mapped(normal_map, materials[s.material].maps.z, s.uv, normalize(n), t, instances[hit.instance].object_to_world, ns);
             }
 #endif
