@@ -4,15 +4,17 @@
 // pushes its instances as tagged entries, and popping one transforms the ray into the instance's
 // object space until the stack falls back below that entry. A scene with one instance skips the
 // top level.
-// Both levels are pair nodes (two children's boxes a node). The top level has one instance a leaf.
-// BVH_MAX_DEPTH is injected by the host from the builder's bound.
+// Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
+// level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
+// the binary tree; the wide tree has at most half its levels.
 
 const uint NO_INDEX = 0xffffffffu;
 const uint INSTANCE_ENTRY = 0x80000000u;
 const float MISSED_BOX = uintBitsToFloat(0x7f800000u);  // +infinity
-// Each node visit leaves at most one entry behind (the farther child; at the top level the nearer
-// is taken back at once): at most one a level of each BVH, plus the first entry and the nearer.
-const uint STACK_SIZE = 2u * BVH_MAX_DEPTH + 2u;
+// Each node visit leaves at most three entries behind (the children other than the nearest; at the
+// top level the nearest is taken back at once): at most three a wide level of each BVH, whose
+// levels number at most BVH_MAX_DEPTH / 2, plus the first entry and the nearest.
+const uint STACK_SIZE = 3u * BVH_MAX_DEPTH + 2u;
 
 struct Hit {
     float t;
@@ -21,16 +23,50 @@ struct Hit {
     vec2 bary;      // barycentric (u, v) on a mesh triangle
 };
 
-// Where the ray enters [bmin, bmax] within (0, t_max), or +infinity when it misses the box.
-float box_entry(vec3 bmin, vec3 bmax, vec3 o, vec3 inv_d, float t_max) {
-    vec3 t0 = (bmin - o) * inv_d;
-    vec3 t1 = (bmax - o) * inv_d;
-    vec3 tn = min(t0, t1);
-    vec3 tf = max(t0, t1);
-    float enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+// Each byte of `word` as a lane: child k's in lane k.
+uvec4 child_bytes(uint word) {
+    return (uvec4(word) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
+}
+
+// Where the ray enters each of the node's four children within (0, t_max), or +infinity for a
+// child it misses and for an empty slot. The four boxes are decoded and tested side by side: one
+// node's loads serve them all.
+vec4 wide_child_entries(WideNode node, vec3 o, vec3 inv_d, float t_max) {
+    uvec3 exponents = child_bytes(floatBitsToUint(node.origin.w)).xyz;
+    vec3 quantum = uintBitsToFloat(exponents << 23u);
+    // A child's plane at t = (origin + steps * quantum - o) * inv_d = from + steps * per_step: one
+    // multiply-add a plane. Where the ray starts inside the node, from and steps * per_step cancel
+    // and the sum is off by a few ulps of the node's size, not of the child's; the host keeps every
+    // stored bound at least 1/64 quantum outside the exact one (src/bvh/wide_node.rs, MARGIN), a
+    // thousand times more, and a bound at step 0 is the origin's plane, computed as exactly as the
+    // float boxes' slab test was.
+    vec3 from = (node.origin.xyz - o) * inv_d;
+    vec3 per_step = quantum * inv_d;
+    vec4 x0 = from.x + vec4(child_bytes(node.quantized_xy.x)) * per_step.x;
+    vec4 x1 = from.x + vec4(child_bytes(node.quantized_xy.y)) * per_step.x;
+    vec4 y0 = from.y + vec4(child_bytes(node.quantized_xy.z)) * per_step.y;
+    vec4 y1 = from.y + vec4(child_bytes(node.quantized_xy.w)) * per_step.y;
+    vec4 z0 = from.z + vec4(child_bytes(node.quantized_z_kinds.x)) * per_step.z;
+    vec4 z1 = from.z + vec4(child_bytes(node.quantized_z_kinds.y)) * per_step.z;
+    vec4 enter = max(max(min(x0, x1), min(y0, y1)), max(min(z0, z1), vec4(0.0)));
     // The factor (1 + 2 gamma_3) keeps rounding from culling a box the ray grazes (pbrt-v4, 6.8).
-    float leave = min(min(tf.x, tf.y), min(tf.z, t_max)) * 1.0000004;
-    return enter <= leave ? enter : MISSED_BOX;
+    vec4 leave = min(min(max(x0, x1), max(y0, y1)), min(max(z0, z1), vec4(t_max))) * 1.0000004;
+    bvec4 present = notEqual(child_bytes(node.quantized_z_kinds.z), uvec4(WIDE_CHILD_NONE));
+    bvec4 entered = bvec4(uvec4(lessThanEqual(enter, leave)) & uvec4(present));
+    return mix(vec4(MISSED_BOX), enter, entered);
+}
+
+// Orders the pair (t_a, a), (t_b, b) by entry distance.
+void order_children(inout float t_a, inout uvec2 a, inout float t_b, inout uvec2 b) {
+    if (t_b < t_a) {
+        float t = t_a; t_a = t_b; t_b = t;
+        uvec2 c = a; a = b; b = c;
+    }
+}
+
+// The k-th of four children (k from 1), by selects rather than an array a loop indexes.
+uvec2 kth_child(uint k, uvec2 c0, uvec2 c1, uvec2 c2, uvec2 c3) {
+    return k == 4u ? c3 : k == 3u ? c2 : k == 2u ? c1 : c0;
 }
 
 // Zero direction components would make 0 * inf = NaN in the slab test; nudge them.
@@ -95,40 +131,53 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
             }
             node_index = info.y;
         }
-        // Walk down from this node: test both children, visit a leaf child at once, go on to the
-        // nearer interior child and leave the farther one on the stack.
+        // Walk down from this node: test its children, intersect leaf children at once, go on to
+        // the nearest interior child and leave the others on the stack, nearer on top.
         while (true) {
             LOOP_ITERATION();
-            PairNode node = load_nodes(node_index);
-            float t_a = box_entry(node.a_min.xyz, node.a_max.xyz, ro, inv_d, hit.t);
-            float t_b = box_entry(node.b_min.xyz, node.b_max.xyz, ro, inv_d, hit.t);
-            uvec2 a = floatBitsToUint(vec2(node.a_min.w, node.a_max.w));  // link, primitive count
-            uvec2 b = floatBitsToUint(vec2(node.b_min.w, node.b_max.w));
-            if (t_b < t_a) {
-                uvec2 c = a; a = b; b = c;
-                float t = t_a; t_a = t_b; t_b = t;
-            }
+            WideNode node = load_nodes(node_index);
+            vec4 entries = wide_child_entries(node, ro, inv_d, hit.t);
+            // Per child: its link and kind, sorted with the entry distances (a sorting network).
+            uvec4 kinds = child_bytes(node.quantized_z_kinds.z);
+            float t0 = entries.x, t1 = entries.y, t2 = entries.z, t3 = entries.w;
+            uvec2 c0 = uvec2(node.links.x, kinds.x), c1 = uvec2(node.links.y, kinds.y);
+            uvec2 c2 = uvec2(node.links.z, kinds.z), c3 = uvec2(node.links.w, kinds.w);
+            order_children(t0, c0, t1, c1);
+            order_children(t2, c2, t3, c3);
+            order_children(t0, c0, t2, c2);
+            order_children(t1, c1, t3, c3);
+            order_children(t1, c1, t2, c2);
+            uint entered = uint(t0 != MISSED_BOX) + uint(t1 != MISSED_BOX) + uint(t2 != MISSED_BOX) + uint(t3 != MISSED_BOX);
 #if SCENE_TOP_LEVEL
             if (instance == NO_INDEX) {
-                // Top level: every leaf is one instance (the host builds it so). Leave the farther
-                // child, then the nearer, on the stack and take the nearer from there: entering an
+                // Top level: every leaf is one instance (the host builds it so). Leave the children
+                // on the stack, farthest first, and take the nearest from there: entering an
                 // instance happens when its entry is popped.
-                if (t_b <= hit.t) stack[sp++] = b.y == 0u ? b.x : INSTANCE_ENTRY | b.x;
-                if (t_a <= hit.t) stack[sp++] = a.y == 0u ? a.x : INSTANCE_ENTRY | a.x;
+                for (uint k = entered; k > 0u; --k) {
+                    LOOP_ITERATION();
+                    uvec2 c = kth_child(k, c0, c1, c2, c3);
+                    stack[sp++] = c.y == WIDE_CHILD_INTERIOR ? c.x : INSTANCE_ENTRY | c.x;
+                }
                 break;
             }
 #endif
+            // Children farthest first: leaves are intersected, interior children left on the
+            // stack, so that the nearest becomes the next node and the nearer of the rest lie on
+            // top. One loop over the children in this order measured faster on lavapipe than a
+            // nearest-first pass over the leaves and a second, farthest-first, over the rest
+            // (docs/benchmarks.md): a leaf's hit can no longer cull a farther sibling in the same
+            // node, but fewer loops run in step.
             uint next = NO_INDEX;
-            for (uint k = 0u; k < 2u; ++k) {
+            for (uint k = entered; k > 0u; --k) {
                 LOOP_ITERATION();
-                // A hit in the nearer child's leaf may put the farther child out of reach; a missed
-                // box enters at +infinity, so the same test skips it.
-                if ((k == 0u ? t_a : t_b) > hit.t) break;
-                uvec2 child = k == 0u ? a : b;
-                uint first = child.x;
-                uint count = child.y;
-                if (count == 0u) {
-                    if (next == NO_INDEX) next = first; else stack[sp++] = first;
+                float t_k = k == 4u ? t3 : k == 3u ? t2 : k == 2u ? t1 : t0;
+                uvec2 c = kth_child(k, c0, c1, c2, c3);
+                if (t_k > hit.t) continue;
+                uint first = c.x;
+                uint count = c.y;
+                if (count == WIDE_CHILD_INTERIOR) {
+                    if (next != NO_INDEX) stack[sp++] = next;
+                    next = first;
                 } else if (SCENE_MESHES == 1 && (SCENE_PRIMITIVES == 0 || instance_kind == INSTANCE_MESH)) {
                     for (uint i = first; i < first + count; ++i) {
                         LOOP_ITERATION();

@@ -102,16 +102,23 @@ struct LightAlias {
     uint alias;
 };
 
-// BVH node (src/bvh/pair_node.rs): both children of an interior node of the binary BVH, so one
-// load tests both boxes. Per child: xyz of *_min / *_max = its box; *_min.w = its link and
-// *_max.w = its primitive count (uint bits). Count 0: an interior child, the link is its node;
-// otherwise a leaf of primitives link..link + count. A missing child is a point box at +infinity.
-struct PairNode {
-    vec4 a_min;
-    vec4 a_max;
-    vec4 b_min;
-    vec4 b_max;
+// BVH node (src/bvh/wide_node.rs): up to four children, their boxes quantized to 8 bits against
+// the node's own. Byte k of each packed word belongs to child k.
+// - origin.xyz: the node's box's min corner; origin.w (uint bits): per axis (bytes 0, 1, 2) the
+//   biased exponent of the quantum, so the quantum is uintBitsToFloat(byte << 23);
+// - quantized_xy: each child's min x, max x, min y, max y in quanta from the origin (mins rounded
+//   down, maxes up); quantized_z_kinds.xy: min z, max z;
+// - quantized_z_kinds.z: each child's kind: WIDE_CHILD_INTERIOR, a leaf's primitive count, or
+//   WIDE_CHILD_NONE; quantized_z_kinds.w is unused;
+// - links: an interior child's node, or a leaf's first primitive.
+struct WideNode {
+    vec4 origin;
+    uvec4 quantized_xy;
+    uvec4 quantized_z_kinds;
+    uvec4 links;
 };
+const uint WIDE_CHILD_INTERIOR = 0u;
+const uint WIDE_CHILD_NONE = 255u;
 
 // Instance kinds (INSTANCE_* must match layout.rs): the scene's own spheres, quads and triangles
 // (one group, identity transform), or a placed triangle mesh.

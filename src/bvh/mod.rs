@@ -1,10 +1,10 @@
 //! Bounding volume hierarchy over primitive bounds: built on the CPU with binned SAH (in parallel)
 //! as binary 32-byte `BvhNode`s in depth-first order, walkable on the CPU, and turned into the
-//! 64-byte `PairNode`s the GLSL kernel walks (pair_node.rs).
+//! 64-byte four-wide, quantized `WideNode`s the GLSL kernel walks (wide_node.rs).
 //!
 //! A BVH over zero primitives is the single node `BvhNode::EMPTY_ROOT`: an inverted box that the
-//! sign-ordered slab test of `ray_box` never hits. As pair nodes it is a root of two missing
-//! children, which the kernel never enters either; the host also passes a node count of 0 for an
+//! sign-ordered slab test of `ray_box` never hits. As wide nodes it is a root of no children,
+//! which the kernel never enters either; the host also passes a node count of 0 for an
 //! empty scene, and the kernel then skips traversal at once.
 
 mod aabb;
@@ -13,13 +13,13 @@ mod blocks;
 mod box_a;
 mod flatten;
 mod node;
-mod pair_node;
 mod partition;
 mod sah;
 mod stats;
 #[cfg(test)]
 mod test_scenes;
 mod traverse;
+mod wide_node;
 
 use rayon::prelude::*;
 
@@ -27,9 +27,9 @@ use box_a::BoxA;
 
 pub use aabb::Aabb;
 pub use node::BvhNode;
-pub use pair_node::{pair_nodes, ChildBox, PairNode, NO_CHILD};
 pub use stats::BuildStats;
 pub use traverse::{any_hit, closest_hit, ray_box, Ray};
+pub use wide_node::{wide_nodes, WideChild, WideNode, CHILD_INTERIOR, CHILD_NONE, WIDTH};
 
 /// Deepest leaf level (root = 0) the builder emits. It is also the traversal stack size: the stack
 /// holds at most one pending far child per level above the current node.

@@ -1,7 +1,7 @@
 use super::Aabb;
 
 /// The builder's binary node, 32 bytes, in depth-first order. The kernel walks these as
-/// `PairNode`s (pair_node.rs), one per interior node.
+/// `WideNode`s (wide_node.rs), one per binary interior node two levels apart.
 ///
 /// - interior (`prim_count() == 0`): the first child is the next node, `offset` is the second child,
 ///   `axis()` is the split axis (visit the second child first when `ray.dir[axis] < 0`);

@@ -4,15 +4,15 @@
 //! is stored once.
 
 use super::layout::*;
-use crate::bvh::{self, pair_nodes, Aabb, BuildStats, PairNode};
+use crate::bvh::{self, wide_nodes, Aabb, BuildStats, WideNode, CHILD_INTERIOR, CHILD_NONE, WIDTH};
 use crate::scene::{Mesh, Scene, Shape};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
 
 pub struct Acceleration {
-    /// Every BVH as pair nodes (crate::bvh::PairNode), the top level's root at 0.
-    pub nodes: Vec<PairNode>,
+    /// Every BVH as wide nodes (crate::bvh::WideNode), the top level's root at 0.
+    pub nodes: Vec<WideNode>,
     /// In top-level leaf order.
     pub instances: Vec<GpuInstance>,
     /// The scene's own shapes, in their bottom-level leaf order.
@@ -32,6 +32,8 @@ pub struct Acceleration {
     /// Tangent and bitangent sign, one a vertex of meshes with tangents (see `Mesh::tangents`;
     /// others have zeros where a later mesh needs entries).
     pub tangents: Vec<[f32; 4]>,
+    /// Everything placed, in world space (`Aabb::EMPTY` for an empty scene).
+    pub bounds: Aabb,
     pub stats: AccelerationStats,
 }
 
@@ -151,13 +153,17 @@ fn transformed_bounds(b: &Aabb, m: Mat4) -> Aabb {
     }))
 }
 
-/// Appends a bottom level's nodes as pair nodes, rebasing child links onto the shared node array
+/// Appends a bottom level's nodes as wide nodes, rebasing child links onto the shared node array
 /// and leaf ranges onto the shared primitive array; returns its root's index.
-fn append_nodes(nodes: &mut Vec<PairNode>, bottom: &bvh::Bvh, prim_base: u32) -> u32 {
+fn append_nodes(nodes: &mut Vec<WideNode>, bottom: &bvh::Bvh, prim_base: u32) -> u32 {
     let node_base = nodes.len() as u32;
-    nodes.extend(pair_nodes(&bottom.nodes).into_iter().map(|mut n| {
-        for c in n.children.iter_mut().filter(|c| !c.is_missing()) {
-            c.link += if c.is_leaf() { prim_base } else { node_base };
+    nodes.extend(wide_nodes(&bottom.nodes).into_iter().map(|mut n| {
+        for k in 0..WIDTH {
+            match n.kind(k) {
+                CHILD_NONE => {}
+                CHILD_INTERIOR => n.links[k] += node_base,
+                _leaf => n.links[k] += prim_base,
+            }
         }
         n
     }));
@@ -184,7 +190,7 @@ impl Acceleration {
             placements.push((Some(mesh), inst.transform, transformed_bounds(&meshes[mesh].root_bounds, inst.transform)));
         }
         let top = bvh::build_single_leaves(&placements.iter().map(|p| p.2).collect::<Vec<_>>());
-        let mut nodes = pair_nodes(&top.nodes);
+        let mut nodes = wide_nodes(&top.nodes);
 
         let mut primitives = Vec::new();
         let mut group_root = 0;
@@ -256,7 +262,8 @@ impl Acceleration {
             top: (!instances.is_empty()).then(|| top.stats()),
             largest_mesh: meshes.iter().max_by_key(|m| m.bvh.prim_order.len()).map(|m| m.bvh.stats()),
         };
-        Acceleration { nodes, instances, primitives, triangles, triangle_materials, triangle_slots, normals, uvs, tangents, stats }
+        let bounds = if instances.is_empty() { Aabb::EMPTY } else { top.nodes[0].bounds() };
+        Acceleration { nodes, instances, primitives, triangles, triangle_materials, triangle_slots, normals, uvs, tangents, bounds, stats }
     }
 
     pub fn gpu_bytes(&self) -> u64 {

@@ -9,7 +9,7 @@ use super::chunks::{self, SplitPlans, EXTRA_BINDING_BASE};
 use super::glsl_block::{glsl_members, GlslBlock, GlslMember, GlslType};
 use super::kernel::KernelVariant;
 use super::layout::{FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuPunctualLight, GpuStats, GpuTexture, PassParams};
-use crate::bvh::PairNode;
+use crate::bvh::WideNode;
 
 /// Names a buffer of the kernel on the host: the key of [`BINDINGS`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -158,9 +158,9 @@ const fn chunked<T: GlslType>() -> Shape {
 pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // The camera, film, integrator settings and scene counts (see FrameParams).
     BufferBinding { buffer: Frame, binding: 0, name: "frame", shape: Shape::UniformBlock(Block::of::<FrameParams>()), access: Read, bound_in: EveryKernel, what: "frame parameters" },
-    // BVH pair nodes (src/bvh/pair_node.rs): the top level over instances, its root at node 0,
+    // BVH wide nodes (src/bvh/wide_node.rs): the top level over instances, its root at node 0,
     // then every bottom-level BVH.
-    BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: chunked::<PairNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
+    BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: chunked::<WideNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
     // The scene's own spheres, quads and triangles, in their BVH's leaf order.
     BufferBinding { buffer: Primitives, binding: 2, name: "prims", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "primitives" },
     BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: array::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },

@@ -191,7 +191,7 @@ mod tests {
             _ => unreachable!("{} is an array", b.name),
         };
         let src = glsl(nodes, element(nodes), ChunkPlan::WHOLE);
-        assert!(src.contains("PairNode load_nodes(uint i) { return nodes_0[i]; }"), "{src}");
+        assert!(src.contains("WideNode load_nodes(uint i) { return nodes_0[i]; }"), "{src}");
         let src = glsl(accum, element(accum), ChunkPlan { shift: 4, chunks: 3 });
         let window1 = format!("binding = {}) buffer accum_window1 {{ vec4 accum_1[]; }}", window_binding(accum, 1));
         assert!(src.contains(&window1), "{src}");

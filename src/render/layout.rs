@@ -3,7 +3,7 @@
 //! the kind constants of the twins must match the GLSL; the tests below pin every offset.
 
 use super::glsl_block::{glsl_block, GlslType};
-use crate::bvh::PairNode;
+use crate::bvh::WideNode;
 use bytemuck::{Pod, Zeroable};
 
 pub const PRIM_SPHERE: u32 = 0;
@@ -288,8 +288,8 @@ impl GlslType for GpuPunctualLight {
 impl GlslType for GpuAliasEntry {
     const NAME: &'static str = "LightAlias";
 }
-impl GlslType for PairNode {
-    const NAME: &'static str = "PairNode";
+impl GlslType for WideNode {
+    const NAME: &'static str = "WideNode";
 }
 impl GlslType for GpuMeshTriangle {
     const NAME: &'static str = "MeshTriangle";
@@ -471,6 +471,8 @@ mod tests {
             ("FILTER_GAUSSIAN", FILTER_GAUSSIAN),
             ("SAMPLER_INDEPENDENT", SAMPLER_INDEPENDENT),
             ("SAMPLER_SOBOL", SAMPLER_SOBOL),
+            ("WIDE_CHILD_INTERIOR", crate::bvh::CHILD_INTERIOR),
+            ("WIDE_CHILD_NONE", crate::bvh::CHILD_NONE),
         ] {
             let literal = if value >= 1 << 31 { format!("{value:#x}u") } else { format!("{value}u") };
             assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl or rng.glsl");

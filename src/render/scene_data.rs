@@ -241,11 +241,9 @@ impl SceneData {
         let triangle_emission = triangle_emission(scene, &acceleration, &fitted);
         let area_lights = world_lights(scene, &acceleration, &triangle_emission);
         let mut powers: Vec<f64> = area_lights.iter().map(|l| area_light_power(&l.shape, &scene.materials[l.shape.material() as usize], l.luminance)).collect();
-        let scene_radius = acceleration.nodes.first().map_or(0.0, |root| {
-            let bounds = root.bounds();
-            0.5 * (bounds.max - bounds.min).as_dvec3().length()
-        });
-        // An empty scene's root has empty (infinite) bounds.
+        let bounds = acceleration.bounds;
+        let scene_radius = 0.5 * (bounds.max - bounds.min).as_dvec3().length();
+        // An empty scene has empty (infinite) bounds.
         let scene_radius = if scene_radius.is_finite() { scene_radius } else { 0.0 };
         let punctual_powers: Vec<f64> = scene.lights.iter().map(|l| punctual_light_power(l, scene_radius)).collect();
         let punctual_lights = scene.lights.iter().zip(&punctual_powers).map(|(l, &p)| gpu_punctual_light(l, p)).collect();

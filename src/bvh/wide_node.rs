@@ -1,0 +1,319 @@
+//! The node format the kernel walks: a four-wide BVH with quantized child boxes, 64 bytes a node.
+//!
+//! Each node holds up to four children, the grandchildren of a binary node (a binary child that is
+//! a leaf stays one child), so the wide tree has half the binary tree's levels and a ray tests four
+//! boxes per node fetched. The children's boxes are stored as 8-bit offsets from the node's own
+//! min corner in steps of a power of two per axis (Ylitie, Karras and Laine 2017, "Efficient
+//! incoherent ray traversal on GPUs through compressed wide BVHs", section 3), rounded outwards, so
+//! the four boxes cost 24 bytes where full floats cost 96: one node is four 16-byte loads, where
+//! the pair nodes it replaced needed eight loads for four boxes. Loads are what traversal pays for,
+//! on lavapipe most of all (docs/benchmarks.md). Leaves get no node of their own: a leaf child names
+//! its primitives directly.
+
+use super::{Aabb, BvhNode};
+
+/// Children a node holds.
+pub const WIDTH: usize = 4;
+
+/// A child's kind byte: an interior child (its link is a node)...
+pub const CHILD_INTERIOR: u32 = 0;
+/// ...or an empty slot; the kinds between are leaves, the byte their primitive count.
+pub const CHILD_NONE: u32 = 0xff;
+
+/// Steps of the 8-bit grid a child's box is snapped to.
+const QUANTA: f64 = 255.0;
+
+/// How far, in quanta, a stored bound lies at least outside the exact one (unless it is the
+/// node's own min, stored as step 0). The kernel computes a child's planes as
+/// from + steps * per_step (shaders/bvh.glsl), which can be off by a few ulps of the node's size
+/// where the ray starts inside the node; 1/64 of a quantum (the node's size / 16,320) is a
+/// thousand times that, so rounding never moves a plane inside the child's box.
+const MARGIN: f64 = 1.0 / 64.0;
+
+/// GPU node, std430-compatible: 64 bytes, mirrors GLSL `struct WideNode` (shaders/layout.glsl).
+/// Byte k of each packed word belongs to child k.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable, PartialEq)]
+pub struct WideNode {
+    /// The node's box's min corner, where the children's quantized bounds start.
+    pub origin: [f32; 3],
+    /// Per axis (bytes 0, 1, 2) the exponent of the quantum, biased as an f32's exponent field:
+    /// the quantum along that axis is 2^(byte - 127), so the GPU gets it by one shift.
+    pub exponents: u32,
+    /// The children's boxes in quanta from `origin`: min x, max x, min y, max y, min z, max z.
+    /// Mins are rounded down and maxes up, so a decoded box holds the exact one.
+    pub quantized: [u32; 6],
+    /// Each child's kind: [`CHILD_INTERIOR`], a leaf's primitive count (1 to `MAX_LEAF_SIZE`), or
+    /// [`CHILD_NONE`].
+    pub kinds: u32,
+    /// Zero; pads the node to four 16-byte loads.
+    pub unused: u32,
+    /// Per child: an interior child's node, or a leaf's first primitive (in `Bvh::prim_order`
+    /// order); zero for an empty slot.
+    pub links: [u32; WIDTH],
+}
+
+/// One child of a [`WideNode`] before quantization.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WideChild {
+    Interior { bounds: Aabb, node: u32 },
+    Leaf { bounds: Aabb, first: u32, count: u32 },
+}
+
+impl WideChild {
+    fn bounds(&self) -> Aabb {
+        match *self {
+            WideChild::Interior { bounds, .. } | WideChild::Leaf { bounds, .. } => bounds,
+        }
+    }
+}
+
+impl WideNode {
+    /// A node of no children: the root of an empty BVH, which no ray enters.
+    pub const EMPTY: WideNode = WideNode { origin: [0.0; 3], exponents: 0, quantized: [0; 6], kinds: u32::MAX, unused: 0, links: [0; WIDTH] };
+
+    /// Packs up to [`WIDTH`] children, quantizing their boxes against their union.
+    pub fn new(children: &[WideChild]) -> WideNode {
+        assert!(children.len() <= WIDTH, "{} children in a {WIDTH}-wide node", children.len());
+        let bounds = children.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.bounds()));
+        let mut node = WideNode::EMPTY;
+        if children.is_empty() {
+            return node;
+        }
+        node.origin = bounds.min.into();
+        let exponents: [u32; 3] = std::array::from_fn(|axis| quantum_exponent(bounds.min[axis], bounds.max[axis]));
+        node.exponents = exponents[0] | exponents[1] << 8 | exponents[2] << 16;
+        node.kinds = 0;
+        for (k, child) in children.iter().chain(std::iter::repeat(&WideChild::Leaf { bounds: Aabb::EMPTY, first: 0, count: 0 })).take(WIDTH).enumerate() {
+            let shift = 8 * k as u32;
+            let (kind, link) = match *child {
+                WideChild::Interior { node, .. } => (CHILD_INTERIOR, node),
+                WideChild::Leaf { count: 0, .. } => (CHILD_NONE, 0),
+                WideChild::Leaf { first, count, .. } => {
+                    assert!(count < CHILD_NONE, "a leaf of {count} primitives");
+                    (count, first)
+                }
+            };
+            node.kinds |= kind << shift;
+            node.links[k] = link;
+            if kind == CHILD_NONE {
+                continue;
+            }
+            let b = child.bounds();
+            for axis in 0..3 {
+                let quantum = quantum(exponents[axis]);
+                let from_origin = |v: f32| (v as f64 - node.origin[axis] as f64) / quantum;
+                let low = (from_origin(b.min[axis]) - MARGIN).floor().clamp(0.0, QUANTA) as u32;
+                let high = (from_origin(b.max[axis]) + MARGIN).ceil().clamp(0.0, QUANTA) as u32;
+                node.quantized[2 * axis] |= low << shift;
+                node.quantized[2 * axis + 1] |= high << shift;
+            }
+        }
+        node
+    }
+
+    /// Child `k`'s kind byte.
+    pub fn kind(&self, k: usize) -> u32 {
+        self.kinds >> (8 * k) & 0xff
+    }
+
+    /// Child `k`'s box as stored: the origin plus a whole number of quanta per bound, rounded once
+    /// to f32 (the kernel tests these planes, `wide_child_entries` in shaders/bvh.glsl).
+    pub fn child_bounds(&self, k: usize) -> Aabb {
+        let decode = |word: u32, axis: usize| {
+            let steps = (word >> (8 * k) & 0xff) as f32;
+            self.origin[axis] + steps * quantum(self.exponents >> (8 * axis) & 0xff) as f32
+        };
+        let q = &self.quantized;
+        Aabb::new(
+            glam::Vec3::new(decode(q[0], 0), decode(q[2], 1), decode(q[4], 2)),
+            glam::Vec3::new(decode(q[1], 0), decode(q[3], 1), decode(q[5], 2)),
+        )
+    }
+}
+
+/// 2^(biased - 127), as an f32 exponent field of `biased` means (biased 1 to 254).
+fn quantum(biased: u32) -> f64 {
+    2f64.powi(biased as i32 - 127)
+}
+
+/// The smallest exponent (biased as an f32's) whose quantum spans [min, max] in [`QUANTA`] steps
+/// with [`MARGIN`] to spare, so that a max bound plus the margin still fits in 255 steps. A flat
+/// axis gets the smallest normal quantum.
+fn quantum_exponent(min: f32, max: f32) -> u32 {
+    let extent = max as f64 - min as f64;
+    let spans = |biased: u32| (QUANTA - MARGIN) * quantum(biased) >= extent;
+    let mut biased = if extent > 0.0 { ((extent / QUANTA).log2().ceil() as i32 + 127).clamp(1, 254) as u32 } else { 1 };
+    // log2 rounds: step down while a finer quantum still spans the box, up while this one does not.
+    while biased > 1 && spans(biased - 1) {
+        biased -= 1;
+    }
+    while biased < 254 && !spans(biased) {
+        biased += 1;
+    }
+    biased
+}
+
+/// The binary BVH `nodes` (depth-first, root at 0, layout contract on [`BvhNode`]) as wide nodes,
+/// root at 0, each node's children the grandchildren of a binary interior node (a binary child that
+/// is a leaf stays one). The wide tree is at most half as deep as the binary one, rounded up, which
+/// bounds the kernel's stack (`STACK_SIZE` in bvh.glsl). A root that is a leaf becomes a node of
+/// that one leaf; an empty BVH the node of no children.
+pub fn wide_nodes(nodes: &[BvhNode]) -> Vec<WideNode> {
+    let root = &nodes[0];
+    if root.is_leaf() {
+        return vec![WideNode::new(&[leaf_child(root)])];
+    }
+    if nodes.len() == 1 {
+        return vec![WideNode::EMPTY];
+    }
+    let mut wide = Vec::with_capacity(nodes.len() / 3 + 1);
+    collapse(nodes, 0, &mut wide);
+    wide
+}
+
+/// Appends the wide node of binary interior node `index` and, depth first, those below it; returns
+/// its index in `wide`.
+fn collapse(nodes: &[BvhNode], index: usize, wide: &mut Vec<WideNode>) -> u32 {
+    let at = wide.len();
+    wide.push(WideNode::EMPTY);
+    let mut children = Vec::with_capacity(WIDTH);
+    for child in binary_children(nodes, index) {
+        if nodes[child].is_leaf() {
+            children.push(child);
+        } else {
+            children.extend(binary_children(nodes, child));
+        }
+    }
+    let children: Vec<WideChild> = children
+        .into_iter()
+        .map(|c| {
+            let n = &nodes[c];
+            if n.is_leaf() {
+                leaf_child(n)
+            } else {
+                WideChild::Interior { bounds: n.bounds(), node: collapse(nodes, c, wide) }
+            }
+        })
+        .collect();
+    wide[at] = WideNode::new(&children);
+    at as u32
+}
+
+fn binary_children(nodes: &[BvhNode], index: usize) -> [usize; 2] {
+    [index + 1, nodes[index].offset as usize]
+}
+
+fn leaf_child(n: &BvhNode) -> WideChild {
+    WideChild::Leaf { bounds: n.bounds(), first: n.offset, count: n.prim_count() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::build;
+    use glam::Vec3;
+    use std::mem::{offset_of, size_of};
+
+    #[test]
+    fn layout_matches_the_glsl_struct() {
+        assert_eq!(offset_of!(WideNode, exponents), 12);
+        assert_eq!(offset_of!(WideNode, quantized), 16);
+        assert_eq!(offset_of!(WideNode, kinds), 40);
+        assert_eq!(offset_of!(WideNode, links), 48);
+        assert_eq!(size_of::<WideNode>(), 64);
+    }
+
+    fn scattered_boxes(count: usize, scale: f32, offset: Vec3) -> Vec<Aabb> {
+        (0..count)
+            .map(|i| {
+                let c = Vec3::new((i * 37 % 101) as f32, (i * 53 % 97) as f32, (i % 7) as f32) * scale + offset;
+                Aabb::new(c, c + 0.5 * scale)
+            })
+            .collect()
+    }
+
+    /// Walks the wide tree below `index`: counts each primitive reached in `seen`, checks that
+    /// every decoded child box holds the primitives below it and is at most one quantum (plus
+    /// rounding) larger per side, and returns the exact bounds of everything below and the depth.
+    fn check_subtree(wide: &[WideNode], index: u32, bvh: &crate::bvh::Bvh, bounds: &[Aabb], seen: &mut [u32]) -> (Aabb, usize) {
+        let node = &wide[index as usize];
+        let (mut below, mut depth) = (Aabb::EMPTY, 1);
+        for k in 0..WIDTH {
+            let kind = node.kind(k);
+            if kind == CHILD_NONE {
+                continue;
+            }
+            let exact = if kind == CHILD_INTERIOR {
+                let (exact, d) = check_subtree(wide, node.links[k], bvh, bounds, seen);
+                depth = depth.max(d + 1);
+                exact
+            } else {
+                let prims = node.links[k]..node.links[k] + kind;
+                prims.map(|i| bvh.prim_order[i as usize] as usize).fold(Aabb::EMPTY, |b, prim| {
+                    seen[prim] += 1;
+                    b.union(&bounds[prim])
+                })
+            };
+            let decoded = node.child_bounds(k);
+            assert!(decoded.contains(&exact), "child box {decoded:?} does not hold {exact:?}");
+            // The stored bounds (in reals, before the f32 rounding that only moves them outwards)
+            // keep the margin the kernel's rounding needs, except a min at the node's own.
+            for a in 0..3 {
+                let q = quantum(node.exponents >> (8 * a) & 0xff);
+                let steps = |word: u32| (word >> (8 * k) & 0xff) as f64;
+                let (low, high) = (steps(node.quantized[2 * a]), steps(node.quantized[2 * a + 1]));
+                let origin = node.origin[a] as f64;
+                assert!(low == 0.0 || exact.min[a] as f64 - (origin + low * q) >= MARGIN * q, "min {a} within the margin");
+                assert!(origin + high * q - exact.max[a] as f64 >= MARGIN * q, "max {a} within the margin");
+            }
+            let quanta = Vec3::from_array(std::array::from_fn(|a| quantum(node.exponents >> (8 * a) & 0xff) as f32));
+            let slack = (exact.min - decoded.min).max(decoded.max - exact.max);
+            let rounding = exact.max.abs().max(exact.min.abs()) * 1e-6;
+            assert!(slack.cmple(quanta * (1.0 + MARGIN as f32) + rounding).all(), "slack {slack:?} over quanta {quanta:?}");
+            below = below.union(&exact);
+        }
+        (below, depth)
+    }
+
+    /// Every primitive is reachable exactly once through conservative, tight boxes, and the wide
+    /// tree is no deeper than half the binary one (rounded up), the bound the kernel's stack needs.
+    #[test]
+    fn wide_nodes_cover_the_binary_tree_with_conservative_boxes() {
+        // Far from the origin and tiny, where f32 rounding of origin + steps * quantum matters.
+        for (scale, offset) in [(1.0, Vec3::ZERO), (1e-3, Vec3::new(1e4, -3e3, 7.0)), (37.0, Vec3::splat(-1e5))] {
+            let bounds = scattered_boxes(3000, scale, offset);
+            let bvh = build(&bounds);
+            let wide = wide_nodes(&bvh.nodes);
+            let mut seen = vec![0u32; bounds.len()];
+            let (_, depth) = check_subtree(&wide, 0, &bvh, &bounds, &mut seen);
+            assert!(seen.iter().all(|&s| s == 1), "every primitive once");
+            let binary_levels = bvh.stats().max_depth + 1;
+            assert!(depth <= binary_levels.div_ceil(2), "wide depth {depth}, binary {binary_levels}");
+            assert!(wide.len() * 2 <= bvh.nodes.len(), "{} wide nodes for {} binary", wide.len(), bvh.nodes.len());
+        }
+    }
+
+    #[test]
+    fn a_leaf_root_is_one_child_and_an_empty_tree_has_none() {
+        let one = build(&[Aabb::new(Vec3::ZERO, Vec3::ONE)]);
+        let wide = wide_nodes(&one.nodes);
+        assert_eq!(wide.len(), 1);
+        assert_eq!((wide[0].kind(0), wide[0].links[0]), (1, 0));
+        assert!((1..WIDTH).all(|k| wide[0].kind(k) == CHILD_NONE));
+        let stored = wide[0].child_bounds(0);
+        assert!(stored.contains(&Aabb::new(Vec3::ZERO, Vec3::ONE)) && stored.max.cmplt(Vec3::splat(1.01)).all(), "{stored:?}");
+        assert_eq!(wide_nodes(&build(&[]).nodes), vec![WideNode::EMPTY]);
+        assert!((0..WIDTH).all(|k| WideNode::EMPTY.kind(k) == CHILD_NONE));
+    }
+
+    #[test]
+    fn quantum_spans_the_box_and_no_finer_one_does() {
+        for (min, max) in [(0.0f32, 1.0f32), (-3.5, 1e6), (1e4, 1e4 + 1e-3), (2.0, 2.0), (-1e-30, 1e-30)] {
+            let e = quantum_exponent(min, max);
+            let extent = max as f64 - min as f64;
+            assert!((QUANTA - MARGIN) * quantum(e) >= extent, "{min}..{max}: exponent {e} too fine");
+            assert!(e == 1 || (QUANTA - MARGIN) * quantum(e - 1) < extent, "{min}..{max}: exponent {e} too coarse");
+        }
+    }
+}
