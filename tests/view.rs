@@ -486,6 +486,36 @@ fn minimizing_pauses_accumulation_and_restoring_resumes_it() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+#[test]
+fn a_swapchain_made_out_of_date_by_quick_resizes_is_re_created() {
+    let Some(display) = x_display("a_swapchain_made_out_of_date_by_quick_resizes_is_re_created") else { return };
+    let dir = temp_dir("view-out-of-date");
+    let scene = small_scene(&dir, "box.toml");
+    let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "200", "--height", "150", "--spp", "1000000"]);
+    let w = viewer.window.clone();
+    // Sizes changing faster than frames: lavapipe's X11 surface then finds the swapchain out of
+    // date at acquire or present before the viewer has seen the Resized event (17 times in 40
+    // such resizes when counted), and the viewer must skip that frame and re-create the swapchain
+    // rather than fail.
+    let mut resizes = vec!["sleep".to_owned(), "0".to_owned()];
+    for i in 0..30 {
+        resizes.extend(["windowsize".into(), w.clone(), (150 + (i % 7) * 30).to_string(), (100 + (i % 5) * 25).to_string(), "sleep".into(), "0.03".into()]);
+    }
+    resizes.extend(["windowsize".into(), w.clone(), "160".into(), "120".into()]);
+    viewer.xdotool(&resizes.iter().map(String::as_str).collect::<Vec<_>>());
+    wait_until("the image to follow the final size", || {
+        viewer.print_camera();
+        viewer.stdout.lock().unwrap().iter().rev().find(|l| l.starts_with('#'))?.contains("(160x120)").then_some(())
+    });
+    let settled = viewer.samples_shown();
+    wait_until("frames after the resizes", || {
+        viewer.check_alive();
+        (viewer.samples_shown() > settled).then_some(())
+    });
+    viewer.quit();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A Python 3 that has python3-xlib: the one on PATH, else Debian's (where PATH leads to another,
 /// e.g. pyenv's, which does not see Debian's packages).
 fn python_with_xlib() -> Option<&'static str> {
