@@ -1,7 +1,9 @@
 //! `caustica view` in a real window: under the test's own Xvfb server when no display is set
 //! (CI), driven with xdotool (synthesized input through the XTEST extension, as from a real
-//! mouse and keyboard) and inspected with xwininfo. Without Xvfb or xdotool installed the window
-//! tests say SKIPPED loudly and pass; CI installs them (.ci/run).
+//! mouse and keyboard) and inspected with xwininfo and xprop. Minimizing needs a window manager:
+//! that test runs openbox in its Xvfb. A file is dropped on the window by
+//! tests/support/xdnd_drop.py (python3-xlib), as a file manager would. Without these tools
+//! installed the window tests say SKIPPED loudly and pass; CI installs them (.ci/run).
 //!
 //! What the viewer shows and saves is checked against `caustica render`, pixel for pixel.
 
@@ -27,41 +29,83 @@ fn installed(program: &str) -> bool {
 struct XDisplay {
     name: String,
     xvfb: Option<Child>,
+    window_manager: Option<Child>,
     _one_at_a_time: MutexGuard<'static, ()>,
 }
 
 impl Drop for XDisplay {
     fn drop(&mut self) {
-        if let Some(xvfb) = self.xvfb.take() {
-            stop(xvfb);
+        // The window manager first: it is a client of the server.
+        for process in [self.window_manager.take(), self.xvfb.take()].into_iter().flatten() {
+            stop(process);
         }
     }
 }
 
-/// Ends Xvfb with SIGTERM, on which it removes its lock file and socket (SIGKILL would leave them).
-fn stop(mut xvfb: Child) {
-    unsafe { libc::kill(xvfb.id() as i32, libc::SIGTERM) };
-    let _ = xvfb.wait();
+/// Ends a process with SIGTERM, on which Xvfb removes its lock file and socket (SIGKILL would leave them).
+fn stop(mut process: Child) {
+    unsafe { libc::kill(process.id() as i32, libc::SIGTERM) };
+    let _ = process.wait();
 }
 
-/// The display to test on, or `None` (having said SKIPPED) where the tools are missing.
+/// The display to test on, or `None` (having said SKIPPED) where the tools are missing. Without
+/// a window manager, as most tests want: nothing moves, decorates or resizes the window.
 fn x_display(test: &str) -> Option<XDisplay> {
+    x_display_with(test, false)
+}
+
+/// The display to test on with a window manager running: openbox in the test's Xvfb, or the
+/// session's own when DISPLAY is set (and one runs there).
+fn x_display_with_window_manager(test: &str) -> Option<XDisplay> {
+    x_display_with(test, true)
+}
+
+fn x_display_with(test: &str, window_manager: bool) -> Option<XDisplay> {
     static LOCK: Mutex<()> = Mutex::new(());
     let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let missing: Vec<&str> = ["xdotool", "xwininfo"].into_iter().filter(|p| !installed(p)).collect();
+    let session = std::env::var_os("DISPLAY").filter(|d| !d.is_empty()).map(|d| d.to_string_lossy().into_owned());
+    let mut tools = vec!["xdotool", "xwininfo", "xprop"];
+    if window_manager && session.is_none() {
+        tools.push("openbox");
+    }
+    let missing: Vec<&str> = tools.into_iter().filter(|p| !installed(p)).collect();
     if !missing.is_empty() {
-        eprintln!("SKIPPED: {test}: {} not installed (apt-get install xdotool x11-utils)", missing.join(" and "));
+        eprintln!("SKIPPED: {test}: {} not installed (apt-get install xdotool x11-utils openbox)", missing.join(" and "));
         return None;
     }
-    if let Some(name) = std::env::var_os("DISPLAY").filter(|d| !d.is_empty()) {
-        return Some(XDisplay { name: name.to_string_lossy().into_owned(), xvfb: None, _one_at_a_time: guard });
+    if let Some(name) = session {
+        if window_manager && !has_window_manager(&name) {
+            eprintln!("SKIPPED: {test}: DISPLAY {name} has no window manager (none announces itself on the root window)");
+            return None;
+        }
+        return Some(XDisplay { name, xvfb: None, window_manager: None, _one_at_a_time: guard });
     }
     if !installed("Xvfb") {
         eprintln!("SKIPPED: {test}: no DISPLAY and Xvfb is not installed (apt-get install xvfb)");
         return None;
     }
     let (xvfb, number) = start_xvfb();
-    Some(XDisplay { name: format!(":{number}"), xvfb: Some(xvfb), _one_at_a_time: guard })
+    let mut display = XDisplay { name: format!(":{number}"), xvfb: Some(xvfb), window_manager: None, _one_at_a_time: guard };
+    if window_manager {
+        display.window_manager = Some(start_openbox(&display.name));
+    }
+    Some(display)
+}
+
+/// Whether an EWMH window manager runs on the display (it names its window on the root window).
+fn has_window_manager(display: &str) -> bool {
+    let out = Command::new("xprop").args(["-root", "_NET_SUPPORTING_WM_CHECK"]).env("DISPLAY", display).output();
+    out.is_ok_and(|o| String::from_utf8_lossy(&o.stdout).contains("window id"))
+}
+
+/// openbox on the display, once it manages windows.
+fn start_openbox(display: &str) -> Child {
+    let mut cmd = Command::new("openbox");
+    cmd.env("DISPLAY", display).stdout(Stdio::null()).stderr(Stdio::null());
+    stop_with_this_process(&mut cmd);
+    let openbox = cmd.spawn().expect("start openbox");
+    wait_until("openbox to manage the display", || has_window_manager(display).then_some(()));
+    openbox
 }
 
 /// An Xvfb server on a display number it chooses, once it accepts connections: with -displayfd
@@ -181,6 +225,13 @@ impl Viewer {
 
     fn title(&self) -> String {
         self.xdotool(&["getwindowname", &self.window]).trim().to_owned()
+    }
+
+    /// The samples per pixel the title shows ("... - 12/100 spp - ...").
+    fn samples_shown(&self) -> u32 {
+        let title = self.title();
+        let count = title.split(" - ").find_map(|part| part.strip_suffix(" spp")).and_then(|s| s.split('/').next()?.parse().ok());
+        count.unwrap_or_else(|| panic!("no sample count in the title: {title}"))
     }
 
     /// Presses P and returns the camera block it printed (the `count`-th block).
@@ -399,6 +450,112 @@ fn a_scene_rewritten_on_disk_is_reloaded_keeping_the_camera() {
     let expected_scene = dir.join("expected.toml");
     std::fs::write(&expected_scene, with_camera(&rewritten, &camera.text)).unwrap();
     let rendered = render_png(&dir, &expected_scene, &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()], "expected.png");
+    assert_same_pixels(&png, &rendered);
+    viewer.quit();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn minimizing_pauses_accumulation_and_restoring_resumes_it() {
+    let Some(display) = x_display_with_window_manager("minimizing_pauses_accumulation_and_restoring_resumes_it") else { return };
+    let dir = temp_dir("view-minimize");
+    let scene = small_scene(&dir, "box.toml");
+    // A limit the test does not reach: only the pause stops the samples.
+    let viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "1000000"]);
+    let w = viewer.window.clone();
+    let first = viewer.samples_shown();
+    wait_until("samples before minimizing", || (viewer.samples_shown() > first).then_some(()));
+
+    viewer.xdotool(&["windowminimize", "--sync", &w]);
+    // What winit asks (Window::is_minimized): the state the window manager gave the window.
+    let state = viewer.tool("xprop", &["-id", &w, "_NET_WM_STATE"]);
+    assert!(state.contains("_NET_WM_STATE_HIDDEN"), "the window manager iconified the window: {state}");
+    // The dispatch in flight ends and the title (refreshed every 250 ms) catches up.
+    std::thread::sleep(Duration::from_secs(1));
+    let paused_at = viewer.samples_shown();
+    std::thread::sleep(Duration::from_secs(2));
+    let title = viewer.title();
+    assert_eq!(viewer.samples_shown(), paused_at, "no samples are added while minimized: {title}");
+    // The frame rate the title shows: an idle loop wakes about 30 times a second, a spinning one thousands.
+    let fps: f64 = title.split(" - ").find_map(|p| p.strip_suffix(" fps")).and_then(|f| f.parse().ok()).unwrap_or_else(|| panic!("no fps in the title: {title}"));
+    assert!(fps < 100.0, "the frame loop idles while minimized: {title}");
+
+    viewer.xdotool(&["windowactivate", "--sync", &w]);
+    wait_until("samples after restoring", || (viewer.samples_shown() > paused_at).then_some(()));
+    viewer.quit();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_swapchain_made_out_of_date_by_quick_resizes_is_re_created() {
+    let Some(display) = x_display("a_swapchain_made_out_of_date_by_quick_resizes_is_re_created") else { return };
+    let dir = temp_dir("view-out-of-date");
+    let scene = small_scene(&dir, "box.toml");
+    let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "200", "--height", "150", "--spp", "1000000"]);
+    let w = viewer.window.clone();
+    // Sizes changing faster than frames: lavapipe's X11 surface then finds the swapchain out of
+    // date at acquire or present before the viewer has seen the Resized event (17 times in 40
+    // such resizes when counted), and the viewer must skip that frame and re-create the swapchain
+    // rather than fail.
+    let mut resizes = vec!["sleep".to_owned(), "0".to_owned()];
+    for i in 0..30 {
+        resizes.extend(["windowsize".into(), w.clone(), (150 + (i % 7) * 30).to_string(), (100 + (i % 5) * 25).to_string(), "sleep".into(), "0.03".into()]);
+    }
+    resizes.extend(["windowsize".into(), w.clone(), "160".into(), "120".into()]);
+    viewer.xdotool(&resizes.iter().map(String::as_str).collect::<Vec<_>>());
+    wait_until("the image to follow the final size", || {
+        viewer.print_camera();
+        viewer.stdout.lock().unwrap().iter().rev().find(|l| l.starts_with('#'))?.contains("(160x120)").then_some(())
+    });
+    let settled = viewer.samples_shown();
+    wait_until("frames after the resizes", || {
+        viewer.check_alive();
+        (viewer.samples_shown() > settled).then_some(())
+    });
+    viewer.quit();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A Python 3 that has python3-xlib: the one on PATH, else Debian's (where PATH leads to another,
+/// e.g. pyenv's, which does not see Debian's packages).
+fn python_with_xlib() -> Option<&'static str> {
+    ["python3", "/usr/bin/python3"].into_iter().find(|python| Command::new(python).args(["-c", "import Xlib"]).stderr(Stdio::null()).status().is_ok_and(|s| s.success()))
+}
+
+#[test]
+fn a_file_dropped_on_the_window_is_opened_with_its_own_camera() {
+    let test = "a_file_dropped_on_the_window_is_opened_with_its_own_camera";
+    let Some(python) = python_with_xlib() else {
+        eprintln!("SKIPPED: {test}: python3-xlib is not installed (apt-get install python3-xlib)");
+        return;
+    };
+    let Some(display) = x_display(test) else { return };
+    let dir = temp_dir("view-drop");
+    let scene = small_scene(&dir, "box.toml");
+    // The dropped scene has other walls and another camera, so the picture tells the two apart.
+    let mut table: toml::Table = toml::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    for (_, material) in table["materials"].as_table_mut().unwrap().iter_mut() {
+        if let Some(albedo) = material.get_mut("albedo") {
+            *albedo = toml::Value::try_from([0.9, 0.6, 0.2]).unwrap();
+        }
+    }
+    table["camera"].as_table_mut().unwrap().insert("fov".into(), toml::Value::Float(65.0));
+    let dropped = dir.join("dropped.toml");
+    std::fs::write(&dropped, toml::to_string(&table).unwrap()).unwrap();
+    let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "2"]);
+
+    let helper = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/support/xdnd_drop.py");
+    let out = Command::new(python).arg(&helper).arg(&viewer.window).arg(&dropped).env("DISPLAY", &viewer.display).output().unwrap();
+    assert!(out.status.success(), "the drop: {}", String::from_utf8_lossy(&out.stderr));
+    wait_until("the dropped scene in the title", || {
+        viewer.check_alive();
+        viewer.title().contains("dropped.toml").then_some(())
+    });
+
+    // What is shown is the dropped scene, from its own camera, and S names the files after it.
+    let (png, exr) = viewer.save(&dir);
+    assert!(png.file_name().unwrap().to_string_lossy().starts_with("dropped-view-"), "{}", png.display());
+    let rendered = render_png(&dir, &dropped, &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()], "expected.png");
     assert_same_pixels(&png, &rendered);
     viewer.quit();
     std::fs::remove_dir_all(&dir).unwrap();

@@ -204,7 +204,10 @@ impl<'a> Viewer<'a> {
 
     /// How long the event loop may wait for events before the next frame.
     pub fn wait_time(&self) -> Duration {
-        if self.quit || self.redraw || self.camera_moved || !self.fly_keys.is_empty() || (!self.done() && !self.paused()) {
+        let work = self.redraw || self.camera_moved || !self.fly_keys.is_empty() || !self.done();
+        // While paused nothing is rendered or drawn, so a redraw stays pending until the window is
+        // back: waiting for it would spin the loop (thousands of empty frames a second, a core busy).
+        if self.quit || (work && !self.paused()) {
             Duration::ZERO
         } else {
             IDLE_WAIT
