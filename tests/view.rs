@@ -420,6 +420,19 @@ fn window_has_the_size_and_title_and_input_moves_the_camera_and_restarts_accumul
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The scene `text` with every albedo set to `albedo` and the camera's field of view to `fov`: a
+/// picture told apart from the original at a glance.
+fn recoloured_scene(text: &str, albedo: [f64; 3], fov: f64) -> String {
+    let mut table: toml::Table = toml::from_str(text).unwrap();
+    for (_, material) in table["materials"].as_table_mut().unwrap().iter_mut() {
+        if let Some(value) = material.get_mut("albedo") {
+            *value = toml::Value::try_from(albedo).unwrap();
+        }
+    }
+    table["camera"].as_table_mut().unwrap().insert("fov".into(), toml::Value::Float(fov));
+    toml::to_string(&table).unwrap()
+}
+
 #[test]
 fn a_scene_rewritten_on_disk_is_reloaded_keeping_the_camera() {
     let Some(display) = x_display("a_scene_rewritten_on_disk_is_reloaded_keeping_the_camera") else { return };
@@ -430,14 +443,7 @@ fn a_scene_rewritten_on_disk_is_reloaded_keeping_the_camera() {
     let camera = viewer.print_camera();
 
     // The walls change colour and the file's camera moves: the viewer takes the walls, keeps its camera.
-    let mut table: toml::Table = toml::from_str(&original).unwrap();
-    for (_, material) in table["materials"].as_table_mut().unwrap().iter_mut() {
-        if let Some(albedo) = material.get_mut("albedo") {
-            *albedo = toml::Value::try_from([0.2, 0.3, 0.9]).unwrap();
-        }
-    }
-    table["camera"].as_table_mut().unwrap().insert("fov".into(), toml::Value::Float(70.0));
-    let rewritten = toml::to_string(&table).unwrap();
+    let rewritten = recoloured_scene(&original, [0.2, 0.3, 0.9], 70.0);
     std::fs::write(&scene, &rewritten).unwrap();
     wait_until("the reload", || {
         viewer.check_alive();
@@ -533,15 +539,8 @@ fn a_file_dropped_on_the_window_is_opened_with_its_own_camera() {
     let dir = temp_dir("view-drop");
     let scene = small_scene(&dir, "box.toml");
     // The dropped scene has other walls and another camera, so the picture tells the two apart.
-    let mut table: toml::Table = toml::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
-    for (_, material) in table["materials"].as_table_mut().unwrap().iter_mut() {
-        if let Some(albedo) = material.get_mut("albedo") {
-            *albedo = toml::Value::try_from([0.9, 0.6, 0.2]).unwrap();
-        }
-    }
-    table["camera"].as_table_mut().unwrap().insert("fov".into(), toml::Value::Float(65.0));
     let dropped = dir.join("dropped.toml");
-    std::fs::write(&dropped, toml::to_string(&table).unwrap()).unwrap();
+    std::fs::write(&dropped, recoloured_scene(&std::fs::read_to_string(&scene).unwrap(), [0.9, 0.6, 0.2], 65.0)).unwrap();
     let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "2"]);
 
     let helper = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/support/xdnd_drop.py");
