@@ -100,8 +100,8 @@ impl WideNode {
                 continue;
             }
             let b = child.bounds();
-            for axis in 0..3 {
-                let quantum = quantum(exponents[axis]);
+            for (axis, &exponent) in exponents.iter().enumerate() {
+                let quantum = quantum(exponent);
                 let from_origin = |v: f32| (v as f64 - node.origin[axis] as f64) / quantum;
                 let low = (from_origin(b.min[axis]) - MARGIN).floor().clamp(0.0, QUANTA) as u32;
                 let high = (from_origin(b.max[axis]) + MARGIN).ceil().clamp(0.0, QUANTA) as u32;
