@@ -152,7 +152,7 @@ mod tests {
 
     #[test]
     fn large_arrays_are_split_into_power_of_two_windows() {
-        // 10M triangles' worth of nodes (3.5M pair nodes, 224 MB) under lavapipe's 128 MiB.
+        // 3.5M 64-byte nodes (224 MB; about 20M triangles' worth of wide nodes) under lavapipe's 128 MiB.
         let bytes = 3_500_000 * 64;
         let p = plan(NODE_BYTES, bytes, 128 << 20, 16).unwrap();
         assert_eq!(p, ChunkPlan { shift: 21, chunks: 2 });
