@@ -55,7 +55,7 @@ pub struct WideNode {
 
 /// One child of a [`WideNode`] before quantization.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum WideChild {
+enum WideChild {
     Interior { bounds: Aabb, node: u32 },
     Leaf { bounds: Aabb, first: u32, count: u32 },
 }
@@ -72,8 +72,9 @@ impl WideNode {
     /// A node of no children: the root of an empty BVH, which no ray enters.
     pub const EMPTY: WideNode = WideNode { origin: [0.0; 3], exponents: 0, quantized: [0; 6], kinds: u32::MAX, unused: 0, links: [0; WIDTH] };
 
-    /// Packs up to [`WIDTH`] children, quantizing their boxes against their union.
-    pub fn new(children: &[WideChild]) -> WideNode {
+    /// Packs up to [`WIDTH`] children, quantizing their boxes against their union; the slots
+    /// after them stay empty.
+    fn new(children: &[WideChild]) -> WideNode {
         assert!(children.len() <= WIDTH, "{} children in a {WIDTH}-wide node", children.len());
         let bounds = children.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.bounds()));
         let mut node = WideNode::EMPTY;
@@ -83,22 +84,17 @@ impl WideNode {
         node.origin = bounds.min.into();
         let exponents: [u32; 3] = std::array::from_fn(|axis| quantum_exponent(bounds.min[axis], bounds.max[axis]));
         node.exponents = exponents[0] | exponents[1] << 8 | exponents[2] << 16;
-        node.kinds = 0;
-        for (k, child) in children.iter().chain(std::iter::repeat(&WideChild::Leaf { bounds: Aabb::EMPTY, first: 0, count: 0 })).take(WIDTH).enumerate() {
+        for (k, child) in children.iter().enumerate() {
             let shift = 8 * k as u32;
             let (kind, link) = match *child {
                 WideChild::Interior { node, .. } => (CHILD_INTERIOR, node),
-                WideChild::Leaf { count: 0, .. } => (CHILD_NONE, 0),
                 WideChild::Leaf { first, count, .. } => {
-                    assert!(count < CHILD_NONE, "a leaf of {count} primitives");
+                    assert!((1..CHILD_NONE).contains(&count), "a leaf of {count} primitives");
                     (count, first)
                 }
             };
-            node.kinds |= kind << shift;
+            node.kinds = node.kinds & !(0xff << shift) | kind << shift;
             node.links[k] = link;
-            if kind == CHILD_NONE {
-                continue;
-            }
             let b = child.bounds();
             for (axis, &exponent) in exponents.iter().enumerate() {
                 let quantum = quantum(exponent);
@@ -114,22 +110,29 @@ impl WideNode {
 
     /// Child `k`'s kind byte.
     pub fn kind(&self, k: usize) -> u32 {
-        self.kinds >> (8 * k) & 0xff
+        byte(self.kinds, k)
+    }
+
+    /// The quantum along `axis`.
+    fn quantum_along(&self, axis: usize) -> f64 {
+        quantum(byte(self.exponents, axis))
     }
 
     /// Child `k`'s box as stored: the origin plus a whole number of quanta per bound, rounded once
     /// to f32 (the kernel tests these planes, `wide_child_entries` in shaders/bvh.glsl).
     pub fn child_bounds(&self, k: usize) -> Aabb {
-        let decode = |word: u32, axis: usize| {
-            let steps = (word >> (8 * k) & 0xff) as f32;
-            self.origin[axis] + steps * quantum(self.exponents >> (8 * axis) & 0xff) as f32
-        };
+        let decode = |word: u32, axis: usize| self.origin[axis] + byte(word, k) as f32 * self.quantum_along(axis) as f32;
         let q = &self.quantized;
         Aabb::new(
             glam::Vec3::new(decode(q[0], 0), decode(q[2], 1), decode(q[4], 2)),
             glam::Vec3::new(decode(q[1], 0), decode(q[3], 1), decode(q[5], 2)),
         )
     }
+}
+
+/// Byte `k` of a packed word (`child_bytes` in shaders/bvh.glsl).
+fn byte(word: u32, k: usize) -> u32 {
+    word >> (8 * k) & 0xff
 }
 
 /// 2^(biased - 127), as an f32 exponent field of `biased` means (biased 1 to 254).
@@ -260,14 +263,13 @@ mod tests {
             // The stored bounds (in reals, before the f32 rounding that only moves them outwards)
             // keep the margin the kernel's rounding needs, except a min at the node's own.
             for a in 0..3 {
-                let q = quantum(node.exponents >> (8 * a) & 0xff);
-                let steps = |word: u32| (word >> (8 * k) & 0xff) as f64;
-                let (low, high) = (steps(node.quantized[2 * a]), steps(node.quantized[2 * a + 1]));
+                let q = node.quantum_along(a);
+                let (low, high) = (byte(node.quantized[2 * a], k) as f64, byte(node.quantized[2 * a + 1], k) as f64);
                 let origin = node.origin[a] as f64;
                 assert!(low == 0.0 || exact.min[a] as f64 - (origin + low * q) >= MARGIN * q, "min {a} within the margin");
                 assert!(origin + high * q - exact.max[a] as f64 >= MARGIN * q, "max {a} within the margin");
             }
-            let quanta = Vec3::from_array(std::array::from_fn(|a| quantum(node.exponents >> (8 * a) & 0xff) as f32));
+            let quanta = Vec3::from_array(std::array::from_fn(|a| node.quantum_along(a) as f32));
             let slack = (exact.min - decoded.min).max(decoded.max - exact.max);
             let rounding = exact.max.abs().max(exact.min.abs()) * 1e-6;
             assert!(slack.cmple(quanta * (1.0 + MARGIN as f32) + rounding).all(), "slack {slack:?} over quanta {quanta:?}");
