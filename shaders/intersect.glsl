@@ -50,14 +50,16 @@ float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max,
 
 // Every function that switches on a primitive's kind names each PRIM_* kind of layout.glsl, and
 // an unknown kind has no surface (no hit, no normal, no area) rather than passing for another
-// kind; a new kind is a case in each (src/render/layout.rs tests that every kind has one).
+// kind; a new kind is a case in each (src/render/layout.rs tests that every kind has one). A kind
+// the scene has none of (SCENE_SPHERE_SHAPES, SCENE_QUAD_SHAPES, SCENE_TRIANGLE_SHAPES:
+// src/render/features.rs) is compiled out of its case, which then answers as for an unknown kind.
 
 float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
     vec2 unused_bary;
     switch (prim_kind(p)) {
-        case PRIM_SPHERE: return intersect_sphere(p.a.xyz, p.a.w, o, d, t_max);
-        case PRIM_QUAD: return intersect_quad(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max);
-        case PRIM_TRIANGLE: return intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max, unused_bary);
+        case PRIM_SPHERE: return SCENE_SPHERE_SHAPES == 1 ? intersect_sphere(p.a.xyz, p.a.w, o, d, t_max) : NO_HIT;
+        case PRIM_QUAD: return SCENE_QUAD_SHAPES == 1 ? intersect_quad(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max) : NO_HIT;
+        case PRIM_TRIANGLE: return SCENE_TRIANGLE_SHAPES == 1 ? intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max, unused_bary) : NO_HIT;
         default: return NO_HIT;
     }
 }
@@ -65,9 +67,9 @@ float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
 // Outward (sphere) or front-side (quad, triangle) unit normal at a point on the primitive.
 vec3 primitive_normal(Primitive p, vec3 point) {
     switch (prim_kind(p)) {
-        case PRIM_SPHERE: return (point - p.a.xyz) / p.a.w;
+        case PRIM_SPHERE: return SCENE_SPHERE_SHAPES == 1 ? (point - p.a.xyz) / p.a.w : vec3(0.0);
         case PRIM_QUAD:
-        case PRIM_TRIANGLE: return normalize(cross(p.b.xyz, p.c.xyz));
+        case PRIM_TRIANGLE: return SCENE_QUAD_SHAPES == 1 || SCENE_TRIANGLE_SHAPES == 1 ? normalize(cross(p.b.xyz, p.c.xyz)) : vec3(0.0);
         default: return vec3(0.0);
     }
 }
@@ -79,8 +81,8 @@ vec3 primitive_normal(Primitive p, vec3 point) {
 // lobe keeps an arbitrary frame, as Mitsuba's coordinate_system(n) for meshes without them).
 vec3 primitive_tangent(Primitive p, vec3 point) {
     switch (prim_kind(p)) {
-        case PRIM_SPHERE: return vec3(p.a.y - point.y, point.x - p.a.x, 0.0);
-        case PRIM_QUAD: return p.b.xyz;
+        case PRIM_SPHERE: return SCENE_SPHERE_SHAPES == 1 ? vec3(p.a.y - point.y, point.x - p.a.x, 0.0) : vec3(0.0);
+        case PRIM_QUAD: return SCENE_QUAD_SHAPES == 1 ? p.b.xyz : vec3(0.0);
         case PRIM_TRIANGLE: return vec3(0.0);
         default: return vec3(0.0);
     }
@@ -88,9 +90,9 @@ vec3 primitive_tangent(Primitive p, vec3 point) {
 
 float primitive_area(Primitive p) {
     switch (prim_kind(p)) {
-        case PRIM_SPHERE: return 4.0 * PI * p.a.w * p.a.w;
-        case PRIM_QUAD: return length(cross(p.b.xyz, p.c.xyz));
-        case PRIM_TRIANGLE: return 0.5 * length(cross(p.b.xyz, p.c.xyz));
+        case PRIM_SPHERE: return SCENE_SPHERE_SHAPES == 1 ? 4.0 * PI * p.a.w * p.a.w : 0.0;
+        case PRIM_QUAD: return SCENE_QUAD_SHAPES == 1 ? length(cross(p.b.xyz, p.c.xyz)) : 0.0;
+        case PRIM_TRIANGLE: return SCENE_TRIANGLE_SHAPES == 1 ? 0.5 * length(cross(p.b.xyz, p.c.xyz)) : 0.0;
         default: return 0.0;
     }
 }

@@ -13,6 +13,10 @@
 // and the MIS weight of an emitter hit by BSDF sampling both evaluate it, so the two weights of a
 // path come from the same pdfs and sum to 1, with no light index needed at a hit; the alias table,
 // built from the same powers in double precision, picks with that probability up to f32 rounding.
+//
+// Each kind of light the scene lacks is compiled out (SCENE_SPHERE_LIGHTS, SCENE_TRIANGLE_LIGHTS,
+// SCENE_PUNCTUAL_LIGHTS, SCENE_LIGHT_DISKS: src/render/features.rs): a quad-lit box samples no
+// cones or spherical triangles. On Mesa 22.3's lavapipe every branch runs, taken or not.
 
 struct LightSample {
     vec3 dir;
@@ -169,13 +173,13 @@ float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
     switch (prim_kind(p)) {
         case PRIM_SPHERE: {
             SphereCone cone;
-            if (sphere_cone(p, ref, cone)) return pick / (2.0 * PI * (1.0 - cone.cos_max));
+            if (SCENE_SPHERE_LIGHTS == 1 && sphere_cone(p, ref, cone)) return pick / (2.0 * PI * (1.0 - cone.cos_max));
             break;
         }
         case PRIM_QUAD: break;
         case PRIM_TRIANGLE: {
             SphericalTriangle s;
-            if (spherical_triangle(p, ref, s)) return pick / s.area;
+            if (SCENE_TRIANGLE_LIGHTS == 1 && spherical_triangle(p, ref, s)) return pick / s.area;
             break;
         }
         default: return 0.0;
@@ -203,6 +207,7 @@ bool sample_area_light_point(Primitive p, vec3 ref, vec2 u, out vec3 point) {
     point = ref;
     switch (prim_kind(p)) {
         case PRIM_SPHERE: {
+            if (SCENE_SPHERE_LIGHTS == 0) return false;
             SphereCone cone;
             if (sphere_cone(p, ref, cone)) {
                 vec3 dir = sample_cone(u, cone.to_center / sqrt(cone.distance2), cone.cos_max);
@@ -218,6 +223,7 @@ bool sample_area_light_point(Primitive p, vec3 ref, vec2 u, out vec3 point) {
             point = p.a.xyz + u.x * p.b.xyz + u.y * p.c.xyz;
             return true;
         case PRIM_TRIANGLE: {
+            if (SCENE_TRIANGLE_LIGHTS == 0) return false;
             SphericalTriangle s;
             if (spherical_triangle(p, ref, s)) {
                 vec3 dir = sample_spherical_triangle(s, u);
@@ -303,6 +309,7 @@ bool sample_punctual_light(PunctualLight l, vec3 ref, vec2 u, inout LightSample 
 // weight 1).
 vec3 light_disks_radiance(vec3 dir, float bsdf_pdf) {
     vec3 sum = vec3(0.0);
+    if (SCENE_LIGHT_DISKS == 0) return sum;
     for (uint i = 0u; i < frame.punctual_light_count; ++i) {
         LOOP_ITERATION();
         PunctualLight l = punctual_lights[i];
@@ -321,7 +328,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     if (count == 0u) return false;
     uint index = pick_light(count, rng);
     vec2 u = rng_next2(rng);
-    if (index >= area_count) {
+    if (SCENE_PUNCTUAL_LIGHTS == 1 && index >= area_count) {
         PunctualLight l = punctual_lights[index - area_count];
         if (!sample_punctual_light(l, ref, u, ls)) return false;
         ls.pdf *= pick_probability(l.value_power.w);

@@ -67,9 +67,10 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
 /// by the spheres' longitude), a one-sided clear-coated plastic, a thin pane and a sphere of
 /// absorbing glass under an environment map, lit by a mesh lamp with an emission texture, the
 /// floor normal-mapped and anisotropically glossy along its tangents, and two squares with
-/// alpha over it (a textured BLEND and a textured MASK): every feature on, which the checked-in
-/// scenes without the shared data lack (textures, several instances, textured emitters, normal
-/// maps, alpha, clear coats, absorption, anisotropy).
+/// alpha over it (a textured BLEND and a textured MASK), beside a glowing sphere, a quad, a
+/// triangle, a spot light and a sun with a disk: every feature on, which the checked-in scenes
+/// without the shared data lack (textures, several instances, textured emitters, normal maps,
+/// alpha, clear coats, absorption, anisotropy).
 #[test]
 fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     let mut scene = parse(
@@ -131,6 +132,30 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         center = [0.0, 0.8, 0.9]
         radius = 0.2
         material = "pane"
+        [[spheres]]
+        center = [-0.6, 1.2, -0.5]
+        radius = 0.1
+        material = "glow"
+        [[quads]]
+        origin = [-1.0, -0.2, -1.2]
+        edge_u = [2.0, 0.0, 0.0]
+        edge_v = [0.0, 1.5, 0.0]
+        material = "lace"
+        [[triangles]]
+        vertices = [[0.6, -0.2, -0.9], [1.0, -0.2, -0.9], [0.8, 0.4, -0.9]]
+        material = "metal"
+        [[lights]]
+        type = "spot"
+        position = [0.5, 1.5, 1.0]
+        look_at = [0.0, 0.0, 0.0]
+        intensity = [2.0, 2.0, 2.0]
+        cone_angle = 30.0
+        falloff_start = 20.0
+        [[lights]]
+        type = "directional"
+        direction = [-0.3, -1.0, -0.2]
+        irradiance = [1.0, 0.9, 0.8]
+        angular_diameter = 5.0
         "#,
     );
     let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();

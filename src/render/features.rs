@@ -1,12 +1,15 @@
 //! What of the kernel a scene uses. The kernel is compiled for the scene (issue 11, item 4): code
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
 //! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
-//! clear coats, absorption, Beckmann lobes, anisotropic lobes, thin dielectrics, one-sided surfaces) is left out by `#if` and by constants
-//! the compiler folds, so the scene pays nothing for it: fewer instructions and live values a path.
+//! clear coats, absorption, Beckmann lobes, anisotropic lobes, thin dielectrics, one-sided
+//! surfaces, each kind of shape and of light) is left out by `#if` and by constants the compiler
+//! folds, so the scene pays nothing for it: fewer instructions and live values a path. Mesa 22.3's
+//! lavapipe runs every branch of a subgroup even where no lane takes it, so there the code a scene
+//! does not use costs as much as the code it does.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
-use super::layout::{GpuMaterial, ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE};
+use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
@@ -54,12 +57,27 @@ pub struct SceneFeatures {
     /// Absorbing dielectrics (Beer-Lambert, KHR_materials_volume): the attenuation of each path
     /// segment that ends on such a surface from inside.
     pub absorption: bool,
+    /// Spheres, quads and triangles (PRIM_* kinds) among the scene's own shapes and its area
+    /// lights (each emissive mesh triangle is a triangle light): each kind's case of the switches
+    /// on a primitive's kind (intersect.glsl).
+    pub sphere_shapes: bool,
+    pub quad_shapes: bool,
+    pub triangle_shapes: bool,
+    /// Emissive spheres: sampling the cone they subtend (lights.glsl).
+    pub sphere_lights: bool,
+    /// Emissive triangles: sampling the spherical triangle they subtend.
+    pub triangle_lights: bool,
+    /// Point, spot and directional lights: their share of light selection.
+    pub punctual_lights: bool,
+    /// Directional lights with an angular size (a sun's disk): what a path that escapes sees of
+    /// them.
+    pub light_disks: bool,
 }
 
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -69,6 +87,9 @@ impl SceneFeatures {
         // metallic-roughness texture.
         let rough = |m: &GpuMaterial| m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE;
         let flags = |m: &GpuMaterial| m.maps[3].to_bits();
+        let kind = |p: &GpuPrimitive| p.b[3].to_bits();
+        let lights_of = |k| data.lights.iter().any(|l| kind(l) == k);
+        let shapes_of = |k| lights_of(k) || data.acceleration.primitives.iter().any(|p| kind(p) == k);
         Self {
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
@@ -86,11 +107,18 @@ impl SceneFeatures {
             one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
             clearcoat: data.materials.iter().any(|m| m.coat[0] > 0.0),
             absorption: data.materials.iter().any(|m| m.volume[..3].iter().any(|&s| s > 0.0)),
+            sphere_shapes: shapes_of(PRIM_SPHERE),
+            quad_shapes: shapes_of(PRIM_QUAD),
+            triangle_shapes: shapes_of(PRIM_TRIANGLE),
+            sphere_lights: lights_of(PRIM_SPHERE),
+            triangle_lights: lights_of(PRIM_TRIANGLE),
+            punctual_lights: !data.punctual_lights.is_empty(),
+            light_disks: data.punctual_lights.iter().any(|l| l.position_kind[3].to_bits() == LIGHT_DIRECTIONAL && l.shape[2] > 0.0),
         }
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 16] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 23] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -108,6 +136,13 @@ impl SceneFeatures {
             ("one_sided", "SCENE_ONE_SIDED", self.one_sided),
             ("clearcoat", "SCENE_CLEARCOAT", self.clearcoat),
             ("absorption", "SCENE_ABSORPTION", self.absorption),
+            ("sphere_shapes", "SCENE_SPHERE_SHAPES", self.sphere_shapes),
+            ("quad_shapes", "SCENE_QUAD_SHAPES", self.quad_shapes),
+            ("triangle_shapes", "SCENE_TRIANGLE_SHAPES", self.triangle_shapes),
+            ("sphere_lights", "SCENE_SPHERE_LIGHTS", self.sphere_lights),
+            ("triangle_lights", "SCENE_TRIANGLE_LIGHTS", self.triangle_lights),
+            ("punctual_lights", "SCENE_PUNCTUAL_LIGHTS", self.punctual_lights),
+            ("light_disks", "SCENE_LIGHT_DISKS", self.light_disks),
         ]
     }
 
