@@ -111,18 +111,19 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, vec3 tangent, bool entering, inout R
     float r = m.albedo_r.w;
     float t = m.emission_t.w;
     float xi = rng_next(rng);
-    if (xi < r) {
+    // Without reflectors (SCENE_REFLECTORS) every r is 0, without dielectrics every t.
+    if (SCENE_REFLECTORS == 1 && xi < r) {
         l.kind = LOBE_REFLECT;
         l.fresnel = floatBitsToUint(m.conductor_eta.w);
         if (l.fresnel == CONDUCTOR_COMPLEX) {
             l.color = m.conductor_eta.rgb;
             l.k = m.conductor_k.rgb;
         }
-    } else if (xi < r + t && SCENE_THIN_DIELECTRICS == 1 && (material_flags(m) & MATERIAL_THIN) != 0u) {
+    } else if (SCENE_DIELECTRICS == 1 && xi < r + t && SCENE_THIN_DIELECTRICS == 1 && (material_flags(m) & MATERIAL_THIN) != 0u) {
         // A sheet has the outside medium on both sides, whichever side the ray comes from.
         l.kind = LOBE_THIN_DIELECTRIC;
         l.eta = 1.0 / m.params.x;
-    } else if (xi < r + t) {
+    } else if (SCENE_DIELECTRICS == 1 && xi < r + t) {
         l.kind = LOBE_DIELECTRIC;
         l.eta = entering ? 1.0 / m.params.x : m.params.x;
     } else if (SCENE_COATED == 1 && m.conductor_k.w > 0.0) {
@@ -321,9 +322,9 @@ bool sample_lobe(Lobe l, vec3 d, inout Rng rng, out BsdfSample s) {
     switch (l.kind) {
         case LOBE_DIFFUSE: return sample_diffuse(l, d, rng, s);
         case LOBE_COATED_DIFFUSE: return sample_coated_diffuse(l, d, rng, s);
-        case LOBE_REFLECT: return sample_reflect(l, d, rng, s);
-        case LOBE_DIELECTRIC: return sample_dielectric(l, d, rng, s);
-        case LOBE_THIN_DIELECTRIC: return sample_thin_dielectric(l, d, rng, s);
+        case LOBE_REFLECT: return SCENE_REFLECTORS == 1 ? sample_reflect(l, d, rng, s) : false;
+        case LOBE_DIELECTRIC: return SCENE_DIELECTRICS == 1 ? sample_dielectric(l, d, rng, s) : false;
+        case LOBE_THIN_DIELECTRIC: return SCENE_THIN_DIELECTRICS == 1 ? sample_thin_dielectric(l, d, rng, s) : false;
         default: return false;
     }
 }
@@ -336,8 +337,8 @@ vec3 eval_lobe(Lobe l, vec3 d, vec3 wi, out float pdf) {
     switch (l.kind) {
         case LOBE_DIFFUSE: return eval_diffuse(l, d, wi, pdf);
         case LOBE_COATED_DIFFUSE: return eval_coated_diffuse(l, d, wi, pdf);
-        case LOBE_REFLECT: return eval_reflect(l, d, wi, pdf);
-        case LOBE_DIELECTRIC: return eval_dielectric(l, d, wi, pdf);
+        case LOBE_REFLECT: return SCENE_REFLECTORS == 1 ? eval_reflect(l, d, wi, pdf) : vec3(0.0);
+        case LOBE_DIELECTRIC: return SCENE_DIELECTRICS == 1 ? eval_dielectric(l, d, wi, pdf) : vec3(0.0);
         default: return vec3(0.0);
     }
 }

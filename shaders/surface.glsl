@@ -106,8 +106,10 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 }
 
 // The hit emitter as a world-space primitive, for its light-sampling pdf.
+// Only emitters get here: without triangle lights (SCENE_TRIANGLE_LIGHTS; every emissive mesh
+// triangle is one) the hit is one of the scene's own shapes.
 Primitive world_primitive(Hit hit) {
-    if (SCENE_MESHES == 0 || (SCENE_PRIMITIVES == 1 && instances[hit.instance].info.x == INSTANCE_PRIMITIVES)) return prims[hit.prim];
+    if (SCENE_MESHES == 0 || SCENE_TRIANGLE_LIGHTS == 0 || (SCENE_PRIMITIVES == 1 && instances[hit.instance].info.x == INSTANCE_PRIMITIVES)) return prims[hit.prim];
     vec4 object_to_world[3] = instances[hit.instance].object_to_world;
     MeshTriangle tri = load_mesh_triangles(hit.prim);
     Primitive p;

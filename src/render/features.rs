@@ -2,7 +2,7 @@
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
 //! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
 //! clear coats, absorption, Beckmann lobes, anisotropic lobes, thin dielectrics, one-sided
-//! surfaces, each kind of shape and of light) is left out by `#if` and by constants the compiler
+//! surfaces, reflection and refraction lobes, each kind of shape and of light) is left out by `#if` and by constants the compiler
 //! folds, so the scene pays nothing for it: fewer instructions and live values a path. Mesa 22.3's
 //! lavapipe runs every branch of a subgroup even where no lane takes it, so there the code a scene
 //! does not use costs as much as the code it does.
@@ -57,6 +57,12 @@ pub struct SceneFeatures {
     /// Absorbing dielectrics (Beer-Lambert, KHR_materials_volume): the attenuation of each path
     /// segment that ends on such a surface from inside.
     pub absorption: bool,
+    /// Reflection lobes (LOBE_REFLECT): a material with a reflectivity, a metallic factor under a
+    /// metallic-roughness texture, a plastic's coat or a clear coat. Else no mirror or metal code.
+    pub reflectors: bool,
+    /// Transparent materials (LOBE_DIELECTRIC and thin sheets): a transparency, or a transmission
+    /// factor under a metallic-roughness texture. Else no refraction code.
+    pub dielectrics: bool,
     /// Spheres, quads and triangles (PRIM_* kinds) among the scene's own shapes and its area
     /// lights (each emissive mesh triangle is a triangle light): each kind's case of the switches
     /// on a primitive's kind (intersect.glsl).
@@ -77,7 +83,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -87,6 +93,8 @@ impl SceneFeatures {
         // metallic-roughness texture.
         let rough = |m: &GpuMaterial| m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE;
         let flags = |m: &GpuMaterial| m.maps[3].to_bits();
+        // A metallic-roughness texture sets R and T per texel from the factors (surface_material).
+        let textured = |m: &GpuMaterial| m.metallic_roughness[0].to_bits() != NO_TEXTURE;
         let kind = |p: &GpuPrimitive| p.b[3].to_bits();
         let lights_of = |k| data.lights.iter().any(|l| kind(l) == k);
         let shapes_of = |k| lights_of(k) || data.acceleration.primitives.iter().any(|p| kind(p) == k);
@@ -107,6 +115,8 @@ impl SceneFeatures {
             one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
             clearcoat: data.materials.iter().any(|m| m.coat[0] > 0.0),
             absorption: data.materials.iter().any(|m| m.volume[..3].iter().any(|&s| s > 0.0)),
+            reflectors: data.materials.iter().any(|m| m.albedo_r[3] > 0.0 || (textured(m) && m.metallic_roughness[1] > 0.0) || m.conductor_k[3] > 0.0 || m.coat[0] > 0.0),
+            dielectrics: data.materials.iter().any(|m| m.emission_t[3] > 0.0 || (textured(m) && m.metallic_roughness[3] > 0.0)),
             sphere_shapes: shapes_of(PRIM_SPHERE),
             quad_shapes: shapes_of(PRIM_QUAD),
             triangle_shapes: shapes_of(PRIM_TRIANGLE),
@@ -118,7 +128,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 23] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 25] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -136,6 +146,8 @@ impl SceneFeatures {
             ("one_sided", "SCENE_ONE_SIDED", self.one_sided),
             ("clearcoat", "SCENE_CLEARCOAT", self.clearcoat),
             ("absorption", "SCENE_ABSORPTION", self.absorption),
+            ("reflectors", "SCENE_REFLECTORS", self.reflectors),
+            ("dielectrics", "SCENE_DIELECTRICS", self.dielectrics),
             ("sphere_shapes", "SCENE_SPHERE_SHAPES", self.sphere_shapes),
             ("quad_shapes", "SCENE_QUAD_SHAPES", self.quad_shapes),
             ("triangle_shapes", "SCENE_TRIANGLE_SHAPES", self.triangle_shapes),
