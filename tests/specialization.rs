@@ -201,6 +201,44 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     assert_eq!(features, SceneFeatures::ALL, "the scene was meant to use every feature");
 }
 
+/// Coats reflect through the reflection lobe even where no material is a mirror or a metal: a
+/// plastic and a clear-coated diffuse sphere, nothing else shiny, keep that lobe in their kernel.
+#[test]
+fn coats_without_mirrors_render_the_same_with_their_own_kernel() {
+    let mut scene = parse(
+        r#"
+        camera = { position = [0, 0.5, 3], look_at = [0, 0.3, 0], fov = 40 }
+        film = { width = 40, height = 30, spp = 2 }
+        environment = { color = [0.6, 0.7, 0.9] }
+        [materials.plastic]
+        albedo = [0.2, 0.5, 0.8]
+        coat = true
+        [materials.lacquered]
+        albedo = [0.8, 0.3, 0.2]
+        [materials.floor]
+        albedo = [0.7, 0.7, 0.7]
+        [[spheres]]
+        center = [-0.4, 0.3, 0.0]
+        radius = 0.3
+        material = "plastic"
+        [[spheres]]
+        center = [0.4, 0.3, 0.0]
+        radius = 0.3
+        material = "lacquered"
+        [[quads]]
+        origin = [-2.0, 0.0, 2.0]
+        edge_u = [4.0, 0.0, 0.0]
+        edge_v = [0.0, 0.0, -4.0]
+        material = "floor"
+        "#,
+    );
+    let lacquered = scene.materials.iter().position(|m| m.name == "lacquered").unwrap();
+    scene.materials[lacquered].clearcoat = Some(Clearcoat { factor: 1.0, roughness: 0.0, texture: None, roughness_texture: None });
+    let (_lock, ctx) = gpu();
+    let features = assert_specialized_kernel_agrees(&ctx, scene);
+    assert!(features.reflectors && !features.dielectrics, "{:?}", features.names());
+}
+
 /// Dealing the rows of workgroups into stripes (the default on lavapipe) renders each pixel once,
 /// as in order: the same sums bit for bit. Each dispatch covers the whole image, 100 rows: 13 rows
 /// of workgroups in 3 stripes of unequal length, so a row mapping that is off renders some rows
