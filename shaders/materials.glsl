@@ -57,7 +57,7 @@ bool lobe_is_delta(Lobe l) {
 
 vec3 lobe_fresnel(Lobe l, float cos_i) {
     float c = clamp(cos_i, 0.0, 1.0);
-    if (l.fresnel == CONDUCTOR_COMPLEX) return fresnel_conductor(c, l.color, l.k);
+    if (SCENE_COMPLEX_CONDUCTORS == 1 && l.fresnel == CONDUCTOR_COMPLEX) return fresnel_conductor(c, l.color, l.k);
     if (l.fresnel == CONDUCTOR_ALBEDO) return fresnel_schlick(c, l.color);
     if (l.fresnel == FRESNEL_COAT) return vec3(fresnel_dielectric(c, l.eta));
     return vec3(1.0);
@@ -115,7 +115,7 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, vec3 tangent, bool entering, inout R
     if (SCENE_REFLECTORS == 1 && xi < r) {
         l.kind = LOBE_REFLECT;
         l.fresnel = floatBitsToUint(m.conductor_eta.w);
-        if (l.fresnel == CONDUCTOR_COMPLEX) {
+        if (SCENE_COMPLEX_CONDUCTORS == 1 && l.fresnel == CONDUCTOR_COMPLEX) {
             l.color = m.conductor_eta.rgb;
             l.k = m.conductor_k.rgb;
         }

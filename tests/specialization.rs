@@ -101,6 +101,7 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         albedo = [0.8, 0.2, 0.2]
         [materials.brushed]
         albedo = [0.9, 0.9, 0.9]
+        metal = "gold"
         reflectivity = 1.0
         roughness = 0.4
         roughness_v = 0.15

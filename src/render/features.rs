@@ -2,14 +2,14 @@
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
 //! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
 //! clear coats, absorption, Beckmann lobes, anisotropic lobes, thin dielectrics, one-sided
-//! surfaces, reflection and refraction lobes, each kind of shape and of light) is left out by `#if` and by constants the compiler
+//! surfaces, reflection and refraction lobes, metals' complex Fresnel, each kind of shape and of light) is left out by `#if` and by constants the compiler
 //! folds, so the scene pays nothing for it: fewer instructions and live values a path. Mesa 22.3's
 //! lavapipe runs every branch of a subgroup even where no lane takes it, so there the code a scene
 //! does not use costs as much as the code it does.
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
-use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
+use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
@@ -63,6 +63,9 @@ pub struct SceneFeatures {
     /// Transparent materials (LOBE_DIELECTRIC and thin sheets): a transparency, or a transmission
     /// factor under a metallic-roughness texture. Else no refraction code.
     pub dielectrics: bool,
+    /// Metals of a complex index of refraction (CONDUCTOR_COMPLEX: gold, copper, ...): their
+    /// Fresnel. Mirrors and albedo-tinted metals need none of it.
+    pub complex_conductors: bool,
     /// Spheres, quads and triangles (PRIM_* kinds) among the scene's own shapes and its area
     /// lights (each emissive mesh triangle is a triangle light): each kind's case of the switches
     /// on a primitive's kind (intersect.glsl).
@@ -83,7 +86,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
+    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -117,6 +120,7 @@ impl SceneFeatures {
             absorption: data.materials.iter().any(|m| m.volume[..3].iter().any(|&s| s > 0.0)),
             reflectors: data.materials.iter().any(|m| m.albedo_r[3] > 0.0 || (textured(m) && m.metallic_roughness[1] > 0.0) || m.conductor_k[3] > 0.0 || m.coat[0] > 0.0),
             dielectrics: data.materials.iter().any(|m| m.emission_t[3] > 0.0 || (textured(m) && m.metallic_roughness[3] > 0.0)),
+            complex_conductors: data.materials.iter().any(|m| m.conductor_eta[3].to_bits() == CONDUCTOR_COMPLEX),
             sphere_shapes: shapes_of(PRIM_SPHERE),
             quad_shapes: shapes_of(PRIM_QUAD),
             triangle_shapes: shapes_of(PRIM_TRIANGLE),
@@ -128,7 +132,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 25] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 26] {
         [
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
@@ -148,6 +152,7 @@ impl SceneFeatures {
             ("absorption", "SCENE_ABSORPTION", self.absorption),
             ("reflectors", "SCENE_REFLECTORS", self.reflectors),
             ("dielectrics", "SCENE_DIELECTRICS", self.dielectrics),
+            ("complex_conductors", "SCENE_COMPLEX_CONDUCTORS", self.complex_conductors),
             ("sphere_shapes", "SCENE_SPHERE_SHAPES", self.sphere_shapes),
             ("quad_shapes", "SCENE_QUAD_SHAPES", self.quad_shapes),
             ("triangle_shapes", "SCENE_TRIANGLE_SHAPES", self.triangle_shapes),
