@@ -2,10 +2,11 @@
 //! for what the scene lacks (meshes, analytic primitives, a top-level BVH over several instances,
 //! textures, emission textures, normal maps, alpha, an environment map, rough lobes, coated bases,
 //! clear coats, absorption, Beckmann lobes, anisotropic lobes, thin dielectrics, one-sided
-//! surfaces, reflection and refraction lobes, metals' complex Fresnel, each kind of shape and of light) is left out by `#if` and by constants the compiler
-//! folds, so the scene pays nothing for it: fewer instructions and live values a path. Mesa 22.3's
-//! lavapipe runs every branch of a subgroup even where no lane takes it, so there the code a scene
-//! does not use costs as much as the code it does.
+//! surfaces, reflection and refraction lobes, metals' complex Fresnel, each kind of shape and of
+//! light) is left out by `#if` and by constants the compiler folds, so the scene pays nothing for
+//! it: fewer instructions and live values a path. Mesa 22.3's lavapipe runs every branch of a
+//! subgroup even where no lane takes it, so there the code a scene does not use costs as much as
+//! the code it does (docs/benchmarks.md, stop 16).
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
@@ -92,12 +93,13 @@ impl SceneFeatures {
     pub fn of(data: &SceneData) -> Self {
         let instances = &data.acceleration.instances;
         let has_instance = |kind| instances.iter().any(|i| i.info[0] == kind);
+        // A metallic-roughness texture sets roughness, R and T per texel, scaling the material's
+        // factors (surface_material).
+        let textured = |m: &GpuMaterial| m.metallic_roughness[0].to_bits() != NO_TEXTURE;
         // A material's own R and T lobes are rough: by its roughness, or per texel by a
         // metallic-roughness texture.
-        let rough = |m: &GpuMaterial| m.params[3] >= ALPHA_DELTA || m.metallic_roughness[0].to_bits() != NO_TEXTURE;
+        let rough = |m: &GpuMaterial| m.params[3] >= ALPHA_DELTA || textured(m);
         let flags = |m: &GpuMaterial| m.maps[3].to_bits();
-        // A metallic-roughness texture sets R and T per texel from the factors (surface_material).
-        let textured = |m: &GpuMaterial| m.metallic_roughness[0].to_bits() != NO_TEXTURE;
         let kind = |p: &GpuPrimitive| p.b[3].to_bits();
         let lights_of = |k| data.lights.iter().any(|l| kind(l) == k);
         let shapes_of = |k| lights_of(k) || data.acceleration.primitives.iter().any(|p| kind(p) == k);
