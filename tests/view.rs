@@ -473,9 +473,10 @@ fn minimizing_pauses_accumulation_and_restoring_resumes_it() {
     wait_until("samples before minimizing", || (viewer.samples_shown() > first).then_some(()));
 
     viewer.xdotool(&["windowminimize", "--sync", &w]);
-    // What winit asks (Window::is_minimized): the state the window manager gave the window.
-    let state = viewer.tool("xprop", &["-id", &w, "_NET_WM_STATE"]);
-    assert!(state.contains("_NET_WM_STATE_HIDDEN"), "the window manager iconified the window: {state}");
+    // What winit asks (Window::is_minimized): the state the window manager gave the window. The
+    // window manager sets it after the unmap `--sync` waits for (a clean-clone run once read it
+    // empty), so wait for it.
+    wait_until("the window manager to mark the window hidden (_NET_WM_STATE_HIDDEN)", || viewer.tool("xprop", &["-id", &w, "_NET_WM_STATE"]).contains("_NET_WM_STATE_HIDDEN").then_some(()));
     // The dispatch in flight ends and the title (refreshed every 250 ms) catches up.
     std::thread::sleep(Duration::from_secs(1));
     let paused_at = viewer.samples_shown();
