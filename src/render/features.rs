@@ -103,6 +103,9 @@ impl SceneFeatures {
         let kind = |p: &GpuPrimitive| p.b[3].to_bits();
         let lights_of = |k| data.lights.iter().any(|l| kind(l) == k);
         let shapes_of = |k| lights_of(k) || data.acceleration.primitives.iter().any(|p| kind(p) == k);
+        // Plastics and clear coats reflect through the reflection lobe too.
+        let coated = data.materials.iter().any(|m| m.conductor_k[3] > 0.0);
+        let clearcoat = data.materials.iter().any(|m| m.coat[0] > 0.0);
         Self {
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
@@ -113,14 +116,14 @@ impl SceneFeatures {
             alpha: has_instance(INSTANCE_MESH) && data.materials.iter().any(|m| m.alpha[3].to_bits() != ALPHA_OPAQUE),
             environment_map: data.env_kind != ENV_CONSTANT,
             rough_lobes: data.materials.iter().any(|m| rough(m) || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
-            coated: data.materials.iter().any(|m| m.conductor_k[3] > 0.0),
+            coated,
             beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && rough(m)),
             anisotropic: data.materials.iter().any(|m| m.volume[3] > 0.0 && rough(m)),
             thin_dielectrics: data.materials.iter().any(|m| flags(m) & MATERIAL_THIN != 0),
             one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
-            clearcoat: data.materials.iter().any(|m| m.coat[0] > 0.0),
+            clearcoat,
             absorption: data.materials.iter().any(|m| m.volume[..3].iter().any(|&s| s > 0.0)),
-            reflectors: data.materials.iter().any(|m| m.albedo_r[3] > 0.0 || (textured(m) && m.metallic_roughness[1] > 0.0) || m.conductor_k[3] > 0.0 || m.coat[0] > 0.0),
+            reflectors: coated || clearcoat || data.materials.iter().any(|m| m.albedo_r[3] > 0.0 || (textured(m) && m.metallic_roughness[1] > 0.0)),
             dielectrics: data.materials.iter().any(|m| m.emission_t[3] > 0.0 || (textured(m) && m.metallic_roughness[3] > 0.0)),
             complex_conductors: data.materials.iter().any(|m| m.conductor_eta[3].to_bits() == CONDUCTOR_COMPLEX),
             sphere_shapes: shapes_of(PRIM_SPHERE),
