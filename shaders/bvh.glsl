@@ -7,6 +7,8 @@
 // Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
 // level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
 // the binary tree; the wide tree has at most half its levels.
+// A scene of a few shapes and nothing else compiles no walk at all (SCENE_BVH 0): its rays test
+// every shape in turn.
 
 const uint NO_INDEX = 0xffffffffu;
 const uint INSTANCE_ENTRY = 0x80000000u;
@@ -83,6 +85,25 @@ vec3 affine_vector(vec4 rows[3], vec3 v) {
     return vec3(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
 }
 
+#if SCENE_BVH == 0
+// Closest hit along o + t d with 0 < t < t_max, in a scene of a few shapes and nothing else
+// (src/render/features.rs, FEW_PRIMITIVES). With any_hit, returns at the first hit found. The
+// shapes are tested one after another, all lanes of a subgroup on the same shape at once, which
+// lavapipe loads once for all of them; a walk loads each lane's own node and leaves, and keeps a
+// stack (docs/benchmarks.md, "few shapes"). The shapes are the scene's one instance, number 0.
+bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
+    hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
+    for (uint i = 0u; i < frame.primitive_count; ++i) {
+        LOOP_ITERATION();
+        float t = intersect_primitive(prims[i], o, d, hit.t);
+        if (t > 0.0) {
+            hit = Hit(t, i, 0u, vec2(0.0));
+            if (any_hit) return true;
+        }
+    }
+    return hit.prim != NO_INDEX;
+}
+#else
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found (shadow rays).
 // The object-space ray keeps the world parameter t: its direction is transformed, not renormalised.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
@@ -207,6 +228,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     }
     return hit.prim != NO_INDEX;
 }
+#endif
 
 bool occluded(vec3 o, vec3 d, float t_max) {
     Hit ignored;

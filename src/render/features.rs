@@ -14,12 +14,23 @@ use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, 
 use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
+/// Most shapes a scene may have for its rays to test each in turn rather than walk its BVH (the
+/// `bvh` feature off). Measured on lavapipe (docs/benchmarks.md, "few shapes"): a loop over 10 to
+/// 16 shapes beats the walk by 37-49 % on Mesa 25 and is level or better on Mesa 22.3, which loses
+/// 21 % at 22 shapes (it runs every shape kind's test for each, see below).
+pub const FEW_PRIMITIVES: usize = 16;
+
 /// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl).
 pub const ALPHA_DELTA: f32 = 1e-3;
 
 /// The kernel features a scene needs; each is one `SCENE_*` define (0 or 1) of the kernel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SceneFeatures {
+    /// The BVH walk: a scene with meshes, several instances or more than FEW_PRIMITIVES shapes.
+    /// Without it rays test the scene's few shapes one after another (bvh.glsl): every lane of a
+    /// subgroup reads the same shape at once, which lavapipe loads once for all of them, and no
+    /// stack or node is touched.
+    pub bvh: bool,
     /// More than one instance: the kernel walks the top-level BVH (bvh.glsl).
     pub top_level: bool,
     /// Triangle meshes (mesh instances).
@@ -87,7 +98,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
+    pub const ALL: Self = Self { bvh: true, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -107,6 +118,7 @@ impl SceneFeatures {
         let coated = data.materials.iter().any(|m| m.conductor_k[3] > 0.0);
         let clearcoat = data.materials.iter().any(|m| m.coat[0] > 0.0);
         Self {
+            bvh: instances.len() != 1 || has_instance(INSTANCE_MESH) || data.acceleration.primitives.len() > FEW_PRIMITIVES,
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
             primitives: has_instance(INSTANCE_PRIMITIVES),
@@ -137,8 +149,9 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 26] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 27] {
         [
+            ("bvh", "SCENE_BVH", self.bvh),
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
             ("primitives", "SCENE_PRIMITIVES", self.primitives),
@@ -193,6 +206,23 @@ mod tests {
     fn alpha_delta_matches_glsl() {
         let glsl = include_str!("../../shaders/microfacet.glsl");
         assert!(glsl.contains(&format!("const float ALPHA_DELTA = {ALPHA_DELTA:e};")), "ALPHA_DELTA = {ALPHA_DELTA:e} not found in microfacet.glsl");
+    }
+
+    fn features_of(scene: &crate::scene::Scene) -> SceneFeatures {
+        SceneFeatures::of(&SceneData::new(scene, crate::render::TEXTURE_BUDGET_BYTES))
+    }
+
+    #[test]
+    fn only_a_scene_of_few_shapes_and_no_mesh_goes_without_its_bvh() {
+        let mut scene = crate::scene::Scene::default_scene();
+        assert!(!features_of(&scene).bvh, "the Cornell box ({} shapes) is tested shape by shape", scene.shapes.len());
+        let sphere = crate::scene::Shape::Sphere { center: glam::Vec3::ZERO, radius: 0.1, material: 0 };
+        scene.shapes.resize(FEW_PRIMITIVES, sphere);
+        assert!(!features_of(&scene).bvh, "{FEW_PRIMITIVES} shapes");
+        scene.shapes.push(sphere);
+        assert!(features_of(&scene).bvh, "{} shapes", FEW_PRIMITIVES + 1);
+        let meshes = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml")).expect("a checked-in scene loads");
+        assert!(features_of(&meshes).bvh, "a mesh scene walks its BVH");
     }
 
     #[test]

@@ -220,7 +220,9 @@ glsl_block! {
         pub sampler_kind: u32,
         /// Number of point, spot and directional lights: the entries of `punctual_lights`.
         pub punctual_light_count: u32,
-        pub pad6: u32,
+        /// Number of the scene's own shapes: the entries of `prims`, which a kernel without the
+        /// BVH walk (SCENE_BVH 0, features.rs) tests each in turn.
+        pub primitive_count: u32,
         pub pad7: u32,
         /// Total power of the lights (area and punctual) when they are picked by power (0: picked
         /// uniformly).
