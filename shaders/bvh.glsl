@@ -85,6 +85,20 @@ vec3 affine_vector(vec4 rows[3], vec3 v) {
     return vec3(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
 }
 
+// Tests the scene's shapes first..first + count (of `instance`) against the ray, keeping the
+// nearest hit before hit.t. True when any_hit and one was found: the caller returns at once.
+bool intersect_shapes(uint first, uint count, uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
+    for (uint i = first; i < first + count; ++i) {
+        LOOP_ITERATION();
+        float t = intersect_primitive(prims[i], o, d, hit.t);
+        if (t > 0.0) {
+            hit = Hit(t, i, instance, vec2(0.0));
+            if (any_hit) return true;
+        }
+    }
+    return false;
+}
+
 #if SCENE_BVH == 0
 // Closest hit along o + t d with 0 < t < t_max, in a scene of a few shapes and nothing else
 // (src/render/features.rs, FEW_PRIMITIVES). With any_hit, returns at the first hit found. The
@@ -93,14 +107,7 @@ vec3 affine_vector(vec4 rows[3], vec3 v) {
 // stack (docs/benchmarks.md, "few shapes"). The shapes are the scene's one instance, number 0.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
-    for (uint i = 0u; i < frame.primitive_count; ++i) {
-        LOOP_ITERATION();
-        float t = intersect_primitive(prims[i], o, d, hit.t);
-        if (t > 0.0) {
-            hit = Hit(t, i, 0u, vec2(0.0));
-            if (any_hit) return true;
-        }
-    }
+    if (intersect_shapes(0u, frame.primitive_count, 0u, o, d, any_hit, hit)) return true;
     return hit.prim != NO_INDEX;
 }
 #else
@@ -212,14 +219,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                         }
                     }
                 } else if (SCENE_PRIMITIVES == 1) {
-                    for (uint i = first; i < first + count; ++i) {
-                        LOOP_ITERATION();
-                        float t = intersect_primitive(prims[i], ro, rd, hit.t);
-                        if (t > 0.0) {
-                            hit = Hit(t, i, instance, vec2(0.0));
-                            if (any_hit) return true;
-                        }
-                    }
+                    if (intersect_shapes(first, count, instance, ro, rd, any_hit, hit)) return true;
                 }
             }
             if (next == NO_INDEX) break;
