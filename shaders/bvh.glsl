@@ -85,16 +85,21 @@ vec3 affine_vector(vec4 rows[3], vec3 v) {
     return vec3(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
 }
 
-// Tests the scene's shapes first..first + count (of `instance`) against the ray, keeping the
-// nearest hit before hit.t. True when any_hit and one was found: the caller returns at once.
+// Tests shape `i` (of `instance`, its kind `kind`) against the ray, keeping the nearest hit before
+// hit.t. True when any_hit and it was hit: the caller returns at once.
+bool intersect_shape(uint kind, Primitive p, uint i, uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
+    float t = intersect_primitive_as(kind, p, o, d, hit.t);
+    if (t <= 0.0) return false;
+    hit = Hit(t, i, instance, vec2(0.0));
+    return any_hit;
+}
+
+// The scene's shapes first..first + count (of `instance`), as intersect_shape.
 bool intersect_shapes(uint first, uint count, uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
     for (uint i = first; i < first + count; ++i) {
         LOOP_ITERATION();
-        float t = intersect_primitive(prims[i], o, d, hit.t);
-        if (t > 0.0) {
-            hit = Hit(t, i, instance, vec2(0.0));
-            if (any_hit) return true;
-        }
+        Primitive p = prims[i];
+        if (intersect_shape(prim_kind(p), p, i, instance, o, d, any_hit, hit)) return true;
     }
     return false;
 }
@@ -104,10 +109,14 @@ bool intersect_shapes(uint first, uint count, uint instance, vec3 o, vec3 d, boo
 // (src/render/features.rs, FEW_PRIMITIVES). With any_hit, returns at the first hit found. The
 // shapes are tested one after another, all lanes of a subgroup on the same shape at once, which
 // lavapipe loads once for all of them; a walk loads each lane's own node and leaves, and keeps a
-// stack (docs/benchmarks.md, "few shapes"). The shapes are the scene's one instance, number 0.
+// stack (docs/benchmarks.md, "few shapes"). The host lists them in SCENE_FEW_SHAPES, one
+// FEW_SHAPE(index, kind) each in stored (leaf) order, so that each is straight-line code of its
+// own kind's test: no loop, and no switch on the kind, every case of which Mesa 22.3 would run for
+// each shape (docs/benchmarks.md, stop 18). The shapes are the scene's one instance, number 0.
+#define FEW_SHAPE(i, kind) if (intersect_shape(kind, prims[i], i, 0u, o, d, any_hit, hit)) return true;
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
-    if (intersect_shapes(0u, frame.primitive_count, 0u, o, d, any_hit, hit)) return true;
+    SCENE_FEW_SHAPES
     return hit.prim != NO_INDEX;
 }
 #else

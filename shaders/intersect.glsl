@@ -54,14 +54,20 @@ float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max,
 // the scene has none of (SCENE_SPHERE_SHAPES, SCENE_QUAD_SHAPES, SCENE_TRIANGLE_SHAPES:
 // src/render/features.rs) is compiled out of its case, which then answers as for an unknown kind.
 
-float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
+// `kind` is the primitive's own (prim_kind(p)), or a constant where the host compiled it in: a
+// kernel without the BVH walk tests each of its few shapes by its kind's test alone (bvh.glsl).
+float intersect_primitive_as(uint kind, Primitive p, vec3 o, vec3 d, float t_max) {
     vec2 unused_bary;
-    switch (prim_kind(p)) {
+    switch (kind) {
         case PRIM_SPHERE: return SCENE_SPHERE_SHAPES == 1 ? intersect_sphere(p.a.xyz, p.a.w, o, d, t_max) : NO_HIT;
         case PRIM_QUAD: return SCENE_QUAD_SHAPES == 1 ? intersect_quad(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max) : NO_HIT;
         case PRIM_TRIANGLE: return SCENE_TRIANGLE_SHAPES == 1 ? intersect_triangle(p.a.xyz, p.b.xyz, p.c.xyz, o, d, t_max, unused_bary) : NO_HIT;
         default: return NO_HIT;
     }
+}
+
+float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
+    return intersect_primitive_as(prim_kind(p), p, o, d, t_max);
 }
 
 // Outward (sphere) or front-side (quad, triangle) unit normal at a point on the primitive.

@@ -23,7 +23,49 @@ pub const FEW_PRIMITIVES: usize = 16;
 /// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl).
 pub const ALPHA_DELTA: f32 = 1e-3;
 
-/// The kernel features a scene needs; each is one `SCENE_*` define (0 or 1) of the kernel.
+/// The kinds (PRIM_*) of a scene's few shapes in the order they are stored, for a kernel without
+/// the BVH walk: its rays test them as straight-line code, each shape by its own kind's test
+/// (bvh.glsl, `SCENE_FEW_SHAPES`). Empty for a kernel that walks a BVH.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct FewShapes {
+    count: u8,
+    kinds: [u8; FEW_PRIMITIVES],
+}
+
+impl FewShapes {
+    /// The shapes of these kinds, in this order; `None` past FEW_PRIMITIVES or for a kind the
+    /// kernel does not know.
+    pub fn new(kinds: impl IntoIterator<Item = u32>) -> Option<Self> {
+        let mut shapes = Self::default();
+        for kind in kinds {
+            if shapes.count as usize == FEW_PRIMITIVES || kind_name(kind).is_none() {
+                return None;
+            }
+            shapes.kinds[shapes.count as usize] = kind as u8;
+            shapes.count += 1;
+        }
+        Some(shapes)
+    }
+
+    /// `SCENE_FEW_SHAPES`: one `FEW_SHAPE(index, kind)` a shape, in order.
+    fn define(&self) -> String {
+        let kinds = &self.kinds[..self.count as usize];
+        kinds.iter().enumerate().map(|(i, &kind)| format!("FEW_SHAPE({i}u, {})", kind_name(kind.into()).expect("FewShapes holds known kinds"))).collect::<Vec<_>>().join(" ")
+    }
+}
+
+/// A primitive kind's name in the kernel (layout.glsl).
+fn kind_name(kind: u32) -> Option<&'static str> {
+    match kind {
+        PRIM_SPHERE => Some("PRIM_SPHERE"),
+        PRIM_QUAD => Some("PRIM_QUAD"),
+        PRIM_TRIANGLE => Some("PRIM_TRIANGLE"),
+        _ => None,
+    }
+}
+
+/// The kernel features a scene needs; each is one `SCENE_*` define (0 or 1) of the kernel, but for
+/// the list of shapes a kernel without the BVH walk tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SceneFeatures {
     /// The BVH walk: a scene with meshes, several instances or more than FEW_PRIMITIVES shapes.
@@ -31,6 +73,8 @@ pub struct SceneFeatures {
     /// subgroup reads the same shape at once, which lavapipe loads once for all of them, and no
     /// stack or node is touched.
     pub bvh: bool,
+    /// Without the walk, the shapes its rays test, by kind.
+    pub few_shapes: FewShapes,
     /// More than one instance: the kernel walks the top-level BVH (bvh.glsl).
     pub top_level: bool,
     /// Triangle meshes (mesh instances).
@@ -98,7 +142,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { bvh: true, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
+    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes { count: 0, kinds: [0; FEW_PRIMITIVES] }, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -117,8 +161,13 @@ impl SceneFeatures {
         // Plastics and clear coats reflect through the reflection lobe too.
         let coated = data.materials.iter().any(|m| m.conductor_k[3] > 0.0);
         let clearcoat = data.materials.iter().any(|m| m.coat[0] > 0.0);
+        // One instance of shapes and no mesh: few shapes (at most FEW_PRIMITIVES, each of a kind
+        // the kernel knows) go without the walk.
+        let one_instance_of_shapes = instances.len() == 1 && !has_instance(INSTANCE_MESH);
+        let few_shapes = if one_instance_of_shapes { FewShapes::new(data.acceleration.primitives.iter().map(kind)) } else { None };
         Self {
-            bvh: instances.len() != 1 || has_instance(INSTANCE_MESH) || data.acceleration.primitives.len() > FEW_PRIMITIVES,
+            bvh: few_shapes.is_none(),
+            few_shapes: few_shapes.unwrap_or_default(),
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
             primitives: has_instance(INSTANCE_PRIMITIVES),
@@ -183,7 +232,9 @@ impl SceneFeatures {
 
     /// The `#define`s that compile the kernel for these features.
     pub fn defines(&self) -> Vec<(&'static str, String)> {
-        self.table().into_iter().map(|(_, define, on)| (define, u32::from(on).to_string())).collect()
+        let mut defines: Vec<_> = self.table().into_iter().map(|(_, define, on)| (define, u32::from(on).to_string())).collect();
+        defines.push(("SCENE_FEW_SHAPES", self.few_shapes.define()));
+        defines
     }
 
     /// The names of the features that are on.
@@ -229,7 +280,7 @@ mod tests {
     fn every_feature_is_one_define_used_by_the_kernel() {
         let kernel: String = crate::render::kernel::SHADERS.iter().map(|(_, text)| *text).collect();
         for (name, value) in SceneFeatures::ALL.defines() {
-            assert_eq!(value, "1");
+            assert_eq!(value, if name == "SCENE_FEW_SHAPES" { "" } else { "1" }, "{name}");
             assert!(kernel.contains(name), "{name} is defined for the kernel but no shader file uses it");
         }
     }

@@ -220,9 +220,7 @@ glsl_block! {
         pub sampler_kind: u32,
         /// Number of point, spot and directional lights: the entries of `punctual_lights`.
         pub punctual_light_count: u32,
-        /// Number of the scene's own shapes: the entries of `prims`, which a kernel without the
-        /// BVH walk (SCENE_BVH 0, features.rs) tests each in turn.
-        pub primitive_count: u32,
+        pub pad6: u32,
         pub pad7: u32,
         /// Total power of the lights (area and punctual) when they are picked by power (0: picked
         /// uniformly).
@@ -420,7 +418,8 @@ mod tests {
         let mut switches = 0;
         for (file, glsl) in [("intersect.glsl", include_str!("../../shaders/intersect.glsl")), ("lights.glsl", include_str!("../../shaders/lights.glsl"))] {
             assert!(!glsl.contains("prim_kind(p) =="), "{file} compares a kind outside a switch");
-            for (start, _) in glsl.match_indices("switch (prim_kind(p)) {") {
+            let starts = glsl.match_indices("switch (prim_kind(p)) {").chain(glsl.match_indices("switch (kind) {"));
+            for (start, _) in starts {
                 // The switch's body: up to the brace that closes it.
                 let body = &glsl[start..];
                 let mut depth = 0;

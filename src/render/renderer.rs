@@ -183,7 +183,6 @@ fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> Fr
         sampler_kind: sampler,
         light_total_power: data.light_distribution.total_power,
         punctual_light_count: data.punctual_lights.len() as u32,
-        primitive_count: data.acceleration.primitives.len() as u32,
         ..FrameParams::zeroed()
     }
 }
