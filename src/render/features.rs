@@ -26,17 +26,20 @@ pub const ALPHA_DELTA: f32 = 1e-3;
 /// The kinds (PRIM_*) of a scene's few shapes in the order they are stored, for a kernel without
 /// the BVH walk: its rays test them as straight-line code, each shape by its own kind's test
 /// (bvh.glsl, `SCENE_FEW_SHAPES`). Empty for a kernel that walks a BVH.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct FewShapes {
     count: u8,
     kinds: [u8; FEW_PRIMITIVES],
 }
 
 impl FewShapes {
+    /// No shapes: a kernel that walks its BVH.
+    pub const NONE: Self = Self { count: 0, kinds: [0; FEW_PRIMITIVES] };
+
     /// The shapes of these kinds, in this order; `None` past FEW_PRIMITIVES or for a kind the
     /// kernel does not know.
     pub fn new(kinds: impl IntoIterator<Item = u32>) -> Option<Self> {
-        let mut shapes = Self::default();
+        let mut shapes = Self::NONE;
         for kind in kinds {
             if shapes.count as usize == FEW_PRIMITIVES || kind_name(kind).is_none() {
                 return None;
@@ -142,7 +145,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes { count: 0, kinds: [0; FEW_PRIMITIVES] }, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
+    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes::NONE, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -167,7 +170,7 @@ impl SceneFeatures {
         let few_shapes = if one_instance_of_shapes { FewShapes::new(data.acceleration.primitives.iter().map(kind)) } else { None };
         Self {
             bvh: few_shapes.is_none(),
-            few_shapes: few_shapes.unwrap_or_default(),
+            few_shapes: few_shapes.unwrap_or(FewShapes::NONE),
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
             primitives: has_instance(INSTANCE_PRIMITIVES),
