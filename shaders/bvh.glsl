@@ -7,8 +7,10 @@
 // Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
 // level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
 // the binary tree; the wide tree has at most half its levels.
-// A scene of a few shapes and nothing else compiles no walk at all (SCENE_BVH 0): its rays test
-// every shape in turn.
+// A scene's few shapes (SCENE_FEW_SHAPES, at most FEW_PRIMITIVES of src/render/features.rs) are
+// tested in turn, as straight-line code, before any walk: a scene of nothing else compiles no walk
+// at all (SCENE_BVH 0), and a scene with meshes walks them alone (SCENE_WALKED_SHAPES 0), skipping
+// the shapes' instance, with t_max already cut to the nearest shape.
 
 const uint NO_INDEX = 0xffffffffu;
 const uint INSTANCE_ENTRY = 0x80000000u;
@@ -104,16 +106,18 @@ bool intersect_shapes(uint first, uint count, uint instance, vec3 o, vec3 d, boo
     return false;
 }
 
+// The host lists the scene's few shapes in SCENE_FEW_SHAPES, one FEW_SHAPE(index, kind) each in
+// stored (leaf) order, so that each is straight-line code of its own kind's test: no loop, and no
+// switch on the kind, every case of which Mesa 22.3 would run for each shape (docs/benchmarks.md,
+// stop 18). Their hits are in the shapes' own instance.
+#define FEW_SHAPE(i, kind) if (intersect_shape(kind, prims[i], i, frame.shape_instance, o, d, any_hit, hit)) return true;
+
 #if SCENE_BVH == 0
 // Closest hit along o + t d with 0 < t < t_max, in a scene of a few shapes and nothing else
 // (src/render/features.rs, FEW_PRIMITIVES). With any_hit, returns at the first hit found. The
 // shapes are tested one after another, all lanes of a subgroup on the same shape at once, which
 // lavapipe loads once for all of them; a walk loads each lane's own node and leaves, and keeps a
-// stack (docs/benchmarks.md, "few shapes"). The host lists them in SCENE_FEW_SHAPES, one
-// FEW_SHAPE(index, kind) each in stored (leaf) order, so that each is straight-line code of its
-// own kind's test: no loop, and no switch on the kind, every case of which Mesa 22.3 would run for
-// each shape (docs/benchmarks.md, stop 18). The shapes are the scene's one instance, number 0.
-#define FEW_SHAPE(i, kind) if (intersect_shape(kind, prims[i], i, 0u, o, d, any_hit, hit)) return true;
+// stack (docs/benchmarks.md, "few shapes").
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
     SCENE_FEW_SHAPES
@@ -123,11 +127,9 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found (shadow rays).
 // The object-space ray keeps the world parameter t: its direction is transformed, not renormalised.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
-    hit.t = t_max;
-    hit.prim = NO_INDEX;
-    hit.instance = NO_INDEX;
-    hit.bary = vec2(0.0);
-    if (frame.node_count == 0u) return false;  // empty scene: no root node to test
+    hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
+    SCENE_FEW_SHAPES
+    if (frame.node_count == 0u) return hit.prim != NO_INDEX;  // empty scene: no root node to test
     vec3 ro = o;
     vec3 rd = d;
     vec3 world_inv_d = safe_inverse(d);
@@ -154,9 +156,12 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
         uint entry = stack[--sp];
         uint node_index = entry;
         if ((entry & INSTANCE_ENTRY) != 0u) {
-            instance = entry & ~INSTANCE_ENTRY;
-            uvec4 info = instances[instance].info;
-            instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_PRIMITIVES == 0 ? INSTANCE_MESH : info.x;
+            uint entered = entry & ~INSTANCE_ENTRY;
+            uvec4 info = instances[entered].info;
+            // Shapes tested before the walk are not walked again.
+            if (SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && info.x == INSTANCE_PRIMITIVES) continue;
+            instance = entered;
+            instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
             instance_sp = sp;
             // The scene's own shapes are placed by the identity: keep the world ray (loads are
             // what costs, on lavapipe most of all).
@@ -215,7 +220,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 if (count == WIDE_CHILD_INTERIOR) {
                     if (next != NO_INDEX) stack[sp++] = next;
                     next = first;
-                } else if (SCENE_MESHES == 1 && (SCENE_PRIMITIVES == 0 || instance_kind == INSTANCE_MESH)) {
+                } else if (SCENE_MESHES == 1 && (SCENE_WALKED_SHAPES == 0 || instance_kind == INSTANCE_MESH)) {
                     for (uint i = first; i < first + count; ++i) {
                         LOOP_ITERATION();
                         MeshTriangle tri = load_mesh_triangles(i);
@@ -227,7 +232,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                             if (any_hit) return true;
                         }
                     }
-                } else if (SCENE_PRIMITIVES == 1) {
+                } else if (SCENE_WALKED_SHAPES == 1) {
                     if (intersect_shapes(first, count, instance, ro, rd, any_hit, hit)) return true;
                 }
             }

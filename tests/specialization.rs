@@ -7,8 +7,8 @@
 mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
-use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures};
-use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Texture};
+use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, FEW_PRIMITIVES};
+use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Shape, Texture};
 use common::{gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::Path;
@@ -198,6 +198,12 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         Instance { mesh: 3, transform: Mat4::from_translation(Vec3::new(0.4, 0.9, 0.2)) * Mat4::from_scale(Vec3::splat(0.4)) },
     ];
     let (_lock, ctx) = gpu();
+    let features = assert_specialized_kernel_agrees(&ctx, scene.clone());
+    assert_eq!((features.few_shapes.len(), features.walked_shapes), (scene.shapes.len(), false), "its few shapes are tested before the walk of its meshes");
+    // With more shapes than are tested apart, the walk meets them among the meshes: the general
+    // kernel's every feature.
+    let far_below = Shape::Sphere { center: Vec3::new(0.0, -50.0, 0.0), radius: 0.01, material: 0 };
+    scene.shapes.resize(FEW_PRIMITIVES + 1, far_below);
     let features = assert_specialized_kernel_agrees(&ctx, scene);
     assert_eq!(features, SceneFeatures::ALL, "the scene was meant to use every feature");
 }

@@ -23,9 +23,9 @@ pub const FEW_PRIMITIVES: usize = 32;
 /// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl).
 pub const ALPHA_DELTA: f32 = 1e-3;
 
-/// The kinds (PRIM_*) of a scene's few shapes in the order they are stored, for a kernel without
-/// the BVH walk: its rays test them as straight-line code, each shape by its own kind's test
-/// (bvh.glsl, `SCENE_FEW_SHAPES`). Empty for a kernel that walks a BVH.
+/// The kinds (PRIM_*) of a scene's few shapes in the order they are stored: its rays test them as
+/// straight-line code, each shape by its own kind's test, before walking any mesh (bvh.glsl,
+/// `SCENE_FEW_SHAPES`). Empty where the walk meets the shapes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct FewShapes {
     count: u8,
@@ -50,6 +50,15 @@ impl FewShapes {
         Some(shapes)
     }
 
+    /// How many shapes are listed.
+    pub fn len(&self) -> usize {
+        self.count as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
     /// `SCENE_FEW_SHAPES`: one `FEW_SHAPE(index, kind)` a shape, in order.
     fn define(&self) -> String {
         let kinds = &self.kinds[..self.count as usize];
@@ -71,13 +80,16 @@ fn kind_name(kind: u32) -> Option<&'static str> {
 /// the list of shapes a kernel without the BVH walk tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SceneFeatures {
-    /// The BVH walk: a scene with meshes, several instances or more than FEW_PRIMITIVES shapes.
-    /// Without it rays test the scene's few shapes one after another (bvh.glsl): every lane of a
-    /// subgroup reads the same shape at once, which lavapipe loads once for all of them, and no
-    /// stack or node is touched.
+    /// The BVH walk: a scene with meshes or more than FEW_PRIMITIVES shapes. Without it rays test
+    /// the scene's few shapes one after another (bvh.glsl): every lane of a subgroup reads the
+    /// same shape at once, which lavapipe loads once for all of them, and no stack or node is
+    /// touched.
     pub bvh: bool,
-    /// Without the walk, the shapes its rays test, by kind.
+    /// The shapes rays test one after another, by kind, before any walk: the scene's own, when
+    /// there are at most FEW_PRIMITIVES.
     pub few_shapes: FewShapes,
+    /// The walk meets shapes: more than FEW_PRIMITIVES of them (else they are few_shapes).
+    pub walked_shapes: bool,
     /// More than one instance: the kernel walks the top-level BVH (bvh.glsl).
     pub top_level: bool,
     /// Triangle meshes (mesh instances).
@@ -145,7 +157,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes::NONE, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
+    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes::NONE, walked_shapes: true, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -164,16 +176,17 @@ impl SceneFeatures {
         // Plastics and clear coats reflect through the reflection lobe too.
         let coated = data.materials.iter().any(|m| m.conductor_k[3] > 0.0);
         let clearcoat = data.materials.iter().any(|m| m.coat[0] > 0.0);
-        // One instance of shapes and no mesh: few shapes (at most FEW_PRIMITIVES, each of a kind
-        // the kernel knows) go without the walk.
-        let one_instance_of_shapes = instances.len() == 1 && !has_instance(INSTANCE_MESH);
-        let few_shapes = if one_instance_of_shapes { FewShapes::new(data.acceleration.primitives.iter().map(kind)) } else { None };
+        // Few shapes (at most FEW_PRIMITIVES, each of a kind the kernel knows) are tested before
+        // the walk, which then walks the meshes alone; without meshes there is no walk.
+        let few_shapes = FewShapes::new(data.acceleration.primitives.iter().map(kind));
+        let primitives = has_instance(INSTANCE_PRIMITIVES);
         Self {
-            bvh: few_shapes.is_none(),
+            bvh: has_instance(INSTANCE_MESH) || few_shapes.is_none() || !primitives,
             few_shapes: few_shapes.unwrap_or(FewShapes::NONE),
+            walked_shapes: primitives && few_shapes.is_none(),
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
-            primitives: has_instance(INSTANCE_PRIMITIVES),
+            primitives,
             textures: !data.textures.is_empty(),
             emissive_textures: data.materials.iter().any(|m| m.maps[0].to_bits() != NO_TEXTURE && m.emission_t[..3].iter().any(|&e| e > 0.0)),
             normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
@@ -201,9 +214,10 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 27] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 28] {
         [
             ("bvh", "SCENE_BVH", self.bvh),
+            ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes),
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
             ("primitives", "SCENE_PRIMITIVES", self.primitives),
@@ -267,16 +281,21 @@ mod tests {
     }
 
     #[test]
-    fn only_a_scene_of_few_shapes_and_no_mesh_goes_without_its_bvh() {
+    fn few_shapes_are_tested_apart_from_the_walk_and_many_are_walked() {
+        // (walk, shapes tested apart, walked shapes)
+        let shape = |f: SceneFeatures| (f.bvh, f.few_shapes.len(), f.walked_shapes);
         let mut scene = crate::scene::Scene::default_scene();
-        assert!(!features_of(&scene).bvh, "the Cornell box ({} shapes) is tested shape by shape", scene.shapes.len());
+        let n = scene.shapes.len();
+        assert_eq!(shape(features_of(&scene)), (false, n, false), "the Cornell box is tested shape by shape");
         let sphere = crate::scene::Shape::Sphere { center: glam::Vec3::ZERO, radius: 0.1, material: 0 };
         scene.shapes.resize(FEW_PRIMITIVES, sphere);
-        assert!(!features_of(&scene).bvh, "{FEW_PRIMITIVES} shapes");
+        assert_eq!(shape(features_of(&scene)), (false, FEW_PRIMITIVES, false), "{FEW_PRIMITIVES} shapes");
         scene.shapes.push(sphere);
-        assert!(features_of(&scene).bvh, "{} shapes", FEW_PRIMITIVES + 1);
-        let meshes = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml")).expect("a checked-in scene loads");
-        assert!(features_of(&meshes).bvh, "a mesh scene walks its BVH");
+        assert_eq!(shape(features_of(&scene)), (true, 0, true), "{} shapes are walked", FEW_PRIMITIVES + 1);
+        let mut meshes = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml")).expect("a checked-in scene loads");
+        assert_eq!(shape(features_of(&meshes)), (true, 0, false), "a scene of meshes alone walks them");
+        meshes.shapes.push(sphere);
+        assert_eq!(shape(features_of(&meshes)), (true, 1, false), "a mesh scene's one sphere is tested before the walk");
     }
 
     #[test]

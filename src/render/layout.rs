@@ -220,7 +220,9 @@ glsl_block! {
         pub sampler_kind: u32,
         /// Number of point, spot and directional lights: the entries of `punctual_lights`.
         pub punctual_light_count: u32,
-        pub pad6: u32,
+        /// The instance of the scene's own shapes (`u32::MAX` where there are none): where the
+        /// kernel's hits on its few shapes, tested apart from the walk, lie (SCENE_FEW_SHAPES).
+        pub shape_instance: u32,
         pub pad7: u32,
         /// Total power of the lights (area and punctual) when they are picked by power (0: picked
         /// uniformly).

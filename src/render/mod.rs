@@ -24,7 +24,7 @@ pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
 pub use renderer::{frame_params, mean_image, GeometryReport, KernelChoice, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};
 pub use scene_data::SceneData;
-pub use features::{SceneFeatures, ALPHA_DELTA};
+pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling

@@ -8,7 +8,7 @@
 use super::bindings::{BufferBinding, KernelBuffer, Shape, BINDINGS};
 use super::chunks::{self, SplitPlans, UNSPLIT};
 use super::kernel::{kernel_spirv, KernelVariant, WORKGROUP};
-use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
+use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::features::SceneFeatures;
@@ -183,6 +183,7 @@ fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> Fr
         sampler_kind: sampler,
         light_total_power: data.light_distribution.total_power,
         punctual_light_count: data.punctual_lights.len() as u32,
+        shape_instance: data.acceleration.instances.iter().position(|i| i.info[0] == INSTANCE_PRIMITIVES).map_or(u32::MAX, |i| i as u32),
         ..FrameParams::zeroed()
     }
 }
