@@ -327,6 +327,9 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     ls.delta = false;
     if (count == 0u) return false;
     uint index = pick_light(count, rng);
+    // One light (area or punctual): index 0, a constant, so that it and its material are loaded
+    // once for the subgroup. The pick still draws its numbers: the general kernel's sample streams.
+    if (SCENE_SEVERAL_LIGHTS == 0) index = 0u;
     vec2 u = rng_next2(rng);
     if (SCENE_PUNCTUAL_LIGHTS == 1 && index >= area_count) {
         PunctualLight l = punctual_lights[index - area_count];
