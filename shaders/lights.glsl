@@ -329,7 +329,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     uint index = pick_light(count, rng);
     // One light (area or punctual): index 0, a constant, so that it and its material are loaded
     // once for the subgroup. The pick still draws its numbers: the general kernel's sample streams.
-    if (SCENE_SEVERAL_LIGHTS == 0) index = 0u;
+    if (SCENE_LIGHT_PICK == 0) index = 0u;
     vec2 u = rng_next2(rng);
     if (SCENE_PUNCTUAL_LIGHTS == 1 && index >= area_count) {
         PunctualLight l = punctual_lights[index - area_count];

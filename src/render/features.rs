@@ -149,10 +149,12 @@ pub struct SceneFeatures {
     pub triangle_lights: bool,
     /// Point, spot and directional lights: their share of light selection.
     pub punctual_lights: bool,
-    /// More than one light (area or punctual) to pick from. With one, its index is the constant 0,
-    /// so that the light and its material are loaded once for a subgroup (lavapipe loads at an
-    /// index it cannot prove uniform lane by lane).
-    pub several_lights: bool,
+    /// A pick among the lights: any number of them (area or punctual) but one. With exactly one,
+    /// its index is the constant 0, so that the light and its material are loaded once for a
+    /// subgroup (lavapipe loads at an index it cannot prove uniform lane by lane). A scene of no
+    /// light keeps the pick, which never runs: with the constant there, a bunny under a sky
+    /// measured 15 % slower on Mesa 25 (docs/benchmarks.md, stop 18).
+    pub light_pick: bool,
     /// Directional lights with an angular size (a sun's disk): what a path that escapes sees of
     /// them.
     pub light_disks: bool,
@@ -161,7 +163,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes::NONE, walked_shapes: true, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, several_lights: true, light_disks: true };
+    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes::NONE, walked_shapes: true, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_pick: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -213,7 +215,7 @@ impl SceneFeatures {
             sphere_lights: lights_of(PRIM_SPHERE),
             triangle_lights: lights_of(PRIM_TRIANGLE),
             punctual_lights: !data.punctual_lights.is_empty(),
-            several_lights: data.lights.len() + data.punctual_lights.len() > 1,
+            light_pick: data.lights.len() + data.punctual_lights.len() != 1,
             light_disks: data.punctual_lights.iter().any(|l| l.position_kind[3].to_bits() == LIGHT_DIRECTIONAL && l.shape[2] > 0.0),
         }
     }
@@ -248,7 +250,7 @@ impl SceneFeatures {
             ("sphere_lights", "SCENE_SPHERE_LIGHTS", self.sphere_lights),
             ("triangle_lights", "SCENE_TRIANGLE_LIGHTS", self.triangle_lights),
             ("punctual_lights", "SCENE_PUNCTUAL_LIGHTS", self.punctual_lights),
-            ("several_lights", "SCENE_SEVERAL_LIGHTS", self.several_lights),
+            ("light_pick", "SCENE_LIGHT_PICK", self.light_pick),
             ("light_disks", "SCENE_LIGHT_DISKS", self.light_disks),
         ]
     }
