@@ -9,7 +9,7 @@ mod common;
 use caustica::bench::{suite_entries, SuiteEntry};
 use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, FEW_PRIMITIVES};
 use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Shape, Texture};
-use common::{gpu, parse};
+use common::{floor_point_scene, gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::Path;
 
@@ -251,33 +251,21 @@ fn coats_without_mirrors_render_the_same_with_their_own_kernel() {
 #[test]
 fn one_light_and_one_area_light_beside_a_punctual_one_render_the_same_with_their_own_kernels() {
     let lamp = r#"
-        camera = { position = [0, 0.5, 3], look_at = [0, 0.3, 0], fov = 40 }
-        film = { width = 40, height = 30, spp = 2 }
-        [materials.floor]
-        albedo = [0.7, 0.7, 0.7]
-        [materials.lamp]
-        albedo = [0, 0, 0]
-        emission = [6, 5, 4]
-        [[quads]]
-        origin = [-2.0, 0.0, 2.0]
-        edge_u = [4.0, 0.0, 0.0]
-        edge_v = [0.0, 0.0, -4.0]
-        material = "floor"
         [[spheres]]
         center = [-0.5, 1.2, 0.0]
         radius = 0.2
         material = "lamp"
         "#;
-    let (_lock, ctx) = gpu();
-    let features = assert_specialized_kernel_agrees(&ctx, parse(lamp));
-    assert!(!features.light_pick, "one light is sampled without a pick");
     let point = r#"
         [[lights]]
         type = "point"
         position = [0.8, 1.0, 0.5]
         intensity = [2.0, 2.0, 2.0]
         "#;
-    let features = assert_specialized_kernel_agrees(&ctx, parse(&format!("{lamp}{point}")));
+    let (_lock, ctx) = gpu();
+    let features = assert_specialized_kernel_agrees(&ctx, floor_point_scene(lamp, 2, true));
+    assert!(!features.light_pick, "one light is sampled without a pick");
+    let features = assert_specialized_kernel_agrees(&ctx, floor_point_scene(&format!("{lamp}{point}"), 2, true));
     assert!(features.light_pick, "an area light and a point light are picked between");
 }
 
