@@ -8,8 +8,9 @@
 mod common;
 
 use caustica::gpu::GpuContext;
-use caustica::render::Renderer;
-use caustica::scene::Scene;
+use caustica::render::{Renderer, FEW_PRIMITIVES};
+use caustica::scene::{Scene, Shape};
+use glam::Vec3;
 use common::gpu;
 use std::path::Path;
 
@@ -59,6 +60,12 @@ fn tiny_image_at_thousands_of_samples_loses_none() {
     let mut scene = Scene::default_scene();
     scene.film.width = 16;
     scene.film.height = 12;
+    // The Cornell box's own 8 shapes are tested as straight-line code, with no loop to count: its
+    // 2000 samples stay within Mesa 22.3's loop limit. With more shapes than that takes, the kernel
+    // walks the BVH, whose loops reach the limit, and the repeat is exercised. The spheres sit
+    // behind the camera.
+    let behind_the_camera = Shape::Sphere { center: Vec3::new(0.0, 0.0, 10.0), radius: 0.01, material: 0 };
+    scene.shapes.resize(FEW_PRIMITIVES + 1, behind_the_camera);
     check_against_one_sample_dispatches(&scene, 2000);
 }
 
