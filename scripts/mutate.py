@@ -6,7 +6,8 @@ or mark it `equivalent` in the list with the reason it changes nothing (docs/tes
 
 GLSL mutations need no rebuild: the kernel reads its shader files from $CAUSTICA_SHADER_DIR when it
 is set (src/render/kernel.rs), so the mutated copy lives in a scratch folder and the tests run as
-built. Rust mutations are applied to the working tree, rebuilt, and always restored.
+built. Rust mutations are applied to the working tree, rebuilt, and always restored, and the restored code
+is built again at the end, so that target/ holds no mutant.
 
 Usage: scripts/mutate.py [--list] [--only ID ...] [--area AREA] [--timeout S] [--json FILE]
 Exit status: 0 when every mutation is killed or marked equivalent, 1 otherwise, 2 on a bad list.
@@ -120,18 +121,25 @@ def main():
             print(f"unmutated: {' '.join(tests)} pass ({seconds:.0f} s)", flush=True)
     results = []
     started = time.monotonic()
-    for m in mutations:
-        passed, seconds, tail = run(m, args.timeout)
-        if not passed:
-            verdict = "killed"
-        elif "equivalent" in m:
-            verdict = "equivalent"
-        else:
-            verdict = "SURVIVED"
-        results.append({"id": m["id"], "area": m["area"], "verdict": verdict, "seconds": round(seconds, 1), "tests": " ".join(m["tests"]), "detail": tail})
-        print(f"{verdict:<10} {seconds:6.1f} s  {m['id']:<32} {m['bug']}", flush=True)
-        if verdict != "killed" and tail:
-            print("           " + tail.replace("\n", "\n           "), flush=True)
+    try:
+        for m in mutations:
+            passed, seconds, tail = run(m, args.timeout)
+            if not passed:
+                verdict = "killed"
+            elif "equivalent" in m:
+                verdict = "equivalent"
+            else:
+                verdict = "SURVIVED"
+            results.append({"id": m["id"], "area": m["area"], "verdict": verdict, "seconds": round(seconds, 1), "tests": " ".join(m["tests"]), "detail": tail})
+            print(f"{verdict:<10} {seconds:6.1f} s  {m['id']:<32} {m['bug']}", flush=True)
+            if verdict != "killed" and tail:
+                print("           " + tail.replace("\n", "\n           "), flush=True)
+    finally:
+        # A Rust mutation's tests build target/release/caustica from the mutated code, and the
+        # restored source is rebuilt only by the next cargo call: until then the binary there is
+        # the last mutant (a benchmark that copied it would measure a bug). Rebuild it now.
+        if any(not m["file"].endswith((".glsl", ".comp")) for m in mutations):
+            subprocess.run(["cargo", "build", "--release", "--bins", "--tests", "-q"], cwd=ROOT, env=env, check=True)
     total = time.monotonic() - started
     survived = [r for r in results if r["verdict"] == "SURVIVED"]
     killed = sum(r["verdict"] == "killed" for r in results)
