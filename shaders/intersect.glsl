@@ -55,7 +55,7 @@ float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max,
 // src/render/features.rs) is compiled out of its case, which then answers as for an unknown kind.
 
 // `kind` is the primitive's own (prim_kind(p)), or a constant where the host compiled it in: a
-// kernel without the BVH walk tests each of its few shapes by its kind's test alone (bvh.glsl).
+// scene's few shapes are each tested by their kind's test alone (SCENE_FEW_SHAPES, bvh.glsl).
 float intersect_primitive_as(uint kind, Primitive p, vec3 o, vec3 d, float t_max) {
     vec2 unused_bary;
     switch (kind) {

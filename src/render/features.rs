@@ -14,8 +14,8 @@ use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, 
 use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
-/// Most shapes a scene may have for its rays to test each in turn rather than walk its BVH (the
-/// `bvh` feature off). Measured on lavapipe with each shape's test compiled in as straight-line
+/// Most shapes a scene may have for its rays to test each in turn rather than walk them in its BVH
+/// (`few_shapes`; with no mesh, the `bvh` feature off). Measured on lavapipe with each shape's test compiled in as straight-line
 /// code of its kind (docs/benchmarks.md, stop 18): at 32 shapes it beats the walk 3-5x on Mesa 25
 /// and 1.3-1.6x on Mesa 22.3; at 48 and 64 Mesa 22.3 is level, and the kernel's compile grows.
 pub const FEW_PRIMITIVES: usize = 32;
@@ -33,7 +33,7 @@ pub struct FewShapes {
 }
 
 impl FewShapes {
-    /// No shapes: a kernel that walks its BVH.
+    /// No shapes listed: the walk meets them, or there are none.
     pub const NONE: Self = Self { count: 0, kinds: [0; FEW_PRIMITIVES] };
 
     /// The shapes of these kinds, in this order; `None` past FEW_PRIMITIVES or for a kind the
@@ -80,7 +80,8 @@ fn kind_name(kind: u32) -> Option<&'static str> {
 /// the list of shapes a kernel without the BVH walk tests.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SceneFeatures {
-    /// The BVH walk: a scene with meshes or more than FEW_PRIMITIVES shapes. Without it rays test
+    /// The BVH walk: a scene with meshes, more than FEW_PRIMITIVES shapes, or nothing at all (the
+    /// walk then returns at once, finding no node). Without it rays test
     /// the scene's few shapes one after another (bvh.glsl): every lane of a subgroup reads the
     /// same shape at once, which lavapipe loads once for all of them, and no stack or node is
     /// touched.
@@ -153,7 +154,7 @@ pub struct SceneFeatures {
     /// its index is the constant 0, so that the light and its material are loaded once for a
     /// subgroup (lavapipe loads at an index it cannot prove uniform lane by lane). A scene of no
     /// light keeps the pick, which never runs: with the constant there, a bunny under a sky
-    /// measured 15 % slower on Mesa 25 (docs/benchmarks.md, stop 18).
+    /// measured 18 % slower on Mesa 25 (docs/benchmarks.md, stop 18).
     pub light_pick: bool,
     /// Directional lights with an angular size (a sun's disk): what a path that escapes sees of
     /// them.
