@@ -66,10 +66,6 @@ float intersect_primitive_as(uint kind, Primitive p, vec3 o, vec3 d, float t_max
     }
 }
 
-float intersect_primitive(Primitive p, vec3 o, vec3 d, float t_max) {
-    return intersect_primitive_as(prim_kind(p), p, o, d, t_max);
-}
-
 // Outward (sphere) or front-side (quad, triangle) unit normal at a point on the primitive.
 vec3 primitive_normal(Primitive p, vec3 point) {
     switch (prim_kind(p)) {

@@ -199,7 +199,7 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
     ];
     let (_lock, ctx) = gpu();
     let features = assert_specialized_kernel_agrees(&ctx, scene.clone());
-    assert_eq!((features.few_shapes.len(), features.walked_shapes), (scene.shapes.len(), false), "its few shapes are tested before the walk of its meshes");
+    assert_eq!((features.few_shapes.len(), features.walked_shapes()), (scene.shapes.len(), false), "its few shapes are tested before the walk of its meshes");
     // With more shapes than are tested apart, the walk meets them among the meshes: the general
     // kernel's every feature.
     let far_below = Shape::Sphere { center: Vec3::new(0.0, -50.0, 0.0), radius: 0.01, material: 0 };

@@ -77,20 +77,13 @@ fn kind_name(kind: u32) -> Option<&'static str> {
 }
 
 /// The kernel features a scene needs; each is one `SCENE_*` define (0 or 1) of the kernel, but for
-/// the list of shapes a kernel without the BVH walk tests.
+/// the list of shapes tested before any walk. Whether there is a walk, and whether it meets shapes,
+/// follow from `meshes`, `primitives` and that list ([`Self::bvh`], [`Self::walked_shapes`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct SceneFeatures {
-    /// The BVH walk: a scene with meshes, more than FEW_PRIMITIVES shapes, or nothing at all (the
-    /// walk then returns at once, finding no node). Without it rays test
-    /// the scene's few shapes one after another (bvh.glsl): every lane of a subgroup reads the
-    /// same shape at once, which lavapipe loads once for all of them, and no stack or node is
-    /// touched.
-    pub bvh: bool,
     /// The shapes rays test one after another, by kind, before any walk: the scene's own, when
     /// there are at most FEW_PRIMITIVES.
     pub few_shapes: FewShapes,
-    /// The walk meets shapes: more than FEW_PRIMITIVES of them (else they are few_shapes).
-    pub walked_shapes: bool,
     /// More than one instance: the kernel walks the top-level BVH (bvh.glsl).
     pub top_level: bool,
     /// Triangle meshes (mesh instances).
@@ -164,7 +157,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { bvh: true, few_shapes: FewShapes::NONE, walked_shapes: true, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_pick: true, light_disks: true };
+    pub const ALL: Self = Self { few_shapes: FewShapes::NONE, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_pick: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -183,17 +176,12 @@ impl SceneFeatures {
         // Plastics and clear coats reflect through the reflection lobe too.
         let coated = data.materials.iter().any(|m| m.conductor_k[3] > 0.0);
         let clearcoat = data.materials.iter().any(|m| m.coat[0] > 0.0);
-        // Few shapes (at most FEW_PRIMITIVES, each of a kind the kernel knows) are tested before
-        // the walk, which then walks the meshes alone; without meshes there is no walk.
-        let few_shapes = FewShapes::new(data.acceleration.primitives.iter().map(kind));
-        let primitives = has_instance(INSTANCE_PRIMITIVES);
         Self {
-            bvh: has_instance(INSTANCE_MESH) || few_shapes.is_none() || !primitives,
-            few_shapes: few_shapes.unwrap_or(FewShapes::NONE),
-            walked_shapes: primitives && few_shapes.is_none(),
+            // At most FEW_PRIMITIVES shapes, each of a kind the kernel knows; else the walk meets them.
+            few_shapes: FewShapes::new(data.acceleration.primitives.iter().map(kind)).unwrap_or(FewShapes::NONE),
             top_level: instances.len() > 1,
             meshes: has_instance(INSTANCE_MESH),
-            primitives,
+            primitives: has_instance(INSTANCE_PRIMITIVES),
             textures: !data.textures.is_empty(),
             emissive_textures: data.materials.iter().any(|m| m.maps[0].to_bits() != NO_TEXTURE && m.emission_t[..3].iter().any(|&e| e > 0.0)),
             normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
@@ -221,11 +209,24 @@ impl SceneFeatures {
         }
     }
 
+    /// The BVH walk: a scene with meshes, more than FEW_PRIMITIVES shapes, or nothing at all (the
+    /// walk then returns at once, finding no node). Without it rays test the scene's few shapes
+    /// one after another (bvh.glsl): every lane of a subgroup reads the same shape at once, which
+    /// lavapipe loads once for all of them, and no stack or node is touched.
+    pub fn bvh(&self) -> bool {
+        self.meshes || self.few_shapes.is_empty()
+    }
+
+    /// The walk meets shapes: more than FEW_PRIMITIVES of them (else they are few_shapes).
+    pub fn walked_shapes(&self) -> bool {
+        self.primitives && self.few_shapes.is_empty()
+    }
+
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
     fn table(&self) -> [(&'static str, &'static str, bool); 29] {
         [
-            ("bvh", "SCENE_BVH", self.bvh),
-            ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes),
+            ("bvh", "SCENE_BVH", self.bvh()),
+            ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes()),
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
             ("meshes", "SCENE_MESHES", self.meshes),
             ("primitives", "SCENE_PRIMITIVES", self.primitives),
@@ -292,7 +293,7 @@ mod tests {
     #[test]
     fn few_shapes_are_tested_apart_from_the_walk_and_many_are_walked() {
         // (walk, shapes tested apart, walked shapes)
-        let shape = |f: SceneFeatures| (f.bvh, f.few_shapes.len(), f.walked_shapes);
+        let shape = |f: SceneFeatures| (f.bvh(), f.few_shapes.len(), f.walked_shapes());
         let mut scene = crate::scene::Scene::default_scene();
         let n = scene.shapes.len();
         assert_eq!(shape(features_of(&scene)), (false, n, false), "the Cornell box is tested shape by shape");
