@@ -1,5 +1,6 @@
 //! Progressive rendering: uploads a scene, then adds samples in dispatches sized to take about
-//! `DISPATCH_TARGET_S` each, so a desktop GPU's watchdog never fires and progress stays smooth.
+//! `GPU_DISPATCH_TARGET_S` each on a GPU, so a desktop GPU's watchdog never fires and progress
+//! stays smooth, and `CPU_DISPATCH_TARGET_S` on a CPU device, which has no watchdog.
 //! Every dispatch is checked: each pixel of its band must hold the target sample count afterwards.
 //! On devices that end shader loops early (llvmpipe before Mesa 24, see shaders/loop_limit.glsl)
 //! dispatches are also sized from the loop iterations the kernel counts, and a band cut short is
@@ -14,15 +15,30 @@ use super::aov::{AovSet, AovSums};
 use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
-use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
+use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceType, GpuContext};
 use crate::image::RgbImage;
 use crate::scene::{Camera, Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
 use bytemuck::Zeroable;
 use std::time::Instant;
 
-/// Wall time one dispatch aims for. Windows' GPU watchdog fires at 2 s.
-const DISPATCH_TARGET_S: f64 = 0.2;
+/// Wall time one dispatch aims for on a GPU. Windows' GPU watchdog fires at 2 s.
+const GPU_DISPATCH_TARGET_S: f64 = 0.2;
+/// Wall time one dispatch aims for on a CPU device (lavapipe). Every dispatch ends in a tail, lanes
+/// whose pixels are done idling beside those still on their last paths, and a thread whose share
+/// of the workgroups is done idling beside the other; longer dispatches pay it less often. 1 s
+/// against 0.2 s measured +6 to +36 % on Mesa 25 (docs/benchmarks.md, stop 19). A time budget or
+/// an interrupt waits for the pass in progress, so about this long at most.
+const CPU_DISPATCH_TARGET_S: f64 = 1.0;
+
+/// The wall time a dispatch aims for on a device of `kind`.
+fn dispatch_target_for(kind: DeviceType) -> f64 {
+    if kind == DeviceType::Cpu {
+        CPU_DISPATCH_TARGET_S
+    } else {
+        GPU_DISPATCH_TARGET_S
+    }
+}
 /// Upper bound on pixel-samples in one dispatch, so the 32-bit counters cannot wrap in practice.
 const MAX_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 24;
 /// Most samples one pixel can hold: the kernel keeps each pixel's count in a float, exact to 2^24.
@@ -73,7 +89,8 @@ pub struct Renderer<'a> {
     plan_for_loop_limit: bool,
     /// Dispatches repeated in smaller steps because the device's loop limit cut them short.
     pub repeated_dispatches: u32,
-    /// Wall time one dispatch aims for (`DISPATCH_TARGET_S` unless [`Self::set_dispatch_target`]).
+    /// Wall time one dispatch aims for (the device's [`dispatch_target_for`] unless
+    /// [`Self::set_dispatch_target`]).
     dispatch_target_s: f64,
     /// The frame parameters uploaded, kept so that [`Self::set_camera`] can change the camera alone.
     params: FrameParams,
@@ -384,12 +401,12 @@ impl<'a> Renderer<'a> {
             lights: data.lights.len(),
             gpu_bytes: data.gpu_bytes(),
             split_arrays,
-        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0, dispatch_target_s: DISPATCH_TARGET_S, params, hashed_bytes, pass_in_progress: None, group_order: GroupOrder::for_device(ctx.info.kind) })
+        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0, dispatch_target_s: dispatch_target_for(ctx.info.kind), params, hashed_bytes, pass_in_progress: None, group_order: GroupOrder::for_device(ctx.info.kind) })
     }
 
     /// Dispatches `samples` samples per pixel over the whole image at a time (at least 1; fewer
     /// where the device's loop limit requires it) instead of sizing dispatches to take
-    /// `DISPATCH_TARGET_S`. The image does not depend on it: renders split into any dispatches
+    /// the device's dispatch target. The image does not depend on it: renders split into any dispatches
     /// agree bit for bit.
     pub fn fix_samples_per_dispatch(&mut self, samples: u32) {
         self.fixed_samples_per_dispatch = Some(samples.max(1));
@@ -553,7 +570,7 @@ impl<'a> Renderer<'a> {
         self.pass_in_progress.map(|p| p.target)
     }
 
-    /// Sizes dispatches to take about `seconds` of wall time instead of `DISPATCH_TARGET_S`: an
+    /// Sizes dispatches to take about `seconds` of wall time instead of the device's default: an
     /// interactive viewer needs shorter ones to keep drawing its window.
     pub fn set_dispatch_target(&mut self, seconds: f64) {
         self.dispatch_target_s = seconds;
