@@ -3,7 +3,7 @@
 // bottom-level BVH in the same node array. One explicit stack serves both levels: a top-level leaf
 // pushes its instances as tagged entries, and popping one transforms the ray into the instance's
 // object space until the stack falls back below that entry. A scene with one instance skips the
-// top level.
+// top level: its kernel (SCENE_TOP_LEVEL 0) enters the instance before the walk.
 // Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
 // level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
 // the binary tree; the wide tree has at most half its levels.
@@ -132,17 +132,36 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     if (frame.node_count == 0u) return hit.prim != NO_INDEX;  // empty scene: no root node to test
     vec3 ro = o;
     vec3 rd = d;
-    vec3 world_inv_d = safe_inverse(d);
-    vec3 inv_d = world_inv_d;
     uint stack[STACK_SIZE];
     uint sp = 0u;
+#if SCENE_TOP_LEVEL == 0
+    // The scene's one instance is entered before the walk, which ends when the stack empties:
+    // nothing of leaving or entering an instance, nor the world ray, stays in the loop (Mesa 22.3
+    // runs every block of a loop body, taken or not: docs/benchmarks.md, stop 19).
+    uint instance = 0u;
+    uvec4 info = instances[0].info;
+    uint instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
+    // Shapes tested before the walk are not walked again.
+    if (SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && info.x == INSTANCE_PRIMITIVES) return hit.prim != NO_INDEX;
+    if (instance_kind == INSTANCE_MESH) {
+        vec4 world_to_object[3] = instances[0].world_to_object;
+        ro = affine_point(world_to_object, o);
+        rd = affine_vector(world_to_object, d);
+    }
+    vec3 inv_d = safe_inverse(rd);
+    stack[sp++] = info.y;
+#else
+    vec3 world_inv_d = safe_inverse(d);
+    vec3 inv_d = world_inv_d;
     uint instance = NO_INDEX;  // the instance whose bottom level is being walked
     uint instance_kind = INSTANCE_PRIMITIVES;
     uint instance_sp = 0u;     // stack height when it was entered
     // Start at the top-level root, or with a single instance, in that instance right away.
-    stack[sp++] = SCENE_TOP_LEVEL == 0 || frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
+    stack[sp++] = frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
+#endif
     while (true) {
         LOOP_ITERATION();
+#if SCENE_TOP_LEVEL
         // Next entry: leave the instance once its part of the stack is used up.
         if (instance != NO_INDEX && sp == instance_sp) {
             if (instance_kind == INSTANCE_MESH) {
@@ -152,9 +171,11 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
             }
             instance = NO_INDEX;
         }
+#endif
         if (sp == 0u) break;
         uint entry = stack[--sp];
         uint node_index = entry;
+#if SCENE_TOP_LEVEL
         if ((entry & INSTANCE_ENTRY) != 0u) {
             uint entered = entry & ~INSTANCE_ENTRY;
             uvec4 info = instances[entered].info;
@@ -173,6 +194,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
             }
             node_index = info.y;
         }
+#endif
         // Walk down from this node: test its children, intersect leaf children at once, go on to
         // the nearest interior child and leave the others on the stack, nearer on top.
         while (true) {
