@@ -140,9 +140,9 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     // runs every block of a loop body, taken or not: docs/benchmarks.md, stop 19).
     uint instance = 0u;
     uvec4 info = instances[0].info;
+    // It is walked whatever it holds: a scene whose one instance is its few shapes has no walk
+    // (SCENE_BVH 0).
     uint instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
-    // Shapes tested before the walk are not walked again.
-    if (SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && info.x == INSTANCE_PRIMITIVES) return hit.prim != NO_INDEX;
     if (instance_kind == INSTANCE_MESH) {
         vec4 world_to_object[3] = instances[0].world_to_object;
         ro = affine_point(world_to_object, o);
