@@ -73,6 +73,24 @@ uvec2 kth_child(uint k, uvec2 c0, uvec2 c1, uvec2 c2, uvec2 c3) {
     return k == 4u ? c3 : k == 3u ? c2 : k == 2u ? c1 : c0;
 }
 
+// Node `node_index`'s children as the ray enters them within (0, t_max), nearest first: their
+// entries (+infinity for a child missed) and (link, kind) pairs, sorted by a sorting network.
+// Returns how many are entered.
+uint sorted_children(uint node_index, vec3 ro, vec3 inv_d, float t_max, out float t0, out float t1, out float t2, out float t3, out uvec2 c0, out uvec2 c1, out uvec2 c2, out uvec2 c3) {
+    WideNode node = load_nodes(node_index);
+    vec4 entries = wide_child_entries(node, ro, inv_d, t_max);
+    uvec4 kinds = child_bytes(node.quantized_z_kinds.z);
+    t0 = entries.x, t1 = entries.y, t2 = entries.z, t3 = entries.w;
+    c0 = uvec2(node.links.x, kinds.x), c1 = uvec2(node.links.y, kinds.y);
+    c2 = uvec2(node.links.z, kinds.z), c3 = uvec2(node.links.w, kinds.w);
+    order_children(t0, c0, t1, c1);
+    order_children(t2, c2, t3, c3);
+    order_children(t0, c0, t2, c2);
+    order_children(t1, c1, t3, c3);
+    order_children(t1, c1, t2, c2);
+    return uint(t0 != MISSED_BOX) + uint(t1 != MISSED_BOX) + uint(t2 != MISSED_BOX) + uint(t3 != MISSED_BOX);
+}
+
 // Zero direction components would make 0 * inf = NaN in the slab test; nudge them.
 vec3 safe_inverse(vec3 d) {
     const float tiny = 1e-30;
@@ -193,38 +211,30 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 inv_d = safe_inverse(rd);
             }
             node_index = info.y;
+        } else if (instance == NO_INDEX) {
+            // A top-level node (every leaf of which is one instance: the host builds it so): its
+            // children go on the stack, farthest first, and the nearest is taken from there;
+            // entering an instance happens when its entry is popped. Here rather than in the walk
+            // down below, which Mesa 22.3 would run it in at every node (docs/benchmarks.md,
+            // stop 19).
+            float t0, t1, t2, t3;
+            uvec2 c0, c1, c2, c3;
+            uint entered = sorted_children(node_index, ro, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
+            for (uint k = entered; k > 0u; --k) {
+                LOOP_ITERATION();
+                uvec2 c = kth_child(k, c0, c1, c2, c3);
+                stack[sp++] = c.y == WIDE_CHILD_INTERIOR ? c.x : INSTANCE_ENTRY | c.x;
+            }
+            continue;
         }
 #endif
         // Walk down from this node: test its children, intersect leaf children at once, go on to
         // the nearest interior child and leave the others on the stack, nearer on top.
         while (true) {
             LOOP_ITERATION();
-            WideNode node = load_nodes(node_index);
-            vec4 entries = wide_child_entries(node, ro, inv_d, hit.t);
-            // Per child: its link and kind, sorted with the entry distances (a sorting network).
-            uvec4 kinds = child_bytes(node.quantized_z_kinds.z);
-            float t0 = entries.x, t1 = entries.y, t2 = entries.z, t3 = entries.w;
-            uvec2 c0 = uvec2(node.links.x, kinds.x), c1 = uvec2(node.links.y, kinds.y);
-            uvec2 c2 = uvec2(node.links.z, kinds.z), c3 = uvec2(node.links.w, kinds.w);
-            order_children(t0, c0, t1, c1);
-            order_children(t2, c2, t3, c3);
-            order_children(t0, c0, t2, c2);
-            order_children(t1, c1, t3, c3);
-            order_children(t1, c1, t2, c2);
-            uint entered = uint(t0 != MISSED_BOX) + uint(t1 != MISSED_BOX) + uint(t2 != MISSED_BOX) + uint(t3 != MISSED_BOX);
-#if SCENE_TOP_LEVEL
-            if (instance == NO_INDEX) {
-                // Top level: every leaf is one instance (the host builds it so). Leave the children
-                // on the stack, farthest first, and take the nearest from there: entering an
-                // instance happens when its entry is popped.
-                for (uint k = entered; k > 0u; --k) {
-                    LOOP_ITERATION();
-                    uvec2 c = kth_child(k, c0, c1, c2, c3);
-                    stack[sp++] = c.y == WIDE_CHILD_INTERIOR ? c.x : INSTANCE_ENTRY | c.x;
-                }
-                break;
-            }
-#endif
+            float t0, t1, t2, t3;
+            uvec2 c0, c1, c2, c3;
+            uint entered = sorted_children(node_index, ro, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
             // Children farthest first: leaves are intersected, interior children left on the
             // stack, so that the nearest becomes the next node and the nearer of the rest lie on
             // top. One loop over the children in this order measured faster on lavapipe than a
