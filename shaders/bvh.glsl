@@ -158,9 +158,10 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     // runs every block of a loop body, taken or not: docs/benchmarks.md, stop 19).
     uint instance = 0u;
     uvec4 info = instances[0].info;
-    // It is walked whatever it holds: a scene whose one instance is its few shapes has no walk
-    // (SCENE_BVH 0).
-    uint instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
+    // The one instance is the mesh where the scene has meshes (a mesh beside shapes makes two
+    // instances), else its many shapes (a scene whose one instance is its few shapes has no walk,
+    // SCENE_BVH 0): its kind is known when the kernel is compiled.
+    uint instance_kind = SCENE_MESHES == 1 ? INSTANCE_MESH : INSTANCE_PRIMITIVES;
     if (instance_kind == INSTANCE_MESH) {
         vec4 world_to_object[3] = instances[0].world_to_object;
         ro = affine_point(world_to_object, o);
