@@ -15,9 +15,10 @@ use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
 
 /// Most shapes a scene may have for its rays to test each in turn rather than walk them in its BVH
-/// (`few_shapes`; with no mesh, the `bvh` feature off). Measured on lavapipe with each shape's test compiled in as straight-line
-/// code of its kind (docs/benchmarks.md, stop 18): at 32 shapes it beats the walk 3-5x on Mesa 25
-/// and 1.3-1.6x on Mesa 22.3; at 48 and 64 Mesa 22.3 is level, and the kernel's compile grows.
+/// (`few_shapes`; with no mesh, the `bvh` feature off). Measured on lavapipe with each shape's test
+/// compiled in as straight-line code of its kind (docs/benchmarks.md, stop 18): at 32 shapes it
+/// beats the walk 3-5x on Mesa 25 and 1.3-1.6x on Mesa 22.3; at 48 and 64 Mesa 22.3 is level, and
+/// the kernel's compile grows.
 pub const FEW_PRIMITIVES: usize = 32;
 
 /// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl).

@@ -40,6 +40,7 @@ fn dispatch_target_for(kind: DeviceType) -> f64 {
         GPU_DISPATCH_TARGET_S
     }
 }
+
 /// Upper bound on pixel-samples in one dispatch, so the 32-bit counters cannot wrap in practice.
 const MAX_PIXEL_SAMPLES_PER_DISPATCH: u64 = 1 << 24;
 /// Most samples one pixel can hold: the kernel keeps each pixel's count in a float, exact to 2^24.
@@ -406,9 +407,9 @@ impl<'a> Renderer<'a> {
     }
 
     /// Dispatches `samples` samples per pixel over the whole image at a time (at least 1; fewer
-    /// where the device's loop limit requires it) instead of sizing dispatches to take
-    /// the device's dispatch target. The image does not depend on it: renders split into any dispatches
-    /// agree bit for bit.
+    /// where the device's loop limit requires it) instead of sizing dispatches to take the
+    /// device's dispatch target. The image does not depend on it: renders split into any
+    /// dispatches agree bit for bit.
     pub fn fix_samples_per_dispatch(&mut self, samples: u32) {
         self.fixed_samples_per_dispatch = Some(samples.max(1));
     }
