@@ -1,9 +1,11 @@
 // Two-level BVH traversal (layout in src/bvh and src/render/acceleration.rs). Node 0 is the root of
 // the top-level BVH, whose leaves list instances; each instance points at the root of its own
-// bottom-level BVH in the same node array. One explicit stack serves both levels: a top-level leaf
-// pushes its instances as tagged entries, and popping one transforms the ray into the instance's
-// object space until the stack falls back below that entry. A scene with one instance skips the
-// top level: its kernel (SCENE_TOP_LEVEL 0) enters the instance before the walk.
+// bottom-level BVH in the same node array. Each instance the ray enters is walked to its end by
+// walk_instance, in the instance's object space, before the top level goes on. The top level is
+// compiled for the scene (src/render/features.rs): a scene of one instance has none
+// (SCENE_TOP_LEVEL 0); a scene whose top level is its root alone tests the instances as that
+// node's children and walks them in turn (SCENE_TOP_LEVEL_TREE 0); any other walks the top level
+// with a stack of its own, its leaves' instances tagged.
 // Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
 // level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
 // the binary tree; the wide tree has at most half its levels.
@@ -16,8 +18,8 @@ const uint NO_INDEX = 0xffffffffu;
 const uint INSTANCE_ENTRY = 0x80000000u;
 const float MISSED_BOX = uintBitsToFloat(0x7f800000u);  // +infinity
 // Each node visit leaves at most three entries behind (the children other than the nearest; at the
-// top level the nearest is taken back at once): at most three a wide level of each BVH, whose
-// levels number at most BVH_MAX_DEPTH / 2, plus the first entry and the nearest.
+// top level the nearest is taken back at once): at most three a wide level of the BVH a stack
+// walks, whose levels number at most BVH_MAX_DEPTH / 2, plus the first entry and the nearest.
 const uint STACK_SIZE = 3u * BVH_MAX_DEPTH + 2u;
 
 struct Hit {
@@ -142,93 +144,20 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     return hit.prim != NO_INDEX;
 }
 #else
-// Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found (shadow rays).
-// The object-space ray keeps the world parameter t: its direction is transformed, not renormalised.
-bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
-    hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
-    SCENE_FEW_SHAPES
-    if (frame.node_count == 0u) return hit.prim != NO_INDEX;  // empty scene: no root node to test
-    vec3 ro = o;
-    vec3 rd = d;
+// Walks one instance's BVH from its root node `root`, with the ray (ro, rd) already in the
+// instance's object space, keeping the nearest hit before hit.t. True when any_hit and it was
+// hit: the caller returns at once. The walk knows nothing of instances, their transforms or the
+// top level: every scene walks its meshes with this loop alone, and Mesa 22.3, which runs every
+// block of a loop body taken or not (docs/benchmarks.md, stop 16), pays for nothing else in it.
+bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 rd, bool any_hit, inout Hit hit) {
+    vec3 inv_d = safe_inverse(rd);
     uint stack[STACK_SIZE];
     uint sp = 0u;
-#if SCENE_TOP_LEVEL == 0
-    // The scene's one instance is entered before the walk, which ends when the stack empties:
-    // nothing of leaving or entering an instance, nor the world ray, stays in the loop (Mesa 22.3
-    // runs every block of a loop body, taken or not: docs/benchmarks.md, stop 19).
-    uint instance = 0u;
-    uvec4 info = instances[0].info;
-    // The one instance is the mesh where the scene has meshes (a mesh beside shapes makes two
-    // instances), else its many shapes (a scene whose one instance is its few shapes has no walk,
-    // SCENE_BVH 0): its kind is known when the kernel is compiled.
-    uint instance_kind = SCENE_MESHES == 1 ? INSTANCE_MESH : INSTANCE_PRIMITIVES;
-    if (instance_kind == INSTANCE_MESH) {
-        vec4 world_to_object[3] = instances[0].world_to_object;
-        ro = affine_point(world_to_object, o);
-        rd = affine_vector(world_to_object, d);
-    }
-    vec3 inv_d = safe_inverse(rd);
-    stack[sp++] = info.y;
-#else
-    vec3 world_inv_d = safe_inverse(d);
-    vec3 inv_d = world_inv_d;
-    uint instance = NO_INDEX;  // the instance whose bottom level is being walked
-    uint instance_kind = INSTANCE_PRIMITIVES;
-    uint instance_sp = 0u;     // stack height when it was entered
-    // Start at the top-level root, or with a single instance, in that instance right away.
-    stack[sp++] = frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
-#endif
+    stack[sp++] = root;
     while (true) {
         LOOP_ITERATION();
-#if SCENE_TOP_LEVEL
-        // Next entry: leave the instance once its part of the stack is used up.
-        if (instance != NO_INDEX && sp == instance_sp) {
-            if (instance_kind == INSTANCE_MESH) {
-                ro = o;
-                rd = d;
-                inv_d = world_inv_d;
-            }
-            instance = NO_INDEX;
-        }
-#endif
         if (sp == 0u) break;
-        uint entry = stack[--sp];
-        uint node_index = entry;
-#if SCENE_TOP_LEVEL
-        if ((entry & INSTANCE_ENTRY) != 0u) {
-            uint entered = entry & ~INSTANCE_ENTRY;
-            uvec4 info = instances[entered].info;
-            // Shapes tested before the walk are not walked again.
-            if (SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && info.x == INSTANCE_PRIMITIVES) continue;
-            instance = entered;
-            instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
-            instance_sp = sp;
-            // The scene's own shapes are placed by the identity: keep the world ray (loads are
-            // what costs, on lavapipe most of all).
-            if (instance_kind == INSTANCE_MESH) {
-                vec4 world_to_object[3] = instances[instance].world_to_object;
-                ro = affine_point(world_to_object, o);
-                rd = affine_vector(world_to_object, d);
-                inv_d = safe_inverse(rd);
-            }
-            node_index = info.y;
-        } else if (instance == NO_INDEX) {
-            // A top-level node (every leaf of which is one instance: the host builds it so): its
-            // children go on the stack, farthest first, and the nearest is taken from there;
-            // entering an instance happens when its entry is popped. Here rather than in the walk
-            // down below, which Mesa 22.3 would run it in at every node (docs/benchmarks.md,
-            // stop 19).
-            float t0, t1, t2, t3;
-            uvec2 c0, c1, c2, c3;
-            uint entered = sorted_children(node_index, ro, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
-            for (uint k = entered; k > 0u; --k) {
-                LOOP_ITERATION();
-                uvec2 c = kth_child(k, c0, c1, c2, c3);
-                stack[sp++] = c.y == WIDE_CHILD_INTERIOR ? c.x : INSTANCE_ENTRY | c.x;
-            }
-            continue;
-        }
-#endif
+        uint node_index = stack[--sp];
         // Walk down from this node: test its children, intersect leaf children at once, go on to
         // the nearest interior child and leave the others on the stack, nearer on top.
         while (true) {
@@ -273,6 +202,79 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
             node_index = next;
         }
     }
+    return false;
+}
+
+// Walks instance `instance` with the world ray o + t d, as walk_instance: in its object space
+// where it is a placed mesh (the object-space ray keeps the world parameter t: its direction is
+// transformed, not renormalised). The scene's own shapes are placed by the identity and keep the
+// world ray (loads are what costs, on lavapipe most of all); where they were tested before any
+// walk, their instance is not walked again.
+bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
+    uvec4 info = instances[instance].info;
+    if (SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && info.x == INSTANCE_PRIMITIVES) return false;
+    // Where the scene has meshes and no walked shapes every walked instance is a mesh, and where
+    // it has no meshes none is: the kind is known when the kernel is compiled.
+    uint instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
+    vec3 ro = o;
+    vec3 rd = d;
+    if (instance_kind == INSTANCE_MESH) {
+        vec4 world_to_object[3] = instances[instance].world_to_object;
+        ro = affine_point(world_to_object, o);
+        rd = affine_vector(world_to_object, d);
+    }
+    return walk_instance(info.y, instance, instance_kind, ro, rd, any_hit, hit);
+}
+
+// Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found
+// (shadow rays). Each instance the ray enters is walked to the end before the next: the top level
+// is walked apart from the instances' BVHs, by a loop of its own or none.
+bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
+    hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
+    SCENE_FEW_SHAPES
+    if (frame.node_count == 0u) return hit.prim != NO_INDEX;  // empty scene: no root node to test
+#if SCENE_TOP_LEVEL == 0
+    // The scene's one instance (at the constant index 0, a load lavapipe makes once for all lanes).
+    if (walk_placed(0u, o, d, any_hit, hit)) return true;
+#elif SCENE_TOP_LEVEL_TREE == 0
+    // The top level is its root alone, every child an instance (src/render/features.rs): the
+    // instances the ray enters are walked in turn, nearest first, with no stack of their own,
+    // and the rest are left once the hit is nearer than where the ray enters them.
+    float t0, t1, t2, t3;
+    uvec2 c0, c1, c2, c3;
+    uint entered = sorted_children(0u, o, safe_inverse(d), hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
+    for (uint k = 1u; k <= entered; ++k) {
+        LOOP_ITERATION();
+        float t_k = k == 4u ? t3 : k == 3u ? t2 : k == 2u ? t1 : t0;
+        if (t_k > hit.t) break;
+        if (walk_placed(kth_child(k, c0, c1, c2, c3).x, o, d, any_hit, hit)) return true;
+    }
+#else
+    // The top-level walk: its nodes' children go on its own stack, farthest first, instances
+    // tagged; an instance is walked when its entry is popped. A scene of one instance (the
+    // general kernel's, which serves any scene) starts in that instance.
+    vec3 inv_d = safe_inverse(d);
+    uint stack[STACK_SIZE];
+    uint sp = 0u;
+    stack[sp++] = frame.instance_count == 1u ? INSTANCE_ENTRY : 0u;
+    while (true) {
+        LOOP_ITERATION();
+        if (sp == 0u) break;
+        uint entry = stack[--sp];
+        if ((entry & INSTANCE_ENTRY) != 0u) {
+            if (walk_placed(entry & ~INSTANCE_ENTRY, o, d, any_hit, hit)) return true;
+            continue;
+        }
+        float t0, t1, t2, t3;
+        uvec2 c0, c1, c2, c3;
+        uint entered = sorted_children(entry, o, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
+        for (uint k = entered; k > 0u; --k) {
+            LOOP_ITERATION();
+            uvec2 c = kth_child(k, c0, c1, c2, c3);
+            stack[sp++] = c.y == WIDE_CHILD_INTERIOR ? c.x : INSTANCE_ENTRY | c.x;
+        }
+    }
+#endif
     return hit.prim != NO_INDEX;
 }
 #endif

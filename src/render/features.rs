@@ -12,6 +12,7 @@
 
 use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use super::scene_data::SceneData;
+use crate::bvh::{CHILD_INTERIOR, WIDTH};
 use super::layout::ENV_CONSTANT;
 
 /// Most shapes a scene may have for its rays to test each in turn rather than walk them in its BVH
@@ -87,6 +88,10 @@ pub struct SceneFeatures {
     pub few_shapes: FewShapes,
     /// More than one instance: the kernel walks the top-level BVH (bvh.glsl).
     pub top_level: bool,
+    /// A top level deeper than its root: some child of the root is a node, not an instance, so
+    /// the top level needs a walk of its own. Without it the root's children are the instances,
+    /// tested as one node and walked in turn, nearest first, with no top-level stack.
+    pub top_level_tree: bool,
     /// Triangle meshes (mesh instances).
     pub meshes: bool,
     /// The scene's own spheres, quads and triangles.
@@ -158,7 +163,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { few_shapes: FewShapes::NONE, top_level: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_pick: true, light_disks: true };
+    pub const ALL: Self = Self { few_shapes: FewShapes::NONE, top_level: true, top_level_tree: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_pick: true, light_disks: true };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -181,6 +186,7 @@ impl SceneFeatures {
             // At most FEW_PRIMITIVES shapes, each of a kind the kernel knows; else the walk meets them.
             few_shapes: FewShapes::new(data.acceleration.primitives.iter().map(kind)).unwrap_or(FewShapes::NONE),
             top_level: instances.len() > 1,
+            top_level_tree: instances.len() > 1 && data.acceleration.nodes.first().is_some_and(|root| (0..WIDTH).any(|k| root.kind(k) == CHILD_INTERIOR)),
             meshes: has_instance(INSTANCE_MESH),
             primitives: has_instance(INSTANCE_PRIMITIVES),
             textures: !data.textures.is_empty(),
@@ -224,11 +230,12 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 29] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 30] {
         [
             ("bvh", "SCENE_BVH", self.bvh()),
             ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes()),
             ("top_level", "SCENE_TOP_LEVEL", self.top_level),
+            ("top_level_tree", "SCENE_TOP_LEVEL_TREE", self.top_level_tree),
             ("meshes", "SCENE_MESHES", self.meshes),
             ("primitives", "SCENE_PRIMITIVES", self.primitives),
             ("textures", "SCENE_TEXTURES", self.textures),
@@ -307,6 +314,23 @@ mod tests {
         assert_eq!(shape(features_of(&meshes)), (true, 0, false), "a scene of meshes alone walks them");
         meshes.shapes.push(sphere);
         assert_eq!(shape(features_of(&meshes)), (true, 1, false), "a mesh scene's one sphere is tested before the walk");
+    }
+
+    #[test]
+    fn a_top_level_of_up_to_four_instances_is_its_root_alone() {
+        // (top level, top level deeper than its root)
+        let top = |f: SceneFeatures| (f.top_level, f.top_level_tree);
+        let mut scene = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml")).expect("a checked-in scene loads");
+        assert_eq!(scene.instances.len(), 1);
+        assert_eq!(top(features_of(&scene)), (false, false), "one instance: no top level");
+        let placed = scene.instances[0];
+        let shifted = |i: usize| crate::scene::Instance { transform: glam::Mat4::from_translation(glam::Vec3::new(3.0 * i as f32, 0.0, 0.0)) * placed.transform, ..placed };
+        for count in 2..=WIDTH {
+            scene.instances = (0..count).map(shifted).collect();
+            assert_eq!(top(features_of(&scene)), (true, false), "{count} instances are the root's children");
+        }
+        scene.instances = (0..WIDTH + 1).map(shifted).collect();
+        assert_eq!(top(features_of(&scene)), (true, true), "{} instances need a top-level walk", WIDTH + 1);
     }
 
     #[test]
