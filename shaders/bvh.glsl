@@ -75,6 +75,11 @@ uvec2 kth_child(uint k, uvec2 c0, uvec2 c1, uvec2 c2, uvec2 c3) {
     return k == 4u ? c3 : k == 3u ? c2 : k == 2u ? c1 : c0;
 }
 
+// The k-th of four children's entry distances (k from 1), as kth_child.
+float kth_entry(uint k, float t0, float t1, float t2, float t3) {
+    return k == 4u ? t3 : k == 3u ? t2 : k == 2u ? t1 : t0;
+}
+
 // Node `node_index`'s children as the ray enters them within (0, t_max), nearest first: their
 // entries (+infinity for a child missed) and (link, kind) pairs, sorted by a sorting network.
 // Returns how many are entered.
@@ -174,7 +179,7 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
             uint next = NO_INDEX;
             for (uint k = entered; k > 0u; --k) {
                 LOOP_ITERATION();
-                float t_k = k == 4u ? t3 : k == 3u ? t2 : k == 2u ? t1 : t0;
+                float t_k = kth_entry(k, t0, t1, t2, t3);
                 uvec2 c = kth_child(k, c0, c1, c2, c3);
                 if (t_k > hit.t) continue;
                 uint first = c.x;
@@ -245,7 +250,7 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     uint entered = sorted_children(0u, o, safe_inverse(d), hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
     for (uint k = 1u; k <= entered; ++k) {
         LOOP_ITERATION();
-        float t_k = k == 4u ? t3 : k == 3u ? t2 : k == 2u ? t1 : t0;
+        float t_k = kth_entry(k, t0, t1, t2, t3);
         if (t_k > hit.t) break;
         if (walk_placed(kth_child(k, c0, c1, c2, c3).x, o, d, any_hit, hit)) return true;
     }

@@ -12,8 +12,8 @@
 
 use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use super::scene_data::SceneData;
-use crate::bvh::{CHILD_INTERIOR, WIDTH};
 use super::layout::ENV_CONSTANT;
+use crate::bvh::{CHILD_INTERIOR, WIDTH};
 
 /// Most shapes a scene may have for its rays to test each in turn rather than walk them in its BVH
 /// (`few_shapes`; with no mesh, the `bvh` feature off). Measured on lavapipe with each shape's test
