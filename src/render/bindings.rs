@@ -181,9 +181,9 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: texels::<WideNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
     // The scene's own spheres, quads and triangles, in their BVH's leaf order.
     BufferBinding { buffer: Primitives, binding: 2, name: "prims", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "primitives" },
-    BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: array::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },
+    BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: texels::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },
     // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
-    BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
+    BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: texels::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
     // The environment map's texels, rgb, row-major, top row first (one texel for a constant sky).
     BufferBinding { buffer: EnvTexels, binding: 5, name: "env_texels", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "environment map" },
     // Per pixel: rgb = sum of sample radiance, a = samples accumulated.

@@ -1,10 +1,12 @@
-//! Large arrays split across several storage-buffer bindings. A device limits what one storage
-//! binding can see (`maxStorageBufferRange`: 128 MiB on lavapipe and some integrated GPUs, 4 GiB
-//! on most discrete ones), not how large a buffer can be. Each array that can outgrow one binding
-//! (marked `chunked` in bindings.rs's table) lives in one buffer and is bound as consecutive windows of a power-of-two number of elements;
-//! the kernel reads it through a generated `load_<name>(i)` that picks the window by `i >> shift`.
-//! Lavapipe cannot index an array of bindings by a non-uniform index, so the windows are separate
-//! bindings chosen by a `switch`; with one window (the usual case) the accessor is a plain load.
+//! Large arrays split across several bindings. A device limits what one storage binding can see
+//! (`maxStorageBufferRange`: 128 MiB on lavapipe and some integrated GPUs, 4 GiB on most discrete
+//! ones) and how many texels one texel buffer holds (`maxTexelBufferElements`), not how large a
+//! buffer can be. Each array that can outgrow one binding (marked `chunked` in bindings.rs's
+//! table, and every array read as texels) lives in one buffer and is bound as consecutive windows
+//! of a power-of-two number of elements; the kernel reads it through a generated `load_<name>(i)`
+//! that picks the window by `i >> shift`. Lavapipe cannot index an array of bindings by a
+//! non-uniform index, so the windows are separate bindings chosen by a `switch`; with one window
+//! (the usual case) the accessor is a plain load.
 
 use super::bindings::{BufferBinding, Element, KernelBuffer};
 use super::glsl_block::Texel;

@@ -301,6 +301,12 @@ impl GlslType for GpuMeshTriangle {
 impl GlslTexels for WideNode {
     const TEXELS: &'static [Texel] = &[Texel::Vec4, Texel::Uvec4, Texel::Uvec4, Texel::Uvec4];
 }
+impl GlslTexels for GpuMaterial {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4; 10];
+}
+impl GlslTexels for GpuPrimitive {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4; 3];
+}
 impl GlslTexels for GpuMeshTriangle {
     const TEXELS: &'static [Texel] = &[Texel::Vec4; 3];
 }
