@@ -12,7 +12,7 @@ pub struct Binding<'a> {
     pub buffer: &'a Buffer,
     pub offset: u64,
     pub range: u64,
-    /// Bound as a uniform texel buffer of [`TEXEL_FORMAT`] (the kernel's `usamplerBuffer`)
+    /// Bound as a uniform texel buffer of [`TEXEL_FORMAT`] (the kernel's `utextureBuffer`)
     /// rather than as the buffer's kind says.
     pub as_texels: bool,
 }

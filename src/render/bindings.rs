@@ -59,7 +59,7 @@ pub enum Shape {
     /// `buffer { <element> <name>[]; }` (std430). A `chunked` array may span several bindings
     /// (chunks.rs); the kernel reads it with `load_<name>(i)` and writes it with `store_<name>`.
     Array { element: Element, chunked: bool },
-    /// `uniform usamplerBuffer <name>_0;`: an array of records read as consecutive RGBA32UI
+    /// `uniform utextureBuffer <name>_0;`: an array of records read as consecutive RGBA32UI
     /// texels of a uniform texel buffer, by `load_<name>(i)`, and split like a chunked array.
     /// For the walk's nodes and triangles: lavapipe fetches a texel for all of a subgroup's lanes
     /// as straight-line code, where it loads a storage buffer with a per-lane index one lane at a
@@ -387,8 +387,10 @@ mod tests {
     #[test]
     fn the_generated_declarations_say_what_each_buffer_is() {
         let src = glsl(&UNSPLIT, KernelVariant { aovs: true, ..Default::default() });
-        let materials = format!("binding = {}) readonly buffer materials_buffer {{ Material materials[]; }};", KernelBuffer::Materials.entry().binding);
-        assert!(src.contains(&materials), "{src}");
+        let instances = format!("binding = {}) readonly buffer instances_buffer {{ Instance instances[]; }};", KernelBuffer::Instances.entry().binding);
+        assert!(src.contains(&instances), "{src}");
+        let materials = format!("binding = {}) uniform utextureBuffer materials_0;", KernelBuffer::Materials.entry().binding);
+        assert!(src.contains(&materials) && src.contains("Material load_materials(uint i)"), "{src}");
         assert!(src.contains("    // Number of area lights: the entries of `lights`.\n    uint light_count;\n"), "{src}");
         assert!(src.contains("vec4 load_aov_normal_hits(uint i)"), "{src}");
         assert!(!glsl(&UNSPLIT, KernelVariant::default()).contains("aov_normal_hits"), "a kernel without AOVs does not declare their sums");

@@ -140,7 +140,7 @@ pub fn glsl_texels(array: &BufferBinding, element: Element, texels: &[Texel], pl
     let (name, ty) = (array.name, element.glsl_type);
     let mut out = String::new();
     for c in 0..plan.chunks {
-        out += &format!("layout(set = 0, binding = {}) uniform usamplerBuffer {name}_{c};\n", window_binding(array, c));
+        out += &format!("layout(set = 0, binding = {}) uniform utextureBuffer {name}_{c};\n", window_binding(array, c));
     }
     // One function a window: a texel buffer passed as an argument would cost lavapipe a dynamic
     // texture handle at every fetch (about 20x slower, measured).
@@ -223,11 +223,11 @@ mod tests {
         let nodes = KernelBuffer::Nodes.entry();
         let Shape::Texels { element, texels } = nodes.shape else { panic!("the nodes are read as texels") };
         let src = glsl_texels(nodes, element, texels, ChunkPlan::WHOLE);
-        assert!(src.contains(&format!("binding = {}) uniform usamplerBuffer nodes_0;", nodes.binding)), "{src}");
+        assert!(src.contains(&format!("binding = {}) uniform utextureBuffer nodes_0;", nodes.binding)), "{src}");
         assert!(src.contains("    int t = int(j * 4u);\n    return WideNode(uintBitsToFloat(texelFetch(nodes_0, t + 0)), texelFetch(nodes_0, t + 1), texelFetch(nodes_0, t + 2), texelFetch(nodes_0, t + 3));"), "{src}");
         assert!(src.contains("WideNode load_nodes(uint i) { return nodes_0_record(i); }"), "{src}");
         let src = glsl_texels(nodes, element, texels, ChunkPlan { shift: 4, chunks: 2 });
-        assert!(src.contains(&format!("binding = {}) uniform usamplerBuffer nodes_1;", window_binding(nodes, 1))), "{src}");
+        assert!(src.contains(&format!("binding = {}) uniform utextureBuffer nodes_1;", window_binding(nodes, 1))), "{src}");
         assert!(src.contains("    case 0u: return nodes_0_record(j);\n    default: return nodes_1_record(j);"), "{src}");
     }
 }

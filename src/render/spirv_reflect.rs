@@ -155,7 +155,8 @@ pub fn block_variables(spirv: &[u32]) -> Vec<BlockVariable> {
         .collect()
 }
 
-/// One texel buffer (GLSL `samplerBuffer`, `usamplerBuffer`, `isamplerBuffer`) of the kernel.
+/// One uniform texel buffer of the kernel: GLSL `textureBuffer` (read by `texelFetch` with
+/// GL_EXT_samplerless_texture_functions) or `samplerBuffer`, of any component type.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TexelBufferVariable {
     pub name: String,
@@ -163,7 +164,7 @@ pub struct TexelBufferVariable {
     pub binding: Option<u32>,
 }
 
-/// Every texel buffer that `spirv` reads through a sampler (uniform texel buffers).
+/// Every uniform texel buffer of `spirv` (not the storage texel buffers of `imageBuffer`).
 pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
     assert_eq!(spirv.first(), Some(&MAGIC), "not SPIR-V");
     let (mut names, mut decorations) = (HashMap::new(), HashMap::new());
@@ -178,10 +179,13 @@ pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
             OP_NAME => {
                 names.insert(operands[0], string(&operands[1..]));
             }
-            // Result, sampled type, Dim, ...
-            OP_TYPE_IMAGE if operands[2] == DIM_BUFFER => buffer_images.push(operands[0]),
+            // Result, sampled type, Dim, Depth, Arrayed, MS, Sampled (1: read without a sampler's
+            // help, as a uniform texel buffer; 2: a storage image), ...
+            OP_TYPE_IMAGE if operands[2] == DIM_BUFFER && operands[6] == 1 => buffer_images.push(operands[0]),
             OP_TYPE_SAMPLED_IMAGE if buffer_images.contains(&operands[1]) => sampled_buffers.push(operands[0]),
-            OP_TYPE_POINTER if operands[1] == UNIFORM_CONSTANT && sampled_buffers.contains(&operands[2]) => pointers.push(operands[0]),
+            OP_TYPE_POINTER if operands[1] == UNIFORM_CONSTANT && (buffer_images.contains(&operands[2]) || sampled_buffers.contains(&operands[2])) => {
+                pointers.push(operands[0])
+            }
             OP_VARIABLE if pointers.contains(&operands[0]) => variables.push(operands[1]),
             OP_DECORATE => {
                 decorations.insert((operands[0], operands[1]), operands.get(2).copied().unwrap_or(0));
@@ -232,8 +236,8 @@ mod tests {
     #[test]
     fn reads_the_texel_buffers_of_a_small_kernel() {
         let spirv = compile_compute(
-            "#version 460\nlayout(local_size_x = 1) in;\n\
-             layout(set = 0, binding = 2) uniform usamplerBuffer records;\n\
+            "#version 460\n#extension GL_EXT_samplerless_texture_functions : require\nlayout(local_size_x = 1) in;\n\
+             layout(set = 0, binding = 2) uniform utextureBuffer records;\n\
              layout(set = 0, binding = 4) uniform sampler2D picture;\n\
              layout(std430, set = 0, binding = 6) buffer Output { uvec4 out_values[]; };\n\
              void main() { out_values[0] = texelFetch(records, 3) + uvec4(texelFetch(picture, ivec2(0), 0)); }\n",
