@@ -22,7 +22,7 @@ float blend_coin(vec3 o, vec3 d, uint triangle, uint instance) {
 // (`tri`, at barycentrics `bary`) hits it, or passes through where its material's opacity says
 // the surface is absent.
 bool alpha_passes(MeshTriangle tri, uint triangle, uint instance, vec2 bary, vec3 o, vec3 d) {
-    vec4 alpha = materials[load_triangle_materials(triangle)].alpha;
+    vec4 alpha = load_materials(load_triangle_materials(triangle)).alpha;
     uint mode = floatBitsToUint(alpha.w);
     if (mode == ALPHA_OPAQUE) return true;
     float opacity = alpha.y;

@@ -30,7 +30,7 @@ struct LightSample {
 // triangle (area_light_power in light_selection.rs). A textured emitter's luminance is its mean
 // over the triangle, from the host (textured_emission.rs).
 float light_power(Primitive p) {
-    Material m = materials[prim_material(p)];
+    Material m = load_materials(prim_material(p));
     float sides = primitive_is_flat(p) && m.params.y > 0.5 ? 2.0 : 1.0;
     float luminance = dot(m.emission_t.rgb, vec3(0.2126, 0.7152, 0.0722));
 #if SCENE_EMISSIVE_TEXTURES
@@ -337,7 +337,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
         ls.pdf *= pick_probability(l.value_power.w);
         return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
     }
-    Primitive p = lights[index];
+    Primitive p = load_lights(index);
     vec3 point;
     if (!sample_area_light_point(p, ref, u, point)) return false;
     vec3 to_point = point - ref;
@@ -345,7 +345,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     if (ls.dist <= 0.0) return false;
     ls.dir = to_point / ls.dist;
     bool front = dot(primitive_normal(p, point), ls.dir) < 0.0;
-    Material m = materials[prim_material(p)];
+    Material m = load_materials(prim_material(p));
     ls.radiance = emitted_radiance(m, front);
 #if SCENE_EMISSIVE_TEXTURES
     uint emission_index = floatBitsToUint(m.maps.x);

@@ -9,6 +9,8 @@
 // scene uses (src/render/features.rs: what is 0 is compiled out).
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+// texelFetch of the texel buffers the walk and shading read their records from (bindings.rs).
+#extension GL_EXT_samplerless_texture_functions : require
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 

@@ -93,10 +93,10 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
             // The interpolated normal decides the side; a normal map only bends it.
             float side = dot(ns, s.ng) < 0.0 ? -1.0 : 1.0;
 #if SCENE_NORMAL_MAPS
-            uint normal_map = floatBitsToUint(materials[s.material].maps.y);
+            uint normal_map = floatBitsToUint(load_materials(s.material).maps.y);
             if (normal_map != NO_TEXTURE && (info.z & INSTANCE_HAS_TANGENTS) != 0u) {
                 vec4 t = interpolated_tangent(tri, w);
-                ns = normal_mapped(normal_map, materials[s.material].maps.z, s.uv, normalize(n), t, instances[hit.instance].object_to_world, ns);
+                ns = normal_mapped(normal_map, load_materials(s.material).maps.z, s.uv, normalize(n), t, instances[hit.instance].object_to_world, ns);
             }
 #endif
             s.ns = side * ns;
@@ -123,7 +123,7 @@ Primitive world_primitive(Hit hit) {
 // metallic-roughness texture (G = roughness, B = metallic) turned into R, T and alpha as the loader
 // does factors.
 Material surface_material(Surface s) {
-    Material m = materials[s.material];
+    Material m = load_materials(s.material);
 #if SCENE_TEXTURES
     uint texture_index = floatBitsToUint(m.params.z);
     if (texture_index != NO_TEXTURE) m.albedo_r.rgb *= texture_rgb(texture_index, s.uv);

@@ -26,7 +26,7 @@ use common::*;
 use std::f64::consts::PI;
 
 /// The test kernel. It includes layout.glsl for `struct Material` and binds only `materials` (at
-/// its binding in the kernel's table, src/render/bindings.rs); the other buffers, the frame uniform
+/// its binding in the kernel's table, src/render/bindings.rs, as texels); the other buffers, the frame uniform
 /// and the pass push constants that layout.glsl also declares are unused (the pipeline still has
 /// the 16-byte push range). Its own buffers sit at bindings 30-32, clear of the table's.
 /// Mode 0: invocation i picks a lobe with random stream i and samples it, writing
@@ -39,6 +39,7 @@ use std::f64::consts::PI;
 /// Every lobe is given the query's tangent as the surface's u direction.
 /// A lobe's code is kind * 4 + fresnel, which tells the plastic's coat from a conductor.
 const TEST_KERNEL: &str = r#"#version 460
+#extension GL_EXT_samplerless_texture_functions : require
 layout(local_size_x = 64) in;
 #include "layout.glsl"
 #include "rng.glsl"
@@ -55,7 +56,7 @@ layout(std430, set = 0, binding = 32) writeonly buffer Results { vec4 results[];
 // entering ray and -z for a leaving one (pick_lobe flips it).
 Lobe lobe_for(inout Rng rng) {
     bool entering = query.d.w > 0.5;
-    return pick_lobe(materials[0], query.d.xyz, vec3(0.0, 0.0, entering ? 1.0 : -1.0), query.tangent.xyz, entering, rng);
+    return pick_lobe(load_materials(0), query.d.xyz, vec3(0.0, 0.0, entering ? 1.0 : -1.0), query.tangent.xyz, entering, rng);
 }
 
 uint lobe_code(Lobe l) { return l.kind * 4u + l.fresnel; }
@@ -65,7 +66,7 @@ void main() {
     if (id >= query.info.y) return;
     vec3 d = query.d.xyz;
     if (query.info.x == 2u) {
-        Material m = materials[0];
+        Material m = load_materials(0);
         uint distribution = (material_flags(m) & MATERIAL_BECKMANN) != 0u ? MICROFACET_BECKMANN : MICROFACET_GGX;
         vec2 alpha = vec2(m.params.w, m.volume.w > 0.0 ? m.volume.w : m.params.w);
         vec3 t = normalize(vec3(query.tangent.xy, 0.0));
@@ -194,7 +195,8 @@ impl<'a> Kernel<'a> {
         let query = Buffer::with_data(ctx, "query", BufferKind::HostStorage, &[0u8; 48]).unwrap();
         let dirs = Buffer::with_data(ctx, "dirs", BufferKind::HostStorage, bytemuck::cast_slice(&quadrature().0)).unwrap();
         let results = Buffer::with_data(ctx, "results", BufferKind::HostStorage, &vec![0u8; results_len * 16]).unwrap();
-        let bindings = [Binding::whole(KernelBuffer::Materials.entry().binding, &material), Binding::whole(30, &query), Binding::whole(31, &dirs), Binding::whole(32, &results)];
+        let materials = Binding { as_texels: KernelBuffer::Materials.entry().is_texel_array(), ..Binding::whole(KernelBuffer::Materials.entry().binding, &material) };
+        let bindings = [materials, Binding::whole(30, &query), Binding::whole(31, &dirs), Binding::whole(32, &results)];
         let kernel = ComputeKernel::new(ctx, &spirv, &bindings, 16).unwrap();
         Kernel { ctx, kernel, material, query, dirs, results }
     }

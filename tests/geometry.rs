@@ -524,7 +524,8 @@ fn sphere_scene() -> Scene {
     scene
 }
 
-/// On a device whose storage bindings see only 4 KiB, the BVH nodes, mesh triangles, texels,
+/// On a device whose storage and texel-buffer bindings see only 4 KiB, the BVH nodes, mesh
+/// triangles (both texel buffers), texels,
 /// environment map and accumulation image are each split across several
 /// bindings, and the image is the same, bit for bit, as with every array in one binding.
 #[test]

@@ -55,7 +55,8 @@ impl Buffer {
     pub fn with_data(ctx: &GpuContext, name: &str, kind: BufferKind, bytes: &[u8]) -> Result<Self> {
         let usage = match kind {
             BufferKind::Uniform => vk::BufferUsageFlags::UNIFORM_BUFFER,
-            BufferKind::Storage | BufferKind::HostStorage => vk::BufferUsageFlags::STORAGE_BUFFER,
+            // Any of the kernel's arrays may be bound as texels (src/render/bindings.rs).
+            BufferKind::Storage | BufferKind::HostStorage => vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
         };
         if kind == BufferKind::HostStorage {
             let mut buffer = Self::create(ctx, name, bytes.len() as u64, usage, MemoryLocation::GpuToCpu, kind)?;

@@ -1,4 +1,5 @@
-//! A compute pipeline with one descriptor set of buffers and a push-constant block.
+//! A compute pipeline with one descriptor set of buffers and a push-constant block. A buffer is
+//! bound as a storage or uniform buffer, or as a uniform texel buffer of RGBA32UI texels.
 
 use super::buffer::{Buffer, BufferKind};
 use super::context::GpuContext;
@@ -11,12 +12,27 @@ pub struct Binding<'a> {
     pub buffer: &'a Buffer,
     pub offset: u64,
     pub range: u64,
+    /// Bound as a uniform texel buffer of [`TEXEL_FORMAT`] (the kernel's `utextureBuffer`)
+    /// rather than as the buffer's kind says.
+    pub as_texels: bool,
 }
+
+/// The texels of a buffer bound as texels: four 32-bit words, which every Vulkan device must
+/// support for uniform texel buffers.
+pub const TEXEL_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 
 impl<'a> Binding<'a> {
     /// The whole buffer.
     pub fn whole(binding: u32, buffer: &'a Buffer) -> Self {
-        Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE }
+        Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE, as_texels: false }
+    }
+
+    fn descriptor_type(&self) -> vk::DescriptorType {
+        match self.buffer.kind {
+            _ if self.as_texels => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            BufferKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
+            BufferKind::Storage | BufferKind::HostStorage => vk::DescriptorType::STORAGE_BUFFER,
+        }
     }
 }
 
@@ -26,16 +42,11 @@ pub struct ComputeKernel {
     pipeline: vk::Pipeline,
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
+    /// The views of the buffers bound as texels.
+    texel_views: Vec<vk::BufferView>,
     push_size: u32,
     /// Two timestamps around each dispatch, where the device's queue records them.
     timestamps: Option<vk::QueryPool>,
-}
-
-fn descriptor_type(kind: BufferKind) -> vk::DescriptorType {
-    match kind {
-        BufferKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
-        BufferKind::Storage | BufferKind::HostStorage => vk::DescriptorType::STORAGE_BUFFER,
-    }
 }
 
 impl ComputeKernel {
@@ -46,7 +57,7 @@ impl ComputeKernel {
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b.binding)
-                    .descriptor_type(descriptor_type(b.buffer.kind))
+                    .descriptor_type(b.descriptor_type())
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -78,15 +89,11 @@ impl ComputeKernel {
         unsafe { device.destroy_shader_module(module, None) };
         let pipeline = created.map_err(|(_, e)| anyhow!("creating the compute pipeline: {e}"))?[0];
 
-        let uniform_count = bindings.iter().filter(|b| b.buffer.kind == BufferKind::Uniform).count() as u32;
-        let storage_count = bindings.len() as u32 - uniform_count;
-        let mut pool_sizes = vec![];
-        if uniform_count > 0 {
-            pool_sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: uniform_count });
-        }
-        if storage_count > 0 {
-            pool_sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: storage_count });
-        }
+        let pool_sizes: Vec<_> = [vk::DescriptorType::UNIFORM_BUFFER, vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_TEXEL_BUFFER]
+            .into_iter()
+            .map(|ty| vk::DescriptorPoolSize { ty, descriptor_count: bindings.iter().filter(|b| b.descriptor_type() == ty).count() as u32 })
+            .filter(|size| size.descriptor_count > 0)
+            .collect();
         let pool = unsafe {
             device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes), None)
         }?;
@@ -97,15 +104,29 @@ impl ComputeKernel {
             .iter()
             .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer.buffer).offset(b.offset).range(b.range)])
             .collect();
+        let mut texel_views = Vec::new();
+        let mut views: Vec<[vk::BufferView; 1]> = Vec::new();
+        for b in bindings {
+            let view = match b.as_texels {
+                true => {
+                    let info = vk::BufferViewCreateInfo::default().buffer(b.buffer.buffer).format(TEXEL_FORMAT).offset(b.offset).range(b.range);
+                    let view = unsafe { device.create_buffer_view(&info, None) }.context("creating a texel view of a buffer")?;
+                    texel_views.push(view);
+                    view
+                }
+                false => vk::BufferView::null(),
+            };
+            views.push([view]);
+        }
         let writes: Vec<_> = bindings
             .iter()
-            .zip(&infos)
-            .map(|(b, info)| {
-                vk::WriteDescriptorSet::default()
-                    .dst_set(set)
-                    .dst_binding(b.binding)
-                    .descriptor_type(descriptor_type(b.buffer.kind))
-                    .buffer_info(info)
+            .zip(infos.iter().zip(&views))
+            .map(|(b, (info, view))| {
+                let write = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(b.binding).descriptor_type(b.descriptor_type());
+                match b.as_texels {
+                    true => write.texel_buffer_view(view),
+                    false => write.buffer_info(info),
+                }
             })
             .collect();
         unsafe { device.update_descriptor_sets(&writes, &[]) };
@@ -113,7 +134,7 @@ impl ComputeKernel {
             Some(_) => Some(unsafe { device.create_query_pool(&vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2), None) }?),
             None => None,
         };
-        Ok(Self { set_layout, layout, pipeline, pool, set, push_size, timestamps })
+        Ok(Self { set_layout, layout, pipeline, pool, set, texel_views, push_size, timestamps })
     }
 
     /// Records one dispatch of `groups` workgroups into `cb`, for work submitted with other
@@ -177,6 +198,9 @@ impl ComputeKernel {
         unsafe {
             if let Some(pool) = self.timestamps {
                 device.destroy_query_pool(pool, None);
+            }
+            for view in self.texel_views {
+                device.destroy_buffer_view(view, None);
             }
             device.destroy_pipeline(self.pipeline, None);
             device.destroy_pipeline_layout(self.layout, None);

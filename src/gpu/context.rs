@@ -58,6 +58,13 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u64,
     pub min_storage_buffer_offset_alignment: u64,
     pub max_storage_buffers_per_stage: u32,
+    /// Bytes one uniform texel buffer of 16-byte texels can see (`maxTexelBufferElements` texels,
+    /// at most 2^31 of them, which the kernel's `int` texel index reaches; lowered as
+    /// `max_storage_buffer_range` is).
+    pub max_texel_buffer_range: u64,
+    pub min_texel_buffer_offset_alignment: u64,
+    /// Texel buffers count against the sampled images a stage may bind.
+    pub max_texel_buffers_per_stage: u32,
     pub device_local_bytes: u64,
     has_compute_queue: bool,
 }
@@ -68,7 +75,7 @@ pub struct ContextOptions {
     pub device: Option<String>,
     /// Enable the Khronos validation layer (when installed) and record its messages.
     pub validation: bool,
-    /// Act as if one storage binding could see at most this many bytes (tests of the splitting of
+    /// Act as if one storage or texel-buffer binding could see at most this many bytes (tests of the splitting of
     /// large arrays, and of the refusal of scenes too large, on any device).
     pub storage_binding_limit: Option<u64>,
 }
@@ -166,6 +173,9 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
+        max_texel_buffer_range: (props.limits.max_texel_buffer_elements as u64).min(1 << 31) * 16,
+        min_texel_buffer_offset_alignment: props.limits.min_texel_buffer_offset_alignment,
+        max_texel_buffers_per_stage: props.limits.max_per_stage_descriptor_sampled_images,
         device_local_bytes,
         has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
     }
@@ -276,6 +286,7 @@ impl GpuContext {
         let (physical, mut info) = choose(devices, options.device.as_deref())?;
         if let Some(limit) = options.storage_binding_limit {
             info.max_storage_buffer_range = info.max_storage_buffer_range.min(limit);
+            info.max_texel_buffer_range = info.max_texel_buffer_range.min(limit);
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let family = match &surface {

@@ -1,12 +1,12 @@
 //! Every buffer the kernel binds, declared once in [`BINDINGS`]: its binding number, its name and
-//! element type in GLSL, whether it may be split across bindings (chunks.rs), whether the kernel
-//! writes it, and which kernel variants bind it. The kernel's declarations are generated from the
+//! element type in GLSL, whether it may be split across bindings (chunks.rs) or is read as texels,
+//! whether the kernel writes it, and which kernel variants bind it. The kernel's declarations are generated from the
 //! table ([`glsl`], the kernel's `interface.glsl`, which layout.glsl includes), and the renderer
 //! creates and binds its buffers from it, so no binding number is written anywhere else. The tests
 //! compile every variant and check the SPIR-V's bindings and block layouts against the table.
 
 use super::chunks::{self, SplitPlans, EXTRA_BINDING_BASE};
-use super::glsl_block::{glsl_members, GlslBlock, GlslMember, GlslType};
+use super::glsl_block::{glsl_members, GlslBlock, GlslMember, GlslTexels, GlslType, Texel};
 use super::kernel::KernelVariant;
 use super::layout::{FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuPunctualLight, GpuStats, GpuTexture, PassParams};
 use crate::bvh::WideNode;
@@ -59,6 +59,13 @@ pub enum Shape {
     /// `buffer { <element> <name>[]; }` (std430). A `chunked` array may span several bindings
     /// (chunks.rs); the kernel reads it with `load_<name>(i)` and writes it with `store_<name>`.
     Array { element: Element, chunked: bool },
+    /// `uniform utextureBuffer <name>_0;`: an array of records read as consecutive RGBA32UI
+    /// texels of a uniform texel buffer, by `load_<name>(i)`, and split like a chunked array.
+    /// For the walk's nodes and triangles: lavapipe fetches a texel for all of a subgroup's lanes
+    /// as straight-line code, where it loads a storage buffer with a per-lane index one lane at a
+    /// time, each lane's load behind a branch of its own (docs/benchmarks.md, stop 21). GPUs
+    /// have read BVHs through the texture path since Aila and Laine (2009).
+    Texels { element: Element, texels: &'static [Texel] },
 }
 
 /// A block's GLSL type name and members, from the host struct it is declared by.
@@ -133,9 +140,14 @@ impl BufferBinding {
     /// The element of an array that may span several bindings.
     pub fn chunked_element(&self) -> Option<Element> {
         match self.shape {
-            Shape::Array { element, chunked: true } => Some(element),
+            Shape::Array { element, chunked: true } | Shape::Texels { element, .. } => Some(element),
             _ => None,
         }
+    }
+
+    /// Whether the kernel reads it as texels (bound as uniform texel buffers).
+    pub fn is_texel_array(&self) -> bool {
+        matches!(self.shape, Shape::Texels { .. })
     }
 }
 
@@ -153,6 +165,12 @@ const fn chunked<T: GlslType>() -> Shape {
     Shape::Array { element: Element::of::<T>(), chunked: true }
 }
 
+/// An array of `T`s read as texels, `T::TEXELS` a record (bound as uniform texel buffers).
+const fn texels<T: GlslTexels>() -> Shape {
+    assert!(T::TEXELS.len() * 16 == size_of::<T>(), "a record read as texels is a whole number of 16-byte texels");
+    Shape::Texels { element: Element::of::<T>(), texels: T::TEXELS }
+}
+
 /// Every buffer of the kernel, in [`KernelBuffer`] order (checked at compile time below).
 #[rustfmt::skip]
 pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
@@ -160,12 +178,12 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     BufferBinding { buffer: Frame, binding: 0, name: "frame", shape: Shape::UniformBlock(Block::of::<FrameParams>()), access: Read, bound_in: EveryKernel, what: "frame parameters" },
     // BVH wide nodes (src/bvh/wide_node.rs): the top level over instances, its root at node 0,
     // then every bottom-level BVH.
-    BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: chunked::<WideNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
+    BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: texels::<WideNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
     // The scene's own spheres, quads and triangles, in their BVH's leaf order.
     BufferBinding { buffer: Primitives, binding: 2, name: "prims", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "primitives" },
-    BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: array::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },
+    BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: texels::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },
     // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
-    BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
+    BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: texels::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
     // The environment map's texels, rgb, row-major, top row first (one texel for a constant sky).
     BufferBinding { buffer: EnvTexels, binding: 5, name: "env_texels", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "environment map" },
     // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
@@ -175,7 +193,7 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Placements of bottom-level BVHs; the top-level BVH's leaves index them.
     BufferBinding { buffer: Instances, binding: 8, name: "instances", shape: array::<GpuInstance>(), access: Read, bound_in: EveryKernel, what: "instances" },
     // Every mesh's triangles by value (MeshTriangle) and their materials, in their BVH's leaf order.
-    BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: chunked::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },
+    BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: texels::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },
     BufferBinding { buffer: TriangleMaterials, binding: 10, name: "triangle_materials", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "triangle materials" },
     // Vertex attributes of every mesh, indexed by global vertex index: normals octahedral
     // snorm16x2, texture coordinates.
@@ -247,6 +265,7 @@ pub fn glsl(plans: &SplitPlans, variant: KernelVariant) -> String {
                 format!("layout(std430, set = 0, binding = {binding}) {access}buffer {name}_buffer {{ {} {name}[]; }};\n", element.glsl_type)
             }
             Shape::Array { element, chunked: true } => chunks::glsl(b, element, plans[b.buffer]),
+            Shape::Texels { element, texels } => chunks::glsl_texels(b, element, texels, plans[b.buffer]),
         };
     }
     out
@@ -258,7 +277,7 @@ mod tests {
     use crate::render::chunks::{window_binding, ChunkPlan, MAX_CHUNKS, UNSPLIT};
     use crate::render::features::SceneFeatures;
     use crate::render::kernel::kernel_spirv;
-    use crate::render::spirv_reflect::{block_variables, StorageClass};
+    use crate::render::spirv_reflect::{block_variables, texel_buffer_variables, StorageClass};
     use std::collections::BTreeMap;
 
     const VARIANTS: [KernelVariant; 4] = [
@@ -268,10 +287,17 @@ mod tests {
         KernelVariant { aovs: true, count_loop_iterations: true, features: SceneFeatures::ALL },
     ];
 
-    /// A binding as a compiled kernel declares it: the storage class, the block's instance name
-    /// (or its array's name, for a block without one), whether it is readonly, and the array
-    /// stride in bytes.
-    type Declared = (StorageClass, String, bool, Option<u32>);
+    /// What a binding holds: a block of this storage class, or a texel buffer.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    enum Kind {
+        Block(StorageClass),
+        TexelBuffer,
+    }
+
+    /// A binding as a compiled kernel declares it: its kind, the block's instance name (or its
+    /// array's name, for a block without one; a texel buffer's own), whether it is readonly, and
+    /// the array stride in bytes.
+    type Declared = (Kind, String, bool, Option<u32>);
 
     /// What the table says `variant` declares at each binding of set 0, arrays split by `plans`.
     fn declared_by_table(plans: &SplitPlans, variant: KernelVariant) -> BTreeMap<u32, Declared> {
@@ -279,15 +305,21 @@ mod tests {
         for b in BINDINGS.iter().filter(|b| b.is_bound_in(variant)) {
             let readonly = !b.is_written();
             match b.shape {
-                Shape::UniformBlock(_) => declared.insert(b.binding, (StorageClass::Uniform, b.name.to_owned(), readonly, None)),
-                Shape::StorageBlock(_) => declared.insert(b.binding, (StorageClass::StorageBuffer, b.name.to_owned(), readonly, None)),
+                Shape::UniformBlock(_) => declared.insert(b.binding, (Kind::Block(StorageClass::Uniform), b.name.to_owned(), readonly, None)),
+                Shape::StorageBlock(_) => declared.insert(b.binding, (Kind::Block(StorageClass::StorageBuffer), b.name.to_owned(), readonly, None)),
                 Shape::Array { element, chunked: false } => {
-                    declared.insert(b.binding, (StorageClass::StorageBuffer, b.name.to_owned(), readonly, Some(element.bytes as u32)))
+                    declared.insert(b.binding, (Kind::Block(StorageClass::StorageBuffer), b.name.to_owned(), readonly, Some(element.bytes as u32)))
                 }
                 Shape::Array { element, chunked: true } => {
                     for c in 0..plans[b.buffer].chunks {
-                        let window = (StorageClass::StorageBuffer, format!("{}_{c}", b.name), readonly, Some(element.bytes as u32));
+                        let window = (Kind::Block(StorageClass::StorageBuffer), format!("{}_{c}", b.name), readonly, Some(element.bytes as u32));
                         declared.insert(window_binding(b, c), window);
+                    }
+                    None
+                }
+                Shape::Texels { .. } => {
+                    for c in 0..plans[b.buffer].chunks {
+                        declared.insert(window_binding(b, c), (Kind::TexelBuffer, format!("{}_{c}", b.name), true, None));
                     }
                     None
                 }
@@ -308,7 +340,12 @@ mod tests {
                 (true, [array]) => (array.name.clone(), array.array_stride),
                 _ => (v.name.clone(), None),
             };
-            assert!(declared.insert(binding, (v.storage_class, name, readonly, stride)).is_none(), "binding {binding} is declared twice");
+            assert!(declared.insert(binding, (Kind::Block(v.storage_class), name, readonly, stride)).is_none(), "binding {binding} is declared twice");
+        }
+        for v in texel_buffer_variables(spirv) {
+            let Some(binding) = v.binding else { continue };
+            assert_eq!(v.set, Some(0), "binding {binding} is outside descriptor set 0");
+            assert!(declared.insert(binding, (Kind::TexelBuffer, v.name, true, None)).is_none(), "binding {binding} is declared twice");
         }
         declared
     }
@@ -350,8 +387,10 @@ mod tests {
     #[test]
     fn the_generated_declarations_say_what_each_buffer_is() {
         let src = glsl(&UNSPLIT, KernelVariant { aovs: true, ..Default::default() });
-        let materials = format!("binding = {}) readonly buffer materials_buffer {{ Material materials[]; }};", KernelBuffer::Materials.entry().binding);
-        assert!(src.contains(&materials), "{src}");
+        let instances = format!("binding = {}) readonly buffer instances_buffer {{ Instance instances[]; }};", KernelBuffer::Instances.entry().binding);
+        assert!(src.contains(&instances), "{src}");
+        let materials = format!("binding = {}) uniform utextureBuffer materials_0;", KernelBuffer::Materials.entry().binding);
+        assert!(src.contains(&materials) && src.contains("Material load_materials(uint i)"), "{src}");
         assert!(src.contains("    // Number of area lights: the entries of `lights`.\n    uint light_count;\n"), "{src}");
         assert!(src.contains("vec4 load_aov_normal_hits(uint i)"), "{src}");
         assert!(!glsl(&UNSPLIT, KernelVariant::default()).contains("aov_normal_hits"), "a kernel without AOVs does not declare their sums");

@@ -1,12 +1,15 @@
-//! Large arrays split across several storage-buffer bindings. A device limits what one storage
-//! binding can see (`maxStorageBufferRange`: 128 MiB on lavapipe and some integrated GPUs, 4 GiB
-//! on most discrete ones), not how large a buffer can be. Each array that can outgrow one binding
-//! (marked `chunked` in bindings.rs's table) lives in one buffer and is bound as consecutive windows of a power-of-two number of elements;
-//! the kernel reads it through a generated `load_<name>(i)` that picks the window by `i >> shift`.
-//! Lavapipe cannot index an array of bindings by a non-uniform index, so the windows are separate
-//! bindings chosen by a `switch`; with one window (the usual case) the accessor is a plain load.
+//! Large arrays split across several bindings. A device limits what one storage binding can see
+//! (`maxStorageBufferRange`: 128 MiB on lavapipe and some integrated GPUs, 4 GiB on most discrete
+//! ones) and how many texels one texel buffer holds (`maxTexelBufferElements`), not how large a
+//! buffer can be. Each array that can outgrow one binding (marked `chunked` in bindings.rs's
+//! table, and every array read as texels) lives in one buffer and is bound as consecutive windows
+//! of a power-of-two number of elements; the kernel reads it through a generated `load_<name>(i)`
+//! that picks the window by `i >> shift`. Lavapipe cannot index an array of bindings by a
+//! non-uniform index, so the windows are separate bindings chosen by a `switch`; with one window
+//! (the usual case) the accessor is a plain load.
 
 use super::bindings::{BufferBinding, Element, KernelBuffer};
+use super::glsl_block::Texel;
 use anyhow::{bail, Result};
 use std::ops::{Index, IndexMut};
 
@@ -112,26 +115,49 @@ pub fn glsl(array: &BufferBinding, element: Element, plan: ChunkPlan) -> String 
         }
         return out;
     }
-    let mask = (1u64 << plan.shift) - 1;
-    let shift = plan.shift;
-    let cases = |body: &dyn Fn(u32) -> String| -> String {
-        (0..plan.chunks)
-            .map(|c| {
-                let label = if c + 1 == plan.chunks { "default:".to_string() } else { format!("case {c}u:") };
-                format!("    {label} {}\n", body(c))
-            })
-            .collect()
-    };
-    out += &format!(
-        "{ty} load_{name}(uint i) {{\n    uint j = i & {mask:#x}u;\n    switch (i >> {shift}u) {{\n{}    }}\n}}\n",
-        cases(&|c| format!("return {name}_{c}[j];"))
-    );
+    out += &format!("{ty} load_{name}(uint i) {{\n{}}}\n", window_switch(plan, &|c| format!("return {name}_{c}[j];")));
     if writable {
-        out += &format!(
-            "void store_{name}(uint i, {ty} v) {{\n    uint j = i & {mask:#x}u;\n    switch (i >> {shift}u) {{\n{}    }}\n}}\n",
-            cases(&|c| format!("{name}_{c}[j] = v; break;"))
-        );
+        out += &format!("void store_{name}(uint i, {ty} v) {{\n{}}}\n", window_switch(plan, &|c| format!("{name}_{c}[j] = v; break;")));
     }
+    out
+}
+
+/// A function body that runs `body(c)` for element `i`'s window c, where it is element `j`.
+fn window_switch(plan: ChunkPlan, body: &dyn Fn(u32) -> String) -> String {
+    let cases: String = (0..plan.chunks)
+        .map(|c| {
+            let label = if c + 1 == plan.chunks { "default:".to_string() } else { format!("case {c}u:") };
+            format!("    {label} {}\n", body(c))
+        })
+        .collect();
+    format!("    uint j = i & {:#x}u;\n    switch (i >> {}u) {{\n{cases}    }}\n", (1u64 << plan.shift) - 1, plan.shift)
+}
+
+/// GLSL declarations of the windows of `array`, read as texels (bindings.rs, `Shape::Texels`): one
+/// uniform texel buffer of RGBA32UI texels a window, a function a window that builds its record j
+/// from texels `texels.len()` j on, and the accessor `load_<name>(i)`.
+pub fn glsl_texels(array: &BufferBinding, element: Element, texels: &[Texel], plan: ChunkPlan) -> String {
+    let (name, ty) = (array.name, element.glsl_type);
+    let mut out = String::new();
+    for c in 0..plan.chunks {
+        out += &format!("layout(set = 0, binding = {}) uniform utextureBuffer {name}_{c};\n", window_binding(array, c));
+    }
+    // One function a window: a texel buffer passed as an argument would cost lavapipe a dynamic
+    // texture handle at every fetch (about 20x slower, measured).
+    for c in 0..plan.chunks {
+        let members: Vec<String> = (0..texels.len())
+            .map(|k| match texels[k] {
+                Texel::Vec4 => format!("uintBitsToFloat(texelFetch({name}_{c}, t + {k}))"),
+                Texel::Uvec4 => format!("texelFetch({name}_{c}, t + {k})"),
+            })
+            .collect();
+        out += &format!("{ty} {name}_{c}_record(uint j) {{\n    int t = int(j * {}u);\n    return {ty}({});\n}}\n", texels.len(), members.join(", "));
+    }
+    if plan.chunks == 1 {
+        out += &format!("{ty} load_{name}(uint i) {{ return {name}_0_record(i); }}\n");
+        return out;
+    }
+    out += &format!("{ty} load_{name}(uint i) {{\n{}}}\n", window_switch(plan, &|c| format!("return {name}_{c}_record(j);")));
     out
 }
 
@@ -174,7 +200,7 @@ mod tests {
     #[test]
     fn extra_windows_bind_clear_of_the_table_and_of_each_other() {
         let mut seen: std::collections::HashSet<u32> = BINDINGS.iter().map(|b| b.binding).collect();
-        for array in BINDINGS.iter().filter(|b| matches!(b.shape, Shape::Array { chunked: true, .. })) {
+        for array in BINDINGS.iter().filter(|b| b.chunked_element().is_some()) {
             for c in 1..MAX_CHUNKS {
                 let b = window_binding(array, c);
                 assert!(seen.insert(b), "binding {b} used twice");
@@ -185,16 +211,23 @@ mod tests {
 
     #[test]
     fn accessors_select_the_window_by_the_high_bits() {
-        let [nodes, accum] = [KernelBuffer::Nodes, KernelBuffer::Accum].map(|b| b.entry());
-        let element = |b: &BufferBinding| match b.shape {
-            Shape::Array { element, .. } => element,
-            _ => unreachable!("{} is an array", b.name),
-        };
-        let src = glsl(nodes, element(nodes), ChunkPlan::WHOLE);
-        assert!(src.contains("WideNode load_nodes(uint i) { return nodes_0[i]; }"), "{src}");
-        let src = glsl(accum, element(accum), ChunkPlan { shift: 4, chunks: 3 });
+        let accum = KernelBuffer::Accum.entry();
+        let src = glsl(accum, accum.chunked_element().unwrap(), ChunkPlan { shift: 4, chunks: 3 });
         let window1 = format!("binding = {}) buffer accum_window1 {{ vec4 accum_1[]; }}", window_binding(accum, 1));
         assert!(src.contains(&window1), "{src}");
         assert!(src.contains("uint j = i & 0xfu;\n    switch (i >> 4u) {\n    case 0u: accum_0[j] = v; break;\n    case 1u: accum_1[j] = v; break;\n    default: accum_2[j] = v; break;"), "{src}");
+    }
+
+    #[test]
+    fn records_read_as_texels_are_built_from_their_texels() {
+        let nodes = KernelBuffer::Nodes.entry();
+        let Shape::Texels { element, texels } = nodes.shape else { panic!("the nodes are read as texels") };
+        let src = glsl_texels(nodes, element, texels, ChunkPlan::WHOLE);
+        assert!(src.contains(&format!("binding = {}) uniform utextureBuffer nodes_0;", nodes.binding)), "{src}");
+        assert!(src.contains("    int t = int(j * 4u);\n    return WideNode(uintBitsToFloat(texelFetch(nodes_0, t + 0)), texelFetch(nodes_0, t + 1), texelFetch(nodes_0, t + 2), texelFetch(nodes_0, t + 3));"), "{src}");
+        assert!(src.contains("WideNode load_nodes(uint i) { return nodes_0_record(i); }"), "{src}");
+        let src = glsl_texels(nodes, element, texels, ChunkPlan { shift: 4, chunks: 2 });
+        assert!(src.contains(&format!("binding = {}) uniform utextureBuffer nodes_1;", window_binding(nodes, 1))), "{src}");
+        assert!(src.contains("    case 0u: return nodes_0_record(j);\n    default: return nodes_1_record(j);"), "{src}");
     }
 }

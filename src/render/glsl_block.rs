@@ -30,6 +30,20 @@ glsl_names! {
     [u32; 4] => "uvec4",
 }
 
+/// What one 16-byte texel of a record read through a texel buffer holds: the record's member
+/// there is a `vec4` (its bits reinterpreted) or a `uvec4`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Texel {
+    Vec4,
+    Uvec4,
+}
+
+/// A host record the kernel reads as consecutive RGBA32UI texels of a texel buffer (bindings.rs,
+/// `Shape::Texels`): its GLSL struct has one 16-byte member a texel, of these kinds in order.
+pub trait GlslTexels: GlslType {
+    const TEXELS: &'static [Texel];
+}
+
 /// One member of a block: name, GLSL type, byte offset in the host struct, and the doc comment.
 #[derive(Clone, Copy, Debug)]
 pub struct GlslMember {

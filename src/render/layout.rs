@@ -2,7 +2,7 @@
 //! generated from (FrameParams, GpuStats, PassParams: see glsl_block.rs). Field order, sizes and
 //! the kind constants of the twins must match the GLSL; the tests below pin every offset.
 
-use super::glsl_block::{glsl_block, GlslType};
+use super::glsl_block::{glsl_block, GlslTexels, GlslType, Texel};
 use crate::bvh::WideNode;
 use bytemuck::{Pod, Zeroable};
 
@@ -295,6 +295,20 @@ impl GlslType for WideNode {
 }
 impl GlslType for GpuMeshTriangle {
     const NAME: &'static str = "MeshTriangle";
+}
+// The walk's records, read as texels (bindings.rs): `origin`, `quantized_xy`, `quantized_z_kinds`,
+// `links`; `v0`, `e1`, `e2`.
+impl GlslTexels for WideNode {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4, Texel::Uvec4, Texel::Uvec4, Texel::Uvec4];
+}
+impl GlslTexels for GpuMaterial {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4; 10];
+}
+impl GlslTexels for GpuPrimitive {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4; 3];
+}
+impl GlslTexels for GpuMeshTriangle {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4; 3];
 }
 
 /// Trip count of the kernel's check for loops cut short (shaders/loop_limit.glsl): it runs fewer

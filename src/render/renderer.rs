@@ -281,17 +281,21 @@ fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = 
     let device = &ctx.info;
     let range = device.max_storage_buffer_range;
     let mut plans = UNSPLIT;
-    let mut storage_bindings = 0;
+    let (mut storage_bindings, mut texel_bindings) = (0, 0);
     for (binding, bytes) in sizes.clone() {
         let name = binding.what;
         match (binding.shape, binding.chunked_element()) {
             (Shape::UniformBlock(_), _) => {}
             (_, Some(element)) => {
+                let (range, alignment, count) = match binding.is_texel_array() {
+                    true => (device.max_texel_buffer_range, device.min_texel_buffer_offset_alignment, &mut texel_bindings),
+                    false => (range, device.min_storage_buffer_offset_alignment, &mut storage_bindings),
+                };
                 let plan = &mut plans[binding.buffer];
-                *plan = chunks::plan(element.bytes, bytes, range, device.min_storage_buffer_offset_alignment).map_err(|e| {
+                *plan = chunks::plan(element.bytes, bytes, range, alignment).map_err(|e| {
                     anyhow::anyhow!("{scene}: the {name} need {:.1} MiB but {} allows {e}", mib(bytes), device.name)
                 })?;
-                storage_bindings += plan.chunks;
+                *count += plan.chunks;
             }
             _ if bytes > range => anyhow::bail!(
                 "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
@@ -307,6 +311,13 @@ fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = 
             "{scene}: the scene needs {storage_bindings} storage buffer bindings but {} allows {} (its arrays are too large to split further)",
             device.name,
             device.max_storage_buffers_per_stage
+        );
+    }
+    if texel_bindings > device.max_texel_buffers_per_stage {
+        anyhow::bail!(
+            "{scene}: the scene needs {texel_bindings} texel buffer bindings but {} allows {} (its BVH and triangles are too large to split further)",
+            device.name,
+            device.max_texel_buffers_per_stage
         );
     }
     let total: u64 = sizes.map(|(_, b)| b).sum();
@@ -385,11 +396,11 @@ impl<'a> Renderer<'a> {
             match binding.chunked_element() {
                 Some(element) if plan.chunks > 1 => {
                     for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
-                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range });
+                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range, as_texels: binding.is_texel_array() });
                     }
                 }
                 // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => descriptors.push(Binding::whole(binding.binding, buffer)),
+                _ => descriptors.push(Binding { as_texels: binding.is_texel_array(), ..Binding::whole(binding.binding, buffer) }),
             }
         }
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();

@@ -1,6 +1,6 @@
 //! What a compiled kernel declares as its inputs, read from the SPIR-V words (for tests): every
 //! uniform, storage and push-constant block with its descriptor set, binding, members, member
-//! offsets and whether the kernel may write it. A few instructions suffice; see the SPIR-V
+//! offsets and whether the kernel may write it, and every texel buffer with its set and binding. A few instructions suffice; see the SPIR-V
 //! specification, section 2.3 (physical layout) and 3 (the enumerants used here).
 
 use std::collections::HashMap;
@@ -11,6 +11,8 @@ const HEADER_WORDS: usize = 5;
 // Opcodes.
 const OP_NAME: u32 = 5;
 const OP_MEMBER_NAME: u32 = 6;
+const OP_TYPE_IMAGE: u32 = 25;
+const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
 const OP_TYPE_STRUCT: u32 = 30;
 const OP_TYPE_POINTER: u32 = 32;
 const OP_VARIABLE: u32 = 59;
@@ -23,6 +25,11 @@ const NON_WRITABLE: u32 = 24;
 const BINDING: u32 = 33;
 const DESCRIPTOR_SET: u32 = 34;
 const OFFSET: u32 = 35;
+
+// An image's dimensionality: a texel buffer.
+const DIM_BUFFER: u32 = 5;
+// The storage class of opaque handles (images, samplers).
+const UNIFORM_CONSTANT: u32 = 0;
 
 /// Storage classes of the blocks a kernel takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -148,6 +155,55 @@ pub fn block_variables(spirv: &[u32]) -> Vec<BlockVariable> {
         .collect()
 }
 
+/// One uniform texel buffer of the kernel: GLSL `textureBuffer` (read by `texelFetch` with
+/// GL_EXT_samplerless_texture_functions) or `samplerBuffer`, of any component type.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TexelBufferVariable {
+    pub name: String,
+    pub set: Option<u32>,
+    pub binding: Option<u32>,
+}
+
+/// Every uniform texel buffer of `spirv` (not the storage texel buffers of `imageBuffer`).
+pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
+    assert_eq!(spirv.first(), Some(&MAGIC), "not SPIR-V");
+    let (mut names, mut decorations) = (HashMap::new(), HashMap::new());
+    let (mut buffer_images, mut sampled_buffers, mut pointers) = (Vec::new(), Vec::new(), Vec::new());
+    let mut variables = Vec::new();
+    let mut at = HEADER_WORDS;
+    while at < spirv.len() {
+        let (count, opcode) = ((spirv[at] >> 16) as usize, spirv[at] & 0xffff);
+        assert!(count > 0 && at + count <= spirv.len(), "malformed instruction at word {at}");
+        let operands = &spirv[at + 1..at + count];
+        match opcode {
+            OP_NAME => {
+                names.insert(operands[0], string(&operands[1..]));
+            }
+            // Result, sampled type, Dim, Depth, Arrayed, MS, Sampled (1: read without a sampler's
+            // help, as a uniform texel buffer; 2: a storage image), ...
+            OP_TYPE_IMAGE if operands[2] == DIM_BUFFER && operands[6] == 1 => buffer_images.push(operands[0]),
+            OP_TYPE_SAMPLED_IMAGE if buffer_images.contains(&operands[1]) => sampled_buffers.push(operands[0]),
+            OP_TYPE_POINTER if operands[1] == UNIFORM_CONSTANT && (buffer_images.contains(&operands[2]) || sampled_buffers.contains(&operands[2])) => {
+                pointers.push(operands[0])
+            }
+            OP_VARIABLE if pointers.contains(&operands[0]) => variables.push(operands[1]),
+            OP_DECORATE => {
+                decorations.insert((operands[0], operands[1]), operands.get(2).copied().unwrap_or(0));
+            }
+            _ => {}
+        }
+        at += count;
+    }
+    variables
+        .into_iter()
+        .map(|id| TexelBufferVariable {
+            name: names.get(&id).cloned().unwrap_or_default(),
+            set: decorations.get(&(id, DESCRIPTOR_SET)).copied(),
+            binding: decorations.get(&(id, BINDING)).copied(),
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -175,5 +231,19 @@ mod tests {
         assert_eq!(input.members[0].array_stride, Some(4));
         assert!(!find("Output").is_readonly());
         assert_eq!((find("Push").storage_class, find("Push").binding), (StorageClass::PushConstant, None));
+    }
+
+    #[test]
+    fn reads_the_texel_buffers_of_a_small_kernel() {
+        let spirv = compile_compute(
+            "#version 460\n#extension GL_EXT_samplerless_texture_functions : require\nlayout(local_size_x = 1) in;\n\
+             layout(set = 0, binding = 2) uniform utextureBuffer records;\n\
+             layout(set = 0, binding = 4) uniform sampler2D picture;\n\
+             layout(std430, set = 0, binding = 6) buffer Output { uvec4 out_values[]; };\n\
+             void main() { out_values[0] = texelFetch(records, 3) + uvec4(texelFetch(picture, ivec2(0), 0)); }\n",
+        )
+        .unwrap();
+        assert_eq!(texel_buffer_variables(&spirv), [TexelBufferVariable { name: "records".into(), set: Some(0), binding: Some(2) }]);
+        assert!(block_variables(&spirv).iter().all(|v| v.binding == Some(6)), "a texel buffer or image is no block");
     }
 }
