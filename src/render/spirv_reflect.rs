@@ -86,9 +86,22 @@ fn string(words: &[u32]) -> String {
     String::from_utf8(bytes).expect("SPIR-V strings are UTF-8")
 }
 
+/// The instructions of `spirv` after its header: each one's opcode and operands.
+fn instructions(spirv: &[u32]) -> impl Iterator<Item = (u32, &[u32])> {
+    assert_eq!(spirv.first(), Some(&MAGIC), "not SPIR-V");
+    let mut at = HEADER_WORDS;
+    std::iter::from_fn(move || {
+        let word = *spirv.get(at)?;
+        let count = (word >> 16) as usize;
+        assert!(count > 0 && at + count <= spirv.len(), "malformed instruction at word {at}");
+        let operands = &spirv[at + 1..at + count];
+        at += count;
+        Some((word & 0xffff, operands))
+    })
+}
+
 /// Every uniform, push-constant and storage block variable of `spirv`.
 pub fn block_variables(spirv: &[u32]) -> Vec<BlockVariable> {
-    assert_eq!(spirv.first(), Some(&MAGIC), "not SPIR-V");
     let mut names = HashMap::new();
     let mut member_names = HashMap::new();
     let mut member_types = HashMap::new();
@@ -96,11 +109,7 @@ pub fn block_variables(spirv: &[u32]) -> Vec<BlockVariable> {
     let mut decorations: HashMap<(u32, u32), u32> = HashMap::new();
     let mut member_decorations: HashMap<(u32, u32, u32), u32> = HashMap::new();
     let mut variables = Vec::new();
-    let mut at = HEADER_WORDS;
-    while at < spirv.len() {
-        let (count, opcode) = ((spirv[at] >> 16) as usize, spirv[at] & 0xffff);
-        assert!(count > 0 && at + count <= spirv.len(), "malformed instruction at word {at}");
-        let operands = &spirv[at + 1..at + count];
+    for (opcode, operands) in instructions(spirv) {
         match opcode {
             OP_NAME => {
                 names.insert(operands[0], string(&operands[1..]));
@@ -127,7 +136,6 @@ pub fn block_variables(spirv: &[u32]) -> Vec<BlockVariable> {
             }
             _ => {}
         }
-        at += count;
     }
     variables
         .into_iter()
@@ -166,15 +174,10 @@ pub struct TexelBufferVariable {
 
 /// Every uniform texel buffer of `spirv` (not the storage texel buffers of `imageBuffer`).
 pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
-    assert_eq!(spirv.first(), Some(&MAGIC), "not SPIR-V");
     let (mut names, mut decorations) = (HashMap::new(), HashMap::new());
     let (mut buffer_images, mut sampled_buffers, mut pointers) = (Vec::new(), Vec::new(), Vec::new());
     let mut variables = Vec::new();
-    let mut at = HEADER_WORDS;
-    while at < spirv.len() {
-        let (count, opcode) = ((spirv[at] >> 16) as usize, spirv[at] & 0xffff);
-        assert!(count > 0 && at + count <= spirv.len(), "malformed instruction at word {at}");
-        let operands = &spirv[at + 1..at + count];
+    for (opcode, operands) in instructions(spirv) {
         match opcode {
             OP_NAME => {
                 names.insert(operands[0], string(&operands[1..]));
@@ -192,7 +195,6 @@ pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
             }
             _ => {}
         }
-        at += count;
     }
     variables
         .into_iter()
