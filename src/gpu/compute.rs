@@ -104,20 +104,18 @@ impl ComputeKernel {
             .iter()
             .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.buffer.buffer).offset(b.offset).range(b.range)])
             .collect();
-        let mut texel_views = Vec::new();
-        let mut views: Vec<[vk::BufferView; 1]> = Vec::new();
-        for b in bindings {
-            let view = match b.as_texels {
+        // Each binding's texel view (null for those bound as buffers).
+        let views = bindings
+            .iter()
+            .map(|b| match b.as_texels {
                 true => {
                     let info = vk::BufferViewCreateInfo::default().buffer(b.buffer.buffer).format(TEXEL_FORMAT).offset(b.offset).range(b.range);
-                    let view = unsafe { device.create_buffer_view(&info, None) }.context("creating a texel view of a buffer")?;
-                    texel_views.push(view);
-                    view
+                    unsafe { device.create_buffer_view(&info, None) }.map(|view| [view]).context("creating a texel view of a buffer")
                 }
-                false => vk::BufferView::null(),
-            };
-            views.push([view]);
-        }
+                false => Ok([vk::BufferView::null()]),
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let texel_views = views.iter().map(|[view]| *view).filter(|view| *view != vk::BufferView::null()).collect();
         let writes: Vec<_> = bindings
             .iter()
             .zip(infos.iter().zip(&views))

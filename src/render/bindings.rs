@@ -65,7 +65,7 @@ pub enum Shape {
     /// as straight-line code, where it loads a storage buffer with a per-lane index one lane at a
     /// time, each lane's load behind a branch of its own (docs/benchmarks.md, stop 21). GPUs
     /// have read BVHs through the texture path since Aila and Laine (2009).
-    Texels { element: Element, texels: &'static [Texel] },
+    TexelBuffer { element: Element, texels: &'static [Texel] },
 }
 
 /// A block's GLSL type name and members, from the host struct it is declared by.
@@ -140,14 +140,14 @@ impl BufferBinding {
     /// The element of an array that may span several bindings.
     pub fn chunked_element(&self) -> Option<Element> {
         match self.shape {
-            Shape::Array { element, chunked: true } | Shape::Texels { element, .. } => Some(element),
+            Shape::Array { element, chunked: true } | Shape::TexelBuffer { element, .. } => Some(element),
             _ => None,
         }
     }
 
     /// Whether the kernel reads it as texels (bound as uniform texel buffers).
-    pub fn is_texel_array(&self) -> bool {
-        matches!(self.shape, Shape::Texels { .. })
+    pub fn is_texel_buffer(&self) -> bool {
+        matches!(self.shape, Shape::TexelBuffer { .. })
     }
 }
 
@@ -166,9 +166,9 @@ const fn chunked<T: GlslType>() -> Shape {
 }
 
 /// An array of `T`s read as texels, `T::TEXELS` a record (bound as uniform texel buffers).
-const fn texels<T: GlslTexels>() -> Shape {
+const fn texel_buffer<T: GlslTexels>() -> Shape {
     assert!(T::TEXELS.len() * 16 == size_of::<T>(), "a record read as texels is a whole number of 16-byte texels");
-    Shape::Texels { element: Element::of::<T>(), texels: T::TEXELS }
+    Shape::TexelBuffer { element: Element::of::<T>(), texels: T::TEXELS }
 }
 
 /// Every buffer of the kernel, in [`KernelBuffer`] order (checked at compile time below).
@@ -178,12 +178,12 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     BufferBinding { buffer: Frame, binding: 0, name: "frame", shape: Shape::UniformBlock(Block::of::<FrameParams>()), access: Read, bound_in: EveryKernel, what: "frame parameters" },
     // BVH wide nodes (src/bvh/wide_node.rs): the top level over instances, its root at node 0,
     // then every bottom-level BVH.
-    BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: texels::<WideNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
+    BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: texel_buffer::<WideNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
     // The scene's own spheres, quads and triangles, in their BVH's leaf order.
     BufferBinding { buffer: Primitives, binding: 2, name: "prims", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "primitives" },
-    BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: texels::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },
+    BufferBinding { buffer: Materials, binding: 3, name: "materials", shape: texel_buffer::<GpuMaterial>(), access: Read, bound_in: EveryKernel, what: "materials" },
     // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
-    BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: texels::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
+    BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: texel_buffer::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
     // The environment map's texels, rgb, row-major, top row first (one texel for a constant sky).
     BufferBinding { buffer: EnvTexels, binding: 5, name: "env_texels", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "environment map" },
     // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
@@ -193,7 +193,7 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Placements of bottom-level BVHs; the top-level BVH's leaves index them.
     BufferBinding { buffer: Instances, binding: 8, name: "instances", shape: array::<GpuInstance>(), access: Read, bound_in: EveryKernel, what: "instances" },
     // Every mesh's triangles by value (MeshTriangle) and their materials, in their BVH's leaf order.
-    BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: texels::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },
+    BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: texel_buffer::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },
     BufferBinding { buffer: TriangleMaterials, binding: 10, name: "triangle_materials", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "triangle materials" },
     // Vertex attributes of every mesh, indexed by global vertex index: normals octahedral
     // snorm16x2, texture coordinates.
@@ -265,7 +265,7 @@ pub fn glsl(plans: &SplitPlans, variant: KernelVariant) -> String {
                 format!("layout(std430, set = 0, binding = {binding}) {access}buffer {name}_buffer {{ {} {name}[]; }};\n", element.glsl_type)
             }
             Shape::Array { element, chunked: true } => chunks::glsl(b, element, plans[b.buffer]),
-            Shape::Texels { element, texels } => chunks::glsl_texels(b, element, texels, plans[b.buffer]),
+            Shape::TexelBuffer { element, texels } => chunks::glsl_texels(b, element, texels, plans[b.buffer]),
         };
     }
     out
@@ -317,7 +317,7 @@ mod tests {
                     }
                     None
                 }
-                Shape::Texels { .. } => {
+                Shape::TexelBuffer { .. } => {
                     for c in 0..plans[b.buffer].chunks {
                         declared.insert(window_binding(b, c), (Kind::TexelBuffer, format!("{}_{c}", b.name), true, None));
                     }

@@ -39,7 +39,7 @@ pub enum Texel {
 }
 
 /// A host record the kernel reads as consecutive RGBA32UI texels of a texel buffer (bindings.rs,
-/// `Shape::Texels`): its GLSL struct has one 16-byte member a texel, of these kinds in order.
+/// `Shape::TexelBuffer`): its GLSL struct has one 16-byte member a texel, of these kinds in order.
 pub trait GlslTexels: GlslType {
     const TEXELS: &'static [Texel];
 }

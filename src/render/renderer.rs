@@ -287,7 +287,7 @@ fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = 
         match (binding.shape, binding.chunked_element()) {
             (Shape::UniformBlock(_), _) => {}
             (_, Some(element)) => {
-                let (range, alignment, count) = match binding.is_texel_array() {
+                let (range, alignment, count) = match binding.is_texel_buffer() {
                     true => (device.max_texel_buffer_range, device.min_texel_buffer_offset_alignment, &mut texel_bindings),
                     false => (range, device.min_storage_buffer_offset_alignment, &mut storage_bindings),
                 };
@@ -396,11 +396,11 @@ impl<'a> Renderer<'a> {
             match binding.chunked_element() {
                 Some(element) if plan.chunks > 1 => {
                     for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
-                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range, as_texels: binding.is_texel_array() });
+                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range, as_texels: binding.is_texel_buffer() });
                     }
                 }
                 // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => descriptors.push(Binding { as_texels: binding.is_texel_array(), ..Binding::whole(binding.binding, buffer) }),
+                _ => descriptors.push(Binding { as_texels: binding.is_texel_buffer(), ..Binding::whole(binding.binding, buffer) }),
             }
         }
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
