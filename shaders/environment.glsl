@@ -87,7 +87,7 @@ uint cdf_search(uint offset, uint count, float u) {
     while (hi - lo > 1u) {
         LOOP_ITERATION();
         uint mid = (lo + hi) / 2u;
-        if (env_cdf[offset + mid] <= u) lo = mid; else hi = mid;
+        if (load_env_cdf(offset + mid) <= u) lo = mid; else hi = mid;
     }
     return lo;
 }
@@ -110,7 +110,7 @@ float environment_pdf(vec3 d) {
     uint x = min(uint(p.x * float(w)), w - 1u);
     uint y = min(uint(p.y * float(h)), h - 1u);
     uint row = h + 1u + y * (w + 1u);
-    float p_cell = (env_cdf[y + 1u] - env_cdf[y]) * (env_cdf[row + x + 1u] - env_cdf[row + x]);
+    float p_cell = (load_env_cdf(y + 1u) - load_env_cdf(y)) * (load_env_cdf(row + x + 1u) - load_env_cdf(row + x));
     float jacobian = map_jacobian(p);
     return jacobian > 0.0 ? p_cell * float(w * h) / jacobian : 0.0;
 }
@@ -119,12 +119,12 @@ bool sample_environment(vec2 u, out vec3 dir, out float pdf) {
     uint w = frame.env_width;
     uint h = frame.env_height;
     uint y = cdf_search(0u, h, u.y);
-    float p_row = env_cdf[y + 1u] - env_cdf[y];
+    float p_row = load_env_cdf(y + 1u) - load_env_cdf(y);
     uint row = h + 1u + y * (w + 1u);
     uint x = cdf_search(row, w, u.x);
-    float p_column = env_cdf[row + x + 1u] - env_cdf[row + x];
+    float p_column = load_env_cdf(row + x + 1u) - load_env_cdf(row + x);
     // Reuse each number's position inside its CDF step as the position inside the cell.
-    vec2 inside = vec2((u.x - env_cdf[row + x]) / p_column, (u.y - env_cdf[y]) / p_row);
+    vec2 inside = vec2((u.x - load_env_cdf(row + x)) / p_column, (u.y - load_env_cdf(y)) / p_row);
     vec2 p = (vec2(x, y) + clamp(inside, 0.0, 1.0)) / vec2(w, h);
     float jacobian = map_jacobian(p);
     if (!(jacobian > 0.0)) return false;

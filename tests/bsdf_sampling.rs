@@ -195,7 +195,7 @@ impl<'a> Kernel<'a> {
         let query = Buffer::with_data(ctx, "query", BufferKind::HostStorage, &[0u8; 48]).unwrap();
         let dirs = Buffer::with_data(ctx, "dirs", BufferKind::HostStorage, bytemuck::cast_slice(&quadrature().0)).unwrap();
         let results = Buffer::with_data(ctx, "results", BufferKind::HostStorage, &vec![0u8; results_len * 16]).unwrap();
-        let materials = Binding { as_texels: KernelBuffer::Materials.entry().is_texel_buffer(), ..Binding::whole(KernelBuffer::Materials.entry().binding, &material) };
+        let materials = Binding { as_texels: KernelBuffer::Materials.entry().texel_words(), ..Binding::whole(KernelBuffer::Materials.entry().binding, &material) };
         let bindings = [materials, Binding::whole(30, &query), Binding::whole(31, &dirs), Binding::whole(32, &results)];
         let kernel = ComputeKernel::new(ctx, &spirv, &bindings, 16).unwrap();
         Kernel { ctx, kernel, material, query, dirs, results }

@@ -1,5 +1,6 @@
 //! A compute pipeline with one descriptor set of buffers and a push-constant block. A buffer is
-//! bound as a storage or uniform buffer, or as a uniform texel buffer of RGBA32UI texels.
+//! bound as a storage or uniform buffer, or as a uniform texel buffer of 1, 2 or 4 32-bit words a
+//! texel.
 
 use super::buffer::{Buffer, BufferKind};
 use super::context::GpuContext;
@@ -12,24 +13,47 @@ pub struct Binding<'a> {
     pub buffer: &'a Buffer,
     pub offset: u64,
     pub range: u64,
-    /// Bound as a uniform texel buffer of [`TEXEL_FORMAT`] (the kernel's `utextureBuffer`)
-    /// rather than as the buffer's kind says.
-    pub as_texels: bool,
+    /// Bound as a uniform texel buffer of texels this wide (the kernel's `utextureBuffer`) rather
+    /// than as the buffer's kind says.
+    pub as_texels: Option<TexelWords>,
 }
 
-/// The texels of a buffer bound as texels: four 32-bit words, which every Vulkan device must
-/// support for uniform texel buffers.
-pub const TEXEL_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+/// How wide the texels of a buffer bound as texels are: 1, 2 or 4 32-bit unsigned words, formats
+/// every Vulkan device must support for uniform texel buffers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TexelWords {
+    One,
+    Two,
+    Four,
+}
+
+impl TexelWords {
+    pub const fn bytes(self) -> u64 {
+        match self {
+            TexelWords::One => 4,
+            TexelWords::Two => 8,
+            TexelWords::Four => 16,
+        }
+    }
+
+    fn format(self) -> vk::Format {
+        match self {
+            TexelWords::One => vk::Format::R32_UINT,
+            TexelWords::Two => vk::Format::R32G32_UINT,
+            TexelWords::Four => vk::Format::R32G32B32A32_UINT,
+        }
+    }
+}
 
 impl<'a> Binding<'a> {
     /// The whole buffer.
     pub fn whole(binding: u32, buffer: &'a Buffer) -> Self {
-        Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE, as_texels: false }
+        Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE, as_texels: None }
     }
 
     fn descriptor_type(&self) -> vk::DescriptorType {
         match self.buffer.kind {
-            _ if self.as_texels => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            _ if self.as_texels.is_some() => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
             BufferKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
             BufferKind::Storage | BufferKind::HostStorage => vk::DescriptorType::STORAGE_BUFFER,
         }
@@ -108,11 +132,11 @@ impl ComputeKernel {
         let views = bindings
             .iter()
             .map(|b| match b.as_texels {
-                true => {
-                    let info = vk::BufferViewCreateInfo::default().buffer(b.buffer.buffer).format(TEXEL_FORMAT).offset(b.offset).range(b.range);
+                Some(words) => {
+                    let info = vk::BufferViewCreateInfo::default().buffer(b.buffer.buffer).format(words.format()).offset(b.offset).range(b.range);
                     unsafe { device.create_buffer_view(&info, None) }.map(|view| [view]).context("creating a texel view of a buffer")
                 }
-                false => Ok([vk::BufferView::null()]),
+                None => Ok([vk::BufferView::null()]),
             })
             .collect::<Result<Vec<_>>>()?;
         let texel_views = views.iter().map(|[view]| *view).filter(|view| *view != vk::BufferView::null()).collect();
@@ -122,8 +146,8 @@ impl ComputeKernel {
             .map(|(b, (info, view))| {
                 let write = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(b.binding).descriptor_type(b.descriptor_type());
                 match b.as_texels {
-                    true => write.texel_buffer_view(view),
-                    false => write.buffer_info(info),
+                    Some(_) => write.texel_buffer_view(view),
+                    None => write.buffer_info(info),
                 }
             })
             .collect();

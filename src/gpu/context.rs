@@ -1,5 +1,6 @@
 //! Vulkan instance, physical-device choice, logical device, queue and memory allocator.
 
+use super::compute::TexelWords;
 use super::failure::VulkanError;
 use super::validation::{self, ValidationLog};
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -58,15 +59,23 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u64,
     pub min_storage_buffer_offset_alignment: u64,
     pub max_storage_buffers_per_stage: u32,
-    /// Bytes one uniform texel buffer of 16-byte texels can see (`maxTexelBufferElements` texels,
-    /// at most 2^31 of them, which the kernel's `int` texel index reaches; lowered as
-    /// `max_storage_buffer_range` is).
-    pub max_texel_buffer_range: u64,
+    /// Texels one uniform texel buffer can see (`maxTexelBufferElements`, at most 2^31, which the
+    /// kernel's `int` texel index reaches).
+    pub max_texel_buffer_elements: u64,
+    /// Bytes any one binding may see at most: `ContextOptions::storage_binding_limit`, or no bound.
+    pub binding_limit: u64,
     pub min_texel_buffer_offset_alignment: u64,
     /// Texel buffers count against the sampled images a stage may bind.
     pub max_texel_buffers_per_stage: u32,
     pub device_local_bytes: u64,
     has_compute_queue: bool,
+}
+
+impl DeviceInfo {
+    /// Bytes one uniform texel buffer of texels `words` wide can see.
+    pub fn max_texel_buffer_range(&self, words: TexelWords) -> u64 {
+        (self.max_texel_buffer_elements * words.bytes()).min(self.binding_limit)
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -173,7 +182,8 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
-        max_texel_buffer_range: (props.limits.max_texel_buffer_elements as u64).min(1 << 31) * 16,
+        max_texel_buffer_elements: (props.limits.max_texel_buffer_elements as u64).min(1 << 31),
+        binding_limit: u64::MAX,
         min_texel_buffer_offset_alignment: props.limits.min_texel_buffer_offset_alignment,
         max_texel_buffers_per_stage: props.limits.max_per_stage_descriptor_sampled_images,
         device_local_bytes,
@@ -286,7 +296,7 @@ impl GpuContext {
         let (physical, mut info) = choose(devices, options.device.as_deref())?;
         if let Some(limit) = options.storage_binding_limit {
             info.max_storage_buffer_range = info.max_storage_buffer_range.min(limit);
-            info.max_texel_buffer_range = info.max_texel_buffer_range.min(limit);
+            info.binding_limit = limit;
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let family = match &surface {

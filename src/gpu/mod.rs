@@ -13,7 +13,7 @@ mod swapchain;
 mod validation;
 
 pub use buffer::{Buffer, BufferKind};
-pub use compute::{Binding, ComputeKernel};
+pub use compute::{Binding, ComputeKernel, TexelWords};
 pub use context::{list_devices, ContextOptions, DeviceInfo, DeviceType, GpuContext};
 pub use failure::{DeviceFailure, VulkanError};
 pub use overlay_pass::OverlayDraw;

@@ -10,6 +10,7 @@ use super::glsl_block::{glsl_members, GlslBlock, GlslMember, GlslTexels, GlslTyp
 use super::kernel::KernelVariant;
 use super::layout::{FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuPunctualLight, GpuStats, GpuTexture, PassParams};
 use crate::bvh::WideNode;
+use crate::gpu::TexelWords;
 
 /// Names a buffer of the kernel on the host: the key of [`BINDINGS`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -59,12 +60,13 @@ pub enum Shape {
     /// `buffer { <element> <name>[]; }` (std430). A `chunked` array may span several bindings
     /// (chunks.rs); the kernel reads it with `load_<name>(i)` and writes it with `store_<name>`.
     Array { element: Element, chunked: bool },
-    /// `uniform utextureBuffer <name>_0;`: an array of records read as consecutive RGBA32UI
-    /// texels of a uniform texel buffer, by `load_<name>(i)`, and split like a chunked array.
-    /// For the walk's nodes and triangles: lavapipe fetches a texel for all of a subgroup's lanes
-    /// as straight-line code, where it loads a storage buffer with a per-lane index one lane at a
-    /// time, each lane's load behind a branch of its own (docs/benchmarks.md, stop 21). GPUs
-    /// have read BVHs through the texture path since Aila and Laine (2009).
+    /// `uniform utextureBuffer <name>_0;`: an array of records read as consecutive unsigned
+    /// texels of 1, 2 or 4 words (R32UI, RG32UI, RGBA32UI) of a uniform texel buffer, by
+    /// `load_<name>(i)`, and split like a chunked array. For every array the kernel reads at a
+    /// per-lane index: lavapipe fetches a texel for all of a subgroup's lanes as straight-line
+    /// code, where it loads a storage buffer with a per-lane index one lane at a time, each lane's
+    /// load behind a branch of its own (docs/benchmarks.md, stops 21 and 22). GPUs have read BVHs
+    /// through the texture path since Aila and Laine (2009).
     TexelBuffer { element: Element, texels: &'static [Texel] },
 }
 
@@ -145,9 +147,18 @@ impl BufferBinding {
         }
     }
 
-    /// Whether the kernel reads it as texels (bound as uniform texel buffers).
+    /// How wide the texels are where the kernel reads it as texels (bound as uniform texel
+    /// buffers); `None` for a buffer bound as one.
+    pub fn texel_words(&self) -> Option<TexelWords> {
+        match self.shape {
+            Shape::TexelBuffer { texels, .. } => Some(texels[0].words()),
+            _ => None,
+        }
+    }
+
+    /// Whether the kernel reads it as texels.
     pub fn is_texel_buffer(&self) -> bool {
-        matches!(self.shape, Shape::TexelBuffer { .. })
+        self.texel_words().is_some()
     }
 }
 
@@ -167,7 +178,13 @@ const fn chunked<T: GlslType>() -> Shape {
 
 /// An array of `T`s read as texels, `T::TEXELS` a record (bound as uniform texel buffers).
 const fn texel_buffer<T: GlslTexels>() -> Shape {
-    assert!(T::TEXELS.len() * 16 == size_of::<T>(), "a record read as texels is a whole number of 16-byte texels");
+    let width = T::TEXELS[0].words().bytes();
+    let mut k = 0;
+    while k < T::TEXELS.len() {
+        assert!(T::TEXELS[k].words().bytes() == width, "a record's texels are all as wide: one texel format a buffer");
+        k += 1;
+    }
+    assert!(T::TEXELS.len() as u64 * width == size_of::<T>() as u64, "a record read as texels is a whole number of its texels");
     Shape::TexelBuffer { element: Element::of::<T>(), texels: T::TEXELS }
 }
 
@@ -185,7 +202,7 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Every emitter in world space, in Primitive form (mesh triangles transformed by the host).
     BufferBinding { buffer: Lights, binding: 4, name: "lights", shape: texel_buffer::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "lights" },
     // The environment map's texels, rgb, row-major, top row first (one texel for a constant sky).
-    BufferBinding { buffer: EnvTexels, binding: 5, name: "env_texels", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "environment map" },
+    BufferBinding { buffer: EnvTexels, binding: 5, name: "env_texels", shape: texel_buffer::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "environment map" },
     // Per pixel: rgb = sum of sample radiance, a = samples accumulated.
     BufferBinding { buffer: Accum, binding: 6, name: "accum", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: EveryKernel, what: "accumulation image" },
     // Per-dispatch counters, cleared and read by the host (see GpuStats).
@@ -194,18 +211,18 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     BufferBinding { buffer: Instances, binding: 8, name: "instances", shape: array::<GpuInstance>(), access: Read, bound_in: EveryKernel, what: "instances" },
     // Every mesh's triangles by value (MeshTriangle) and their materials, in their BVH's leaf order.
     BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: texel_buffer::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },
-    BufferBinding { buffer: TriangleMaterials, binding: 10, name: "triangle_materials", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "triangle materials" },
+    BufferBinding { buffer: TriangleMaterials, binding: 10, name: "triangle_materials", shape: texel_buffer::<u32>(), access: Read, bound_in: EveryKernel, what: "triangle materials" },
     // Vertex attributes of every mesh, indexed by global vertex index: normals octahedral
     // snorm16x2, texture coordinates.
-    BufferBinding { buffer: VertexNormals, binding: 11, name: "vertex_normals", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "vertex normals" },
-    BufferBinding { buffer: VertexUvs, binding: 12, name: "vertex_uvs", shape: chunked::<[f32; 2]>(), access: Read, bound_in: EveryKernel, what: "vertex texture coordinates" },
+    BufferBinding { buffer: VertexNormals, binding: 11, name: "vertex_normals", shape: texel_buffer::<u32>(), access: Read, bound_in: EveryKernel, what: "vertex normals" },
+    BufferBinding { buffer: VertexUvs, binding: 12, name: "vertex_uvs", shape: texel_buffer::<[f32; 2]>(), access: Read, bound_in: EveryKernel, what: "vertex texture coordinates" },
     // Where each texture's texels lie in `texels`, its size and TEXTURE_* flags.
     BufferBinding { buffer: TextureInfos, binding: 13, name: "texture_infos", shape: array::<GpuTexture>(), access: Read, bound_in: EveryKernel, what: "texture descriptors" },
     // Every texture's texels, RGBA8, one after another.
-    BufferBinding { buffer: Texels, binding: 14, name: "texels", shape: chunked::<u32>(), access: Read, bound_in: EveryKernel, what: "textures" },
+    BufferBinding { buffer: Texels, binding: 14, name: "texels", shape: texel_buffer::<u32>(), access: Read, bound_in: EveryKernel, what: "textures" },
     // The environment map's sampling distribution: marginal CDF over rows (height + 1 values), then
     // one CDF per row (width + 1 values each); see env_sampling.rs. Empty when it is not sampled.
-    BufferBinding { buffer: EnvCdf, binding: 15, name: "env_cdf", shape: array::<f32>(), access: Read, bound_in: EveryKernel, what: "environment distribution" },
+    BufferBinding { buffer: EnvCdf, binding: 15, name: "env_cdf", shape: texel_buffer::<f32>(), access: Read, bound_in: EveryKernel, what: "environment distribution" },
     // Alias table over `lights` and then `punctual_lights` for picking them by power (light_selection.rs); empty when they
     // are picked uniformly.
     BufferBinding { buffer: LightAlias, binding: 16, name: "light_alias", shape: array::<GpuAliasEntry>(), access: Read, bound_in: EveryKernel, what: "light alias table" },
@@ -215,10 +232,10 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Per entry of `mesh_triangles`: the mean luminance of a textured emitter's emission over the
     // triangle (src/render/textured_emission.rs), which light selection weighs it by; 0 for other
     // triangles, and empty when no material has an emission texture.
-    BufferBinding { buffer: TriangleEmission, binding: 18, name: "triangle_emission", shape: chunked::<f32>(), access: Read, bound_in: EveryKernel, what: "textured emitters' mean luminance" },
+    BufferBinding { buffer: TriangleEmission, binding: 18, name: "triangle_emission", shape: texel_buffer::<f32>(), access: Read, bound_in: EveryKernel, what: "textured emitters' mean luminance" },
     // Tangents of the vertices of meshes with a normal-mapped material, by global vertex index:
     // xyz = unit tangent (along growing u), w = the bitangent's sign.
-    BufferBinding { buffer: VertexTangents, binding: 19, name: "vertex_tangents", shape: chunked::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "vertex tangents" },
+    BufferBinding { buffer: VertexTangents, binding: 19, name: "vertex_tangents", shape: texel_buffer::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "vertex tangents" },
     // Denoiser features (AOVs), per pixel, summed over samples like `accum`: rgb = albedo and
     // xyz = camera-facing shading normal at the first non-specular vertex, and a = distance to the
     // first hit summed over the samples that hit something, w = how many those were.

@@ -133,9 +133,10 @@ fn window_switch(plan: ChunkPlan, body: &dyn Fn(u32) -> String) -> String {
     format!("    uint j = i & {:#x}u;\n    switch (i >> {}u) {{\n{cases}    }}\n", (1u64 << plan.shift) - 1, plan.shift)
 }
 
-/// GLSL declarations of the windows of `array`, read as texels (bindings.rs, `Shape::TexelBuffer`): one
-/// uniform texel buffer of RGBA32UI texels a window, a function a window that builds its record j
-/// from texels `texels.len()` j on, and the accessor `load_<name>(i)`.
+/// GLSL declarations of the windows of `array`, read as texels (bindings.rs, `Shape::TexelBuffer`):
+/// one uniform texel buffer of unsigned texels a window (as wide as the record's texels), a
+/// function a window that builds its record j from texels `texels.len()` j on, and the accessor
+/// `load_<name>(i)`.
 pub fn glsl_texels(array: &BufferBinding, element: Element, texels: &[Texel], plan: ChunkPlan) -> String {
     let (name, ty) = (array.name, element.glsl_type);
     let mut out = String::new();
@@ -147,9 +148,15 @@ pub fn glsl_texels(array: &BufferBinding, element: Element, texels: &[Texel], pl
         let members: Vec<String> = texels
             .iter()
             .enumerate()
-            .map(|(k, texel)| match texel {
-                Texel::Vec4 => format!("uintBitsToFloat(texelFetch({name}_{c}, t + {k}))"),
-                Texel::Uvec4 => format!("texelFetch({name}_{c}, t + {k})"),
+            .map(|(k, texel)| {
+                let fetch = format!("texelFetch({name}_{c}, t + {k})");
+                match texel {
+                    Texel::Vec4 => format!("uintBitsToFloat({fetch})"),
+                    Texel::Uvec4 => fetch,
+                    Texel::Vec2 => format!("uintBitsToFloat({fetch}.xy)"),
+                    Texel::Float => format!("uintBitsToFloat({fetch}.x)"),
+                    Texel::Uint => format!("{fetch}.x"),
+                }
             })
             .collect();
         out += &format!("{ty} {name}_{c}_record(uint j) {{\n    int t = int(j * {}u);\n    return {ty}({});\n}}\n", texels.len(), members.join(", "));
@@ -230,5 +237,19 @@ mod tests {
         let src = glsl_texels(nodes, element, texels, ChunkPlan { shift: 4, chunks: 2 });
         assert!(src.contains(&format!("binding = {}) uniform utextureBuffer nodes_1;", window_binding(nodes, 1))), "{src}");
         assert!(src.contains("    case 0u: return nodes_0_record(j);\n    default: return nodes_1_record(j);"), "{src}");
+    }
+
+    #[test]
+    fn single_words_are_read_as_narrow_texels() {
+        let cdf = KernelBuffer::EnvCdf.entry();
+        let Shape::TexelBuffer { element, texels } = cdf.shape else { panic!("the environment CDF is read as texels") };
+        assert_eq!(cdf.texel_words(), Some(crate::gpu::TexelWords::One));
+        let src = glsl_texels(cdf, element, texels, ChunkPlan::WHOLE);
+        assert!(src.contains("float env_cdf_0_record(uint j) {\n    int t = int(j * 1u);\n    return float(uintBitsToFloat(texelFetch(env_cdf_0, t + 0).x));"), "{src}");
+        let uvs = KernelBuffer::VertexUvs.entry();
+        let Shape::TexelBuffer { element, texels } = uvs.shape else { panic!("the texture coordinates are read as texels") };
+        assert_eq!(uvs.texel_words(), Some(crate::gpu::TexelWords::Two));
+        let src = glsl_texels(uvs, element, texels, ChunkPlan::WHOLE);
+        assert!(src.contains("return vec2(uintBitsToFloat(texelFetch(vertex_uvs_0, t + 0).xy));"), "{src}");
     }
 }

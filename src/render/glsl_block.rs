@@ -4,6 +4,8 @@
 //! member's comment in the generated GLSL. bindings.rs declares the blocks with these members; its
 //! tests read the compiled kernel's member offsets back and compare them with the host's.
 
+use crate::gpu::TexelWords;
+
 /// A host type with a GLSL twin of the same bytes: a scalar or vector, or a struct of
 /// shaders/layout.glsl.
 pub trait GlslType: bytemuck::Pod {
@@ -30,18 +32,48 @@ glsl_names! {
     [u32; 4] => "uvec4",
 }
 
-/// What one 16-byte texel of a record read through a texel buffer holds: the record's member
-/// there is a `vec4` (its bits reinterpreted) or a `uvec4`.
+/// What one texel of a record read through a texel buffer holds: the record's member there is a
+/// `vec4` or `vec2` (the texel's bits reinterpreted), a `uvec4`, a `float` or a `uint`. A texel is
+/// as wide as its member, so that a record of single words (a CDF, packed normals) is read word by
+/// word rather than padded to 16 bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Texel {
     Vec4,
     Uvec4,
+    Vec2,
+    Float,
+    Uint,
 }
 
-/// A host record the kernel reads as consecutive RGBA32UI texels of a texel buffer (bindings.rs,
-/// `Shape::TexelBuffer`): its GLSL struct has one 16-byte member a texel, of these kinds in order.
+impl Texel {
+    /// How many 32-bit words the texel holds.
+    pub const fn words(self) -> TexelWords {
+        match self {
+            Texel::Vec4 | Texel::Uvec4 => TexelWords::Four,
+            Texel::Vec2 => TexelWords::Two,
+            Texel::Float | Texel::Uint => TexelWords::One,
+        }
+    }
+}
+
+/// A host record the kernel reads as consecutive texels of a texel buffer (bindings.rs,
+/// `Shape::TexelBuffer`), all as wide: its GLSL type has one member a texel, of these kinds in
+/// order (a scalar or vector record is its one texel).
 pub trait GlslTexels: GlslType {
     const TEXELS: &'static [Texel];
+}
+
+impl GlslTexels for f32 {
+    const TEXELS: &'static [Texel] = &[Texel::Float];
+}
+impl GlslTexels for u32 {
+    const TEXELS: &'static [Texel] = &[Texel::Uint];
+}
+impl GlslTexels for [f32; 2] {
+    const TEXELS: &'static [Texel] = &[Texel::Vec2];
+}
+impl GlslTexels for [f32; 4] {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4];
 }
 
 /// One member of a block: name, GLSL type, byte offset in the host struct, and the doc comment.

@@ -15,7 +15,7 @@ use super::aov::{AovSet, AovSums};
 use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
-use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceType, GpuContext};
+use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext};
 use crate::image::RgbImage;
 use crate::scene::{Camera, Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
@@ -272,6 +272,15 @@ fn is_hashed(binding: &BufferBinding) -> bool {
     !binding.is_written() && !matches!(binding.shape, Shape::UniformBlock(_))
 }
 
+/// Bytes one binding of `binding` can see on `device`: a texel buffer's as many texels as the
+/// device allows in one, a storage buffer's its storage range.
+fn binding_range(device: &DeviceInfo, binding: &BufferBinding) -> u64 {
+    match binding.texel_words() {
+        Some(words) => device.max_texel_buffer_range(words),
+        None => device.max_storage_buffer_range,
+    }
+}
+
 /// How each large array is split across bindings (see chunks.rs), or why the scene cannot fit the
 /// device: an array larger than its bindings can see, more storage bindings than the kernel may
 /// have, or more bytes than the device's memory. Checked before any upload; the message says how
@@ -287,12 +296,12 @@ fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = 
         match (binding.shape, binding.chunked_element()) {
             (Shape::UniformBlock(_), _) => {}
             (_, Some(element)) => {
-                let (range, alignment, count) = match binding.is_texel_buffer() {
-                    true => (device.max_texel_buffer_range, device.min_texel_buffer_offset_alignment, &mut texel_bindings),
-                    false => (range, device.min_storage_buffer_offset_alignment, &mut storage_bindings),
+                let (alignment, count) = match binding.is_texel_buffer() {
+                    true => (device.min_texel_buffer_offset_alignment, &mut texel_bindings),
+                    false => (device.min_storage_buffer_offset_alignment, &mut storage_bindings),
                 };
                 let plan = &mut plans[binding.buffer];
-                *plan = chunks::plan(element.bytes, bytes, range, alignment).map_err(|e| {
+                *plan = chunks::plan(element.bytes, bytes, binding_range(device, binding), alignment).map_err(|e| {
                     anyhow::anyhow!("{scene}: the {name} need {:.1} MiB but {} allows {e}", mib(bytes), device.name)
                 })?;
                 *count += plan.chunks;
@@ -343,8 +352,9 @@ impl<'a> Renderer<'a> {
     /// either way (tests/specialization.rs); only the speed differs.
     pub fn with_kernel(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet, choice: KernelChoice) -> Result<Self> {
         // One texel buffer holds every texture: it must fit the bindings it can be split across.
-        let texels = KernelBuffer::Texels.entry().chunked_element().expect("texels are chunked");
-        let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texels.bytes, ctx.info.max_storage_buffer_range));
+        let texels = KernelBuffer::Texels.entry();
+        let texel_bytes = texels.chunked_element().expect("texels may be split").bytes;
+        let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texel_bytes, binding_range(&ctx.info, texels)));
         let data = SceneData::new(scene, texture_budget);
         if data.texture_bytes() < data.texture_bytes_requested {
             eprintln!(
@@ -396,11 +406,11 @@ impl<'a> Renderer<'a> {
             match binding.chunked_element() {
                 Some(element) if plan.chunks > 1 => {
                     for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
-                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range, as_texels: binding.is_texel_buffer() });
+                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range, as_texels: binding.texel_words() });
                     }
                 }
                 // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => descriptors.push(Binding { as_texels: binding.is_texel_buffer(), ..Binding::whole(binding.binding, buffer) }),
+                _ => descriptors.push(Binding { as_texels: binding.texel_words(), ..Binding::whole(binding.binding, buffer) }),
             }
         }
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
