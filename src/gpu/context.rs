@@ -62,8 +62,10 @@ pub struct DeviceInfo {
     /// Texels one uniform texel buffer can see (`maxTexelBufferElements`, at most 2^31, which the
     /// kernel's `int` texel index reaches).
     pub max_texel_buffer_elements: u64,
-    /// Bytes any one binding may see at most: `ContextOptions::storage_binding_limit`, or no bound.
-    pub binding_limit: u64,
+    /// Bytes one texel buffer may see at most, whatever its texels' width:
+    /// `ContextOptions::storage_binding_limit` (which lowers `max_storage_buffer_range` itself), or
+    /// no bound.
+    pub texel_binding_limit: u64,
     pub min_texel_buffer_offset_alignment: u64,
     /// Texel buffers count against the sampled images a stage may bind.
     pub max_texel_buffers_per_stage: u32,
@@ -74,7 +76,7 @@ pub struct DeviceInfo {
 impl DeviceInfo {
     /// Bytes one uniform texel buffer of texels `words` wide can see.
     pub fn max_texel_buffer_range(&self, words: TexelWords) -> u64 {
-        (self.max_texel_buffer_elements * words.bytes()).min(self.binding_limit)
+        (self.max_texel_buffer_elements * words.bytes()).min(self.texel_binding_limit)
     }
 }
 
@@ -183,7 +185,7 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
         max_texel_buffer_elements: (props.limits.max_texel_buffer_elements as u64).min(1 << 31),
-        binding_limit: u64::MAX,
+        texel_binding_limit: u64::MAX,
         min_texel_buffer_offset_alignment: props.limits.min_texel_buffer_offset_alignment,
         max_texel_buffers_per_stage: props.limits.max_per_stage_descriptor_sampled_images,
         device_local_bytes,
@@ -296,7 +298,7 @@ impl GpuContext {
         let (physical, mut info) = choose(devices, options.device.as_deref())?;
         if let Some(limit) = options.storage_binding_limit {
             info.max_storage_buffer_range = info.max_storage_buffer_range.min(limit);
-            info.binding_limit = limit;
+            info.texel_binding_limit = limit;
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let family = match &surface {

@@ -324,7 +324,7 @@ fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = 
     }
     if texel_bindings > device.max_texel_buffers_per_stage {
         anyhow::bail!(
-            "{scene}: the scene needs {texel_bindings} texel buffer bindings but {} allows {} (its BVH and triangles are too large to split further)",
+            "{scene}: the scene needs {texel_bindings} texel buffer bindings but {} allows {} (its arrays are too large to split further)",
             device.name,
             device.max_texel_buffers_per_stage
         );
