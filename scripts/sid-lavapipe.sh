@@ -18,7 +18,17 @@ arch=x86_64-linux-gnu
 
 rm -rf "$dir"
 mkdir -p "$dir/apt/lists/partial" "$dir/apt/cache/archives/partial" "$dir/debs" "$dir/root"
-echo "deb [signed-by=/usr/share/keyrings/debian-archive-keyring.gpg] http://deb.debian.org/debian sid main" > "$dir/apt/sources.list"
+# sid from the machine's own Debian mirror and keyring (its bookworm entry, deb822 or one-line, as
+# scripts/current-lavapipe.sh finds it).
+if [ -f /etc/apt/sources.list.d/debian.sources ]; then
+    stanza=$(awk 'BEGIN { RS = "" } /Suites:[^\n]*bookworm( |\n|$)/ { print; exit }' /etc/apt/sources.list.d/debian.sources)
+    mirror=$(awk '/^URIs:/ { print $2; exit }' <<<"$stanza")
+    keyring=$(awk '/^Signed-By:/ { print $2; exit }' <<<"$stanza")
+else
+    mirror=$(grep -hE '^deb .* bookworm main' /etc/apt/sources.list | head -1 | sed -E 's/^deb (\[[^]]*\] )?([^ ]+) .*/\2/')
+fi
+[ -n "${mirror:-}" ] || { echo "no Debian bookworm entry in apt's sources to take the mirror from" >&2; exit 1; }
+echo "deb [signed-by=${keyring:-/usr/share/keyrings/debian-archive-keyring.gpg}] $mirror sid main" > "$dir/apt/sources.list"
 apt_private=(-o "Dir::Etc::sourcelist=$dir/apt/sources.list" -o Dir::Etc::sourceparts=- -o "Dir::State::Lists=$dir/apt/lists"
     -o "Dir::Cache=$dir/apt/cache" -o Debug::NoLocking=1 -o APT::Default-Release=sid)
 apt-get "${apt_private[@]}" update -qq
