@@ -137,6 +137,12 @@ bool intersect_shapes(uint first, uint count, uint instance, vec3 o, vec3 d, boo
 // stop 18). Their hits are in the shapes' own instance.
 #define FEW_SHAPE(i, kind) if (intersect_shape(kind, prims[i], i, frame.shape_instance, o, d, any_hit, hit)) return true;
 
+// The scene's few shapes against the ray, as intersect_shape: true when any_hit and one was hit.
+bool few_shapes_hit(vec3 o, vec3 d, bool any_hit, inout Hit hit) {
+    SCENE_FEW_SHAPES
+    return false;
+}
+
 #if SCENE_BVH == 0
 // Closest hit along o + t d with 0 < t < t_max, in a scene of a few shapes and nothing else
 // (src/render/features.rs, FEW_PRIMITIVES). With any_hit, returns at the first hit found. The
@@ -236,7 +242,7 @@ bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
 // is walked apart from the instances' BVHs, by a loop of its own or none.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
-    SCENE_FEW_SHAPES
+    if (few_shapes_hit(o, d, any_hit, hit)) return true;
     if (frame.node_count == 0u) return hit.prim != NO_INDEX;  // empty scene: no root node to test
 #if SCENE_TOP_LEVEL == 0
     // The scene's one instance (at the constant index 0, a load lavapipe makes once for all lanes).
