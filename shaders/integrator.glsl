@@ -104,9 +104,10 @@ Path path_start(vec3 origin, vec3 dir) {
 }
 
 // The path's vertex at what its ray (path.origin, path.dir) met: `found` and `hit`, as trace_ray
-// returns them. Adds what is seen there, samples the light (`shadow_wanted`: `shadow` is to be traced,
-// and its contribution added where it is not occluded, before the path's next vertex) and the
-// next direction. False once the path has ended: path.radiance, with the shadow ray's contribution,
+// returns them. Adds what is seen there, samples the light and the next direction. In a kernel
+// with the walk queue the light's shadow ray is handed back (`shadow_wanted`: `shadow` is to be
+// traced, and its contribution added where it is not occluded, before the path's next vertex);
+// in any other it is traced here. False once the path has ended: path.radiance, with the shadow ray's contribution,
 // is then the sample's estimate. The rng's dimensions are the vertex's (bounce_dimensions).
 bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first, bool found, Hit hit, out bool shadow_wanted, out ShadowRay shadow) {
     uint depth = path.depth;
@@ -177,6 +178,12 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
     if (nee && !lobe_is_delta(lobe) && depth + 1u < frame.max_bounces) {
         bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
         shadow_wanted = direct_light(lobe, path.dir, surface, path.throughput, rng, rays, shadow);
+#if !WALK_QUEUE
+        // Traced here where no queue takes it: held past the BSDF sample's state, it measured
+        // 1-4 % slower on lavapipe (docs/benchmarks.md, stop 24).
+        if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;
+        shadow_wanted = false;
+#endif
     }
     if (!sampled) return false;
     // Shading normals can send a ray through the geometric surface; such paths end here.
@@ -199,16 +206,15 @@ bool path_ray_wanted(Path path, inout Rng rng) {
     return true;
 }
 
-// Takes the path through its next vertex, tracing its ray and its shadow ray here. False once the
+// Takes the path through its next vertex, tracing its ray and its shadow ray (the kernel without
+// the walk queue). False once the
 // path has ended: path.radiance is then the sample's estimate.
 bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first) {
     if (!path_ray_wanted(path, rng)) return false;
     Hit hit;
     rays += 1u;
     bool found = trace_ray(path.origin, path.dir, 1e30, false, hit);
-    bool shadow_wanted;
+    bool shadow_wanted;  // false: without the queue, path_vertex traces its shadow ray itself
     ShadowRay shadow;
-    bool goes_on = path_vertex(path, rng, rays, first, found, hit, shadow_wanted, shadow);
-    if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;
-    return goes_on;
+    return path_vertex(path, rng, rays, first, found, hit, shadow_wanted, shadow);
 }
