@@ -44,23 +44,12 @@ void queue_clear() {
     }
 }
 
-// Whether a walk of `instance` can hit anything the few shapes' tests did not (walk_placed).
-bool instance_walked(uint instance) {
-    return !(SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && instances[instance].info.x == INSTANCE_PRIMITIVES);
-}
-
 // Queues walk `walk` of instance `instance` by the world ray o + t d, 0 < t < t_max, in the
 // instance's object space as walk_placed puts it.
 void queue_walk(uint walk, uint instance, vec3 o, vec3 d, float t_max, bool any_hit) {
     uvec4 info = instances[instance].info;
-    uint instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
-    vec3 ro = o;
-    vec3 rd = d;
-    if (instance_kind == INSTANCE_MESH) {
-        vec4 world_to_object[3] = instances[instance].world_to_object;
-        ro = affine_point(world_to_object, o);
-        rd = affine_vector(world_to_object, d);
-    }
+    vec3 ro, rd;
+    uint instance_kind = placed_ray(instance, info, o, d, ro, rd);
     queue_origin[walk] = vec4(ro, t_max);
     queue_dir[walk] = vec4(rd, any_hit ? 1.0 : 0.0);
     queue_instance[walk] = uvec2(instance | (instance_kind == INSTANCE_MESH ? INSTANCE_KIND_BIT : 0u), info.y);
@@ -82,7 +71,7 @@ uint queue_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit, out uint 
     for (uint k = 1u; k <= entered; ++k) {
         if (kth_entry(k, t0, t1, t2, t3) > hit.t) break;
         uint instance = kth_child(k, c0, c1, c2, c3).x;
-        if (!instance_walked(instance)) continue;
+        if (!instance_walked(instances[instance].info)) continue;
         if (count == 0u) i0 = instance;
         else if (count == 1u) i1 = instance;
         else if (count == 2u) i2 = instance;
@@ -153,26 +142,13 @@ void walk_queue() {
             float t_k = kth_entry(k, t0, t1, t2, t3);
             uvec2 c = kth_child(k, c0, c1, c2, c3);
             if (t_k > hit.t) continue;
-            uint first = c.x;
-            uint n = c.y;
-            if (n == WIDE_CHILD_INTERIOR) {
+            if (c.y == WIDE_CHILD_INTERIOR) {
                 if (next != NO_INDEX) stack[sp++] = next;
-                next = first;
-            } else if (SCENE_MESHES == 1 && (SCENE_WALKED_SHAPES == 0 || instance_kind == INSTANCE_MESH)) {
-                for (uint i = first; i < first + n; ++i) {
-                    MeshTriangle tri = load_mesh_triangles(i);
-                    vec2 bary;
-                    float t = intersect_triangle(tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, ro, rd, hit.t, bary);
-                    if (t > 0.0) {
-                        if (SCENE_ALPHA == 1 && !alpha_passes(tri, i, instance, bary, ro, rd)) continue;
-                        hit = Hit(t, i, instance, bary);
-                        if (any_hit) { done = true; break; }
-                    }
-                }
-            } else if (SCENE_WALKED_SHAPES == 1) {
-                done = intersect_shapes(first, n, instance, ro, rd, any_hit, hit);
+                next = c.x;
+            } else if (leaf_hit(c.x, c.y, instance, instance_kind, ro, rd, any_hit, hit)) {
+                done = true;
+                break;
             }
-            if (done) break;
         }
         // A shadow ray's walk ends at its first hit.
         if (done) { sp = 0u; next = NO_INDEX; }
