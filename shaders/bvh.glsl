@@ -137,6 +137,12 @@ bool intersect_shapes(uint first, uint count, uint instance, vec3 o, vec3 d, boo
 // stop 18). Their hits are in the shapes' own instance.
 #define FEW_SHAPE(i, kind) if (intersect_shape(kind, prims[i], i, frame.shape_instance, o, d, any_hit, hit)) return true;
 
+// The scene's few shapes against the ray, as intersect_shape: true when any_hit and one was hit.
+bool few_shapes_hit(vec3 o, vec3 d, bool any_hit, inout Hit hit) {
+    SCENE_FEW_SHAPES
+    return false;
+}
+
 #if SCENE_BVH == 0
 // Closest hit along o + t d with 0 < t < t_max, in a scene of a few shapes and nothing else
 // (src/render/features.rs, FEW_PRIMITIVES). With any_hit, returns at the first hit found. The
@@ -149,6 +155,28 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     return hit.prim != NO_INDEX;
 }
 #else
+// Intersects a leaf's `count` records from `first` (triangles of a placed mesh, or shapes), with
+// the ray (ro, rd) in the instance's object space, keeping the nearest hit before hit.t. True
+// when any_hit and one was hit: the walk ends there.
+bool leaf_hit(uint first, uint count, uint instance, uint instance_kind, vec3 ro, vec3 rd, bool any_hit, inout Hit hit) {
+    if (SCENE_MESHES == 1 && (SCENE_WALKED_SHAPES == 0 || instance_kind == INSTANCE_MESH)) {
+        for (uint i = first; i < first + count; ++i) {
+            LOOP_ITERATION();
+            MeshTriangle tri = load_mesh_triangles(i);
+            vec2 bary;
+            float t = intersect_triangle(tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, ro, rd, hit.t, bary);
+            if (t > 0.0) {
+                if (SCENE_ALPHA == 1 && !alpha_passes(tri, i, instance, bary, ro, rd)) continue;
+                hit = Hit(t, i, instance, bary);
+                if (any_hit) return true;
+            }
+        }
+    } else if (SCENE_WALKED_SHAPES == 1) {
+        return intersect_shapes(first, count, instance, ro, rd, any_hit, hit);
+    }
+    return false;
+}
+
 // Walks one instance's BVH from its root node `root`, with the ray (ro, rd) already in the
 // instance's object space, keeping the nearest hit before hit.t. True when any_hit and it was
 // hit: the caller returns at once. The walk knows nothing of instances, their transforms or the
@@ -187,20 +215,8 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
                 if (count == WIDE_CHILD_INTERIOR) {
                     if (next != NO_INDEX) stack[sp++] = next;
                     next = first;
-                } else if (SCENE_MESHES == 1 && (SCENE_WALKED_SHAPES == 0 || instance_kind == INSTANCE_MESH)) {
-                    for (uint i = first; i < first + count; ++i) {
-                        LOOP_ITERATION();
-                        MeshTriangle tri = load_mesh_triangles(i);
-                        vec2 bary;
-                        float t = intersect_triangle(tri.v0.xyz, tri.e1.xyz, tri.e2.xyz, ro, rd, hit.t, bary);
-                        if (t > 0.0) {
-                            if (SCENE_ALPHA == 1 && !alpha_passes(tri, i, instance, bary, ro, rd)) continue;
-                            hit = Hit(t, i, instance, bary);
-                            if (any_hit) return true;
-                        }
-                    }
-                } else if (SCENE_WALKED_SHAPES == 1) {
-                    if (intersect_shapes(first, count, instance, ro, rd, any_hit, hit)) return true;
+                } else if (leaf_hit(first, count, instance, instance_kind, ro, rd, any_hit, hit)) {
+                    return true;
                 }
             }
             if (next == NO_INDEX) break;
@@ -215,19 +231,31 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
 // transformed, not renormalised). The scene's own shapes are placed by the identity and keep the
 // world ray (loads are what costs, on lavapipe most of all); where they were tested before any
 // walk, their instance is not walked again.
-bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
-    uvec4 info = instances[instance].info;
-    if (SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && info.x == INSTANCE_PRIMITIVES) return false;
+// Instance `instance`'s kind, and the world ray o + t d in its space (ro, rd), as walk_placed walks it.
+uint placed_ray(uint instance, uvec4 info, vec3 o, vec3 d, out vec3 ro, out vec3 rd) {
     // Where the scene has meshes and no walked shapes every walked instance is a mesh, and where
     // it has no meshes none is: the kind is known when the kernel is compiled.
     uint instance_kind = SCENE_MESHES == 0 ? INSTANCE_PRIMITIVES : SCENE_WALKED_SHAPES == 0 ? INSTANCE_MESH : info.x;
-    vec3 ro = o;
-    vec3 rd = d;
+    ro = o;
+    rd = d;
     if (instance_kind == INSTANCE_MESH) {
         vec4 world_to_object[3] = instances[instance].world_to_object;
         ro = affine_point(world_to_object, o);
         rd = affine_vector(world_to_object, d);
     }
+    return instance_kind;
+}
+
+// Whether a walk of `instance` (its `info`) can hit anything the few shapes' tests did not.
+bool instance_walked(uvec4 info) {
+    return !(SCENE_PRIMITIVES == 1 && SCENE_WALKED_SHAPES == 0 && info.x == INSTANCE_PRIMITIVES);
+}
+
+bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
+    uvec4 info = instances[instance].info;
+    if (!instance_walked(info)) return false;
+    vec3 ro, rd;
+    uint instance_kind = placed_ray(instance, info, o, d, ro, rd);
     return walk_instance(info.y, instance, instance_kind, ro, rd, any_hit, hit);
 }
 
@@ -236,7 +264,7 @@ bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
 // is walked apart from the instances' BVHs, by a loop of its own or none.
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
-    SCENE_FEW_SHAPES
+    if (few_shapes_hit(o, d, any_hit, hit)) return true;
     if (frame.node_count == 0u) return hit.prim != NO_INDEX;  // empty scene: no root node to test
 #if SCENE_TOP_LEVEL == 0
     // The scene's one instance (at the constant index 0, a load lavapipe makes once for all lanes).

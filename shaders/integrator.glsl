@@ -31,33 +31,44 @@ float survival_probability(vec3 throughput) {
     return clamp(max3(throughput), frame.rr_survival_min, frame.rr_survival_max);
 }
 
+// A shadow ray of next-event estimation and what it adds to the path's radiance when nothing blocks it
+// (the path's throughput at the vertex times the MIS-weighted light sample).
+struct ShadowRay {
+    vec3 origin;
+    vec3 dir;
+    float t_max;
+    vec3 contribution;
+};
+
 // Next-event estimation at a vertex with a non-delta lobe: one light sample, MIS-weighted
-// against the lobe's own pdf for that direction.
-vec3 direct_light(Lobe lobe, vec3 d, Surface surface, inout Rng rng, inout uint rays) {
+// against the lobe's own pdf for that direction. False where the sample adds nothing whatever the
+// shadow ray meets; else `shadow` is the ray to trace and what the path gains if it is not occluded.
+bool direct_light(Lobe lobe, vec3 d, Surface surface, vec3 throughput, inout Rng rng, inout uint rays, out ShadowRay shadow) {
     LightSample ls;
-    if (!sample_direct(surface.point, rng, ls)) return vec3(0.0);
+    if (!sample_direct(surface.point, rng, ls)) return false;
     // As for sampled directions: the shading and geometric normals must agree on the side.
-    if (dot(ls.dir, surface.ns) * dot(ls.dir, surface.ng) <= 0.0) return vec3(0.0);
+    if (dot(ls.dir, surface.ns) * dot(ls.dir, surface.ng) <= 0.0) return false;
     float lobe_pdf;
     vec3 f_cos = eval_lobe(lobe, d, ls.dir, lobe_pdf);
-    if (max3(f_cos) <= 0.0) return vec3(0.0);
+    if (max3(f_cos) <= 0.0) return false;
     rays += 1u;
-    vec3 shadow_origin = offset_origin(surface.point, surface.ng, ls.dir);
-    vec3 shadow_dir = ls.dir;
+    shadow.origin = offset_origin(surface.point, surface.ng, ls.dir);
+    shadow.dir = ls.dir;
     float shadow_dist = ls.dist;
     // Aim from the offset origin at the sampled point: from the surface point, a ray that leaves
     // at a grazing angle reaches the light's plane up to offset / cos short of ls.dist, and the
     // light would shadow itself.
     if (ls.dist < 1e30) {
-        vec3 to_light = surface.point + ls.dist * ls.dir - shadow_origin;
+        vec3 to_light = surface.point + ls.dist * ls.dir - shadow.origin;
         shadow_dist = length(to_light);
-        shadow_dir = to_light / shadow_dist;
+        shadow.dir = to_light / shadow_dist;
     }
     // Stop short of the light so its own surface does not count as a blocker.
-    if (occluded(shadow_origin, shadow_dir, shadow_dist * (1.0 - 1e-4))) return vec3(0.0);
+    shadow.t_max = shadow_dist * (1.0 - 1e-4);
     // A delta light cannot be hit by BSDF sampling: this is its only strategy.
     float weight = ls.delta ? 1.0 : power_heuristic(ls.pdf, lobe_pdf);
-    return f_cos * ls.radiance * (weight / ls.pdf);
+    shadow.contribution = throughput * (f_cos * ls.radiance * (weight / ls.pdf));
+    return true;
 }
 
 // Denoiser features of one path (AOVs): albedo and camera-facing shading normal of the first vertex
@@ -92,16 +103,17 @@ Path path_start(vec3 origin, vec3 dir) {
     return Path(origin, dir, vec3(0.0), vec3(1.0), 0.0, origin, 0u);
 }
 
-// Takes the path through its next vertex. False once the path has ended: path.radiance is then
-// the sample's estimate.
-bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first) {
+// The path's vertex at what its ray (path.origin, path.dir) met: `found` and `hit`, as trace_ray
+// returns them. Adds what is seen there, samples the light and the next direction. In a kernel
+// with the walk queue the light's shadow ray is handed back (`shadow_wanted`: `shadow` is to be
+// traced, and its contribution added where it is not occluded, before the path's next vertex);
+// in any other it is traced here. False once the path has ended: path.radiance, with the shadow ray's contribution,
+// is then the sample's estimate. The rng's dimensions are the vertex's (bounce_dimensions).
+bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first, bool found, Hit hit, out bool shadow_wanted, out ShadowRay shadow) {
     uint depth = path.depth;
-    if (depth >= frame.max_bounces) return false;
     bool nee = frame.nee != 0u;
-    bounce_dimensions(rng, depth, 0u, DIMS_SCATTER);
-    Hit hit;
-    rays += 1u;
-    if (!trace_ray(path.origin, path.dir, 1e30, false, hit)) {
+    shadow_wanted = false;
+    if (!found) {
         float weight = 1.0;
         if (nee && path.bsdf_pdf > 0.0 && environment_sampled()) {
             weight = power_heuristic(path.bsdf_pdf, frame.env_selection_probability * environment_pdf(path.dir));
@@ -165,7 +177,13 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
     // max_bounces is the longest path in segments, as Mitsuba's max_depth (and MIS stays whole).
     if (nee && !lobe_is_delta(lobe) && depth + 1u < frame.max_bounces) {
         bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
-        path.radiance += path.throughput * direct_light(lobe, path.dir, surface, rng, rays);
+        shadow_wanted = direct_light(lobe, path.dir, surface, path.throughput, rng, rays, shadow);
+#if !WALK_QUEUE
+        // Traced here where no queue takes it: held past the BSDF sample's state, it measured
+        // 1-4 % slower on lavapipe (docs/benchmarks.md, stop 24).
+        if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;
+        shadow_wanted = false;
+#endif
     }
     if (!sampled) return false;
     // Shading normals can send a ray through the geometric surface; such paths end here.
@@ -178,4 +196,25 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
     path.dir = s.dir;
     path.depth = depth + 1u;
     return true;
+}
+
+// Whether the path goes on to trace its next ray: max_bounces is the longest path in segments.
+// Sets the rng to the next vertex's dimensions.
+bool path_ray_wanted(Path path, inout Rng rng) {
+    if (path.depth >= frame.max_bounces) return false;
+    bounce_dimensions(rng, path.depth, 0u, DIMS_SCATTER);
+    return true;
+}
+
+// Takes the path through its next vertex, tracing its ray and its shadow ray (the kernel without
+// the walk queue). False once the
+// path has ended: path.radiance is then the sample's estimate.
+bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first) {
+    if (!path_ray_wanted(path, rng)) return false;
+    Hit hit;
+    rays += 1u;
+    bool found = trace_ray(path.origin, path.dir, 1e30, false, hit);
+    bool shadow_wanted;  // false: without the queue, path_vertex traces its shadow ray itself
+    ShadowRay shadow;
+    return path_vertex(path, rng, rays, first, found, hit, shadow_wanted, shadow);
 }

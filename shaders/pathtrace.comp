@@ -5,10 +5,12 @@
 // samples that are missing, and the sums are bit for bit those of one uninterrupted render.
 // The host prepends `#define BVH_MAX_DEPTH` (the BVH builder's bound), `AOVS` (1: also
 // accumulate the denoiser features, the AOV sums; 0: a kernel without them),
-// `COUNT_LOOP_ITERATIONS` (1 on devices that end loops early) and the `SCENE_*` features the
-// scene uses (src/render/features.rs: what is 0 is compiled out).
+// `COUNT_LOOP_ITERATIONS` (1 on devices that end loops early), `WALK_QUEUE` (1: rays walked from
+// a queue the subgroup shares, walk_queue.glsl, and `QUEUE_WALKS_PER_RAY`; src/render/walk_queue.rs)
+// and the `SCENE_*` features the scene uses (src/render/features.rs: what is 0 is compiled out).
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
 // texelFetch of the texel buffers the walk and shading read their records from (bindings.rs).
 #extension GL_EXT_samplerless_texture_functions : require
 
@@ -22,6 +24,13 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "textures.glsl"
 #include "alpha.glsl"
 #include "bvh.glsl"
+#if WALK_QUEUE
+// The queue's rounds must run whole on every lane of a subgroup: only where loops run to their end.
+#if COUNT_LOOP_ITERATIONS
+#error "WALK_QUEUE needs a device whose loops run to their end"
+#endif
+#include "walk_queue.glsl"
+#endif
 #include "surface.glsl"
 #include "materials.glsl"
 #include "environment.glsl"
@@ -55,70 +64,94 @@ uint group_row_of(uint r, uint n) {
     return (rest % per_stripe) * stripes + longer + rest / per_stripe;
 }
 
+// A pixel's running sums and what its samples add to them.
+struct PixelSums {
+    vec4 sum;        // radiance, and the sample count in w
+    uint nonfinite;  // samples whose radiance was dropped as NaN or infinite
+#if AOVS
+    vec4 albedo_depth;
+    vec4 normal_hits;
+#endif
+};
+
+// Adds one sample, its radiance and its denoiser features (its path's first vertex, AOVs), to the
+// pixel's sums.
+void add_sample(inout PixelSums sums, vec3 radiance, FirstHit first_hit) {
+    // Optional firefly clamp (biased): scale down, keeping the sample's colour.
+    float peak = max3(radiance);
+    float clamp_max = frame.radiance_clamp;
+    if (clamp_max > 0.0 && peak > clamp_max) radiance *= clamp_max / peak;
+    // A NaN or infinity, in the sample or in the sum it would make (an emission near the float
+    // range), would poison the pixel for good; drop that sample's radiance, count it.
+    vec3 next = sums.sum.rgb + radiance;
+    if (any(isnan(next)) || any(isinf(next))) {
+        radiance = vec3(0.0);
+        sums.nonfinite += 1u;
+    }
+    sums.sum += vec4(radiance, 1.0);
+#if AOVS
+    sums.albedo_depth += vec4(first_hit.albedo, first_hit.depth);
+    sums.normal_hits += vec4(first_hit.normal, first_hit.hit ? 1.0 : 0.0);
+#endif
+}
+
+#if WALK_QUEUE
+#include "queued_paths.glsl"
+#endif
+
 void main() {
     uint band_row = group_row_of(gl_WorkGroupID.y, gl_NumWorkGroups.y) * gl_WorkGroupSize.y + gl_LocalInvocationID.y;
     uvec2 pixel = uvec2(gl_GlobalInvocationID.x, band_row + pass.row_offset);
     uint width = frame.width;
     bool inside = pixel.x < width && band_row < pass.row_count && pixel.y < frame.height;
     uint index = pixel.y * width + pixel.x;
-    vec4 sum = inside ? load_accum(index) : vec4(0.0);
+    PixelSums sums;
+    sums.sum = inside ? load_accum(index) : vec4(0.0);
+    sums.nonfinite = 0u;
+#if AOVS
+    sums.albedo_depth = inside ? load_aov_albedo_depth(index) : vec4(0.0);
+    sums.normal_hits = inside ? load_aov_normal_hits(index) : vec4(0.0);
+#endif
     // Counts are exact in a float up to 2^24, which the host does not exceed.
-    uint first = uint(sum.w);
+    uint first = uint(sums.sum.w);
     uint target = inside ? pass.target_samples : first;
     uint rays = 0u;
-    uint nonfinite = 0u;
-    float clamp_max = frame.radiance_clamp;
-#if AOVS
-    vec4 albedo_depth = inside ? load_aov_albedo_depth(index) : vec4(0.0);
-    vec4 normal_hits = inside ? load_aov_normal_hits(index) : vec4(0.0);
-#endif
-    // One vertex an iteration; a lane whose path ends adds its sample and starts the next at once,
-    // so the lanes of a subgroup stay busy until each has done all its samples, rather than each
-    // sample waiting for the subgroup's longest path. The sums are added in sample order as before.
     uint s = first;
+#if WALK_QUEUE
+    render_queued_samples(pixel, index, s, target, sums, rays);
+#else
     Rng rng;
     Path path;
     FirstHit first_hit;
+    // One vertex an iteration; a lane whose path ends adds its sample and starts the next at once,
+    // so the lanes of a subgroup stay busy until each has done all its samples, rather than each
+    // sample waiting for the subgroup's longest path. The sums are added in sample order as before.
     bool starting = true;
     while (s < target) {
         LOOP_ITERATION();
         if (starting) start_sample(pixel, index, s, rng, path, first_hit);
         starting = false;
         if (path_step(path, rng, rays, first_hit)) continue;
-        vec3 radiance = path.radiance;
-        // Optional firefly clamp (biased): scale down, keeping the sample's colour.
-        float peak = max3(radiance);
-        if (clamp_max > 0.0 && peak > clamp_max) radiance *= clamp_max / peak;
-        // A NaN or infinity, in the sample or in the sum it would make (an emission near the float
-        // range), would poison the pixel for good; drop that sample's radiance, count it.
-        vec3 next = sum.rgb + radiance;
-        if (any(isnan(next)) || any(isinf(next))) {
-            radiance = vec3(0.0);
-            nonfinite += 1u;
-        }
-        sum += vec4(radiance, 1.0);
-#if AOVS
-        albedo_depth += vec4(first_hit.albedo, first_hit.depth);
-        normal_hits += vec4(first_hit.normal, first_hit.hit ? 1.0 : 0.0);
-#endif
+        add_sample(sums, path.radiance, first_hit);
         ++s;
         starting = true;
     }
+#endif
     report_loop_iterations();
     if (!inside) return;
     atomicAdd(stats.ray_count, rays);
     // Cut short (the sample loop ended early, or any loop did): keep the samples the pixel held,
     // so that the host's repeat adds exactly the missing ones. It sees this pixel missing from
     // pixels_complete.
-    if (uint(sum.w) < target || !loop_limit_intact()) return;
+    if (uint(sums.sum.w) < target || !loop_limit_intact()) return;
     if (target > first) {
-        store_accum(index, sum);
+        store_accum(index, sums.sum);
 #if AOVS
-        store_aov_albedo_depth(index, albedo_depth);
-        store_aov_normal_hits(index, normal_hits);
+        store_aov_albedo_depth(index, sums.albedo_depth);
+        store_aov_normal_hits(index, sums.normal_hits);
 #endif
         atomicAdd(stats.samples_added, target - first);
-        if (nonfinite > 0u) atomicAdd(stats.nonfinite_samples, nonfinite);
+        if (sums.nonfinite > 0u) atomicAdd(stats.nonfinite_samples, sums.nonfinite);
     }
     atomicAdd(stats.pixels_complete, 1u);
 }

@@ -55,6 +55,11 @@ pub struct DeviceInfo {
     /// measurement ran on, which the device name does not say. Empty on devices below Vulkan 1.2.
     pub driver_name: String,
     pub driver_info: String,
+    /// The driver's identity (VK_KHR_driver_properties; `None` below Vulkan 1.2): kernels that
+    /// rely on how one driver runs them ask it (render/walk_queue.rs).
+    pub driver_id: Option<vk::DriverId>,
+    /// Bytes of shared memory a workgroup may use (`maxComputeSharedMemorySize`).
+    pub max_compute_shared_memory_size: u32,
     /// Bytes one storage-buffer binding can see (lowered by `ContextOptions::storage_binding_limit`).
     pub max_storage_buffer_range: u64,
     pub min_storage_buffer_offset_alignment: u64,
@@ -172,7 +177,7 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         .max()
         .unwrap_or(0);
     let v = props.api_version;
-    let (driver_name, driver_info) = driver_properties(instance, pd, v);
+    let (driver_name, driver_info, driver_id) = driver_properties(instance, pd, v);
     DeviceInfo {
         index,
         name: props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
@@ -181,6 +186,8 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         driver: format!("{:#x}", props.driver_version),
         driver_name,
         driver_info,
+        driver_id,
+        max_compute_shared_memory_size: props.limits.max_compute_shared_memory_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
@@ -193,17 +200,17 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
     }
 }
 
-/// The driver's name and version text; chained only where the device supports Vulkan 1.2, which
-/// made the structure core (the instance is created for 1.2).
-fn driver_properties(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> (String, String) {
+/// The driver's name, version text and identity; chained only where the device supports Vulkan
+/// 1.2, which made the structure core (the instance is created for 1.2).
+fn driver_properties(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> (String, String, Option<vk::DriverId>) {
     if api_version < vk::API_VERSION_1_2 {
-        return (String::new(), String::new());
+        return (String::new(), String::new(), None);
     }
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
     unsafe { instance.get_physical_device_properties2(pd, &mut props) };
     let text = |c: Result<&std::ffi::CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
-    (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()))
+    (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()), Some(driver.driver_id))
 }
 
 fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {

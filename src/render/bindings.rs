@@ -297,11 +297,13 @@ mod tests {
     use crate::render::spirv_reflect::{block_variables, texel_buffer_variables, StorageClass};
     use std::collections::BTreeMap;
 
-    const VARIANTS: [KernelVariant; 4] = [
-        KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL },
-        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures::ALL },
-        KernelVariant { aovs: false, count_loop_iterations: true, features: SceneFeatures::ALL },
-        KernelVariant { aovs: true, count_loop_iterations: true, features: SceneFeatures::ALL },
+    const VARIANTS: [KernelVariant; 5] = [
+        KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None },
+        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None },
+        KernelVariant { aovs: false, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None },
+        KernelVariant { aovs: true, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None },
+        // The walk queue's kernel (walk_queue.rs): a top level of its root alone.
+        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2 }) },
     ];
 
     /// What a binding holds: a block of this storage class, or a texel buffer.

@@ -5,6 +5,7 @@
 use super::bindings;
 use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
+use super::walk_queue::WalkQueue;
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{anyhow, Context as _, Result};
@@ -36,6 +37,8 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("environment.glsl", include_str!("../../shaders/environment.glsl")),
     ("camera.glsl", include_str!("../../shaders/camera.glsl")),
     ("integrator.glsl", include_str!("../../shaders/integrator.glsl")),
+    ("walk_queue.glsl", include_str!("../../shaders/walk_queue.glsl")),
+    ("queued_paths.glsl", include_str!("../../shaders/queued_paths.glsl")),
 ];
 
 /// The text of the kernel's shader file `name`: from `$CAUSTICA_SHADER_DIR` when it is set, else as
@@ -70,7 +73,8 @@ const INTERFACE_FILE: &str = "interface.glsl";
 /// Its code is the general kernel's: every scene feature compiled in.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
     let interface = bindings::glsl(&UNSPLIT, KernelVariant::default());
-    assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &SceneFeatures::ALL.defines())
+    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).collect();
+    assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
 }
 
 /// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
@@ -86,6 +90,8 @@ pub struct KernelVariant {
     pub count_loop_iterations: bool,
     /// What of the kernel the scene uses (features.rs); the default is the general kernel.
     pub features: SceneFeatures,
+    /// Rays walked from a queue the subgroup shares (walk_queue.rs), or each lane's by itself.
+    pub walk_queue: Option<WalkQueue>,
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.
@@ -97,6 +103,7 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
         ("COUNT_LOOP_ITERATIONS", u32::from(variant.count_loop_iterations).to_string()),
     ];
     defines.extend(variant.features.defines());
+    defines.extend(WalkQueue::defines(variant.walk_queue));
     assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)
 }
 

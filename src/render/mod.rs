@@ -17,6 +17,7 @@ mod scene_data;
 #[cfg(test)]
 mod spirv_reflect;
 mod textured_emission;
+mod walk_queue;
 
 pub use chunks::UNSPLIT;
 pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};
@@ -26,6 +27,7 @@ pub use renderer::{frame_params, mean_image, GeometryReport, KernelChoice, Rende
 pub use scene_data::SceneData;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
+pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling
 /// make their distributions proportional to (lights.glsl evaluates the same weights in the kernel).

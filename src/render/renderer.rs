@@ -15,6 +15,7 @@ use super::aov::{AovSet, AovSums};
 use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
+use super::walk_queue::WalkQueue;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext};
 use crate::image::RgbImage;
 use crate::scene::{Camera, Filter, Sampler, Scene};
@@ -54,6 +55,8 @@ pub struct Renderer<'a> {
     kernel: Option<ComputeKernel>,
     /// What the kernel was compiled for.
     pub features: SceneFeatures,
+    /// The walk queue the kernel was compiled with, if any (walk_queue.rs).
+    pub walk_queue: Option<WalkQueue>,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
     buffers: Vec<(KernelBuffer, Buffer)>,
     aovs: AovSet,
@@ -372,7 +375,8 @@ impl<'a> Renderer<'a> {
             KernelChoice::ForScene => SceneFeatures::of(&data),
             KernelChoice::General => SceneFeatures::ALL,
         };
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features };
+        let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), &features, data.acceleration.nodes.first(), &data.acceleration.instances);
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
         let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
@@ -416,7 +420,7 @@ impl<'a> Renderer<'a> {
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), features, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        Ok(Self { ctx, kernel: Some(kernel), features, walk_queue, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
