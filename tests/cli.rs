@@ -330,6 +330,7 @@ fn bench_of_one_scene_keeps_its_json_keys() {
     let keys = [
         "scene", "device", "device_type", "width", "height", "samples", "aovs", "setup_seconds", "seconds", "samples_per_second",
         "rays_per_second", "rays_per_sample", "nonfinite_samples", "loop_limit", "repeated_dispatches", "primitives", "gpu_bytes",
+        "walk_queue",
     ];
     for key in keys {
         assert!(summary.get(key).is_some(), "{key} missing: {summary}");

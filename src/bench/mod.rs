@@ -15,7 +15,7 @@ pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcom
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext};
 use crate::process_time::cpu_seconds;
-use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures};
+use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue};
 use crate::scene::Scene;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -44,6 +44,8 @@ pub struct Measurement {
     pub features: SceneFeatures,
     /// The order its workgroups took the image's rows in.
     pub group_order: GroupOrder,
+    /// The walk queue the kernel was compiled with (lavapipe, a flat top level), or none.
+    pub walk_queue: Option<WalkQueue>,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
     pub setup_seconds: f64,
     /// Wall time of the timed dispatches, fences included.
@@ -93,6 +95,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         kernel: setup.choice,
         features: renderer.features,
         group_order: renderer.group_order(),
+        walk_queue: renderer.walk_queue,
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
@@ -136,6 +139,8 @@ impl Measurement {
             },
             "kernel_features": self.features.names(),
             "group_order": self.group_order.label(),
+            // Instances a ray may walk through the queue; null: each lane walks its own rays.
+            "walk_queue": self.walk_queue.map(|q| q.walks_per_ray),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,

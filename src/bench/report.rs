@@ -32,7 +32,8 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         KernelChoice::ForScene => "compiled for the scene",
         KernelChoice::General => "general (--general-kernel)",
     };
-    println!("kernel:       {kernel}: {}; workgroup rows {}", m.features.names().join(", "), m.group_order.label());
+    let walks = m.walk_queue.map_or(String::new(), |q| format!("; rays walked from the subgroup's queue (up to {} instances a ray)", q.walks_per_ray));
+    println!("kernel:       {kernel}: {}; workgroup rows {}{walks}", m.features.names().join(", "), m.group_order.label());
     print_geometry(&m.geometry);
     println!("setup:        {:.3} s (load excluded: BVH, upload, kernel compile)", m.setup_seconds);
     let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));
