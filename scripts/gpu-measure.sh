@@ -3,43 +3,92 @@
 # few minutes (no cargo, no network there). Prepare here:
 #   echo /.gl/ >> .git/info/exclude; echo /.run/ >> .git/info/exclude; mkdir -p .gl .run
 #   (cd .gl && apt-get download libvulkan1)        # the Vulkan loader, which the machine lacks
-#   cargo build --release && cp target/release/caustica .run/
+#   cargo build --release && cp target/release/caustica .run/ && strip .run/caustica
+# and, optionally, in .run/ as well:
+#   data.tar.xz     the shared data's meshes and maps the scenes read (tar of paths relative to
+#                   ../shared/data), so the mesh scenes run too
+#   mitsuba.tar.xz  Mitsuba 3 and Dr.Jit for the machine's python3, unpacked from their wheels (the
+#                   variants and plugins this comparison does not use may be left out), so Mitsuba's
+#                   `cuda_ad_rgb` renders the same scenes on the same GPU in the same run
 # then run there, carrying .gl and .run:
 #   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; bash scripts/gpu-measure.sh
-# Everything goes to $OUT (default ./gpu-out): the device list, the suite at 1024x768 (the issue's
-# size), the smallpt anchor scene at 1024x768, 256 spp, and the A/Bs the kernel has switches for
-# (general kernel, workgroup row order), each as `bench --json`. Rates come from the device's own
-# timestamps (`samples_per_gpu_second`). SIZE=WxH and SPP shrink it for a dry run on lavapipe.
+# Everything goes to $OUT (default ./gpu-out) as one archive, results.tar.gz (the device hands back
+# few files), plus log.txt: the device list, `nvidia-smi`, the suite at 1024x768 (the issue's size),
+# the smallpt anchor scene at 1024x768, 256 spp, the A/Bs the kernel has switches for (general
+# kernel, workgroup row order), each as `bench --json`, small renders to check by eye and against
+# lavapipe's, and with Mitsuba, `scripts/mitsuba_compare.py --variant cuda_ad_rgb` per scene.
+# Rates come from the device's own timestamps (`samples_per_gpu_second`). SIZE=WxH and SPP shrink
+# it for a dry run on lavapipe; MITSUBA_VARIANT=llvm_ad_rgb tries the comparison on a CPU.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"
 mkdir -p "$out"
-caustica="${CAUSTICA:-.run/caustica}"
-[ -x "$caustica" ] || caustica=target/release/caustica
+results="$(mktemp -d)"
+caustica="$(realpath "${CAUSTICA:-.run/caustica}" 2>/dev/null)"
+[ -x "$caustica" ] || caustica="$(realpath target/release/caustica)"
 size="${SIZE:-1024x768}"
 width="${size%x*}"
 height="${size#*x}"
 spp="${SPP:-256}"
+quarter=$(( spp / 4 > 0 ? spp / 4 : 1 ))
+# No single measurement may hold the rest up: the device's time is short.
+limit="${LIMIT_S:-150}"
 if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
     export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi
+if [ -f .run/data.tar.xz ]; then
+    mkdir -p /tmp/caustica-data && tar -xJf .run/data.tar.xz -C /tmp/caustica-data
+    export CAUSTICA_DATA=/tmp/caustica-data
+fi
 
-log() { echo "== $*" | tee -a "$out/log.txt"; }
+log() { echo "== $*" | tee -a "$results/log.txt"; }
 # One measurement: NAME, then the bench arguments. A failure is logged, and the rest still run.
 measure() {
     local name=$1
     shift
     log "$name: caustica bench $*"
-    if ! "$caustica" bench --json "$@" >"$out/$name.json" 2>>"$out/log.txt"; then
+    if ! timeout "$limit" "$caustica" bench --json "$@" >"$results/$name.json" 2>>"$results/log.txt"; then
         log "$name FAILED (exit $?)"
     fi
 }
+# One image: NAME, then the render arguments (small: they are checked against lavapipe's at home).
+render() {
+    local name=$1
+    shift
+    log "$name: caustica render $*"
+    timeout "$limit" "$caustica" render "$@" -o "$results/$name.pfm" -q --json >"$results/$name-render.json" 2>>"$results/log.txt" || log "$name FAILED (exit $?)"
+}
+# One side-by-side with Mitsuba: NAME, then mitsuba_compare.py's arguments.
+compare() {
+    local name=$1
+    shift
+    log "$name: mitsuba_compare.py $*"
+    timeout "$limit" python3 scripts/mitsuba_compare.py --caustica "$caustica" --variant "${MITSUBA_VARIANT:-cuda_ad_rgb}" --json --out "/tmp/compare-$name" "$@" >"$results/$name.json" 2>>"$results/log.txt" || log "$name FAILED (exit $?)"
+}
 
 log "$(date -u) $(uname -m)"
-"$caustica" devices 2>&1 | tee -a "$out/log.txt"
+(nvidia-smi || true) >>"$results/log.txt" 2>&1
+"$caustica" devices 2>&1 | tee -a "$results/log.txt"
 measure smallpt scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
 measure smallpt-in-order scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --group-order in-order
 measure smallpt-interleaved scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --group-order interleaved
 measure smallpt-general scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --general-kernel
-measure suite --suite --width "$width" --height "$height" --spp "$(( spp / 4 > 0 ? spp / 4 : 1 ))"
+measure suite --suite --width "$width" --height "$height" --spp "$quarter"
+measure smallpt-again scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
+render smallpt-image scenes/smallpt.toml --width 256 --height 192 --spp 256 --seed 7
+render bunny-cornell-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
+if [ -f .run/mitsuba.tar.xz ]; then
+    mkdir -p /tmp/mitsuba-site && tar -xJf .run/mitsuba.tar.xz -C /tmp/mitsuba-site
+    export PYTHONPATH=/tmp/mitsuba-site${PYTHONPATH:+:$PYTHONPATH}
+fi
+if python3 -c 'import mitsuba' 2>>"$results/log.txt"; then
+    compare mitsuba-smallpt scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --reference-spp $(( spp * 4 ))
+    compare mitsuba-cornell scenes/cornell.toml --width "$width" --height "$height" --spp "$spp" --reference-spp $(( spp * 4 ))
+    compare mitsuba-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --reference-spp $(( quarter * 4 ))
+    compare mitsuba-bunny-sky scenes/bunny_sky.toml --width "$width" --height "$height" --spp "$quarter" --reference-spp $(( quarter * 4 ))
+else
+    log "no Mitsuba: the side-by-side is left out"
+fi
 log "done $(date -u)"
+cp "$results/log.txt" "$out/log.txt"
+tar -czf "$out/results.tar.gz" -C "$results" .
