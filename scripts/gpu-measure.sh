@@ -2,7 +2,9 @@
 # The speed issue's GPU measurements in one run, for a session that is lent a GPU machine for a
 # few minutes (no cargo, no network there). Prepare here:
 #   echo /.gl/ >> .git/info/exclude; echo /.run/ >> .git/info/exclude; mkdir -p .gl .run
-#   (cd .gl && apt-get download libvulkan1)        # the Vulkan loader, which the machine lacks
+#   (cd .gl && apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
+#        # the Vulkan loader, and glvnd, without which NVIDIA's driver (libGLX_nvidia) creates no
+#        # Vulkan instance: the loader then reports no driver at all
 #   cargo build --release && cp target/release/caustica .run/ && strip .run/caustica
 # and, optionally, in .run/ as well:
 #   data.tar.xz     the shared data's meshes and maps the scenes read (tar of paths relative to
@@ -18,7 +20,8 @@
 # kernel, workgroup row order), each as `bench --json`, small renders to check by eye and against
 # lavapipe's, and with Mitsuba, `scripts/mitsuba_compare.py --variant cuda_ad_rgb` per scene.
 # Rates come from the device's own timestamps (`samples_per_gpu_second`). SIZE=WxH and SPP shrink
-# it for a dry run on lavapipe; MITSUBA_VARIANT=llvm_ad_rgb tries the comparison on a CPU.
+# it for a dry run on lavapipe; MITSUBA_VARIANT=llvm_ad_rgb tries the comparison on a CPU; STEPS
+# (default "caustica mitsuba") picks the parts to run.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"
@@ -35,6 +38,9 @@ quarter=$(( spp / 4 > 0 ? spp / 4 : 1 ))
 limit="${LIMIT_S:-150}"
 if [ -z "${VK_DRIVER_FILES:-}" ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
     export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+fi
+if [ -z "${__EGL_VENDOR_LIBRARY_FILENAMES:-}" ] && [ -f /usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json ]; then
+    export __EGL_VENDOR_LIBRARY_FILENAMES=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
 fi
 if [ -f .run/data.tar.xz ]; then
     mkdir -p /tmp/caustica-data && tar -xJf .run/data.tar.xz -C /tmp/caustica-data
@@ -68,26 +74,36 @@ compare() {
 
 log "$(date -u) $(uname -m)"
 (nvidia-smi || true) >>"$results/log.txt" 2>&1
-"$caustica" devices 2>&1 | tee -a "$results/log.txt"
-measure smallpt scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
-measure smallpt-in-order scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --group-order in-order
-measure smallpt-interleaved scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --group-order interleaved
-measure smallpt-general scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --general-kernel
-measure suite --suite --width "$width" --height "$height" --spp "$quarter"
-measure smallpt-again scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
-render smallpt-image scenes/smallpt.toml --width 256 --height 192 --spp 256 --seed 7
-render bunny-cornell-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
-if [ -f .run/mitsuba.tar.xz ]; then
-    mkdir -p /tmp/mitsuba-site && tar -xJf .run/mitsuba.tar.xz -C /tmp/mitsuba-site
-    export PYTHONPATH=/tmp/mitsuba-site${PYTHONPATH:+:$PYTHONPATH}
+if ! "$caustica" devices 2>&1 | tee -a "$results/log.txt"; then
+    # Without a device nothing below can run: say why the loader found none, and stop.
+    VK_LOADER_DEBUG=error,warn,driver "$caustica" devices 2>&1 | tee -a "$results/log.txt"
+    cp "$results/log.txt" "$out/log.txt"
+    exit 1
 fi
-if python3 -c 'import mitsuba' 2>>"$results/log.txt"; then
-    compare mitsuba-smallpt scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --reference-spp $(( spp * 4 ))
-    compare mitsuba-cornell scenes/cornell.toml --width "$width" --height "$height" --spp "$spp" --reference-spp $(( spp * 4 ))
-    compare mitsuba-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --reference-spp $(( quarter * 4 ))
-    compare mitsuba-bunny-sky scenes/bunny_sky.toml --width "$width" --height "$height" --spp "$quarter" --reference-spp $(( quarter * 4 ))
-else
-    log "no Mitsuba: the side-by-side is left out"
+steps=" ${STEPS:-caustica mitsuba} "
+if [[ "$steps" == *" caustica "* ]]; then
+    measure smallpt scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
+    measure smallpt-in-order scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --group-order in-order
+    measure smallpt-interleaved scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --group-order interleaved
+    measure smallpt-general scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --general-kernel
+    measure suite --suite --width "$width" --height "$height" --spp "$quarter"
+    measure smallpt-again scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
+    render smallpt-image scenes/smallpt.toml --width 256 --height 192 --spp 256 --seed 7
+    render bunny-cornell-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
+fi
+if [[ "$steps" == *" mitsuba "* ]]; then
+    if [ -f .run/mitsuba.tar.xz ]; then
+        mkdir -p /tmp/mitsuba-site && tar -xJf .run/mitsuba.tar.xz -C /tmp/mitsuba-site
+        export PYTHONPATH=/tmp/mitsuba-site${PYTHONPATH:+:$PYTHONPATH}
+    fi
+    if python3 -c 'import mitsuba' 2>>"$results/log.txt"; then
+        compare mitsuba-smallpt scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp" --reference-spp $(( spp * 4 ))
+        compare mitsuba-cornell scenes/cornell.toml --width "$width" --height "$height" --spp "$spp" --reference-spp $(( spp * 4 ))
+        compare mitsuba-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --reference-spp $(( quarter * 4 ))
+        compare mitsuba-bunny-sky scenes/bunny_sky.toml --width "$width" --height "$height" --spp "$quarter" --reference-spp $(( quarter * 4 ))
+    else
+        log "no Mitsuba: the side-by-side is left out"
+    fi
 fi
 log "done $(date -u)"
 cp "$results/log.txt" "$out/log.txt"
