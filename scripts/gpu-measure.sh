@@ -21,7 +21,8 @@
 # lavapipe's, and with Mitsuba, `scripts/mitsuba_compare.py --variant cuda_ad_rgb` per scene.
 # Rates come from the device's own timestamps (`samples_per_gpu_second`). SIZE=WxH and SPP shrink
 # it for a dry run on lavapipe; MITSUBA_VARIANT=llvm_ad_rgb tries the comparison on a CPU; STEPS
-# (default "caustica mitsuba") picks the parts to run.
+# (default "caustica mitsuba") picks the parts to run; "workgroups" is the A/B of the kernel's
+# workgroup shapes (CAUSTICA_WORKGROUP), the suite and the anchor scene with each.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"
@@ -90,6 +91,17 @@ if [[ "$steps" == *" caustica "* ]]; then
     measure smallpt-again scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
     render smallpt-image scenes/smallpt.toml --width 256 --height 192 --spp 256 --seed 7
     render bunny-cornell-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
+fi
+if [[ "$steps" == *" workgroups "* ]]; then
+    # The default shape first and last: the spread between the two is the run's noise.
+    for shape in default 16x8 8x16 32x4 16x4 8x4 32x2 default; do
+        name=${shape/default/default-$SECONDS}
+        if [ "$shape" = default ]; then unset CAUSTICA_WORKGROUP; else export CAUSTICA_WORKGROUP=$shape; fi
+        measure "wg-$name-smallpt" scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
+        measure "wg-$name-suite" --suite --width "$width" --height "$height" --spp "$quarter"
+    done
+    unset CAUSTICA_WORKGROUP
+    measure general-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --general-kernel
 fi
 if [[ "$steps" == *" mitsuba "* ]]; then
     if [ -f .run/mitsuba.tar.xz ]; then

@@ -7,7 +7,7 @@
 mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
-use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, FEW_PRIMITIVES};
+use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, Workgroup, FEW_PRIMITIVES, WORKGROUP_VAR};
 use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Shape, Texture};
 use common::{floor_point_scene, gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -289,4 +289,37 @@ fn both_workgroup_orders_render_the_same_sums() {
     assert!(in_order.iter().all(|p| f32::from_bits(p[3]) == 2.0), "every pixel holds its 2 samples");
     let differing = in_order.iter().zip(&interleaved).filter(|(a, b)| a != b).count();
     assert_eq!(differing, 0, "{differing} of {} pixels differ between the workgroup orders", in_order.len());
+}
+
+/// Every workgroup shape (src/render/workgroup.rs, chosen per device) renders the same sums bit
+/// for bit: each invocation is its pixel's alone. The image, 24x100, divides into none of the
+/// shapes' heights but 4, so partial workgroups at the bottom are covered as well; a shape whose
+/// dispatch or row mapping were off would render some pixels twice or never.
+#[test]
+fn every_workgroup_shape_renders_the_same_sums() {
+    let mut scene = Scene::default_scene();
+    (scene.film.width, scene.film.height, scene.film.spp) = (24, 100, 2);
+    // The override is read when a renderer is made; the lock keeps this binary's other tests from
+    // making one meanwhile.
+    let (_lock, ctx) = gpu();
+    let render = |shape: Option<&str>| {
+        match shape {
+            Some(shape) => std::env::set_var(WORKGROUP_VAR, shape),
+            None => std::env::remove_var(WORKGROUP_VAR),
+        }
+        let mut renderer = Renderer::with_kernel(&ctx, &scene, 3, AovSet::default(), KernelChoice::ForScene).expect("scene uploads");
+        std::env::remove_var(WORKGROUP_VAR);
+        renderer.fix_samples_per_dispatch(1);
+        renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
+        (renderer.workgroup, renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>())
+    };
+    let (default_shape, reference) = render(None);
+    assert_eq!(default_shape, Workgroup::EIGHT_BY_EIGHT, "lavapipe's shape");
+    assert!(reference.iter().all(|p| f32::from_bits(p[3]) == 2.0), "every pixel holds its 2 samples");
+    for shape in ["16x4", "32x2", "4x16", "8x16"] {
+        let (used, sums) = render(Some(shape));
+        assert_eq!(used.label(), shape, "the override was taken");
+        let differing = reference.iter().zip(&sums).filter(|(a, b)| a != b).count();
+        assert_eq!(differing, 0, "{differing} of {} pixels differ between workgroups of 8x8 and {shape}", sums.len());
+    }
 }

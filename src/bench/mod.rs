@@ -13,9 +13,9 @@ pub use report::{print_left_out, print_measurement, print_suite, suite_json, SUI
 pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcome, SuiteSize};
 
 use crate::farm::per_second;
-use crate::gpu::{DeviceInfo, GpuContext};
+use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic};
 use crate::process_time::cpu_seconds;
-use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue};
+use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, Workgroup};
 use crate::scene::Scene;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -46,6 +46,8 @@ pub struct Measurement {
     pub group_order: GroupOrder,
     /// The walk queue the kernel was compiled with (lavapipe, a flat top level), or none.
     pub walk_queue: Option<WalkQueue>,
+    /// The kernel's workgroup shape.
+    pub workgroup: Workgroup,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
     pub setup_seconds: f64,
     /// Wall time of the timed dispatches, fences included.
@@ -65,6 +67,8 @@ pub struct Measurement {
     pub loop_limit: Option<u32>,
     pub repeated_dispatches: u32,
     pub geometry: GeometryReport,
+    /// What the driver says of the kernel (registers per invocation, spills), where it says any.
+    pub kernel_statistics: Vec<KernelStatistic>,
 }
 
 /// Renders `scene` at its film's size and sample count (seed 1) with the kernel set up as `setup`
@@ -96,6 +100,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         features: renderer.features,
         group_order: renderer.group_order(),
         walk_queue: renderer.walk_queue,
+        workgroup: renderer.workgroup,
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
@@ -107,6 +112,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         loop_limit: renderer.loop_limit(),
         repeated_dispatches: renderer.repeated_dispatches,
         geometry: renderer.geometry.clone(),
+        kernel_statistics: renderer.kernel_statistics().to_vec(),
     })
 }
 
@@ -141,6 +147,7 @@ impl Measurement {
             "group_order": self.group_order.label(),
             // Instances a ray may walk through the queue; null: each lane walks its own rays.
             "walk_queue": self.walk_queue.map(|q| q.walks_per_ray),
+            "workgroup": self.workgroup.label(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,
@@ -155,6 +162,8 @@ impl Measurement {
             "repeated_dispatches": self.repeated_dispatches,
             "primitives": self.geometry.acceleration.primitives,
             "gpu_bytes": self.geometry.gpu_bytes,
+            // The driver's own names and figures, e.g. {"Register Count": "96"}.
+            "kernel_statistics": self.kernel_statistics.iter().map(|s| (s.name.clone(), Value::from(s.value.clone()))).collect::<serde_json::Map<_, _>>(),
         })
     }
 

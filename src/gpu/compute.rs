@@ -4,6 +4,7 @@
 
 use super::buffer::{Buffer, BufferKind};
 use super::context::GpuContext;
+use super::pipeline_statistics::{self, KernelStatistic};
 use anyhow::{anyhow, Context as _, Result};
 use ash::vk;
 
@@ -71,6 +72,8 @@ pub struct ComputeKernel {
     push_size: u32,
     /// Two timestamps around each dispatch, where the device's queue records them.
     timestamps: Option<vk::QueryPool>,
+    /// What the driver says of the compiled kernel (registers, spills), where it says anything.
+    pub statistics: Vec<KernelStatistic>,
 }
 
 impl ComputeKernel {
@@ -103,15 +106,17 @@ impl ComputeKernel {
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
+        let capture = if ctx.pipeline_statistics.is_some() { vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR } else { vk::PipelineCreateFlags::empty() };
         let created = unsafe {
             device.create_compute_pipelines(
                 vk::PipelineCache::null(),
-                &[vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)],
+                &[vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout).flags(capture)],
                 None,
             )
         };
         unsafe { device.destroy_shader_module(module, None) };
         let pipeline = created.map_err(|(_, e)| anyhow!("creating the compute pipeline: {e}"))?[0];
+        let statistics = ctx.pipeline_statistics.as_ref().map(|loader| pipeline_statistics::read(loader, pipeline)).unwrap_or_default();
 
         let pool_sizes: Vec<_> = [vk::DescriptorType::UNIFORM_BUFFER, vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_TEXEL_BUFFER]
             .into_iter()
@@ -156,7 +161,7 @@ impl ComputeKernel {
             Some(_) => Some(unsafe { device.create_query_pool(&vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2), None) }?),
             None => None,
         };
-        Ok(Self { set_layout, layout, pipeline, pool, set, texel_views, push_size, timestamps })
+        Ok(Self { set_layout, layout, pipeline, pool, set, texel_views, push_size, timestamps, statistics })
     }
 
     /// Records one dispatch of `groups` workgroups into `cb`, for work submitted with other

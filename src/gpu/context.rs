@@ -115,6 +115,9 @@ pub struct GpuContext {
     pub timestamp_period_ns: Option<f64>,
     /// See [`GpuContext::loop_limit`]; probed on first use.
     loop_limit: OnceLock<Option<u32>>,
+    /// Reads what the driver says of each compiled kernel, where the device can
+    /// (pipeline_statistics.rs).
+    pub(super) pipeline_statistics: Option<ash::khr::pipeline_executable_properties::Device>,
 }
 
 /// What presenting to a window needs beside the device: its surface and the extensions' loaders.
@@ -319,8 +322,16 @@ impl GpuContext {
         let timestamp_period_ns = (families[family as usize].timestamp_valid_bits > 0 && timestamp_period > 0.0).then_some(timestamp_period as f64);
         let priorities = [1.0f32];
         let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-        let device_extensions = if surface.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { vec![] };
-        let device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
+        let mut device_extensions = if surface.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { vec![] };
+        let statistics = super::pipeline_statistics::supported(&instance, physical);
+        if statistics {
+            device_extensions.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
+        }
+        let mut statistics_feature = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(statistics);
+        let mut device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
+        if statistics {
+            device_info = device_info.push_next(&mut statistics_feature);
+        }
         let device = unsafe { instance.create_device(physical, &device_info, None) }
             .with_context(|| format!("creating a logical device on {}", info.name))?;
         let queue = unsafe { device.get_device_queue(family, 0) };
@@ -341,6 +352,7 @@ impl GpuContext {
             allocation_sizes: Default::default(),
         })
         .context("creating the GPU memory allocator")?;
+        let pipeline_statistics = statistics.then(|| ash::khr::pipeline_executable_properties::Device::new(&instance, &device));
         let presentation = surface.map(|(surface_loader, surface)| Presentation {
             surface_loader,
             surface,
@@ -360,6 +372,7 @@ impl GpuContext {
             info,
             timestamp_period_ns,
             loop_limit: OnceLock::new(),
+            pipeline_statistics,
         })
     }
 

@@ -6,6 +6,7 @@ use super::bindings;
 use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::walk_queue::WalkQueue;
+use super::workgroup::Workgroup;
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{anyhow, Context as _, Result};
@@ -73,12 +74,9 @@ const INTERFACE_FILE: &str = "interface.glsl";
 /// Its code is the general kernel's: every scene feature compiled in.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
     let interface = bindings::glsl(&UNSPLIT, KernelVariant::default());
-    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).collect();
+    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(Workgroup::default().defines()).collect();
     assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
 }
-
-/// Workgroup edge of the kernel (`local_size_x/y` in pathtrace.comp).
-pub const WORKGROUP: u32 = 8;
 
 /// What a kernel is compiled with besides the split of the arrays: work that only some renders or
 /// devices need, so that the others pay nothing for it.
@@ -92,6 +90,8 @@ pub struct KernelVariant {
     pub features: SceneFeatures,
     /// Rays walked from a queue the subgroup shares (walk_queue.rs), or each lane's by itself.
     pub walk_queue: Option<WalkQueue>,
+    /// Its `local_size_x/y` (workgroup.rs).
+    pub workgroup: Workgroup,
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.
@@ -104,6 +104,7 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
     ];
     defines.extend(variant.features.defines());
     defines.extend(WalkQueue::defines(variant.walk_queue));
+    defines.extend(variant.workgroup.defines());
     assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)
 }
 

@@ -18,6 +18,7 @@ mod scene_data;
 mod spirv_reflect;
 mod textured_emission;
 mod walk_queue;
+mod workgroup;
 
 pub use chunks::UNSPLIT;
 pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};
@@ -28,6 +29,7 @@ pub use scene_data::SceneData;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
 pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
+pub use workgroup::{Workgroup, WORKGROUP_VAR};
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling
 /// make their distributions proportional to (lights.glsl evaluates the same weights in the kernel).

@@ -8,7 +8,7 @@
 
 use super::bindings::{BufferBinding, KernelBuffer, Shape, BINDINGS};
 use super::chunks::{self, SplitPlans, UNSPLIT};
-use super::kernel::{kernel_spirv, KernelVariant, WORKGROUP};
+use super::kernel::{kernel_spirv, KernelVariant};
 use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
@@ -16,7 +16,8 @@ use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
 use super::walk_queue::WalkQueue;
-use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext};
+use super::workgroup::Workgroup;
+use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic};
 use crate::image::RgbImage;
 use crate::scene::{Camera, Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
@@ -57,6 +58,8 @@ pub struct Renderer<'a> {
     pub features: SceneFeatures,
     /// The walk queue the kernel was compiled with, if any (walk_queue.rs).
     pub walk_queue: Option<WalkQueue>,
+    /// The kernel's workgroup shape (workgroup.rs).
+    pub workgroup: Workgroup,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
     buffers: Vec<(KernelBuffer, Buffer)>,
     aovs: AovSet,
@@ -375,8 +378,9 @@ impl<'a> Renderer<'a> {
             KernelChoice::ForScene => SceneFeatures::of(&data),
             KernelChoice::General => SceneFeatures::ALL,
         };
-        let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), &features, data.acceleration.nodes.first(), &data.acceleration.instances);
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue };
+        let workgroup = Workgroup::for_device(&ctx.info)?;
+        let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances);
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
         let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
@@ -420,7 +424,7 @@ impl<'a> Renderer<'a> {
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), features, walk_queue, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        Ok(Self { ctx, kernel: Some(kernel), features, walk_queue, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -454,6 +458,12 @@ impl<'a> Renderer<'a> {
     /// they are repeated: for tests of that repeat on devices with a limit.
     pub fn ignore_loop_limit_in_planning(&mut self) {
         self.plan_for_loop_limit = false;
+    }
+
+    /// What the driver says of the compiled kernel (registers, spills; see
+    /// [`crate::gpu::KernelStatistic`]); empty where it says nothing.
+    pub fn kernel_statistics(&self) -> &[KernelStatistic] {
+        self.kernel.as_ref().map_or(&[], |k| &k.statistics)
     }
 
     /// The device's loop limit (see [`GpuContext::loop_limit`]).
@@ -673,7 +683,7 @@ impl<'a> Renderer<'a> {
             // would otherwise leave a last band of 16 rows, a dispatch that keeps few of the
             // device's threads busy (Mesa 22.3's lavapipe lost about a tenth of its rate so).
             let bands = (self.height as f64 / budget_row_samples).ceil() as u32;
-            (1, self.height.div_ceil(bands).next_multiple_of(WORKGROUP).min(self.height))
+            (1, self.height.div_ceil(bands).next_multiple_of(self.workgroup.height).min(self.height))
         }
     }
 
@@ -738,7 +748,7 @@ impl<'a> Renderer<'a> {
     fn dispatch(&mut self, row: u32, rows: u32, target: u32, samples: u32) -> Result<GpuStats> {
         self.buffer_mut(KernelBuffer::Stats).expect("every kernel binds the statistics").write(bytemuck::bytes_of(&CLEARED_STATS))?;
         let kernel = self.kernel.as_ref().expect("kernel lives until drop");
-        let groups = [self.width.div_ceil(WORKGROUP), rows.div_ceil(WORKGROUP), 1];
+        let groups = [self.width.div_ceil(self.workgroup.width), rows.div_ceil(self.workgroup.height), 1];
         let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS, group_row_stripes: self.group_order.stripes(groups[1]) };
         let start = Instant::now();
         let device_seconds = kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?;

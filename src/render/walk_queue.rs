@@ -14,7 +14,6 @@
 //! - **the queue fits the device's shared memory**.
 
 use super::features::SceneFeatures;
-use super::kernel::WORKGROUP;
 use super::layout::{GpuInstance, INSTANCE_PRIMITIVES};
 use crate::bvh::{WideNode, CHILD_NONE, WIDTH};
 use crate::gpu::DeviceInfo;
@@ -38,16 +37,17 @@ const WALKS_PER_LANE_PER_INSTANCE: u32 = 2 * 2;
 pub const WALK_QUEUE_VAR: &str = "CAUSTICA_WALK_QUEUE";
 
 impl WalkQueue {
-    /// Shared memory the queue takes in a workgroup: its walks and each subgroup's two counters.
-    pub fn shared_bytes(self) -> u32 {
-        let lanes = WORKGROUP * WORKGROUP;
+    /// Shared memory the queue takes in a workgroup of `lanes` invocations: its walks and each
+    /// subgroup's two counters.
+    pub fn shared_bytes(self, lanes: u32) -> u32 {
         lanes * WALKS_PER_LANE_PER_INSTANCE * self.walks_per_ray * SHARED_BYTES_PER_WALK + 2 * lanes * 4
     }
 
     /// The queue for a scene with these `features`, whose top-level root is `root` over
-    /// `instances`, on `device` (whose loops are cut short where `loop_limit`); `None` where the
-    /// kernel walks each lane's rays itself (see the module's conditions).
-    pub fn for_scene(device: &DeviceInfo, loop_limit: bool, features: &SceneFeatures, root: Option<&WideNode>, instances: &[GpuInstance]) -> Option<WalkQueue> {
+    /// `instances`, on `device` (whose loops are cut short where `loop_limit`) in workgroups of
+    /// `lanes` invocations; `None` where the kernel walks each lane's rays itself (see the
+    /// module's conditions).
+    pub fn for_scene(device: &DeviceInfo, loop_limit: bool, lanes: u32, features: &SceneFeatures, root: Option<&WideNode>, instances: &[GpuInstance]) -> Option<WalkQueue> {
         if std::env::var(WALK_QUEUE_VAR).is_ok_and(|v| v == "0") {
             return None;
         }
@@ -61,7 +61,7 @@ impl WalkQueue {
         let walked = |instance: &GpuInstance| instance.info[0] != INSTANCE_PRIMITIVES || features.walked_shapes();
         let walks_per_ray = (0..WIDTH).filter(|&k| root.kind(k) != CHILD_NONE && instances.get(root.links[k] as usize).is_some_and(walked)).count() as u32;
         let queue = WalkQueue { walks_per_ray };
-        (walks_per_ray > 0 && queue.shared_bytes() <= device.max_compute_shared_memory_size).then_some(queue)
+        (walks_per_ray > 0 && queue.shared_bytes(lanes) <= device.max_compute_shared_memory_size).then_some(queue)
     }
 
     /// The kernel's `#define`s for the queue, or for none.
@@ -77,7 +77,7 @@ mod tests {
     #[test]
     fn shared_bytes_match_the_kernels_arrays() {
         // 64 lanes x 4 walks x 2 instances x 40 bytes, and two counters a lane.
-        assert_eq!(WalkQueue { walks_per_ray: 2 }.shared_bytes(), 64 * 4 * 2 * 40 + 512);
+        assert_eq!(WalkQueue { walks_per_ray: 2 }.shared_bytes(64), 64 * 4 * 2 * 40 + 512);
         let glsl = include_str!("../../shaders/walk_queue.glsl");
         for array in ["shared vec4 queue_origin[", "shared vec4 queue_dir[", "shared uvec2 queue_instance["] {
             assert!(glsl.contains(array), "walk_queue.glsl no longer declares `{array}`: update SHARED_BYTES_PER_WALK");
@@ -87,7 +87,7 @@ mod tests {
 
     #[test]
     fn four_instances_do_not_fit_lavapipes_32_kib() {
-        assert!(WalkQueue { walks_per_ray: 3 }.shared_bytes() <= 32 * 1024);
-        assert!(WalkQueue { walks_per_ray: 4 }.shared_bytes() > 32 * 1024);
+        assert!(WalkQueue { walks_per_ray: 3 }.shared_bytes(64) <= 32 * 1024);
+        assert!(WalkQueue { walks_per_ray: 4 }.shared_bytes(64) > 32 * 1024);
     }
 }
