@@ -18,7 +18,7 @@ spp) and both render at --spp (default 64); each is compared with the reference,
 8 x 8 block means (noise mostly averaged away, bias left). No speed is measured in this mode.
 
 SCENE defaults to scenes/cornell.toml (the built-in Cornell box). caustica is timed by
-`caustica bench --json` (one warm-up sample, then the timed ones) and its image comes from
+`caustica bench --json` (0.3 s of warm-up samples, then the timed ones) and its image comes from
 `caustica render`; Mitsuba's scene is built from the same TOML file, rendered once to compile its
 kernels (Dr.Jit caches them), then rendered again and timed up to the image in memory (Dr.Jit
 evaluates lazily: the time stops only once the image is a numpy array). Both errors are relative MSE

@@ -14,7 +14,8 @@
 // texelFetch of the texel buffers the walk and shading read their records from (bindings.rs).
 #extension GL_EXT_samplerless_texture_functions : require
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+// The workgroup's shape is chosen per device (src/render/workgroup.rs).
+layout(local_size_x = WORKGROUP_WIDTH, local_size_y = WORKGROUP_HEIGHT, local_size_z = 1) in;
 
 #include "layout.glsl"
 #include "loop_limit.glsl"

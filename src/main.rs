@@ -228,7 +228,7 @@ enum Command {
         /// Image height (default 256; with --suite, each scene's own).
         #[arg(long)]
         height: Option<u32>,
-        /// Samples per pixel timed, after one warm-up sample (default 64; with --suite, each
+        /// Samples per pixel timed, after 0.3 s of warm-up samples (default 64; with --suite, each
         /// scene's own).
         #[arg(long)]
         spp: Option<u32>,

@@ -29,13 +29,25 @@ pub struct KernelSetup {
     pub group_order: Option<GroupOrder>,
 }
 
-/// One scene's throughput on one device. The timed samples follow one warm-up sample, whose
-/// first-dispatch costs (pipeline caches, page faults) are not throughput.
+/// Wall time the warm-up renders for at least, before the timed samples: a GPU idles at a
+/// fraction of its clock (an H200 at 345 MHz against 1980) and raises it only under load, and
+/// renders of a tenth of a second timed straight after a kernel's compile ran up to 3.5x slower
+/// on one in some runs than in others (docs/benchmarks.md, stop 25). It also lets the renderer
+/// size its dispatches from measured costs before any is timed.
+const WARM_UP_SECONDS: f64 = 0.3;
+
+/// Most warm-up samples per pixel, however fast the device: 0.3 s of the fastest scene at
+/// 1024x768 on an H200 (15 G samples/s) is about 6,000.
+const MAX_WARM_UP_SAMPLES: u32 = 8192;
+
+/// One scene's throughput on one device. The timed samples follow warm-up samples (at least one,
+/// and [`WARM_UP_SECONDS`] of them), whose first-dispatch costs (pipeline caches, page faults) and
+/// rising clocks are not throughput.
 pub struct Measurement {
     pub scene: String,
     pub width: u32,
     pub height: u32,
-    /// Samples per pixel timed (the warm-up sample excluded).
+    /// Samples per pixel timed (the warm-up samples excluded).
     pub spp: u32,
     pub aovs: AovSet,
     /// The kernel measured: compiled for the scene, or the general one (`--general-kernel`).
@@ -81,7 +93,8 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         renderer.set_group_order(order);
     }
     let setup_seconds = setup_start.elapsed().as_secs_f64();
-    renderer.render(1, |_| {})?;
+    let warm_up = Instant::now();
+    renderer.render_while(MAX_WARM_UP_SAMPLES, |_| warm_up.elapsed().as_secs_f64() < WARM_UP_SECONDS)?;
     let (rays0, secs0, spp0) = (renderer.rays_traced, renderer.seconds, renderer.samples_done);
     let (cpu0, gpu0) = (cpu_seconds(), renderer.gpu_seconds);
     renderer.render(spp, |_| {})?;
