@@ -7,7 +7,7 @@
 mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
-use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkReads, Workgroup, FEW_PRIMITIVES, WALK_READS_VAR, WORKGROUP_VAR};
+use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, Workgroup, FEW_PRIMITIVES, WORKGROUP_VAR};
 use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Shape, Texture};
 use common::{floor_point_scene, gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -322,53 +322,4 @@ fn every_workgroup_shape_renders_the_same_sums() {
         let differing = reference.iter().zip(&sums).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "{differing} of {} pixels differ between workgroups of 8x8 and {shape}", sums.len());
     }
-}
-
-/// Reading the walk's records (BVH nodes, mesh triangles) from storage buffers instead of texel
-/// buffers (src/render/walk_reads.rs, chosen per device) renders the same sums bit for bit, on a
-/// scene of placed meshes with a deep enough BVH; a record declared with another layout than the
-/// host's would change them.
-#[test]
-fn both_ways_of_reading_the_walks_records_render_the_same_sums() {
-    let mut scene = parse(
-        r#"
-        camera = { position = [0, 1.2, 3.2], look_at = [0, 0.2, 0], fov = 45 }
-        film = { width = 32, height = 24, spp = 3 }
-        environment = { color = [0.4, 0.45, 0.5] }
-        [materials.clay]
-        albedo = [0.7, 0.6, 0.5]
-        "#,
-    );
-    let n = 16u32;
-    let at = |i: u32, j: u32| {
-        let (x, z) = (2.0 * i as f32 / n as f32 - 1.0, 2.0 * j as f32 / n as f32 - 1.0);
-        Vec3::new(x, 0.2 * (5.0 * x).sin() * (4.0 * z).cos(), z)
-    };
-    let positions = (0..=n).flat_map(|j| (0..=n).map(move |i| at(i, j))).collect();
-    let v = |i: u32, j: u32| j * (n + 1) + i;
-    let triangles: Vec<[u32; 3]> = (0..n).flat_map(|j| (0..n).flat_map(move |i| [[v(i, j), v(i, j + 1), v(i + 1, j)], [v(i + 1, j), v(i, j + 1), v(i + 1, j + 1)]])).collect();
-    scene.meshes = vec![Mesh { name: "patch".into(), positions, triangle_materials: vec![0; triangles.len()], triangles, ..Default::default() }];
-    scene.instances = vec![
-        Instance { mesh: 0, transform: Mat4::from_rotation_x(0.5) },
-        Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.3, 0.5, -0.5)) * Mat4::from_scale(Vec3::splat(0.4)) },
-    ];
-    let (_lock, ctx) = gpu();
-    let render = |reads: Option<&str>| {
-        match reads {
-            Some(reads) => std::env::set_var(WALK_READS_VAR, reads),
-            None => std::env::remove_var(WALK_READS_VAR),
-        }
-        let renderer = Renderer::with_kernel(&ctx, &scene, 5, AovSet::default(), KernelChoice::ForScene);
-        std::env::remove_var(WALK_READS_VAR);
-        let mut renderer = renderer.expect("scene uploads");
-        renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
-        (renderer.walk_reads, renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>())
-    };
-    let (texels, reference) = render(Some("texels"));
-    let (storage, sums) = render(Some("storage"));
-    assert_eq!((texels, storage), (WalkReads::Texels, WalkReads::Storage), "the override was taken");
-    let hit = reference.iter().filter(|p| f32::from_bits(p[1]) != f32::from_bits(reference[0][1])).count();
-    assert!(hit > reference.len() / 4, "the meshes cover the image ({hit} pixels differ from the corner)");
-    let differing = reference.iter().zip(&sums).filter(|(a, b)| a != b).count();
-    assert_eq!(differing, 0, "{differing} of {} pixels differ between the walk's records read as texels and from storage", sums.len());
 }

@@ -15,7 +15,7 @@ pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcom
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic};
 use crate::process_time::cpu_seconds;
-use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, WalkReads, Workgroup};
+use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, Workgroup};
 use crate::scene::Scene;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -60,8 +60,6 @@ pub struct Measurement {
     pub walk_queue: Option<WalkQueue>,
     /// The kernel's workgroup shape.
     pub workgroup: Workgroup,
-    /// How the kernel reads the walk's records: texels or storage.
-    pub walk_reads: WalkReads,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
     pub setup_seconds: f64,
     /// Wall time of the timed dispatches, fences included.
@@ -116,7 +114,6 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         group_order: renderer.group_order(),
         walk_queue: renderer.walk_queue,
         workgroup: renderer.workgroup,
-        walk_reads: renderer.walk_reads,
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
@@ -164,7 +161,6 @@ impl Measurement {
             // Instances a ray may walk through the queue; null: each lane walks its own rays.
             "walk_queue": self.walk_queue.map(|q| q.walks_per_ray),
             "workgroup": self.workgroup.label(),
-            "walk_reads": self.walk_reads.label(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,

@@ -33,7 +33,7 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         KernelChoice::General => "general (--general-kernel)",
     };
     let walks = m.walk_queue.map_or(String::new(), |q| format!("; rays walked from the subgroup's queue (up to {} instances a ray)", q.walks_per_ray));
-    println!("kernel:       {kernel}: {}; workgroups {}, rows {}, walk reads {}{walks}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label(), m.walk_reads.label());
+    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{walks}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.
         let figures: Vec<String> = m.kernel_statistics.iter().map(|s| format!("{} {}", s.name, s.value)).collect();

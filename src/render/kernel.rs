@@ -6,7 +6,6 @@ use super::bindings;
 use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::walk_queue::WalkQueue;
-use super::walk_reads::WalkReads;
 use super::workgroup::Workgroup;
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
 use crate::input_file::{InputFiles, InputKind};
@@ -93,8 +92,6 @@ pub struct KernelVariant {
     pub walk_queue: Option<WalkQueue>,
     /// Its `local_size_x/y` (workgroup.rs).
     pub workgroup: Workgroup,
-    /// How it reads the walk's records: texels or storage (walk_reads.rs).
-    pub walk_reads: WalkReads,
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.

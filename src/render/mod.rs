@@ -18,7 +18,6 @@ mod scene_data;
 mod spirv_reflect;
 mod textured_emission;
 mod walk_queue;
-mod walk_reads;
 mod workgroup;
 
 pub use chunks::UNSPLIT;
@@ -30,7 +29,6 @@ pub use scene_data::SceneData;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
 pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
-pub use walk_reads::{WalkReads, WALK_READS_VAR};
 pub use workgroup::{Workgroup, WORKGROUP_VAR};
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling

@@ -6,7 +6,7 @@
 //! dispatches are also sized from the loop iterations the kernel counts, and a band cut short is
 //! repeated in smaller steps, which gives the same sums bit for bit.
 
-use super::bindings::{bindings_of, BufferBinding, KernelBuffer, Shape};
+use super::bindings::{BufferBinding, KernelBuffer, Shape, BINDINGS};
 use super::chunks::{self, SplitPlans, UNSPLIT};
 use super::kernel::{kernel_spirv, KernelVariant};
 use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
@@ -16,7 +16,6 @@ use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
 use super::walk_queue::WalkQueue;
-use super::walk_reads::WalkReads;
 use super::workgroup::Workgroup;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic};
 use crate::image::RgbImage;
@@ -61,8 +60,6 @@ pub struct Renderer<'a> {
     pub walk_queue: Option<WalkQueue>,
     /// The kernel's workgroup shape (workgroup.rs).
     pub workgroup: Workgroup,
-    /// How the kernel reads the walk's records (walk_reads.rs).
-    pub walk_reads: WalkReads,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
     buffers: Vec<(KernelBuffer, Buffer)>,
     aovs: AovSet,
@@ -383,11 +380,9 @@ impl<'a> Renderer<'a> {
         };
         let workgroup = Workgroup::for_device(&ctx.info)?;
         let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances);
-        let walk_reads = WalkReads::for_device(&ctx.info)?;
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, walk_reads };
-        let table = bindings_of(variant);
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
-        let contents: Vec<(&BufferBinding, Initial)> = table
+        let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
             .filter(|b| b.is_bound_in(variant))
             .map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes)))
@@ -429,7 +424,7 @@ impl<'a> Renderer<'a> {
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
         let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), features, walk_queue, workgroup, walk_reads, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        Ok(Self { ctx, kernel: Some(kernel), features, walk_queue, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
