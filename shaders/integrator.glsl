@@ -178,7 +178,7 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
     if (nee && !lobe_is_delta(lobe) && depth + 1u < frame.max_bounces) {
         bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
         shadow_wanted = direct_light(lobe, path.dir, surface, path.throughput, rng, rays, shadow);
-#if !WALK_QUEUE && !ONE_TRACE_SITE
+#if !WALK_QUEUE
         // Traced here where no queue takes it: held past the BSDF sample's state, it measured
         // 1-4 % slower on lavapipe (docs/benchmarks.md, stop 24).
         if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;

@@ -128,41 +128,6 @@ void main() {
     // so the lanes of a subgroup stay busy until each has done all its samples, rather than each
     // sample waiting for the subgroup's longest path. The sums are added in sample order as before.
     bool starting = true;
-#if ONE_TRACE_SITE
-    // One ray a lane an iteration, through one call of trace_ray: the shadow ray path_vertex
-    // handed back, else the path's next ray. Lanes tracing either kind walk together, where two
-    // call sites (each inlined) would run one after the other for a subgroup whose lanes are at
-    // different steps. The shadow ray is traced before the path's next vertex, as path_vertex
-    // would trace it, so the sums are the same bit for bit.
-    bool alive = false;
-    bool shadow_pending = false;
-    ShadowRay shadow;
-    while (s < target) {
-        LOOP_ITERATION();
-        if (starting) {
-            start_sample(pixel, index, s, rng, path, first_hit);
-            alive = true;
-        }
-        starting = false;
-        bool shadowing = shadow_pending;
-        if (!shadowing) alive = path_ray_wanted(path, rng);
-        if (shadowing || alive) {
-            Hit hit;
-            if (!shadowing) rays += 1u;
-            bool found = trace_ray(shadowing ? shadow.origin : path.origin, shadowing ? shadow.dir : path.dir, shadowing ? shadow.t_max : 1e30, shadowing, hit);
-            if (shadowing) {
-                if (!found) path.radiance += shadow.contribution;
-                shadow_pending = false;
-            } else {
-                alive = path_vertex(path, rng, rays, first_hit, found, hit, shadow_pending, shadow);
-            }
-            if (alive || shadow_pending) continue;
-        }
-        add_sample(sums, path.radiance, first_hit);
-        ++s;
-        starting = true;
-    }
-#else
     while (s < target) {
         LOOP_ITERATION();
         if (starting) start_sample(pixel, index, s, rng, path, first_hit);
@@ -172,7 +137,6 @@ void main() {
         ++s;
         starting = true;
     }
-#endif
 #endif
     report_loop_iterations();
     if (!inside) return;

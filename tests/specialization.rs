@@ -7,7 +7,7 @@
 mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
-use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, Workgroup, FEW_PRIMITIVES, ONE_TRACE_SITE_VAR, WORKGROUP_VAR};
+use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, Workgroup, FEW_PRIMITIVES, WORKGROUP_VAR};
 use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Shape, Texture};
 use common::{floor_point_scene, gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -322,25 +322,4 @@ fn every_workgroup_shape_renders_the_same_sums() {
         let differing = reference.iter().zip(&sums).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "{differing} of {} pixels differ between workgroups of 8x8 and {shape}", sums.len());
     }
-}
-
-/// Path and shadow rays traced through one call site (`CAUSTICA_ONE_TRACE_SITE=1`,
-/// pathtrace.comp's `ONE_TRACE_SITE`) render the same sums bit for bit as shadow rays traced
-/// where their vertex samples the light: the same rays, the shadow ray before the next vertex.
-#[test]
-fn one_trace_site_renders_the_same_sums() {
-    let mut scene = Scene::default_scene();
-    (scene.film.width, scene.film.height, scene.film.spp) = (32, 24, 3);
-    let (_lock, ctx) = gpu();
-    let render = |one_site: bool| {
-        std::env::set_var(ONE_TRACE_SITE_VAR, if one_site { "1" } else { "0" });
-        let renderer = Renderer::with_kernel(&ctx, &scene, 9, AovSet::ALL, KernelChoice::ForScene);
-        std::env::remove_var(ONE_TRACE_SITE_VAR);
-        let mut renderer = renderer.expect("scene uploads");
-        renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
-        renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>()
-    };
-    let (two_sites, one_site) = (render(false), render(true));
-    let differing = two_sites.iter().zip(&one_site).filter(|(a, b)| a != b).count();
-    assert_eq!(differing, 0, "{differing} of {} pixels differ with one trace site", one_site.len());
 }

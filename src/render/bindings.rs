@@ -298,12 +298,12 @@ mod tests {
     use std::collections::BTreeMap;
 
     const VARIANTS: [KernelVariant; 5] = [
-        KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, one_trace_site: false },
-        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, one_trace_site: false },
-        KernelVariant { aovs: false, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, one_trace_site: false },
-        KernelVariant { aovs: true, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, one_trace_site: false },
+        KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
+        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
+        KernelVariant { aovs: false, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
+        KernelVariant { aovs: true, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
         // The walk queue's kernel (walk_queue.rs): a top level of its root alone.
-        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2 }), workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, one_trace_site: false },
+        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2 }), workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
     ];
 
     /// What a binding holds: a block of this storage class, or a texel buffer.

@@ -74,7 +74,7 @@ const INTERFACE_FILE: &str = "interface.glsl";
 /// Its code is the general kernel's: every scene feature compiled in.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
     let interface = bindings::glsl(&UNSPLIT, KernelVariant::default());
-    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(Workgroup::default().defines()).chain([("ONE_TRACE_SITE", "0".to_owned())]).collect();
+    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(Workgroup::default().defines()).collect();
     assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
 }
 
@@ -92,19 +92,6 @@ pub struct KernelVariant {
     pub walk_queue: Option<WalkQueue>,
     /// Its `local_size_x/y` (workgroup.rs).
     pub workgroup: Workgroup,
-    /// Path and shadow rays traced through one call of `trace_ray` (pathtrace.comp,
-    /// `ONE_TRACE_SITE`), rather than each shadow ray where its vertex samples the light.
-    pub one_trace_site: bool,
-}
-
-/// Names the environment variable that sets [`KernelVariant::one_trace_site`] (`1` or `0`),
-/// for an A/B of one binary.
-pub const ONE_TRACE_SITE_VAR: &str = "CAUSTICA_ONE_TRACE_SITE";
-
-/// Whether kernels trace path and shadow rays through one call site: [`ONE_TRACE_SITE_VAR`]'s
-/// choice where it is set.
-pub fn one_trace_site() -> bool {
-    std::env::var(ONE_TRACE_SITE_VAR).is_ok_and(|v| v == "1")
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.
@@ -118,7 +105,6 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
     defines.extend(variant.features.defines());
     defines.extend(WalkQueue::defines(variant.walk_queue));
     defines.extend(variant.workgroup.defines());
-    defines.push(("ONE_TRACE_SITE", u32::from(variant.one_trace_site).to_string()));
     assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)
 }
 

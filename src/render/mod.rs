@@ -21,7 +21,7 @@ mod walk_queue;
 mod workgroup;
 
 pub use chunks::UNSPLIT;
-pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, ONE_TRACE_SITE_VAR, SHADER_DIR_VAR};
+pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
 pub use renderer::{frame_params, mean_image, GeometryReport, KernelChoice, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};

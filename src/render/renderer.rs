@@ -8,7 +8,7 @@
 
 use super::bindings::{BufferBinding, KernelBuffer, Shape, BINDINGS};
 use super::chunks::{self, SplitPlans, UNSPLIT};
-use super::kernel::{kernel_spirv, one_trace_site, KernelVariant};
+use super::kernel::{kernel_spirv, KernelVariant};
 use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
@@ -380,7 +380,7 @@ impl<'a> Renderer<'a> {
         };
         let workgroup = Workgroup::for_device(&ctx.info)?;
         let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances);
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, one_trace_site: one_trace_site() };
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
         let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
