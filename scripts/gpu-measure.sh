@@ -103,6 +103,17 @@ if [[ "$steps" == *" workgroups "* ]]; then
     unset CAUSTICA_WORKGROUP
     measure general-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --general-kernel
 fi
+if [[ "$steps" == *" shaders "* ]]; then
+    for dir in embedded .run/shaders-*/ embedded; do
+        [ -d "$dir" ] || [ "$dir" = embedded ] || continue
+        name=$(basename "$dir")
+        name=${name/embedded/embedded-$SECONDS}
+        if [ "$dir" = embedded ]; then unset CAUSTICA_SHADER_DIR; else export CAUSTICA_SHADER_DIR=$dir; fi
+        measure "sh-$name-smallpt" scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
+        measure "sh-$name-suite" --suite --width "$width" --height "$height" --spp "$quarter"
+    done
+    unset CAUSTICA_SHADER_DIR
+fi
 if [[ "$steps" == *" mitsuba "* ]]; then
     if [ -f .run/mitsuba.tar.xz ]; then
         mkdir -p /tmp/mitsuba-site && tar -xJf .run/mitsuba.tar.xz -C /tmp/mitsuba-site
