@@ -58,6 +58,11 @@ measure() {
         log "$name FAILED (exit $?)"
     fi
 }
+# One side of an A/B: the anchor scene and the suite, in files PREFIX-smallpt and PREFIX-suite.
+measure_side() {
+    measure "$1-smallpt" scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
+    measure "$1-suite" --suite --width "$width" --height "$height" --spp "$quarter"
+}
 # One image: NAME, then the render arguments (small: they are checked against lavapipe's at home).
 render() {
     local name=$1
@@ -97,8 +102,7 @@ if [[ "$steps" == *" workgroups "* ]]; then
     for shape in default 16x8 8x16 32x4 16x4 8x4 32x2 default; do
         name=${shape/default/default-$SECONDS}
         if [ "$shape" = default ]; then unset CAUSTICA_WORKGROUP; else export CAUSTICA_WORKGROUP=$shape; fi
-        measure "wg-$name-smallpt" scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
-        measure "wg-$name-suite" --suite --width "$width" --height "$height" --spp "$quarter"
+        measure_side "wg-$name"
     done
     unset CAUSTICA_WORKGROUP
     measure general-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --general-kernel
@@ -109,8 +113,7 @@ if [[ "$steps" == *" shaders "* ]]; then
         name=$(basename "$dir")
         name=${name/embedded/embedded-$SECONDS}
         if [ "$dir" = embedded ]; then unset CAUSTICA_SHADER_DIR; else export CAUSTICA_SHADER_DIR=$dir; fi
-        measure "sh-$name-smallpt" scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
-        measure "sh-$name-suite" --suite --width "$width" --height "$height" --spp "$quarter"
+        measure_side "sh-$name"
     done
     unset CAUSTICA_SHADER_DIR
 fi
