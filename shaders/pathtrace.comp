@@ -14,7 +14,7 @@
 // texelFetch of the texel buffers the walk and shading read their records from (bindings.rs).
 #extension GL_EXT_samplerless_texture_functions : require
 
-// The workgroup's shape is chosen per device (src/render/workgroup.rs).
+// The workgroup's shape is a kernel variant (src/render/workgroup.rs).
 layout(local_size_x = WORKGROUP_WIDTH, local_size_y = WORKGROUP_HEIGHT, local_size_z = 1) in;
 
 #include "layout.glsl"

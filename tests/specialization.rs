@@ -291,7 +291,7 @@ fn both_workgroup_orders_render_the_same_sums() {
     assert_eq!(differing, 0, "{differing} of {} pixels differ between the workgroup orders", in_order.len());
 }
 
-/// Every workgroup shape (src/render/workgroup.rs, chosen per device) renders the same sums bit
+/// Every workgroup shape (src/render/workgroup.rs, a kernel variant) renders the same sums bit
 /// for bit: each invocation is its pixel's alone. The image, 24x100, divides into none of the
 /// shapes' heights but 4, so partial workgroups at the bottom are covered as well; a shape whose
 /// dispatch or row mapping were off would render some pixels twice or never.

@@ -378,7 +378,7 @@ impl<'a> Renderer<'a> {
             KernelChoice::ForScene => SceneFeatures::of(&data),
             KernelChoice::General => SceneFeatures::ALL,
         };
-        let workgroup = Workgroup::for_device(&ctx.info)?;
+        let workgroup = Workgroup::chosen()?;
         let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances);
         let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.

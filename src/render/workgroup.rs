@@ -1,9 +1,10 @@
-//! The path-tracing kernel's workgroup shape (`local_size_x/y` of pathtrace.comp), chosen per
-//! device: lavapipe runs a subgroup of 8 lanes as one SIMD thread and a workgroup of 8x8 as eight
-//! of them (its walk queue is laid out for that); a GPU's figures are in docs/benchmarks.md.
-//! `CAUSTICA_WORKGROUP=WxH` overrides the choice, for an A/B of one binary on one device.
+//! The path-tracing kernel's workgroup shape (`local_size_x/y` of pathtrace.comp), a kernel
+//! variant. Every device measured runs best at 8x8: lavapipe runs a subgroup of 8 lanes as one
+//! SIMD thread and a workgroup of 8x8 as eight of them (its walk queue is laid out for that), and
+//! on an NVIDIA H200 no other shape gained more than 3 % (docs/benchmarks.md, stop 25). A device
+//! found to want another shape would get its own here. `CAUSTICA_WORKGROUP=WxH` overrides the
+//! shape, for an A/B of one binary on one device.
 
-use crate::gpu::DeviceInfo;
 use anyhow::{bail, Result};
 
 /// Names the environment variable that overrides the workgroup shape (`WxH`, e.g. `16x8`).
@@ -29,8 +30,8 @@ impl Workgroup {
     /// The shape every device ran before shapes were chosen per device, and lavapipe's.
     pub const EIGHT_BY_EIGHT: Workgroup = Workgroup { width: 8, height: 8 };
 
-    /// The shape for `device`: [`WORKGROUP_VAR`]'s where it is set, else the device's own.
-    pub fn for_device(_device: &DeviceInfo) -> Result<Workgroup> {
+    /// The shape kernels are compiled with: [`WORKGROUP_VAR`]'s where it is set, else 8x8.
+    pub fn chosen() -> Result<Workgroup> {
         match std::env::var(WORKGROUP_VAR) {
             Ok(text) => Workgroup::parse(&text).map_err(|e| anyhow::anyhow!("{WORKGROUP_VAR}={text}: {e}")),
             Err(_) => Ok(Workgroup::default()),
