@@ -297,13 +297,17 @@ mod tests {
     use crate::render::spirv_reflect::{block_variables, texel_buffer_variables, StorageClass};
     use std::collections::BTreeMap;
 
+    /// The general kernel without AOVs or loop counting, in 8x8 workgroups: what each of
+    /// [`VARIANTS`] changes.
+    const GENERAL: KernelVariant = KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT };
+
     const VARIANTS: [KernelVariant; 5] = [
-        KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
-        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
-        KernelVariant { aovs: false, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
-        KernelVariant { aovs: true, count_loop_iterations: true, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
+        GENERAL,
+        KernelVariant { aovs: true, ..GENERAL },
+        KernelVariant { count_loop_iterations: true, ..GENERAL },
+        KernelVariant { aovs: true, count_loop_iterations: true, ..GENERAL },
         // The walk queue's kernel (walk_queue.rs): a top level of its root alone.
-        KernelVariant { aovs: true, count_loop_iterations: false, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2 }), workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT },
+        KernelVariant { aovs: true, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2 }), ..GENERAL },
     ];
 
     /// What a binding holds: a block of this storage class, or a texel buffer.
