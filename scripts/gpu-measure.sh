@@ -22,7 +22,10 @@
 # Rates come from the device's own timestamps (`samples_per_gpu_second`). SIZE=WxH and SPP shrink
 # it for a dry run on lavapipe; MITSUBA_VARIANT=llvm_ad_rgb tries the comparison on a CPU; STEPS
 # (default "caustica mitsuba") picks the parts to run; "workgroups" is the A/B of the kernel's
-# workgroup shapes (CAUSTICA_WORKGROUP), the suite and the anchor scene with each.
+# workgroup shapes (CAUSTICA_WORKGROUP), the suite and the anchor scene with each; "queue" the A/B
+# of the walk queue (CAUSTICA_WALK_QUEUE=1: on a GPU, with subgroup barriers) against the plain
+# kernel, the suite and the anchor scene each way, and the mesh box's image with the queue, to
+# check against lavapipe's; "shaders" runs each .run/shaders-NAME/ folder (CAUSTICA_SHADER_DIR).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"
@@ -106,6 +109,16 @@ if [[ "$steps" == *" workgroups "* ]]; then
     done
     unset CAUSTICA_WORKGROUP
     measure general-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --general-kernel
+fi
+if [[ "$steps" == *" queue "* ]]; then
+    # The plain kernel first and last: the spread between the two is the run's noise. Scenes whose
+    # top level is not their root alone keep the plain kernel either way.
+    for side in plain queue plain; do
+        if [ "$side" = queue ]; then export CAUSTICA_WALK_QUEUE=1; else unset CAUSTICA_WALK_QUEUE; fi
+        measure_side "queue-$side-$SECONDS"
+    done
+    CAUSTICA_WALK_QUEUE=1 render bunny-cornell-queue-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
+    unset CAUSTICA_WALK_QUEUE
 fi
 if [[ "$steps" == *" shaders "* ]]; then
     for dir in embedded .run/shaders-*/ embedded; do

@@ -109,7 +109,9 @@ void render_queued_samples(uvec2 pixel, uint index, uint s, uint target, inout P
             if (k == 0u) a = p;
             else b = p;
         }
+        queue_barrier();
         walk_queue();
+        queue_barrier();
         // The vertex code inlined once a path: 3-6 % faster on lavapipe than one call site that a
         // and b are copied through, for a longer first compile (Mesa caches it): the queue
         // kernel's takes about 3 s more than the plain kernel's.

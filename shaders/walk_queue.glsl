@@ -8,12 +8,13 @@
 // hits, in the order it queued them (nearest entry first): the hit trace_ray finds, bit for bit.
 //
 // Each subgroup has its own queue, so nothing waits for another subgroup. The lanes of a subgroup
-// hand walks to each other through shared memory with no barrier between queueing, walking and
-// reading: the host compiles the queue only for lavapipe, whose gallivm runs a subgroup as one
-// SIMD thread, each of its instructions for all lanes before the next, so a store by one lane is
-// seen by every later load of another. subgroupBarrier() would make it portable, but gallivm
-// (Mesa 25.0) turns it into a workgroup barrier, which inside the path loop cuts later loops short.
-// On a GPU the walk queue is not compiled.
+// hand walks to each other through shared memory, so queueing, walking and reading must be ordered
+// across them: queue_barrier() between the steps of a round. Where the device runs a subgroup's
+// lanes in step, as lavapipe's gallivm does (one SIMD thread, each instruction for all lanes
+// before the next, so a store by one lane is seen by every later load of another), the host
+// compiles it empty (QUEUE_SUBGROUP_BARRIERS 0): gallivm (Mesa 25.0) makes subgroupBarrier() a
+// workgroup barrier, which cuts later loops short where the workgroup's subgroups run different
+// numbers of rounds. Every other device gets the barrier (src/render/walk_queue.rs).
 
 // Each lane carries two paths (queued_paths.glsl), each with a path ray and a shadow ray, each
 // walking at most QUEUE_WALKS_PER_RAY instances (the host's count of walked instances under the
@@ -31,6 +32,14 @@ shared uint queue_walk_count[QUEUE_LANES];
 shared uint queue_next_walk[QUEUE_LANES];
 const uint INSTANCE_KIND_BIT = 0x80000000u;
 
+// Orders one step of a round's shared-memory traffic before the next across the subgroup's lanes.
+// Every lane of the subgroup calls it, in uniform control flow.
+void queue_barrier() {
+#if QUEUE_SUBGROUP_BARRIERS
+    subgroupBarrier();
+#endif
+}
+
 // The first walk of this subgroup's part of the queue.
 uint queue_base() {
     return gl_SubgroupID * gl_SubgroupSize * QUEUE_WALKS_PER_LANE;
@@ -38,10 +47,12 @@ uint queue_base() {
 
 // Empties this subgroup's queue (each round, after every lane has read its hits).
 void queue_clear() {
+    queue_barrier();
     if (subgroupElect()) {
         queue_walk_count[gl_SubgroupID] = 0u;
         queue_next_walk[gl_SubgroupID] = 0u;
     }
+    queue_barrier();
 }
 
 // Queues walk `walk` of instance `instance` by the world ray o + t d, 0 < t < t_max, in the

@@ -8,7 +8,7 @@
 
 mod common;
 
-use caustica::render::{AovSet, AovSums, KernelChoice, Renderer};
+use caustica::render::{AovSet, AovSums, KernelChoice, Renderer, WalkQueue, WALK_QUEUE_VAR, WORKGROUP_VAR};
 use caustica::scene::{Instance, Mesh, Scene};
 use common::{gpu, parse};
 use glam::{Mat4, Vec3};
@@ -65,14 +65,14 @@ fn two_meshes_in_a_room() -> Scene {
 }
 
 /// The sums of `scene` (seed 11, AOVs on), as bits, rendered in passes adding `steps` samples, and
-/// whether its kernel walked from the queue.
-fn sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice, steps: &[u32]) -> (Vec<[u32; 4]>, AovSums, bool) {
+/// the queue its kernel walked from, if any.
+fn sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice, steps: &[u32]) -> (Vec<[u32; 4]>, AovSums, Option<WalkQueue>) {
     let mut renderer = Renderer::with_kernel(ctx, scene, 11, AovSet::ALL, choice).expect("scene uploads");
     for &spp in steps {
         renderer.render(spp, |_| {}).expect("render succeeds without validation messages");
     }
     let bits = renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect();
-    (bits, renderer.aov_sums().expect("readback").expect("AOVs were asked for"), renderer.walk_queue.is_some())
+    (bits, renderer.aov_sums().expect("readback").expect("AOVs were asked for"), renderer.walk_queue)
 }
 
 #[test]
@@ -80,19 +80,49 @@ fn the_walk_queue_renders_the_plain_kernels_sums_bit_for_bit() {
     let (_lock, ctx) = gpu();
     let scene = two_meshes_in_a_room();
     let spp = scene.film.spp;
-    let (queued, queued_aovs, walked_from_queue) = sums(&ctx, &scene, KernelChoice::ForScene, &[spp]);
-    if !walked_from_queue {
+    let (queued, queued_aovs, queue) = sums(&ctx, &scene, KernelChoice::ForScene, &[spp]);
+    if queue.is_none() {
         // The queue is compiled for lavapipe whose loops run to their end (Mesa 24 and newer).
         assert!(ctx.loop_limit().expect("probe").is_some(), "{}: the scene's kernel did not walk from the queue", ctx.info.driver_info);
         eprintln!("SKIPPED: {} ends loops early, so it has no walk queue", ctx.info.driver_info);
         return;
     }
-    let (plain, plain_aovs, general_walked_from_queue) = sums(&ctx, &scene, KernelChoice::General, &[spp]);
-    assert!(!general_walked_from_queue, "the general kernel walks each lane's rays itself");
+    let (plain, plain_aovs, general_queue) = sums(&ctx, &scene, KernelChoice::General, &[spp]);
+    assert!(general_queue.is_none(), "the general kernel walks each lane's rays itself");
     let differing = queued.iter().zip(&plain).filter(|(a, b)| a != b).count();
     assert_eq!(differing, 0, "{differing} of {} pixels differ between the queue's kernel and the plain one", plain.len());
     assert!(queued_aovs == plain_aovs, "the AOV sums differ between the queue's kernel and the plain one");
     // Passes of 2, then 3, then 2 samples: the pixels resume with either path.
     let (split, split_aovs, _) = sums(&ctx, &scene, KernelChoice::ForScene, &[2, 3, spp - 5]);
     assert!(split == queued && split_aovs == queued_aovs, "the queue's sums depend on how the render is split into passes");
+}
+
+/// The queue's kernel with the subgroup barriers a GPU's lanes need (walk_queue.glsl's
+/// queue_barrier) compiles, passes validation and renders the plain kernel's sums bit for bit,
+/// in passes of 2 and 5 samples: on lavapipe, whose subgroup barrier is a workgroup barrier, in
+/// workgroups of one subgroup. What it cannot show is that the barriers stand where a device whose
+/// lanes do not run in step needs them: lavapipe's lanes run in step with or without them (a
+/// barrier moved into the walk loop's divergent branch passes here too). That is the GPU's run to
+/// show: scripts/gpu-measure.sh compares the GPU's images with lavapipe's.
+#[test]
+fn the_walk_queue_with_subgroup_barriers_renders_the_same_sums() {
+    let (_lock, ctx) = gpu();
+    if ctx.loop_limit().expect("probe").is_some() {
+        eprintln!("SKIPPED: {} ends loops early, so it has no walk queue", ctx.info.driver_info);
+        return;
+    }
+    let scene = two_meshes_in_a_room();
+    let spp = scene.film.spp;
+    // The overrides are read when a renderer is made; the lock keeps this binary's other test
+    // from making one meanwhile.
+    std::env::set_var(WALK_QUEUE_VAR, "barriers");
+    std::env::set_var(WORKGROUP_VAR, format!("{}x1", ctx.info.subgroup_size));
+    let (with_barriers, aovs_with_barriers, queue) = sums(&ctx, &scene, KernelChoice::ForScene, &[2, spp - 2]);
+    std::env::remove_var(WALK_QUEUE_VAR);
+    std::env::remove_var(WORKGROUP_VAR);
+    assert!(queue.is_some_and(|q| q.subgroup_barriers), "the scene's kernel walked from the queue, with barriers: {queue:?}");
+    let (plain, plain_aovs, _) = sums(&ctx, &scene, KernelChoice::General, &[spp]);
+    let differing = with_barriers.iter().zip(&plain).filter(|(a, b)| a != b).count();
+    assert_eq!(differing, 0, "{differing} of {} pixels differ between the queue's kernel with barriers and the plain one", plain.len());
+    assert!(aovs_with_barriers == plain_aovs, "the AOV sums differ between the queue's kernel with barriers and the plain one");
 }

@@ -160,6 +160,7 @@ impl Measurement {
             "group_order": self.group_order.label(),
             // Instances a ray may walk through the queue; null: each lane walks its own rays.
             "walk_queue": self.walk_queue.map(|q| q.walks_per_ray),
+            "walk_queue_barriers": self.walk_queue.map(|q| q.subgroup_barriers),
             "workgroup": self.workgroup.label(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,

@@ -32,7 +32,10 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         KernelChoice::ForScene => "compiled for the scene",
         KernelChoice::General => "general (--general-kernel)",
     };
-    let walks = m.walk_queue.map_or(String::new(), |q| format!("; rays walked from the subgroup's queue (up to {} instances a ray)", q.walks_per_ray));
+    let walks = m.walk_queue.map_or(String::new(), |q| {
+        let barriers = if q.subgroup_barriers { ", subgroup barriers" } else { "" };
+        format!("; rays walked from the subgroup's queue (up to {} instances a ray{barriers})", q.walks_per_ray)
+    });
     println!("kernel:       {kernel}: {}; workgroups {}, rows {}{walks}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.

@@ -60,6 +60,9 @@ pub struct DeviceInfo {
     pub driver_id: Option<vk::DriverId>,
     /// Bytes of shared memory a workgroup may use (`maxComputeSharedMemorySize`).
     pub max_compute_shared_memory_size: u32,
+    /// Invocations in a subgroup (`subgroupSize`, Vulkan 1.1): lavapipe's SIMD width in lanes,
+    /// NVIDIA's warp. 0 below Vulkan 1.1.
+    pub subgroup_size: u32,
     /// Bytes one storage-buffer binding can see (lowered by `ContextOptions::storage_binding_limit`).
     pub max_storage_buffer_range: u64,
     pub min_storage_buffer_offset_alignment: u64,
@@ -191,6 +194,7 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         driver_info,
         driver_id,
         max_compute_shared_memory_size: props.limits.max_compute_shared_memory_size,
+        subgroup_size: subgroup_size(instance, pd, v),
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
@@ -214,6 +218,17 @@ fn driver_properties(instance: &ash::Instance, pd: vk::PhysicalDevice, api_versi
     unsafe { instance.get_physical_device_properties2(pd, &mut props) };
     let text = |c: Result<&std::ffi::CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
     (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()), Some(driver.driver_id))
+}
+
+/// The device's subgroup size, or 0 below Vulkan 1.1, which made the structure core.
+fn subgroup_size(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> u32 {
+    if api_version < vk::API_VERSION_1_1 {
+        return 0;
+    }
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    unsafe { instance.get_physical_device_properties2(pd, &mut props) };
+    subgroup.subgroup_size
 }
 
 fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {

@@ -301,13 +301,17 @@ mod tests {
     /// [`VARIANTS`] changes.
     const GENERAL: KernelVariant = KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT };
 
-    const VARIANTS: [KernelVariant; 5] = [
+    /// The walk queue's kernel (walk_queue.rs): a top level of its root alone.
+    const QUEUE: KernelVariant = KernelVariant { aovs: true, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2, subgroup_barriers: false }), ..GENERAL };
+
+    const VARIANTS: [KernelVariant; 6] = [
         GENERAL,
         KernelVariant { aovs: true, ..GENERAL },
         KernelVariant { count_loop_iterations: true, ..GENERAL },
         KernelVariant { aovs: true, count_loop_iterations: true, ..GENERAL },
-        // The walk queue's kernel (walk_queue.rs): a top level of its root alone.
-        KernelVariant { aovs: true, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2 }), ..GENERAL },
+        QUEUE,
+        // ... with the subgroup barriers a GPU's lanes need.
+        KernelVariant { walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2, subgroup_barriers: true }), ..QUEUE },
     ];
 
     /// What a binding holds: a block of this storage class, or a texel buffer.

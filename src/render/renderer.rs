@@ -379,7 +379,7 @@ impl<'a> Renderer<'a> {
             KernelChoice::General => SceneFeatures::ALL,
         };
         let workgroup = Workgroup::chosen()?;
-        let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances);
+        let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances)?;
         let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
         let contents: Vec<(&BufferBinding, Initial)> = BINDINGS

@@ -4,19 +4,28 @@
 //! the lanes a mesh walk leaves idle (docs/benchmarks.md, stop 24); the images are the plain
 //! kernel's bit for bit.
 //!
-//! It is compiled only where all of these hold:
+//! By default it is compiled only where all of these hold:
 //! - **lavapipe**: the lanes hand walks to each other through shared memory without a barrier,
-//!   which is sound where gallivm runs a subgroup as one SIMD thread, and on no GPU;
+//!   which is sound where gallivm runs a subgroup as one SIMD thread;
 //! - **loops run to their end** (no loop limit to count: the rounds need every lane);
 //! - **a top level of its root alone** (two to four instances): a scene of one instance walks
 //!   every ray, and the queue's walk, slower per pass, loses there; a deeper top level would need
 //!   its walk to collect the instances;
 //! - **the queue fits the device's shared memory**.
+//!
+//! `CAUSTICA_WALK_QUEUE` changes the first condition, for an A/B of one binary: `0` compiles no
+//! queue, `1` compiles it on any device (a GPU's kernel then has subgroup barriers between the
+//! round's steps, since its lanes need not run in step), and `barriers` also gives lavapipe's
+//! kernel the barriers, where a workgroup is one subgroup (gallivm makes a subgroup barrier a
+//! workgroup barrier, which cuts loops short where the workgroup's subgroups run different
+//! numbers of rounds): what tests/walk_queue.rs checks the barriers' kernel with. On a GPU the
+//! queue is unmeasured, hence not the default there.
 
 use super::features::SceneFeatures;
 use super::layout::{GpuInstance, INSTANCE_PRIMITIVES};
 use crate::bvh::{WideNode, CHILD_NONE, WIDTH};
 use crate::gpu::DeviceInfo;
+use anyhow::{bail, Result};
 use ash::vk;
 
 /// The queue a kernel is compiled with: `QUEUE_WALKS_PER_RAY` of walk_queue.glsl.
@@ -24,6 +33,9 @@ use ash::vk;
 pub struct WalkQueue {
     /// Instances one ray can walk: those under the top level's root that rays walk.
     pub walks_per_ray: u32,
+    /// Subgroup barriers between queueing, walking and reading (`QUEUE_SUBGROUP_BARRIERS`):
+    /// wherever the lanes of a subgroup need not run in step, that is on every device but lavapipe.
+    pub subgroup_barriers: bool,
 }
 
 /// Shared memory a queued walk takes (walk_queue.glsl: `queue_origin`, `queue_dir`, `queue_instance`).
@@ -33,8 +45,37 @@ pub const SHARED_BYTES_PER_WALK: u32 = 16 + 16 + 8;
 /// ray and a shadow ray (queued_paths.glsl).
 const WALKS_PER_LANE_PER_INSTANCE: u32 = 2 * 2;
 
-/// Names the environment variable that turns the queue off (`0`), for A/B measurement of one binary.
+/// Names the environment variable that turns the queue off (`0`) or on for any device (`1`,
+/// `barriers`), for A/B measurement of one binary (see the module's documentation).
 pub const WALK_QUEUE_VAR: &str = "CAUSTICA_WALK_QUEUE";
+
+/// What [`WALK_QUEUE_VAR`] asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Request {
+    /// Unset: the queue on lavapipe alone.
+    Default,
+    Off,
+    /// On any device, with subgroup barriers except on lavapipe.
+    On,
+    /// On any device, with subgroup barriers on every one.
+    WithBarriers,
+}
+
+impl Request {
+    fn parse(value: Option<&str>) -> Result<Request> {
+        Ok(match value {
+            None => Request::Default,
+            Some("0") => Request::Off,
+            Some("1") => Request::On,
+            Some("barriers") => Request::WithBarriers,
+            Some(other) => bail!("{WALK_QUEUE_VAR}={other}: expected 0 (no queue), 1 (the queue on any device) or barriers (with subgroup barriers on lavapipe too)"),
+        })
+    }
+
+    fn from_env() -> Result<Request> {
+        Request::parse(std::env::var(WALK_QUEUE_VAR).ok().as_deref())
+    }
+}
 
 impl WalkQueue {
     /// Shared memory the queue takes in a workgroup of `lanes` invocations: its walks and each
@@ -46,27 +87,37 @@ impl WalkQueue {
     /// The queue for a scene with these `features`, whose top-level root is `root` over
     /// `instances`, on `device` (whose loops are cut short where `loop_limit`) in workgroups of
     /// `lanes` invocations; `None` where the kernel walks each lane's rays itself (see the
-    /// module's conditions).
-    pub fn for_scene(device: &DeviceInfo, loop_limit: bool, lanes: u32, features: &SceneFeatures, root: Option<&WideNode>, instances: &[GpuInstance]) -> Option<WalkQueue> {
-        if std::env::var(WALK_QUEUE_VAR).is_ok_and(|v| v == "0") {
-            return None;
+    /// module's conditions). An error where [`WALK_QUEUE_VAR`] asks for what cannot run.
+    pub fn for_scene(device: &DeviceInfo, loop_limit: bool, lanes: u32, features: &SceneFeatures, root: Option<&WideNode>, instances: &[GpuInstance]) -> Result<Option<WalkQueue>> {
+        let request = Request::from_env()?;
+        let lavapipe = device.driver_id == Some(vk::DriverId::MESA_LLVMPIPE);
+        if request == Request::Off || (request == Request::Default && !lavapipe) {
+            return Ok(None);
+        }
+        let subgroup_barriers = !lavapipe || request == Request::WithBarriers;
+        if lavapipe && subgroup_barriers && lanes > device.subgroup_size {
+            bail!("{WALK_QUEUE_VAR}=barriers: lavapipe runs a subgroup barrier as a workgroup barrier, so its kernel needs a workgroup of one subgroup ({} lanes, e.g. CAUSTICA_WORKGROUP={}x1), not {lanes}", device.subgroup_size, device.subgroup_size);
         }
         let flat_top_level = features.bvh() && features.top_level && !features.top_level_tree;
-        if device.driver_id != Some(vk::DriverId::MESA_LLVMPIPE) || loop_limit || !flat_top_level {
-            return None;
+        if loop_limit || !flat_top_level {
+            return Ok(None);
         }
-        let root = root?;
+        let Some(root) = root else { return Ok(None) };
         // As walk_queue.glsl's instance_walked: a group of shapes is walked only where its shapes
         // are not tested before the walk.
         let walked = |instance: &GpuInstance| instance.info[0] != INSTANCE_PRIMITIVES || features.walked_shapes();
         let walks_per_ray = (0..WIDTH).filter(|&k| root.kind(k) != CHILD_NONE && instances.get(root.links[k] as usize).is_some_and(walked)).count() as u32;
-        let queue = WalkQueue { walks_per_ray };
-        (walks_per_ray > 0 && queue.shared_bytes(lanes) <= device.max_compute_shared_memory_size).then_some(queue)
+        let queue = WalkQueue { walks_per_ray, subgroup_barriers };
+        Ok((walks_per_ray > 0 && queue.shared_bytes(lanes) <= device.max_compute_shared_memory_size).then_some(queue))
     }
 
     /// The kernel's `#define`s for the queue, or for none.
     pub fn defines(queue: Option<WalkQueue>) -> Vec<(&'static str, String)> {
-        vec![("WALK_QUEUE", u32::from(queue.is_some()).to_string()), ("QUEUE_WALKS_PER_RAY", format!("{}u", queue.map_or(0, |q| q.walks_per_ray)))]
+        vec![
+            ("WALK_QUEUE", u32::from(queue.is_some()).to_string()),
+            ("QUEUE_WALKS_PER_RAY", format!("{}u", queue.map_or(0, |q| q.walks_per_ray))),
+            ("QUEUE_SUBGROUP_BARRIERS", u32::from(queue.is_some_and(|q| q.subgroup_barriers)).to_string()),
+        ]
     }
 }
 
@@ -77,7 +128,7 @@ mod tests {
     #[test]
     fn shared_bytes_match_the_kernels_arrays() {
         // 64 lanes x 4 walks x 2 instances x 40 bytes, and two counters a lane.
-        assert_eq!(WalkQueue { walks_per_ray: 2 }.shared_bytes(64), 64 * 4 * 2 * 40 + 512);
+        assert_eq!(WalkQueue { walks_per_ray: 2, subgroup_barriers: false }.shared_bytes(64), 64 * 4 * 2 * 40 + 512);
         let glsl = include_str!("../../shaders/walk_queue.glsl");
         for array in ["shared vec4 queue_origin[", "shared vec4 queue_dir[", "shared uvec2 queue_instance["] {
             assert!(glsl.contains(array), "walk_queue.glsl no longer declares `{array}`: update SHARED_BYTES_PER_WALK");
@@ -87,7 +138,19 @@ mod tests {
 
     #[test]
     fn four_instances_do_not_fit_lavapipes_32_kib() {
-        assert!(WalkQueue { walks_per_ray: 3 }.shared_bytes(64) <= 32 * 1024);
-        assert!(WalkQueue { walks_per_ray: 4 }.shared_bytes(64) > 32 * 1024);
+        assert!(WalkQueue { walks_per_ray: 3, subgroup_barriers: false }.shared_bytes(64) <= 32 * 1024);
+        assert!(WalkQueue { walks_per_ray: 4, subgroup_barriers: false }.shared_bytes(64) > 32 * 1024);
+    }
+
+    #[test]
+    fn the_variable_takes_three_values_and_refuses_others() {
+        assert_eq!(Request::parse(None).unwrap(), Request::Default);
+        assert_eq!(Request::parse(Some("0")).unwrap(), Request::Off);
+        assert_eq!(Request::parse(Some("1")).unwrap(), Request::On);
+        assert_eq!(Request::parse(Some("barriers")).unwrap(), Request::WithBarriers);
+        for bad in ["", "2", "on", "Barriers"] {
+            let error = Request::parse(Some(bad)).unwrap_err().to_string();
+            assert!(error.contains(WALK_QUEUE_VAR) && error.contains("expected"), "{bad}: {error}");
+        }
     }
 }
