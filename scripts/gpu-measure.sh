@@ -25,7 +25,8 @@
 # workgroup shapes (CAUSTICA_WORKGROUP), the suite and the anchor scene with each; "queue" the A/B
 # of the walk queue (CAUSTICA_WALK_QUEUE=1: on a GPU, with subgroup barriers) against the plain
 # kernel, the suite and the anchor scene each way, and the mesh box's image with the queue, to
-# check against lavapipe's; "shaders" runs each .run/shaders-NAME/ folder (CAUSTICA_SHADER_DIR).
+# check against lavapipe's; "wavefront" the same A/B of the wavefront's kernels (CAUSTICA_WAVEFRONT=1)
+# against the megakernel; "shaders" runs each .run/shaders-NAME/ folder (CAUSTICA_SHADER_DIR).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"
@@ -119,6 +120,15 @@ if [[ "$steps" == *" queue "* ]]; then
     done
     CAUSTICA_WALK_QUEUE=1 render bunny-cornell-queue-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
     unset CAUSTICA_WALK_QUEUE
+fi
+if [[ "$steps" == *" wavefront "* ]]; then
+    # The megakernel first and last, as above.
+    for side in megakernel wavefront megakernel; do
+        if [ "$side" = wavefront ]; then export CAUSTICA_WAVEFRONT=1; else unset CAUSTICA_WAVEFRONT; fi
+        measure_side "wf-$side-$SECONDS"
+    done
+    CAUSTICA_WAVEFRONT=1 render bunny-cornell-wavefront-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
+    unset CAUSTICA_WAVEFRONT
 fi
 if [[ "$steps" == *" shaders "* ]]; then
     for dir in embedded .run/shaders-*/ embedded; do

@@ -106,7 +106,8 @@ Path path_start(vec3 origin, vec3 dir) {
 // The path's vertex at what its ray (path.origin, path.dir) met: `found` and `hit`, as trace_ray
 // returns them. Adds what is seen there, samples the light and the next direction. In a kernel
 // with the walk queue the light's shadow ray is handed back (`shadow_wanted`: `shadow` is to be
-// traced, and its contribution added where it is not occluded, before the path's next vertex);
+// traced, and its contribution added where it is not occluded, before the path's next vertex; so
+// too in the wavefront's);
 // in any other it is traced here. False once the path has ended: path.radiance, with the shadow ray's contribution,
 // is then the sample's estimate. The rng's dimensions are the vertex's (bounce_dimensions).
 bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first, bool found, Hit hit, out bool shadow_wanted, out ShadowRay shadow) {
@@ -178,8 +179,8 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
     if (nee && !lobe_is_delta(lobe) && depth + 1u < frame.max_bounces) {
         bounce_dimensions(rng, depth, DIMS_SCATTER, DIMS_DIRECT);
         shadow_wanted = direct_light(lobe, path.dir, surface, path.throughput, rng, rays, shadow);
-#if !WALK_QUEUE
-        // Traced here where no queue takes it: held past the BSDF sample's state, it measured
+#if !WALK_QUEUE && !WAVEFRONT
+        // Traced here where no queue or wavefront takes it: held past the BSDF sample's state, it measured
         // 1-4 % slower on lavapipe (docs/benchmarks.md, stop 24).
         if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;
         shadow_wanted = false;

@@ -99,6 +99,9 @@ void add_sample(inout PixelSums sums, vec3 radiance, FirstHit first_hit) {
 #if WALK_QUEUE
 #include "queued_paths.glsl"
 #endif
+#if WAVEFRONT
+#include "wavefront.glsl"
+#endif
 
 void main() {
     uint band_row = group_row_of(gl_WorkGroupID.y, gl_NumWorkGroups.y) * gl_WorkGroupSize.y + gl_LocalInvocationID.y;
@@ -106,6 +109,16 @@ void main() {
     uint width = frame.width;
     bool inside = pixel.x < width && band_row < pass.row_count && pixel.y < frame.height;
     uint index = pixel.y * width + pixel.x;
+#if WAVEFRONT
+    // One step of a round for the pixel's path (wavefront.glsl): its state, not its sums, is here.
+    bool in_band = pixel.x < width && band_row < pass.row_count;
+#if WAVEFRONT_STAGE == WAVEFRONT_SHADE
+    wavefront_step(state_base(band_row, pixel.x), in_band, inside, pixel, index);
+#else
+    wavefront_step(state_base(band_row, pixel.x), in_band);
+#endif
+    return;
+#endif
     PixelSums sums;
     sums.sum = inside ? load_accum(index) : vec4(0.0);
     sums.nonfinite = 0u;

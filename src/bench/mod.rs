@@ -58,6 +58,8 @@ pub struct Measurement {
     pub group_order: GroupOrder,
     /// The walk queue the kernel was compiled with (lavapipe, a flat top level), or none.
     pub walk_queue: Option<WalkQueue>,
+    /// Whether the wavefront's kernels ran instead of the megakernel (`CAUSTICA_WAVEFRONT`).
+    pub wavefront: bool,
     /// The kernel's workgroup shape.
     pub workgroup: Workgroup,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
@@ -113,6 +115,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         features: renderer.features,
         group_order: renderer.group_order(),
         walk_queue: renderer.walk_queue,
+        wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
         setup_seconds,
         seconds,
@@ -161,6 +164,7 @@ impl Measurement {
             // Instances a ray may walk through the queue; null: each lane walks its own rays.
             "walk_queue": self.walk_queue.map(|q| q.walks_per_ray),
             "walk_queue_barriers": self.walk_queue.map(|q| q.subgroup_barriers),
+            "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,

@@ -36,7 +36,8 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         let barriers = if q.subgroup_barriers { ", subgroup barriers" } else { "" };
         format!("; rays walked from the subgroup's queue (up to {} instances a ray{barriers})", q.walks_per_ray)
     });
-    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{walks}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
+    let wavefront = if m.wavefront { "; the wavefront's three kernels (CAUSTICA_WAVEFRONT)" } else { "" };
+    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{walks}{wavefront}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.
         let figures: Vec<String> = m.kernel_statistics.iter().map(|s| format!("{} {}", s.name, s.value)).collect();

@@ -185,34 +185,43 @@ impl ComputeKernel {
     /// timestamps (`None` where its queue has none): throughput without the submission, fence
     /// and scheduling costs a wall clock also counts.
     pub fn dispatch_timed(&self, ctx: &GpuContext, push: &[u8], groups: [u32; 3]) -> Result<Option<f64>> {
-        assert_eq!(push.len() as u32, self.push_size, "push-constant block size");
+        Self::dispatch_sequence_timed(ctx, &[(self, push, groups)])
+    }
+
+    /// Runs `steps` (kernel, push constants, workgroups) in order in one submission, each
+    /// dispatch's writes visible to the next, and waits for them; returns the seconds the device
+    /// spent on them all by its timestamps (those of the first kernel's pool), where it has them.
+    pub fn dispatch_sequence_timed(ctx: &GpuContext, steps: &[(&ComputeKernel, &[u8], [u32; 3])]) -> Result<Option<f64>> {
+        let Some(&(first, _, _)) = steps.first() else {
+            return Ok(Some(0.0));
+        };
         ctx.submit_and_wait(|device, cb| unsafe {
-            device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            device.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
-            device.cmd_push_constants(cb, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-            if let Some(pool) = self.timestamps {
+            if let Some(pool) = first.timestamps {
                 device.cmd_reset_query_pool(cb, pool, 0, 2);
                 device.cmd_write_timestamp(cb, vk::PipelineStageFlags::TOP_OF_PIPE, pool, 0);
             }
-            device.cmd_dispatch(cb, groups[0], groups[1], groups[2]);
-            if let Some(pool) = self.timestamps {
+            for &(kernel, push, groups) in steps {
+                assert_eq!(push.len() as u32, kernel.push_size, "push-constant block size");
+                kernel.record(device, cb, push, groups);
+                // Each dispatch's writes reach the next, and the host's reads after the last.
+                let barrier = vk::MemoryBarrier::default()
+                    .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+                    .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::HOST_READ | vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE);
+                device.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST | vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::DependencyFlags::empty(),
+                    &[barrier],
+                    &[],
+                    &[],
+                );
+            }
+            if let Some(pool) = first.timestamps {
                 device.cmd_write_timestamp(cb, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, 1);
             }
-            // Make the kernel's writes visible to later transfers (readback) and host reads.
-            let barrier = vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-                .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::HOST_READ | vk::AccessFlags::SHADER_READ);
-            device.cmd_pipeline_barrier(
-                cb,
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST | vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::DependencyFlags::empty(),
-                &[barrier],
-                &[],
-                &[],
-            );
         })?;
-        let (Some(pool), Some(period_ns)) = (self.timestamps, ctx.timestamp_period_ns) else {
+        let (Some(pool), Some(period_ns)) = (first.timestamps, ctx.timestamp_period_ns) else {
             return Ok(None);
         };
         let mut ticks = [0u64; 2];

@@ -37,12 +37,13 @@ pub enum KernelBuffer {
     VertexTangents,
     AovAlbedoDepth,
     AovNormalHits,
+    PathStates,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::AovNormalHits as usize + 1;
+    pub const COUNT: usize = KernelBuffer::PathStates as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -111,6 +112,8 @@ pub enum BoundIn {
     EveryKernel,
     /// Only kernels built with `AOVS` 1.
     AovKernels,
+    /// Only the wavefront's kernels (wavefront.rs).
+    WavefrontKernels,
 }
 
 /// One binding of the kernel's descriptor set 0.
@@ -132,6 +135,7 @@ impl BufferBinding {
         match self.bound_in {
             BoundIn::EveryKernel => true,
             BoundIn::AovKernels => variant.aovs,
+            BoundIn::WavefrontKernels => variant.wavefront.is_some(),
         }
     }
 
@@ -163,7 +167,7 @@ impl BufferBinding {
 }
 
 use Access::{Read, ReadWrite};
-use BoundIn::{AovKernels, EveryKernel};
+use BoundIn::{AovKernels, EveryKernel, WavefrontKernels};
 use KernelBuffer::*;
 
 /// An array of `T`s that always fits one binding.
@@ -241,6 +245,8 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // first hit summed over the samples that hit something, w = how many those were.
     BufferBinding { buffer: AovAlbedoDepth, binding: 20, name: "aov_albedo_depth", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: AovKernels, what: "albedo and depth sums" },
     BufferBinding { buffer: AovNormalHits, binding: 21, name: "aov_normal_hits", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: AovKernels, what: "normal sums" },
+    // Each pixel's path between the wavefront's kernels (wavefront.glsl), WAVEFRONT_STATE_VEC4S a pixel.
+    BufferBinding { buffer: PathStates, binding: 22, name: "path_states", shape: array::<[u32; 4]>(), access: ReadWrite, bound_in: WavefrontKernels, what: "wavefront path states" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,
@@ -299,12 +305,12 @@ mod tests {
 
     /// The general kernel without AOVs or loop counting, in 8x8 workgroups: what each of
     /// [`VARIANTS`] changes.
-    const GENERAL: KernelVariant = KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT };
+    const GENERAL: KernelVariant = KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, wavefront: None };
 
     /// The walk queue's kernel (walk_queue.rs): a top level of its root alone.
     const QUEUE: KernelVariant = KernelVariant { aovs: true, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2, subgroup_barriers: false }), ..GENERAL };
 
-    const VARIANTS: [KernelVariant; 6] = [
+    const VARIANTS: [KernelVariant; 9] = [
         GENERAL,
         KernelVariant { aovs: true, ..GENERAL },
         KernelVariant { count_loop_iterations: true, ..GENERAL },
@@ -312,6 +318,10 @@ mod tests {
         QUEUE,
         // ... with the subgroup barriers a GPU's lanes need.
         KernelVariant { walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2, subgroup_barriers: true }), ..QUEUE },
+        // The wavefront's three kernels (wavefront.rs), which bind its paths' states too.
+        KernelVariant { aovs: true, wavefront: Some(crate::render::WavefrontStage::Extend), ..GENERAL },
+        KernelVariant { aovs: true, wavefront: Some(crate::render::WavefrontStage::Shadow), ..GENERAL },
+        KernelVariant { wavefront: Some(crate::render::WavefrontStage::Shade), ..GENERAL },
     ];
 
     /// What a binding holds: a block of this storage class, or a texel buffer.

@@ -6,6 +6,7 @@ use super::bindings;
 use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::walk_queue::WalkQueue;
+use super::wavefront::WavefrontStage;
 use super::workgroup::Workgroup;
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
 use crate::input_file::{InputFiles, InputKind};
@@ -40,6 +41,7 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("integrator.glsl", include_str!("../../shaders/integrator.glsl")),
     ("walk_queue.glsl", include_str!("../../shaders/walk_queue.glsl")),
     ("queued_paths.glsl", include_str!("../../shaders/queued_paths.glsl")),
+    ("wavefront.glsl", include_str!("../../shaders/wavefront.glsl")),
 ];
 
 /// The text of the kernel's shader file `name`: from `$CAUSTICA_SHADER_DIR` when it is set, else as
@@ -74,7 +76,7 @@ const INTERFACE_FILE: &str = "interface.glsl";
 /// Its code is the general kernel's: every scene feature compiled in.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
     let interface = bindings::glsl(&UNSPLIT, KernelVariant::default());
-    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(Workgroup::default().defines()).collect();
+    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(WavefrontStage::defines(None)).chain(Workgroup::default().defines()).collect();
     assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
 }
 
@@ -92,6 +94,8 @@ pub struct KernelVariant {
     pub walk_queue: Option<WalkQueue>,
     /// Its `local_size_x/y` (workgroup.rs).
     pub workgroup: Workgroup,
+    /// One of the wavefront's kernels (wavefront.rs), or the megakernel.
+    pub wavefront: Option<WavefrontStage>,
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.
@@ -104,6 +108,7 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
     ];
     defines.extend(variant.features.defines());
     defines.extend(WalkQueue::defines(variant.walk_queue));
+    defines.extend(WavefrontStage::defines(variant.wavefront));
     defines.extend(variant.workgroup.defines());
     assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)
 }

@@ -247,6 +247,10 @@ glsl_block! {
         pub samples_added: u32,
         /// Most loop iterations one subgroup ran (kernels built with COUNT_LOOP_ITERATIONS; else 0).
         pub max_loop_iterations: u32,
+        /// The wavefront's paths still in flight after an even round (wavefront.glsl; else 0).
+        pub paths_in_flight_even: u32,
+        /// ... after an odd round: each round clears the other parity's count for the next.
+        pub paths_in_flight_odd: u32,
     }
 }
 
@@ -268,6 +272,8 @@ glsl_block! {
         /// Stripes the band's rows of workgroups are dealt into (pathtrace.comp's
         /// `group_row_of`): 1 takes them in order; see [`crate::render::GroupOrder`].
         pub group_row_stripes: u32,
+        /// The wavefront's round (wavefront.glsl): 0 starts the pass's paths. 0 in the megakernel.
+        pub wavefront_round: u32,
     }
 }
 
@@ -411,16 +417,18 @@ mod tests {
 
     #[test]
     fn stats_are_pinned() {
-        assert_eq!(size_of::<GpuStats>(), 20);
+        assert_eq!(size_of::<GpuStats>(), 28);
         assert_eq!(offset_of!(GpuStats, nonfinite_samples), 4);
         assert_eq!(offset_of!(GpuStats, pixels_complete), 8);
         assert_eq!(offset_of!(GpuStats, samples_added), 12);
         assert_eq!(offset_of!(GpuStats, max_loop_iterations), 16);
+        assert_eq!(offset_of!(GpuStats, paths_in_flight_even), 20);
+        assert_eq!(offset_of!(GpuStats, paths_in_flight_odd), 24);
     }
 
     #[test]
     fn pass_params_fit_the_push_constant_minimum() {
-        assert_eq!(size_of::<PassParams>(), 24);
+        assert_eq!(size_of::<PassParams>(), 28);
         assert!(size_of::<PassParams>() <= 128, "Vulkan guarantees only 128 bytes of push constants");
     }
 

@@ -18,6 +18,7 @@ mod scene_data;
 mod spirv_reflect;
 mod textured_emission;
 mod walk_queue;
+mod wavefront;
 mod workgroup;
 
 pub use chunks::UNSPLIT;
@@ -29,6 +30,7 @@ pub use scene_data::SceneData;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
 pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
+pub use wavefront::{WavefrontStage, WAVEFRONT_VAR};
 pub use workgroup::{Workgroup, WORKGROUP_VAR};
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling

@@ -16,6 +16,7 @@ use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
 use super::walk_queue::WalkQueue;
+use super::wavefront::{self, WavefrontKernels, WavefrontStage};
 use super::workgroup::Workgroup;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic};
 use crate::image::RgbImage;
@@ -54,6 +55,10 @@ const LOOP_LIMIT_SHARE: f64 = 0.5;
 pub struct Renderer<'a> {
     ctx: &'a GpuContext,
     kernel: Option<ComputeKernel>,
+    /// The wavefront's kernels, where the render runs them instead of the megakernel (wavefront.rs).
+    wavefront: Option<WavefrontKernels>,
+    /// What the driver says of each compiled kernel (the wavefront's named by their stage).
+    statistics: Vec<KernelStatistic>,
     /// What the kernel was compiled for.
     pub features: SceneFeatures,
     /// The walk queue the kernel was compiled with, if any (walk_queue.rs).
@@ -149,7 +154,7 @@ pub struct GeometryReport {
 pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 
 /// The statistics buffer's contents at the start of every dispatch.
-const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0 };
+const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0, paths_in_flight_even: 0, paths_in_flight_odd: 0 };
 
 pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     let mut params = frame_params_without_camera(scene, data, seed);
@@ -240,6 +245,8 @@ fn initial_contents<'d>(buffer: KernelBuffer, params: &'d FrameParams, data: &'d
         Lights => bytemuck::cast_slice(&data.lights),
         EnvTexels => bytemuck::cast_slice(&data.env_texels),
         Accum | AovAlbedoDepth | AovNormalHits => return Initial::Zeroes(image_bytes),
+        // Each pixel's path state (wavefront.rs): image_bytes is 16 bytes a pixel.
+        PathStates => return Initial::Zeroes(image_bytes * wavefront::STATE_VEC4S),
         Stats => bytemuck::bytes_of(&CLEARED_STATS),
         Instances => bytemuck::cast_slice(&a.instances),
         MeshTriangles => bytemuck::cast_slice(&a.triangles),
@@ -379,8 +386,16 @@ impl<'a> Renderer<'a> {
             KernelChoice::General => SceneFeatures::ALL,
         };
         let workgroup = Workgroup::chosen()?;
-        let walk_queue = WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances)?;
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup };
+        let use_wavefront = wavefront::requested()?;
+        if use_wavefront && loop_limit.is_some() {
+            anyhow::bail!("{}=1: {} ends shader loops early, and the wavefront runs only where loops run to their end", wavefront::WAVEFRONT_VAR, ctx.info.name);
+        }
+        let walk_queue = match use_wavefront {
+            true => None,
+            false => WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances)?,
+        };
+        // The wavefront's three kernels bind the same buffers: the first stands for them here.
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, wavefront: use_wavefront.then_some(WavefrontStage::Extend) };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
         let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
@@ -423,8 +438,22 @@ impl<'a> Renderer<'a> {
         }
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
-        let kernel = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, std::mem::size_of::<PassParams>() as u32)?;
-        Ok(Self { ctx, kernel: Some(kernel), features, walk_queue, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        let push_size = std::mem::size_of::<PassParams>() as u32;
+        let (kernel, wavefront, statistics) = if use_wavefront {
+            let mut kernels = Vec::new();
+            let mut statistics = Vec::new();
+            for stage in WavefrontStage::ALL {
+                let k = ComputeKernel::new(ctx, kernel_spirv(&plans, KernelVariant { wavefront: Some(stage), ..variant })?, &descriptors, push_size)?;
+                statistics.extend(k.statistics.iter().map(|s| KernelStatistic { name: format!("{stage:?}: {}", s.name), value: s.value.clone() }));
+                kernels.push(k);
+            }
+            (None, Some(WavefrontKernels { kernels }), statistics)
+        } else {
+            let k = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, push_size)?;
+            let statistics = k.statistics.clone();
+            (Some(k), None, statistics)
+        };
+        Ok(Self { ctx, kernel, wavefront, statistics, features, walk_queue, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -462,8 +491,13 @@ impl<'a> Renderer<'a> {
 
     /// What the driver says of the compiled kernel (registers, spills; see
     /// [`crate::gpu::KernelStatistic`]); empty where it says nothing.
+    /// Whether the render runs the wavefront's kernels rather than the megakernel (wavefront.rs).
+    pub fn runs_wavefront(&self) -> bool {
+        self.wavefront.is_some()
+    }
+
     pub fn kernel_statistics(&self) -> &[KernelStatistic] {
-        self.kernel.as_ref().map_or(&[], |k| &k.statistics)
+        &self.statistics
     }
 
     /// The device's loop limit (see [`GpuContext::loop_limit`]).
@@ -747,11 +781,21 @@ impl<'a> Renderer<'a> {
     /// for the pixels furthest behind. Returns the kernel's counters.
     fn dispatch(&mut self, row: u32, rows: u32, target: u32, samples: u32) -> Result<GpuStats> {
         self.buffer_mut(KernelBuffer::Stats).expect("every kernel binds the statistics").write(bytemuck::bytes_of(&CLEARED_STATS))?;
-        let kernel = self.kernel.as_ref().expect("kernel lives until drop");
         let groups = [self.width.div_ceil(self.workgroup.width), rows.div_ceil(self.workgroup.height), 1];
-        let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS, group_row_stripes: self.group_order.stripes(groups[1]) };
+        let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS, group_row_stripes: self.group_order.stripes(groups[1]), wavefront_round: 0 };
         let start = Instant::now();
-        let device_seconds = kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?;
+        let device_seconds = match (&self.kernel, &self.wavefront) {
+            (Some(kernel), _) => kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?,
+            (None, Some(wavefront)) => {
+                // Each round takes every path at least one vertex or shadow ray on, and a sample
+                // has at most max_bounces vertices, each with one shadow ray: a bound with room.
+                let max_rounds = (samples as u64 + 1) * 2 * (self.params.max_bounces as u64 + 2);
+                let stats = self.buffer(KernelBuffer::Stats).expect("every kernel binds the statistics");
+                let read_stats = || -> Result<GpuStats> { Ok(bytemuck::pod_read_unaligned(&stats.read()?[..std::mem::size_of::<GpuStats>()])) };
+                wavefront.run(self.ctx, groups, max_rounds, |round| bytemuck::bytes_of(&PassParams { wavefront_round: round, ..pass }).to_vec(), read_stats)?
+            }
+            (None, None) => unreachable!("a renderer has the megakernel or the wavefront until drop"),
+        };
         let elapsed = start.elapsed().as_secs_f64();
         self.seconds += elapsed;
         self.gpu_seconds = self.gpu_seconds.zip(device_seconds).map(|(sum, s)| sum + s);
@@ -815,6 +859,9 @@ impl Drop for Renderer<'_> {
     fn drop(&mut self) {
         if let Some(k) = self.kernel.take() {
             k.destroy(self.ctx);
+        }
+        if let Some(w) = self.wavefront.take() {
+            w.destroy(self.ctx);
         }
         for (_, b) in self.buffers.drain(..) {
             b.destroy(self.ctx);

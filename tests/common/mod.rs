@@ -4,6 +4,7 @@
 
 pub mod furnace;
 pub mod gltf_square;
+pub mod two_meshes;
 
 use caustica::gpu::{ContextOptions, GpuContext};
 use caustica::image::RgbImage;
