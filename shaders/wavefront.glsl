@@ -181,7 +181,8 @@ void wavefront_step(uint base, bool in_band, bool inside, uvec2 pixel, uint inde
     uint round = pass.wavefront_round;
     uint rays = 0u;
     bool in_flight = false;
-    if (in_band) {
+    // A pixel already done reads one word, not its whole state.
+    if (in_band && (round == 0u || (path_states[base + 1u].w & PIXEL_DONE) == 0u)) {
         WavefrontState s;
         if (round == 0u) {
             s.sums.sum = inside ? load_accum(index) : vec4(0.0);
@@ -202,42 +203,40 @@ void wavefront_step(uint base, bool in_band, bool inside, uvec2 pixel, uint inde
         } else {
             s = load_state(base);
         }
-        if ((s.flags & PIXEL_DONE) == 0u) {
-            if ((s.flags & PATH_TRACING) != 0u) {
-                rays += 1u;  // the ray EXTEND traced, counted where the plain kernel counts it
-                bool shadowing;
-                bool goes_on = path_vertex(s.path, s.rng, rays, s.first_hit, s.hit.prim != NO_INDEX, s.hit, shadowing, s.shadow);
-                bool tracing = goes_on && path_ray_wanted(s.path, s.rng);
-                s.flags = (tracing ? PATH_TRACING : PATH_ENDED) | (shadowing ? PATH_SHADOWING : 0u);
-            }
-            // A path whose ray max_bounces forbids ends at once, hence the loop.
-            while ((s.flags & (PATH_TRACING | PATH_SHADOWING)) == 0u) {
-                if ((s.flags & PATH_ENDED) != 0u) {
-                    add_sample(s.sums, s.path.radiance, s.first_hit);
-                    s.flags = 0u;
-                }
-                if (s.next_sample >= s.target) break;
-                start_next_sample(s, pixel, index);
-            }
-            in_flight = (s.flags & (PATH_TRACING | PATH_SHADOWING)) != 0u;
-            if (!in_flight) {
-                // The pixel holds the target: store its sums, as the plain kernel's main does.
-                s.flags = PIXEL_DONE;
-                if (inside) {
-                    if (s.target > s.first) {
-                        store_accum(index, s.sums.sum);
-#if AOVS
-                        store_aov_albedo_depth(index, s.sums.albedo_depth);
-                        store_aov_normal_hits(index, s.sums.normal_hits);
-#endif
-                        atomicAdd(stats.samples_added, s.target - s.first);
-                        if (s.sums.nonfinite > 0u) atomicAdd(stats.nonfinite_samples, s.sums.nonfinite);
-                    }
-                    atomicAdd(stats.pixels_complete, 1u);
-                }
-            }
-            store_state(base, s);
+        if ((s.flags & PATH_TRACING) != 0u) {
+            rays += 1u;  // the ray EXTEND traced, counted where the plain kernel counts it
+            bool shadowing;
+            bool goes_on = path_vertex(s.path, s.rng, rays, s.first_hit, s.hit.prim != NO_INDEX, s.hit, shadowing, s.shadow);
+            bool tracing = goes_on && path_ray_wanted(s.path, s.rng);
+            s.flags = (tracing ? PATH_TRACING : PATH_ENDED) | (shadowing ? PATH_SHADOWING : 0u);
         }
+        // A path whose ray max_bounces forbids ends at once, hence the loop.
+        while ((s.flags & (PATH_TRACING | PATH_SHADOWING)) == 0u) {
+            if ((s.flags & PATH_ENDED) != 0u) {
+                add_sample(s.sums, s.path.radiance, s.first_hit);
+                s.flags = 0u;
+            }
+            if (s.next_sample >= s.target) break;
+            start_next_sample(s, pixel, index);
+        }
+        in_flight = (s.flags & (PATH_TRACING | PATH_SHADOWING)) != 0u;
+        if (!in_flight) {
+            // The pixel holds the target: store its sums, as the plain kernel's main does.
+            s.flags = PIXEL_DONE;
+            if (inside) {
+                if (s.target > s.first) {
+                    store_accum(index, s.sums.sum);
+#if AOVS
+                    store_aov_albedo_depth(index, s.sums.albedo_depth);
+                    store_aov_normal_hits(index, s.sums.normal_hits);
+#endif
+                    atomicAdd(stats.samples_added, s.target - s.first);
+                    if (s.sums.nonfinite > 0u) atomicAdd(stats.nonfinite_samples, s.sums.nonfinite);
+                }
+                atomicAdd(stats.pixels_complete, 1u);
+            }
+        }
+        store_state(base, s);
     }
     count_rays(rays);
     uint flights = subgroupAdd(in_flight ? 1u : 0u);
