@@ -67,6 +67,19 @@ measure_side() {
     measure "$1-smallpt" scenes/smallpt.toml --width "$width" --height "$height" --spp "$spp"
     measure "$1-suite" --suite --width "$width" --height "$height" --spp "$quarter"
 }
+# The A/B of a kernel switch: the anchor scene and the suite without it, with VAR=1 and without it
+# again (the spread between the two is the run's noise), files NAME-off-*, NAME-on-*; then the mesh
+# box's image with it, to check against lavapipe's.
+ab_switch() {
+    local name=$1 var=$2 side
+    for side in off on off; do
+        if [ "$side" = on ]; then export "$var"=1; else unset "$var"; fi
+        measure_side "$name-$side-$SECONDS"
+    done
+    export "$var"=1
+    render "$name-bunny-cornell-image" scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
+    unset "$var"
+}
 # One image: NAME, then the render arguments (small: they are checked against lavapipe's at home).
 render() {
     local name=$1
@@ -112,23 +125,11 @@ if [[ "$steps" == *" workgroups "* ]]; then
     measure general-bunny-cornell scenes/bunny_cornell.toml --width "$width" --height "$height" --spp "$quarter" --general-kernel
 fi
 if [[ "$steps" == *" queue "* ]]; then
-    # The plain kernel first and last: the spread between the two is the run's noise. Scenes whose
-    # top level is not their root alone keep the plain kernel either way.
-    for side in plain queue plain; do
-        if [ "$side" = queue ]; then export CAUSTICA_WALK_QUEUE=1; else unset CAUSTICA_WALK_QUEUE; fi
-        measure_side "queue-$side-$SECONDS"
-    done
-    CAUSTICA_WALK_QUEUE=1 render bunny-cornell-queue-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
-    unset CAUSTICA_WALK_QUEUE
+    # Scenes whose top level is not their root alone keep the plain kernel either way.
+    ab_switch queue CAUSTICA_WALK_QUEUE
 fi
 if [[ "$steps" == *" wavefront "* ]]; then
-    # The megakernel first and last, as above.
-    for side in megakernel wavefront megakernel; do
-        if [ "$side" = wavefront ]; then export CAUSTICA_WAVEFRONT=1; else unset CAUSTICA_WAVEFRONT; fi
-        measure_side "wf-$side-$SECONDS"
-    done
-    CAUSTICA_WAVEFRONT=1 render bunny-cornell-wavefront-image scenes/bunny_cornell.toml --width 256 --height 256 --spp 256 --seed 7
-    unset CAUSTICA_WAVEFRONT
+    ab_switch wavefront CAUSTICA_WAVEFRONT
 fi
 if [[ "$steps" == *" shaders "* ]]; then
     for dir in embedded .run/shaders-*/ embedded; do

@@ -9,7 +9,7 @@
 mod common;
 
 use caustica::render::{KernelChoice, WALK_QUEUE_VAR, WORKGROUP_VAR};
-use common::gpu;
+use common::{gpu, loops_end_early};
 use common::two_meshes::{sums, two_meshes_in_a_room};
 
 #[test]
@@ -44,8 +44,7 @@ fn the_walk_queue_renders_the_plain_kernels_sums_bit_for_bit() {
 #[test]
 fn the_walk_queue_with_subgroup_barriers_renders_the_same_sums() {
     let (_lock, ctx) = gpu();
-    if ctx.loop_limit().expect("probe").is_some() {
-        eprintln!("SKIPPED: {} ends loops early, so it has no walk queue", ctx.info.driver_info);
+    if loops_end_early(&ctx, "walk queue") {
         return;
     }
     let scene = two_meshes_in_a_room();

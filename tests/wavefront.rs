@@ -10,7 +10,7 @@ mod common;
 
 use caustica::render::{KernelChoice, Renderer, WAVEFRONT_VAR};
 use caustica::scene::Scene;
-use common::gpu;
+use common::{gpu, loops_end_early};
 use common::two_meshes::{sums, two_meshes_in_a_room};
 
 /// Sums of `scene` with the wavefront (`CAUSTICA_WAVEFRONT=1`, read when a renderer is made; the
@@ -26,8 +26,7 @@ fn wavefront_sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, steps: &[u32])
 #[test]
 fn the_wavefront_renders_the_megakernels_sums_bit_for_bit() {
     let (_lock, ctx) = gpu();
-    if ctx.loop_limit().expect("probe").is_some() {
-        eprintln!("SKIPPED: {} ends loops early, so it has no wavefront", ctx.info.driver_info);
+    if loops_end_early(&ctx, "wavefront") {
         return;
     }
     // Two meshes, clay and glass (paths of very different lengths), every AOV; the Cornell box
@@ -52,8 +51,7 @@ fn the_wavefront_renders_the_megakernels_sums_bit_for_bit() {
 #[test]
 fn the_wavefront_renders_in_bands_as_in_one_dispatch() {
     let (_lock, ctx) = gpu();
-    if ctx.loop_limit().expect("probe").is_some() {
-        eprintln!("SKIPPED: {} ends loops early, so it has no wavefront", ctx.info.driver_info);
+    if loops_end_early(&ctx, "wavefront") {
         return;
     }
     let mut scene = Scene::default_scene();

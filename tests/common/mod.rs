@@ -36,6 +36,17 @@ pub fn caustica(args: &[&str]) -> std::process::Output {
     caustica_command(args).output().expect("run caustica")
 }
 
+/// Whether `ctx` ends shader loops early (Debian 12's Mesa 22.3), where the kernel's forms that
+/// need every loop run to its end (the walk queue, the wavefront) are not compiled: the caller's
+/// test says SKIPPED, naming `what` it lacks, and returns.
+pub fn loops_end_early(ctx: &GpuContext, what: &str) -> bool {
+    let early = ctx.loop_limit().expect("probe").is_some();
+    if early {
+        eprintln!("SKIPPED: {} ends loops early, so it has no {what}", ctx.info.driver_info);
+    }
+    early
+}
+
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
 /// lavapipe already uses every core for one dispatch.
 pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
