@@ -54,9 +54,8 @@ const LOOP_LIMIT_SHARE: f64 = 0.5;
 
 pub struct Renderer<'a> {
     ctx: &'a GpuContext,
-    kernel: Option<ComputeKernel>,
-    /// The wavefront's kernels, where the render runs them instead of the megakernel (wavefront.rs).
-    wavefront: Option<WavefrontKernels>,
+    /// What a pass runs (always there until drop).
+    kernels: Option<Kernels>,
     /// What the driver says of each compiled kernel (the wavefront's named by their stage).
     statistics: Vec<KernelStatistic>,
     /// What the kernel was compiled for.
@@ -114,6 +113,12 @@ pub struct Renderer<'a> {
     pass_in_progress: Option<PassInProgress>,
     /// Order of the workgroups' rows (the device's unless [`Self::set_group_order`]).
     group_order: GroupOrder,
+}
+
+/// The compiled kernels a pass runs: the megakernel, or the wavefront's three (wavefront.rs).
+enum Kernels {
+    Megakernel(ComputeKernel),
+    Wavefront(WavefrontKernels),
 }
 
 /// A pass cut into bands and dispatched a band per [`Renderer::render_step`]: rows before
@@ -439,7 +444,7 @@ impl<'a> Renderer<'a> {
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
         let push_size = std::mem::size_of::<PassParams>() as u32;
-        let (kernel, wavefront, statistics) = if use_wavefront {
+        let (kernels, statistics) = if use_wavefront {
             let mut kernels = Vec::new();
             let mut statistics = Vec::new();
             for stage in WavefrontStage::ALL {
@@ -447,13 +452,13 @@ impl<'a> Renderer<'a> {
                 statistics.extend(k.statistics.iter().map(|s| KernelStatistic { name: format!("{stage:?}: {}", s.name), value: s.value.clone() }));
                 kernels.push(k);
             }
-            (None, Some(WavefrontKernels { kernels }), statistics)
+            (Kernels::Wavefront(WavefrontKernels { kernels }), statistics)
         } else {
             let k = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, push_size)?;
             let statistics = k.statistics.clone();
-            (Some(k), None, statistics)
+            (Kernels::Megakernel(k), statistics)
         };
-        Ok(Self { ctx, kernel, wavefront, statistics, features, walk_queue, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        Ok(Self { ctx, kernels: Some(kernels), statistics, features, walk_queue, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
@@ -489,13 +494,13 @@ impl<'a> Renderer<'a> {
         self.plan_for_loop_limit = false;
     }
 
-    /// What the driver says of the compiled kernel (registers, spills; see
-    /// [`crate::gpu::KernelStatistic`]); empty where it says nothing.
     /// Whether the render runs the wavefront's kernels rather than the megakernel (wavefront.rs).
     pub fn runs_wavefront(&self) -> bool {
-        self.wavefront.is_some()
+        matches!(self.kernels, Some(Kernels::Wavefront(_)))
     }
 
+    /// What the driver says of the compiled kernels (registers, spills; see
+    /// [`crate::gpu::KernelStatistic`]); empty where it says nothing.
     pub fn kernel_statistics(&self) -> &[KernelStatistic] {
         &self.statistics
     }
@@ -784,23 +789,19 @@ impl<'a> Renderer<'a> {
         let groups = [self.width.div_ceil(self.workgroup.width), rows.div_ceil(self.workgroup.height), 1];
         let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS, group_row_stripes: self.group_order.stripes(groups[1]), wavefront_round: 0 };
         let start = Instant::now();
-        let device_seconds = match (&self.kernel, &self.wavefront) {
-            (Some(kernel), _) => kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?,
-            (None, Some(wavefront)) => {
+        let device_seconds = match self.kernels.as_ref().expect("kernels live until drop") {
+            Kernels::Megakernel(kernel) => kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?,
+            Kernels::Wavefront(wavefront) => {
                 // Each round takes every path at least one vertex or shadow ray on, and a sample
                 // has at most max_bounces vertices, each with one shadow ray: a bound with room.
                 let max_rounds = (samples as u64 + 1) * 2 * (self.params.max_bounces as u64 + 2);
-                let stats = self.buffer(KernelBuffer::Stats).expect("every kernel binds the statistics");
-                let read_stats = || -> Result<GpuStats> { Ok(bytemuck::pod_read_unaligned(&stats.read()?[..std::mem::size_of::<GpuStats>()])) };
-                wavefront.run(self.ctx, groups, max_rounds, |round| bytemuck::bytes_of(&PassParams { wavefront_round: round, ..pass }).to_vec(), read_stats)?
+                wavefront.run(self.ctx, groups, max_rounds, |round| bytemuck::bytes_of(&PassParams { wavefront_round: round, ..pass }).to_vec(), || self.read_stats())?
             }
-            (None, None) => unreachable!("a renderer has the megakernel or the wavefront until drop"),
         };
         let elapsed = start.elapsed().as_secs_f64();
         self.seconds += elapsed;
         self.gpu_seconds = self.gpu_seconds.zip(device_seconds).map(|(sum, s)| sum + s);
-        let stats_buffer = self.buffer(KernelBuffer::Stats).expect("every kernel binds the statistics");
-        let stats: GpuStats = bytemuck::pod_read_unaligned(&stats_buffer.read()?[..std::mem::size_of::<GpuStats>()]);
+        let stats = self.read_stats()?;
         self.rays_traced += stats.ray_count as u64;
         self.nonfinite_samples += stats.nonfinite_samples as u64;
         self.loop_iterations_per_sample = self.loop_iterations_per_sample.max(stats.max_loop_iterations as f64 / samples as f64);
@@ -811,6 +812,12 @@ impl<'a> Renderer<'a> {
             None => cost,
         });
         Ok(stats)
+    }
+
+    /// The kernels' counters as the last submission left them.
+    fn read_stats(&self) -> Result<GpuStats> {
+        let stats = self.buffer(KernelBuffer::Stats).expect("every kernel binds the statistics");
+        Ok(bytemuck::pod_read_unaligned(&stats.read()?[..std::mem::size_of::<GpuStats>()]))
     }
 
     /// Raw accumulation: per pixel (sum of radiance, sample count), top row first.
@@ -857,11 +864,10 @@ pub fn mean_image(width: u32, height: u32, accumulation: &[[f32; 4]]) -> RgbImag
 
 impl Drop for Renderer<'_> {
     fn drop(&mut self) {
-        if let Some(k) = self.kernel.take() {
-            k.destroy(self.ctx);
-        }
-        if let Some(w) = self.wavefront.take() {
-            w.destroy(self.ctx);
+        match self.kernels.take() {
+            Some(Kernels::Megakernel(k)) => k.destroy(self.ctx),
+            Some(Kernels::Wavefront(w)) => w.destroy(self.ctx),
+            None => {}
         }
         for (_, b) in self.buffers.drain(..) {
             b.destroy(self.ctx);
