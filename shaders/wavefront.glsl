@@ -27,6 +27,25 @@
 const uint WAVEFRONT_STATE_LAYOUT_VEC4S = 16u;
 const uint wavefront_state_fits_the_hosts_buffer[WAVEFRONT_STATE_LAYOUT_VEC4S == WAVEFRONT_STATE_VEC4S ? 1 : -1] = uint[](0u);
 
+// The uvec4s of a pixel's state, named so that load_state, store_state and the stages' kernels,
+// which read or write some alone, agree on each.
+const uint STATE_RNG = 0u;               // rng.state, rng.kind, rng.pixel_key, rng.sample_index
+const uint STATE_RNG_FLAGS = 1u;         // rng.dim, rng.dim_end, next_sample, flags
+const uint STATE_RAY_ORIGIN = 2u;        // path.origin, path.bsdf_pdf
+const uint STATE_RAY_DIR = 3u;           // path.dir, path.depth
+const uint STATE_RADIANCE = 4u;          // path.radiance, target
+const uint STATE_THROUGHPUT = 5u;        // path.throughput, sums.nonfinite
+const uint STATE_PREV_POINT_HIT_T = 6u;  // path.prev_point, hit.t
+const uint STATE_HIT = 7u;               // hit.prim, hit.instance, hit.bary
+const uint STATE_SHADOW_ORIGIN = 8u;     // shadow.origin, shadow.t_max
+const uint STATE_SHADOW_DIR = 9u;        // shadow.dir, first
+const uint STATE_SHADOW_LIGHT = 10u;     // shadow.contribution, first_hit.depth
+const uint STATE_SUM = 11u;              // sums.sum
+const uint STATE_FIRST_ALBEDO = 12u;     // first_hit.albedo, first_hit.hit and .open (AOVS)
+const uint STATE_FIRST_NORMAL = 13u;     // first_hit.normal (AOVS)
+const uint STATE_AOV_ALBEDO_DEPTH = 14u; // sums.albedo_depth (AOVS)
+const uint STATE_AOV_NORMAL_HITS = 15u;  // sums.normal_hits (AOVS)
+
 // What a pixel's path is waiting for.
 const uint PATH_TRACING = 1u;    // its ray, in the next EXTEND
 const uint PATH_SHADOWING = 2u;  // its last vertex's shadow ray, in the next SHADOW
@@ -60,9 +79,9 @@ uvec4 bits(vec3 v, uint w) {
 
 WavefrontState load_state(uint base) {
     WavefrontState s;
-    uvec4 w0 = path_states[base + 0u], w1 = path_states[base + 1u], w2 = path_states[base + 2u], w3 = path_states[base + 3u];
-    uvec4 w4 = path_states[base + 4u], w5 = path_states[base + 5u], w6 = path_states[base + 6u], w7 = path_states[base + 7u];
-    uvec4 w8 = path_states[base + 8u], w9 = path_states[base + 9u], w10 = path_states[base + 10u], w11 = path_states[base + 11u];
+    uvec4 w0 = path_states[base + STATE_RNG], w1 = path_states[base + STATE_RNG_FLAGS], w2 = path_states[base + STATE_RAY_ORIGIN], w3 = path_states[base + STATE_RAY_DIR];
+    uvec4 w4 = path_states[base + STATE_RADIANCE], w5 = path_states[base + STATE_THROUGHPUT], w6 = path_states[base + STATE_PREV_POINT_HIT_T], w7 = path_states[base + STATE_HIT];
+    uvec4 w8 = path_states[base + STATE_SHADOW_ORIGIN], w9 = path_states[base + STATE_SHADOW_DIR], w10 = path_states[base + STATE_SHADOW_LIGHT], w11 = path_states[base + STATE_SUM];
     s.rng = Rng(w0.x, w0.y, w0.z, w0.w, w1.x, w1.y);
     s.next_sample = w1.z;
     s.flags = w1.w;
@@ -87,7 +106,7 @@ WavefrontState load_state(uint base) {
     s.first_hit.depth = uintBitsToFloat(w10.w);
     s.sums.sum = uintBitsToFloat(w11);
 #if AOVS
-    uvec4 w12 = path_states[base + 12u], w13 = path_states[base + 13u], w14 = path_states[base + 14u], w15 = path_states[base + 15u];
+    uvec4 w12 = path_states[base + STATE_FIRST_ALBEDO], w13 = path_states[base + STATE_FIRST_NORMAL], w14 = path_states[base + STATE_AOV_ALBEDO_DEPTH], w15 = path_states[base + STATE_AOV_NORMAL_HITS];
     s.first_hit.albedo = uintBitsToFloat(w12.xyz);
     s.first_hit.hit = (w12.w & 1u) != 0u;
     s.first_hit.open = (w12.w & 2u) != 0u;
@@ -101,23 +120,23 @@ WavefrontState load_state(uint base) {
 }
 
 void store_state(uint base, WavefrontState s) {
-    path_states[base + 0u] = uvec4(s.rng.state, s.rng.kind, s.rng.pixel_key, s.rng.sample_index);
-    path_states[base + 1u] = uvec4(s.rng.dim, s.rng.dim_end, s.next_sample, s.flags);
-    path_states[base + 2u] = bits(s.path.origin, s.path.bsdf_pdf);
-    path_states[base + 3u] = bits(s.path.dir, s.path.depth);
-    path_states[base + 4u] = bits(s.path.radiance, s.target);
-    path_states[base + 5u] = bits(s.path.throughput, s.sums.nonfinite);
-    path_states[base + 6u] = bits(s.path.prev_point, s.hit.t);
-    path_states[base + 7u] = uvec4(s.hit.prim, s.hit.instance, floatBitsToUint(s.hit.bary));
-    path_states[base + 8u] = bits(s.shadow.origin, s.shadow.t_max);
-    path_states[base + 9u] = bits(s.shadow.dir, s.first);
-    path_states[base + 10u] = bits(s.shadow.contribution, s.first_hit.depth);
-    path_states[base + 11u] = floatBitsToUint(s.sums.sum);
+    path_states[base + STATE_RNG] = uvec4(s.rng.state, s.rng.kind, s.rng.pixel_key, s.rng.sample_index);
+    path_states[base + STATE_RNG_FLAGS] = uvec4(s.rng.dim, s.rng.dim_end, s.next_sample, s.flags);
+    path_states[base + STATE_RAY_ORIGIN] = bits(s.path.origin, s.path.bsdf_pdf);
+    path_states[base + STATE_RAY_DIR] = bits(s.path.dir, s.path.depth);
+    path_states[base + STATE_RADIANCE] = bits(s.path.radiance, s.target);
+    path_states[base + STATE_THROUGHPUT] = bits(s.path.throughput, s.sums.nonfinite);
+    path_states[base + STATE_PREV_POINT_HIT_T] = bits(s.path.prev_point, s.hit.t);
+    path_states[base + STATE_HIT] = uvec4(s.hit.prim, s.hit.instance, floatBitsToUint(s.hit.bary));
+    path_states[base + STATE_SHADOW_ORIGIN] = bits(s.shadow.origin, s.shadow.t_max);
+    path_states[base + STATE_SHADOW_DIR] = bits(s.shadow.dir, s.first);
+    path_states[base + STATE_SHADOW_LIGHT] = bits(s.shadow.contribution, s.first_hit.depth);
+    path_states[base + STATE_SUM] = floatBitsToUint(s.sums.sum);
 #if AOVS
-    path_states[base + 12u] = bits(s.first_hit.albedo, (s.first_hit.hit ? 1u : 0u) | (s.first_hit.open ? 2u : 0u));
-    path_states[base + 13u] = bits(s.first_hit.normal, 0u);
-    path_states[base + 14u] = floatBitsToUint(s.sums.albedo_depth);
-    path_states[base + 15u] = floatBitsToUint(s.sums.normal_hits);
+    path_states[base + STATE_FIRST_ALBEDO] = bits(s.first_hit.albedo, (s.first_hit.hit ? 1u : 0u) | (s.first_hit.open ? 2u : 0u));
+    path_states[base + STATE_FIRST_NORMAL] = bits(s.first_hit.normal, 0u);
+    path_states[base + STATE_AOV_ALBEDO_DEPTH] = floatBitsToUint(s.sums.albedo_depth);
+    path_states[base + STATE_AOV_NORMAL_HITS] = floatBitsToUint(s.sums.normal_hits);
 #endif
 }
 
@@ -133,14 +152,14 @@ void count_rays(uint rays) {
 // SHADE counts the ray, where the plain kernel does.
 void wavefront_step(uint base, bool in_band) {
     if (in_band) {
-        uint flags = path_states[base + 1u].w;
+        uint flags = path_states[base + STATE_RNG_FLAGS].w;
         if ((flags & PATH_TRACING) != 0u) {
-            vec3 origin = uintBitsToFloat(path_states[base + 2u].xyz);
-            vec3 dir = uintBitsToFloat(path_states[base + 3u].xyz);
+            vec3 origin = uintBitsToFloat(path_states[base + STATE_RAY_ORIGIN].xyz);
+            vec3 dir = uintBitsToFloat(path_states[base + STATE_RAY_DIR].xyz);
             Hit hit;
             trace_ray(origin, dir, 1e30, false, hit);
-            path_states[base + 6u].w = floatBitsToUint(hit.t);
-            path_states[base + 7u] = uvec4(hit.prim, hit.instance, floatBitsToUint(hit.bary));
+            path_states[base + STATE_PREV_POINT_HIT_T].w = floatBitsToUint(hit.t);
+            path_states[base + STATE_HIT] = uvec4(hit.prim, hit.instance, floatBitsToUint(hit.bary));
         }
     }
 }
@@ -148,17 +167,16 @@ void wavefront_step(uint base, bool in_band) {
 // Adds the light of each shadow ray that nothing blocks.
 void wavefront_step(uint base, bool in_band) {
     if (in_band) {
-        uvec4 w1 = path_states[base + 1u];
+        uvec4 w1 = path_states[base + STATE_RNG_FLAGS];
         if ((w1.w & PATH_SHADOWING) != 0u) {
-            vec3 origin = uintBitsToFloat(path_states[base + 8u].xyz);
-            uvec4 w9 = path_states[base + 9u];
-            float t_max = uintBitsToFloat(path_states[base + 8u].w);
-            if (!occluded(origin, uintBitsToFloat(w9.xyz), t_max)) {
-                uvec4 w4 = path_states[base + 4u];
-                vec3 radiance = uintBitsToFloat(w4.xyz) + uintBitsToFloat(path_states[base + 10u].xyz);
-                path_states[base + 4u] = bits(radiance, w4.w);
+            vec4 origin = uintBitsToFloat(path_states[base + STATE_SHADOW_ORIGIN]);  // and t_max
+            vec3 dir = uintBitsToFloat(path_states[base + STATE_SHADOW_DIR].xyz);
+            if (!occluded(origin.xyz, dir, origin.w)) {
+                uvec4 w4 = path_states[base + STATE_RADIANCE];
+                vec3 radiance = uintBitsToFloat(w4.xyz) + uintBitsToFloat(path_states[base + STATE_SHADOW_LIGHT].xyz);
+                path_states[base + STATE_RADIANCE] = bits(radiance, w4.w);
             }
-            path_states[base + 1u].w = w1.w & ~PATH_SHADOWING;
+            path_states[base + STATE_RNG_FLAGS].w = w1.w & ~PATH_SHADOWING;
         }
     }
 }
@@ -182,7 +200,7 @@ void wavefront_step(uint base, bool in_band, bool inside, uvec2 pixel, uint inde
     uint rays = 0u;
     bool in_flight = false;
     // A pixel already done reads one word, not its whole state.
-    if (in_band && (round == 0u || (path_states[base + 1u].w & PIXEL_DONE) == 0u)) {
+    if (in_band && (round == 0u || (path_states[base + STATE_RNG_FLAGS].w & PIXEL_DONE) == 0u)) {
         WavefrontState s;
         if (round == 0u) {
             s.sums.sum = inside ? load_accum(index) : vec4(0.0);
