@@ -251,6 +251,9 @@ glsl_block! {
         pub paths_in_flight_even: u32,
         /// ... after an odd round: each round clears the other parity's count for the next.
         pub paths_in_flight_odd: u32,
+        /// Tiles the subgroups took, the last take of each subgroup that found none left
+        /// included (kernels with TAKE_TILES, tile_taking.rs; else 0).
+        pub tiles_taken: u32,
     }
 }
 
