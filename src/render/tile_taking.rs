@@ -33,27 +33,44 @@ pub const TAKE_TILES_VAR: &str = "CAUSTICA_TAKE_TILES";
 /// kernels where `wavefront`, in workgroups of `workgroup`, takes its tiles from the counter. An
 /// error where [`TAKE_TILES_VAR`] asks for what cannot run.
 pub fn takes_tiles(device: &DeviceInfo, loop_limit: bool, wavefront: bool, workgroup: Workgroup) -> Result<bool> {
-    let request = std::env::var(TAKE_TILES_VAR).ok();
-    let wanted = match request.as_deref() {
-        None => device.kind == DeviceType::Cpu,
-        Some("0") => false,
-        Some("1") => true,
-        Some(other) => bail!("{TAKE_TILES_VAR}={other}: expected 0 (each workgroup renders its own pixels) or 1 (subgroups take tiles from a counter)"),
-    };
     let whole_subgroups = device.subgroup_size > 0 && workgroup.invocations() % device.subgroup_size == 0;
     let possible = !loop_limit && !wavefront && whole_subgroups;
-    if wanted && !possible && request.is_some() {
-        bail!(
-            "{TAKE_TILES_VAR}=1: tiles are taken only by the megakernel, on a device whose loops run to their end, in workgroups of whole subgroups ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations, subgroups of {})",
-            device.name,
-            workgroup.invocations(),
-            device.subgroup_size
-        );
+    decide(std::env::var(TAKE_TILES_VAR).ok().as_deref(), device.kind, possible).map_err(|why| {
+        anyhow::anyhow!("{why} ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations a workgroup, subgroups of {})", device.name, workgroup.invocations(), device.subgroup_size)
+    })
+}
+
+/// [`takes_tiles`] for the variable's value `request`, on a device of `kind` where taking tiles
+/// is `possible`.
+fn decide(request: Option<&str>, kind: DeviceType, possible: bool) -> Result<bool> {
+    match request {
+        None => Ok(kind == DeviceType::Cpu && possible),
+        Some("0") => Ok(false),
+        Some("1") if possible => Ok(true),
+        Some("1") => bail!("{TAKE_TILES_VAR}=1: tiles are taken only by the megakernel, on a device whose loops run to their end, in workgroups of whole subgroups"),
+        Some(other) => bail!("{TAKE_TILES_VAR}={other}: expected 0 (each workgroup renders its own pixels) or 1 (subgroups take tiles from a counter)"),
     }
-    Ok(wanted && possible)
 }
 
 /// The kernel's `#define` for it.
 pub fn defines(take_tiles: bool) -> Vec<(&'static str, String)> {
     vec![("TAKE_TILES", u32::from(take_tiles).to_string())]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cpu_devices_take_tiles_where_they_can_and_the_variable_overrides_the_kind() {
+        assert!(decide(None, DeviceType::Cpu, true).unwrap());
+        assert!(!decide(None, DeviceType::Cpu, false).unwrap(), "a CPU device with a loop limit took tiles");
+        assert!(!decide(None, DeviceType::Discrete, true).unwrap());
+        assert!(decide(Some("1"), DeviceType::Discrete, true).unwrap());
+        assert!(!decide(Some("0"), DeviceType::Cpu, true).unwrap());
+        let impossible = decide(Some("1"), DeviceType::Cpu, false).unwrap_err().to_string();
+        assert!(impossible.contains("loops run to their end"), "{impossible}");
+        let bad = decide(Some("yes"), DeviceType::Cpu, true).unwrap_err().to_string();
+        assert!(bad.contains("CAUSTICA_TAKE_TILES=yes") && bad.contains("expected 0"), "{bad}");
+    }
 }
