@@ -6,11 +6,13 @@
 // The host prepends `#define BVH_MAX_DEPTH` (the BVH builder's bound), `AOVS` (1: also
 // accumulate the denoiser features, the AOV sums; 0: a kernel without them),
 // `COUNT_LOOP_ITERATIONS` (1 on devices that end loops early), `WALK_QUEUE` (1: rays walked from
-// a queue the subgroup shares, walk_queue.glsl, and `QUEUE_WALKS_PER_RAY`; src/render/walk_queue.rs)
+// a queue the subgroup shares, walk_queue.glsl, and `QUEUE_WALKS_PER_RAY`; src/render/walk_queue.rs),
+// `TAKE_TILES` (1: subgroups take their pixels from a counter, main below; src/render/tile_taking.rs)
 // and the `SCENE_*` features the scene uses (src/render/features.rs: what is 0 is compiled out).
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_ballot : require
 // texelFetch of the texel buffers the walk and shading read their records from (bindings.rs).
 #extension GL_EXT_samplerless_texture_functions : require
 
@@ -103,9 +105,10 @@ void add_sample(inout PixelSums sums, vec3 radiance, FirstHit first_hit) {
 #include "wavefront.glsl"
 #endif
 
-void main() {
-    uint band_row = group_row_of(gl_WorkGroupID.y, gl_NumWorkGroups.y) * gl_WorkGroupSize.y + gl_LocalInvocationID.y;
-    uvec2 pixel = uvec2(gl_GlobalInvocationID.x, band_row + pass.row_offset);
+// The work of invocation `local` of workgroup `group` of the dispatch: its pixel's samples.
+void render_invocation(uvec2 group, uvec2 local) {
+    uint band_row = group_row_of(group.y, gl_NumWorkGroups.y) * gl_WorkGroupSize.y + local.y;
+    uvec2 pixel = uvec2(group.x * gl_WorkGroupSize.x + local.x, band_row + pass.row_offset);
     uint width = frame.width;
     bool inside = pixel.x < width && band_row < pass.row_count && pixel.y < frame.height;
     uint index = pixel.y * width + pixel.x;
@@ -168,4 +171,26 @@ void main() {
         if (sums.nonfinite > 0u) atomicAdd(stats.nonfinite_samples, sums.nonfinite);
     }
     atomicAdd(stats.pixels_complete, 1u);
+}
+
+void main() {
+#if TAKE_TILES
+    // A tile is one subgroup's share of one workgroup. Each subgroup takes the next from the
+    // counter as soon as it has rendered one, until none is left, so the device's thread that
+    // finishes first takes more: lavapipe splits a dispatch's workgroups among its threads up
+    // front, and their costs differ. The workgroups left when the tiles run out find none and end.
+    uint subgroups = gl_NumSubgroups;
+    uint tiles = gl_NumWorkGroups.x * gl_NumWorkGroups.y * subgroups;
+    while (true) {
+        uint tile = 0u;
+        if (subgroupElect()) tile = atomicAdd(stats.tiles_taken, 1u);
+        tile = subgroupBroadcastFirst(tile);
+        if (tile >= tiles) break;
+        uint group = tile / subgroups;
+        uint local = (tile % subgroups) * gl_SubgroupSize + gl_SubgroupInvocationID;
+        render_invocation(uvec2(group % gl_NumWorkGroups.x, group / gl_NumWorkGroups.x), uvec2(local % gl_WorkGroupSize.x, local / gl_WorkGroupSize.x));
+    }
+#else
+    render_invocation(gl_WorkGroupID.xy, gl_LocalInvocationID.xy);
+#endif
 }

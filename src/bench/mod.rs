@@ -58,6 +58,8 @@ pub struct Measurement {
     pub group_order: GroupOrder,
     /// The walk queue the kernel was compiled with (lavapipe, a flat top level), or none.
     pub walk_queue: Option<WalkQueue>,
+    /// Whether its subgroups took their tiles from a counter (CPU devices; `CAUSTICA_TAKE_TILES`).
+    pub take_tiles: bool,
     /// Whether the wavefront's kernels ran instead of the megakernel (`CAUSTICA_WAVEFRONT`).
     pub wavefront: bool,
     /// The kernel's workgroup shape.
@@ -115,6 +117,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         features: renderer.features,
         group_order: renderer.group_order(),
         walk_queue: renderer.walk_queue,
+        take_tiles: renderer.take_tiles,
         wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
         setup_seconds,
@@ -164,6 +167,7 @@ impl Measurement {
             // Instances a ray may walk through the queue; null: each lane walks its own rays.
             "walk_queue": self.walk_queue.map(|q| q.walks_per_ray),
             "walk_queue_barriers": self.walk_queue.map(|q| q.subgroup_barriers),
+            "take_tiles": self.take_tiles,
             "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
             "setup_seconds": self.setup_seconds,

@@ -36,8 +36,9 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         let barriers = if q.subgroup_barriers { ", subgroup barriers" } else { "" };
         format!("; rays walked from the subgroup's queue (up to {} instances a ray{barriers})", q.walks_per_ray)
     });
+    let tiles = if m.take_tiles { "; subgroups take tiles from a counter" } else { "" };
     let wavefront = if m.wavefront { "; the wavefront's three kernels (CAUSTICA_WAVEFRONT)" } else { "" };
-    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{walks}{wavefront}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
+    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{tiles}{walks}{wavefront}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.
         let figures: Vec<String> = m.kernel_statistics.iter().map(|s| format!("{} {}", s.name, s.value)).collect();

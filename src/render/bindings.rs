@@ -305,17 +305,19 @@ mod tests {
 
     /// The general kernel without AOVs or loop counting, in 8x8 workgroups: what each of
     /// [`VARIANTS`] changes.
-    const GENERAL: KernelVariant = KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, wavefront: None };
+    const GENERAL: KernelVariant = KernelVariant { aovs: false, count_loop_iterations: false, features: SceneFeatures::ALL, walk_queue: None, workgroup: crate::render::Workgroup::EIGHT_BY_EIGHT, take_tiles: false, wavefront: None };
 
     /// The walk queue's kernel (walk_queue.rs): a top level of its root alone.
     const QUEUE: KernelVariant = KernelVariant { aovs: true, features: SceneFeatures { top_level_tree: false, ..SceneFeatures::ALL }, walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2, subgroup_barriers: false }), ..GENERAL };
 
-    const VARIANTS: [KernelVariant; 9] = [
+    const VARIANTS: [KernelVariant; 10] = [
         GENERAL,
         KernelVariant { aovs: true, ..GENERAL },
         KernelVariant { count_loop_iterations: true, ..GENERAL },
         KernelVariant { aovs: true, count_loop_iterations: true, ..GENERAL },
         QUEUE,
+        // ... with its subgroups taking tiles from the statistics' counter (tile_taking.rs).
+        KernelVariant { take_tiles: true, ..QUEUE },
         // ... with the subgroup barriers a GPU's lanes need.
         KernelVariant { walk_queue: Some(crate::render::WalkQueue { walks_per_ray: 2, subgroup_barriers: true }), ..QUEUE },
         // The wavefront's three kernels (wavefront.rs), which bind its paths' states too.

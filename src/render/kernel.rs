@@ -5,6 +5,7 @@
 use super::bindings;
 use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
+use super::tile_taking;
 use super::walk_queue::WalkQueue;
 use super::wavefront::WavefrontStage;
 use super::workgroup::Workgroup;
@@ -76,7 +77,7 @@ const INTERFACE_FILE: &str = "interface.glsl";
 /// Its code is the general kernel's: every scene feature compiled in.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
     let interface = bindings::glsl(&UNSPLIT, KernelVariant::default());
-    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(WavefrontStage::defines(None)).chain(Workgroup::default().defines()).collect();
+    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(tile_taking::defines(false)).chain(WavefrontStage::defines(None)).chain(Workgroup::default().defines()).collect();
     assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
 }
 
@@ -94,6 +95,8 @@ pub struct KernelVariant {
     pub walk_queue: Option<WalkQueue>,
     /// Its `local_size_x/y` (workgroup.rs).
     pub workgroup: Workgroup,
+    /// Subgroups take their tiles from a counter (tile_taking.rs), or each workgroup renders its own.
+    pub take_tiles: bool,
     /// One of the wavefront's kernels (wavefront.rs), or the megakernel.
     pub wavefront: Option<WavefrontStage>,
 }
@@ -108,6 +111,7 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
     ];
     defines.extend(variant.features.defines());
     defines.extend(WalkQueue::defines(variant.walk_queue));
+    defines.extend(tile_taking::defines(variant.take_tiles));
     defines.extend(WavefrontStage::defines(variant.wavefront));
     defines.extend(variant.workgroup.defines());
     assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)

@@ -251,6 +251,9 @@ glsl_block! {
         pub paths_in_flight_even: u32,
         /// ... after an odd round: each round clears the other parity's count for the next.
         pub paths_in_flight_odd: u32,
+        /// Tiles the subgroups took, the last take of each subgroup that found none left
+        /// included (kernels with TAKE_TILES, tile_taking.rs; else 0).
+        pub tiles_taken: u32,
     }
 }
 
@@ -417,13 +420,14 @@ mod tests {
 
     #[test]
     fn stats_are_pinned() {
-        assert_eq!(size_of::<GpuStats>(), 28);
+        assert_eq!(size_of::<GpuStats>(), 32);
         assert_eq!(offset_of!(GpuStats, nonfinite_samples), 4);
         assert_eq!(offset_of!(GpuStats, pixels_complete), 8);
         assert_eq!(offset_of!(GpuStats, samples_added), 12);
         assert_eq!(offset_of!(GpuStats, max_loop_iterations), 16);
         assert_eq!(offset_of!(GpuStats, paths_in_flight_even), 20);
         assert_eq!(offset_of!(GpuStats, paths_in_flight_odd), 24);
+        assert_eq!(offset_of!(GpuStats, tiles_taken), 28);
     }
 
     #[test]

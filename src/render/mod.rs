@@ -17,6 +17,7 @@ mod scene_data;
 #[cfg(test)]
 mod spirv_reflect;
 mod textured_emission;
+mod tile_taking;
 mod walk_queue;
 mod wavefront;
 mod workgroup;
@@ -29,6 +30,7 @@ pub use renderer::{frame_params, mean_image, GeometryReport, KernelChoice, Rende
 pub use scene_data::SceneData;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
+pub use tile_taking::TAKE_TILES_VAR;
 pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
 pub use wavefront::{WavefrontStage, WAVEFRONT_VAR};
 pub use workgroup::{Workgroup, WORKGROUP_VAR};

@@ -15,6 +15,7 @@ use super::aov::{AovSet, AovSums};
 use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
+use super::tile_taking;
 use super::walk_queue::WalkQueue;
 use super::wavefront::{self, WavefrontKernels, WavefrontStage};
 use super::workgroup::Workgroup;
@@ -62,6 +63,8 @@ pub struct Renderer<'a> {
     pub features: SceneFeatures,
     /// The walk queue the kernel was compiled with, if any (walk_queue.rs).
     pub walk_queue: Option<WalkQueue>,
+    /// Whether the kernel's subgroups take their tiles from a counter (tile_taking.rs).
+    pub take_tiles: bool,
     /// The kernel's workgroup shape (workgroup.rs).
     pub workgroup: Workgroup,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
@@ -159,7 +162,7 @@ pub struct GeometryReport {
 pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 
 /// The statistics buffer's contents at the start of every dispatch.
-const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0, paths_in_flight_even: 0, paths_in_flight_odd: 0 };
+const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0, paths_in_flight_even: 0, paths_in_flight_odd: 0, tiles_taken: 0 };
 
 pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     let mut params = frame_params_without_camera(scene, data, seed);
@@ -399,8 +402,9 @@ impl<'a> Renderer<'a> {
             true => None,
             false => WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances)?,
         };
+        let take_tiles = tile_taking::takes_tiles(&ctx.info, loop_limit.is_some(), use_wavefront, workgroup)?;
         // The wavefront's three kernels bind the same buffers: the first stands for them here.
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, wavefront: use_wavefront.then_some(WavefrontStage::Extend) };
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, take_tiles, wavefront: use_wavefront.then_some(WavefrontStage::Extend) };
         // Every buffer this kernel variant binds, in binding order, with what it starts as.
         let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
             .iter()
@@ -458,7 +462,7 @@ impl<'a> Renderer<'a> {
             let statistics = k.statistics.clone();
             (Kernels::Megakernel(k), statistics)
         };
-        Ok(Self { ctx, kernels: Some(kernels), statistics, features, walk_queue, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        Ok(Self { ctx, kernels: Some(kernels), statistics, features, walk_queue, take_tiles, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),

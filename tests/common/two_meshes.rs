@@ -63,9 +63,16 @@ pub fn two_meshes_in_a_room() -> Scene {
 /// the queue its kernel walked from, if any; and whether it ran the wavefront.
 pub fn sums(ctx: &GpuContext, scene: &Scene, choice: KernelChoice, steps: &[u32]) -> (Vec<[u32; 4]>, AovSums, Option<WalkQueue>, bool) {
     let mut renderer = Renderer::with_kernel(ctx, scene, 11, AovSet::ALL, choice).expect("scene uploads");
+    let (bits, aovs) = rendered_sums(&mut renderer, steps);
+    (bits, aovs, renderer.walk_queue, renderer.runs_wavefront())
+}
+
+/// The sums `renderer` (made with AOVs) holds once it has rendered in passes adding `steps`
+/// samples, as bits.
+pub fn rendered_sums(renderer: &mut Renderer, steps: &[u32]) -> (Vec<[u32; 4]>, AovSums) {
     for &spp in steps {
         renderer.render(spp, |_| {}).expect("render succeeds without validation messages");
     }
     let bits = renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect();
-    (bits, renderer.aov_sums().expect("readback").expect("AOVs were asked for"), renderer.walk_queue, renderer.runs_wavefront())
+    (bits, renderer.aov_sums().expect("readback").expect("AOVs were asked for"))
 }

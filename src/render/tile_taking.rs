@@ -1,0 +1,76 @@
+//! Whether the kernel's subgroups take their pixels from a counter (pathtrace.comp, `TAKE_TILES`).
+//!
+//! lavapipe splits a dispatch among its threads up front, one contiguous run of workgroups each
+//! (group_order.rs). Dealing rows into stripes evens the runs' costs out on average, but not
+//! dispatch by dispatch: on the mesh box at 256x256 (bunny + Lucy) the two threads of a 2-core
+//! machine still kept only 1.82 cores busy. With `TAKE_TILES` each subgroup takes the next tile
+//! (a subgroup's share of a workgroup: eight pixels of a row on lavapipe) from a counter in
+//! the statistics buffer as soon as it has finished one, until none is left, so the thread that
+//! finishes its tiles first takes more of them: 1.99 cores busy and 1.10x the samples per
+//! second (docs/benchmarks.md, stop 36). Every tile is one workgroup's subgroup's pixels as
+//! before, whichever subgroup renders it, so the images are the same bit for bit
+//! (tests/tile_taking.rs).
+//!
+//! By default it is compiled where all of these hold:
+//! - **a CPU device**: a GPU hands out its workgroups as its units free up already;
+//! - **loops run to their end**: on a device with a loop limit (Mesa 22.3) a subgroup that takes
+//!   tile after tile would reach it at once;
+//! - **the megakernel**: the wavefront's kernels each take one step of every pixel's path;
+//! - **whole subgroups**: the workgroup's invocations are a multiple of the subgroup size, so the
+//!   tiles cover the workgroup.
+//!
+//! `CAUSTICA_TAKE_TILES` changes the first condition, for an A/B of one binary: `0` compiles no
+//! counter, `1` compiles it on any device that meets the others.
+
+use super::workgroup::Workgroup;
+use crate::gpu::{DeviceInfo, DeviceType};
+use anyhow::{bail, Result};
+
+/// Names the environment variable that turns tile taking off (`0`) or on for any device (`1`).
+pub const TAKE_TILES_VAR: &str = "CAUSTICA_TAKE_TILES";
+
+/// Whether the kernel for `device` (whose loops are cut short where `loop_limit`), the wavefront's
+/// kernels where `wavefront`, in workgroups of `workgroup`, takes its tiles from the counter. An
+/// error where [`TAKE_TILES_VAR`] asks for what cannot run.
+pub fn takes_tiles(device: &DeviceInfo, loop_limit: bool, wavefront: bool, workgroup: Workgroup) -> Result<bool> {
+    let whole_subgroups = device.subgroup_size > 0 && workgroup.invocations() % device.subgroup_size == 0;
+    let possible = !loop_limit && !wavefront && whole_subgroups;
+    decide(std::env::var(TAKE_TILES_VAR).ok().as_deref(), device.kind, possible).map_err(|why| {
+        anyhow::anyhow!("{why} ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations a workgroup, subgroups of {})", device.name, workgroup.invocations(), device.subgroup_size)
+    })
+}
+
+/// [`takes_tiles`] for the variable's value `request`, on a device of `kind` where taking tiles
+/// is `possible`.
+fn decide(request: Option<&str>, kind: DeviceType, possible: bool) -> Result<bool> {
+    match request {
+        None => Ok(kind == DeviceType::Cpu && possible),
+        Some("0") => Ok(false),
+        Some("1") if possible => Ok(true),
+        Some("1") => bail!("{TAKE_TILES_VAR}=1: tiles are taken only by the megakernel, on a device whose loops run to their end, in workgroups of whole subgroups"),
+        Some(other) => bail!("{TAKE_TILES_VAR}={other}: expected 0 (each workgroup renders its own pixels) or 1 (subgroups take tiles from a counter)"),
+    }
+}
+
+/// The kernel's `#define` for it.
+pub fn defines(take_tiles: bool) -> Vec<(&'static str, String)> {
+    vec![("TAKE_TILES", u32::from(take_tiles).to_string())]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cpu_devices_take_tiles_where_they_can_and_the_variable_overrides_the_kind() {
+        assert!(decide(None, DeviceType::Cpu, true).unwrap());
+        assert!(!decide(None, DeviceType::Cpu, false).unwrap(), "a CPU device with a loop limit took tiles");
+        assert!(!decide(None, DeviceType::Discrete, true).unwrap());
+        assert!(decide(Some("1"), DeviceType::Discrete, true).unwrap());
+        assert!(!decide(Some("0"), DeviceType::Cpu, true).unwrap());
+        let impossible = decide(Some("1"), DeviceType::Cpu, false).unwrap_err().to_string();
+        assert!(impossible.contains("loops run to their end"), "{impossible}");
+        let bad = decide(Some("yes"), DeviceType::Cpu, true).unwrap_err().to_string();
+        assert!(bad.contains("CAUSTICA_TAKE_TILES=yes") && bad.contains("expected 0"), "{bad}");
+    }
+}
