@@ -26,7 +26,8 @@
 # of the walk queue (CAUSTICA_WALK_QUEUE=1: on a GPU, with subgroup barriers) against the plain
 # kernel, the suite and the anchor scene each way, and the mesh box's image with the queue, to
 # check against lavapipe's; "wavefront" the same A/B of the wavefront's kernels (CAUSTICA_WAVEFRONT=1)
-# against the megakernel; "shaders" runs each .run/shaders-NAME/ folder (CAUSTICA_SHADER_DIR).
+# against the megakernel; "tiles" the same A/B of subgroups taking their tiles from a counter
+# (CAUSTICA_TAKE_TILES=1); "shaders" runs each .run/shaders-NAME/ folder (CAUSTICA_SHADER_DIR).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"
@@ -130,6 +131,11 @@ if [[ "$steps" == *" queue "* ]]; then
 fi
 if [[ "$steps" == *" wavefront "* ]]; then
     ab_switch wavefront CAUSTICA_WAVEFRONT
+fi
+if [[ "$steps" == *" tiles "* ]]; then
+    # Subgroups taking their tiles from a counter (src/render/tile_taking.rs): lavapipe's default,
+    # a persistent-threads loop on a GPU.
+    ab_switch tiles CAUSTICA_TAKE_TILES
 fi
 if [[ "$steps" == *" shaders "* ]]; then
     for dir in embedded .run/shaders-*/ embedded; do
