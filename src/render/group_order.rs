@@ -6,7 +6,10 @@
 //! thread idles while the other finishes: on the 2-core machine of docs/benchmarks.md a bunny
 //! under a sky kept 1.5 of 2 cores busy. Dealing the rows of workgroups into stripes gives every
 //! run rows from the whole band. GPUs hand out workgroups as their units free up, so they keep
-//! the image's order and the locality it has.
+//! the image's order and the locality it has. Where loops run to their end (Mesa 24 and newer),
+//! lavapipe's subgroups also take their tiles from a counter (tile_taking.rs), which evens the
+//! threads out dispatch by dispatch; the stripes then only order the tiles, and they remain what
+//! balances Debian 12's Mesa 22.3.
 
 use crate::gpu::DeviceType;
 use clap::ValueEnum;
