@@ -48,15 +48,20 @@ vec4 wide_child_entries(WideNode node, vec3 o, vec3 inv_d, float t_max) {
     // float boxes' slab test was.
     vec3 from = (node.origin.xyz - o) * inv_d;
     vec3 per_step = quantum * inv_d;
-    vec4 x0 = from.x + vec4(child_bytes(node.quantized_xy.x)) * per_step.x;
-    vec4 x1 = from.x + vec4(child_bytes(node.quantized_xy.y)) * per_step.x;
-    vec4 y0 = from.y + vec4(child_bytes(node.quantized_xy.z)) * per_step.y;
-    vec4 y1 = from.y + vec4(child_bytes(node.quantized_xy.w)) * per_step.y;
-    vec4 z0 = from.z + vec4(child_bytes(node.quantized_z_kinds.x)) * per_step.z;
-    vec4 z1 = from.z + vec4(child_bytes(node.quantized_z_kinds.y)) * per_step.z;
-    vec4 enter = max(max(min(x0, x1), min(y0, y1)), max(min(z0, z1), vec4(0.0)));
+    // Each axis's near and far planes picked by the direction's sign, before the bytes are
+    // decoded: one select a word instead of a min and a max a child.
+    bvec3 ascending = greaterThanEqual(inv_d, vec3(0.0));
+    uvec3 near_words = mix(uvec3(node.quantized_xy.y, node.quantized_xy.w, node.quantized_z_kinds.y), uvec3(node.quantized_xy.x, node.quantized_xy.z, node.quantized_z_kinds.x), ascending);
+    uvec3 far_words = mix(uvec3(node.quantized_xy.x, node.quantized_xy.z, node.quantized_z_kinds.x), uvec3(node.quantized_xy.y, node.quantized_xy.w, node.quantized_z_kinds.y), ascending);
+    vec4 near_x = from.x + vec4(child_bytes(near_words.x)) * per_step.x;
+    vec4 near_y = from.y + vec4(child_bytes(near_words.y)) * per_step.y;
+    vec4 near_z = from.z + vec4(child_bytes(near_words.z)) * per_step.z;
+    vec4 far_x = from.x + vec4(child_bytes(far_words.x)) * per_step.x;
+    vec4 far_y = from.y + vec4(child_bytes(far_words.y)) * per_step.y;
+    vec4 far_z = from.z + vec4(child_bytes(far_words.z)) * per_step.z;
+    vec4 enter = max(max(near_x, near_y), max(near_z, vec4(0.0)));
     // The factor (1 + 2 gamma_3) keeps rounding from culling a box the ray grazes (pbrt-v4, 6.8).
-    vec4 leave = min(min(max(x0, x1), max(y0, y1)), min(max(z0, z1), vec4(t_max))) * 1.0000004;
+    vec4 leave = min(min(far_x, far_y), min(far_z, vec4(t_max))) * 1.0000004;
     bvec4 present = notEqual(child_bytes(node.quantized_z_kinds.z), uvec4(WIDE_CHILD_NONE));
     bvec4 entered = bvec4(uvec4(lessThanEqual(enter, leave)) & uvec4(present));
     return mix(vec4(MISSED_BOX), enter, entered);
