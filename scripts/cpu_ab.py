@@ -50,7 +50,9 @@ def side_env(shaders):
     return env
 
 
-def start(binary, shaders, scene, args, output):
+def start(side, scene, args):
+    """Starts a render of `scene` by `side` (binary, shaders, output image) for args.seconds."""
+    binary, shaders, output = side
     command = [binary, "render", scene, "--width", str(args.width), "--height", str(args.height),
                "--spp", "1000000", "--time", f"{args.seconds}s", "--output", output]
     return subprocess.Popen(command, cwd=REPO, env=side_env(shaders), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -81,11 +83,13 @@ def main():
     for name in args.scene or ["mesh", "sky"]:
         scene = SCENES.get(name, name)
         sides = [(args.a_bin, args.a, str(out / "cpu_ab-a.pfm")), (b_bin, args.b, str(out / "cpu_ab-b.pfm"))]
-        for process, side in [(start(*s[:2], scene, args, s[2]), label) for s, label in zip(sides, "AB")]:
-            samples(process, side)  # unmeasured: fills lavapipe's disk cache
+        # Unmeasured, both at once: fills lavapipe's disk cache with each side's kernel.
+        warm_up = [start(side, scene, args) for side in sides]
+        for process, label in zip(warm_up, "AB"):
+            samples(process, label)
         ratios = []
         for _ in range(args.rounds):
-            a, b = [start(*s[:2], scene, args, s[2]) for s in sides]
+            a, b = [start(side, scene, args) for side in sides]
             ratios.append(samples(b, "B") / samples(a, "A"))
         print(f"{name}: B/A median {statistics.median(ratios):.3f}, geometric mean {statistics.geometric_mean(ratios):.3f} "
               f"[{', '.join(f'{r:.3f}' for r in ratios)}]", flush=True)

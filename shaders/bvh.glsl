@@ -34,6 +34,12 @@ uvec4 child_bytes(uint word) {
     return (uvec4(word) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
 }
 
+// Where the ray meets the four children's planes along one axis whose bounds `word` packs (steps
+// from the node's origin), from = the origin's plane and per_step = one step, both in t.
+vec4 child_planes(uint word, float from, float per_step) {
+    return from + vec4(child_bytes(word)) * per_step;
+}
+
 // Where the ray enters each of the node's four children within (0, t_max), or +infinity for a
 // child it misses and for an empty slot. The four boxes are decoded and tested side by side: one
 // node's loads serve them all.
@@ -50,15 +56,17 @@ vec4 wide_child_entries(WideNode node, vec3 o, vec3 inv_d, float t_max) {
     vec3 per_step = quantum * inv_d;
     // Each axis's near and far planes picked by the direction's sign, before the bytes are
     // decoded: one select a word instead of a min and a max a child.
+    uvec3 min_words = uvec3(node.quantized_xy.x, node.quantized_xy.z, node.quantized_z_kinds.x);
+    uvec3 max_words = uvec3(node.quantized_xy.y, node.quantized_xy.w, node.quantized_z_kinds.y);
     bvec3 ascending = greaterThanEqual(inv_d, vec3(0.0));
-    uvec3 near_words = mix(uvec3(node.quantized_xy.y, node.quantized_xy.w, node.quantized_z_kinds.y), uvec3(node.quantized_xy.x, node.quantized_xy.z, node.quantized_z_kinds.x), ascending);
-    uvec3 far_words = mix(uvec3(node.quantized_xy.x, node.quantized_xy.z, node.quantized_z_kinds.x), uvec3(node.quantized_xy.y, node.quantized_xy.w, node.quantized_z_kinds.y), ascending);
-    vec4 near_x = from.x + vec4(child_bytes(near_words.x)) * per_step.x;
-    vec4 near_y = from.y + vec4(child_bytes(near_words.y)) * per_step.y;
-    vec4 near_z = from.z + vec4(child_bytes(near_words.z)) * per_step.z;
-    vec4 far_x = from.x + vec4(child_bytes(far_words.x)) * per_step.x;
-    vec4 far_y = from.y + vec4(child_bytes(far_words.y)) * per_step.y;
-    vec4 far_z = from.z + vec4(child_bytes(far_words.z)) * per_step.z;
+    uvec3 near_words = mix(max_words, min_words, ascending);
+    uvec3 far_words = mix(min_words, max_words, ascending);
+    vec4 near_x = child_planes(near_words.x, from.x, per_step.x);
+    vec4 near_y = child_planes(near_words.y, from.y, per_step.y);
+    vec4 near_z = child_planes(near_words.z, from.z, per_step.z);
+    vec4 far_x = child_planes(far_words.x, from.x, per_step.x);
+    vec4 far_y = child_planes(far_words.y, from.y, per_step.y);
+    vec4 far_z = child_planes(far_words.z, from.z, per_step.z);
     vec4 enter = max(max(near_x, near_y), max(near_z, vec4(0.0)));
     // The factor (1 + 2 gamma_3) keeps rounding from culling a box the ray grazes (pbrt-v4, 6.8).
     vec4 leave = min(min(far_x, far_y), min(far_z, vec4(t_max))) * 1.0000004;
