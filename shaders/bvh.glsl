@@ -8,7 +8,7 @@
 // with a stack of its own, its leaves' instances tagged.
 // Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
 // level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
-// the binary tree; the wide tree has at most half its levels.
+// the binary tree; each wide level takes at least one binary level (src/bvh/wide_node.rs).
 // A scene's few shapes (SCENE_FEW_SHAPES, at most FEW_PRIMITIVES of src/render/features.rs) are
 // tested in turn, as straight-line code, before any walk: a scene of nothing else compiles no walk
 // at all (SCENE_BVH 0), and a scene with meshes walks them alone (SCENE_WALKED_SHAPES 0), skipping
@@ -19,8 +19,8 @@ const uint INSTANCE_ENTRY = 0x80000000u;
 const float MISSED_BOX = uintBitsToFloat(0x7f800000u);  // +infinity
 // Each node visit leaves at most three entries behind (the children other than the nearest; at the
 // top level the nearest is taken back at once): at most three a wide level of the BVH a stack
-// walks, whose levels number at most BVH_MAX_DEPTH / 2, plus the first entry and the nearest.
-const uint STACK_SIZE = 3u * BVH_MAX_DEPTH + 2u;
+// walks, whose levels number at most BVH_MAX_DEPTH + 1, plus the first entry.
+const uint STACK_SIZE = 3u * (BVH_MAX_DEPTH + 1u) + 1u;
 
 struct Hit {
     float t;

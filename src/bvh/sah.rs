@@ -9,10 +9,12 @@ use super::partition::{self, SetBounds};
 use super::{Aabb, BvhNode};
 
 /// Cost of visiting an interior node in units of one primitive intersection (SAH: split =
-/// TRAVERSAL_COST * A + A_L * N_L + A_R * N_R, leaf = A * N). Above 1 it trades node visits for
-/// triangle tests: leaves grow from ~1.9 to ~2.8 primitives and the tree from ~1.1 to ~0.7 nodes per
-/// primitive, with no measurable render slowdown on lavapipe and a ~3% higher reference SAH cost.
-const TRAVERSAL_COST: f32 = 2.0;
+/// TRAVERSAL_COST * A + A_L * N_L + A_R * N_R, leaf = A * N). The kernel walks the four-wide tree
+/// that `wide_nodes` chooses from this one by a cost of its own, so the binary tree only offers
+/// the choices: at 1 its leaves are small (~1.9 primitives) and the wide tree can merge them where
+/// that pays. 1 with that choice measured 4 % faster on lavapipe than 2 with two binary levels a
+/// wide node, and 1 alone (two binary levels a node) 3 % slower (docs/benchmarks.md, stop 38).
+const TRAVERSAL_COST: f32 = 1.0;
 
 /// Subtrees larger than this are built as two rayon tasks; smaller ones are cheaper to build inline.
 const PARALLEL_THRESHOLD: usize = 8 * 1024;

@@ -55,7 +55,7 @@ mod tests {
     use glam::Vec3;
 
     #[test]
-    fn distant_pairs_split_into_two_leaves() {
+    fn distant_boxes_split_into_single_leaves() {
         let unit_box_at = |x: f32| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
         let boxes = [0.0, 100.0, 200.0, 300.0].map(unit_box_at);
         let stats = build(&boxes).stats();
@@ -66,12 +66,12 @@ mod tests {
                 stats.max_depth,
                 stats.max_leaf_size
             ),
-            (3, 2, 1, 2)
+            (7, 4, 2, 1)
         );
-        // root 1 + two leaves of 2 prims, each of area 2 * (101 + 1 + 101) = 406, over the root's
-        // area 2 * (301 + 1 + 301) = 1206
+        // root 1 + two interior nodes over a pair, each of area 2 * (101 + 1 + 101) = 406, + four
+        // leaves of one unit box (area 6), over the root's area 2 * (301 + 1 + 301) = 1206
         assert!(
-            (stats.sah_cost - (1.0 + 2.0 * 2.0 * 406.0 / 1206.0)).abs() < 1e-5,
+            (stats.sah_cost - (1.0 + 2.0 * 406.0 / 1206.0 + 4.0 * 6.0 / 1206.0)).abs() < 1e-5,
             "{}",
             stats.sah_cost
         );

@@ -1,14 +1,14 @@
 //! The node format the kernel walks: a four-wide BVH with quantized child boxes, 64 bytes a node.
 //!
-//! Each node holds up to four children, the grandchildren of a binary node (a binary child that is
-//! a leaf stays one child), so the wide tree has half the binary tree's levels and a ray tests four
-//! boxes per node fetched. The children's boxes are stored as 8-bit offsets from the node's own
-//! min corner in steps of a power of two per axis (Ylitie, Karras and Laine 2017, "Efficient
-//! incoherent ray traversal on GPUs through compressed wide BVHs", section 3), rounded outwards, so
-//! the four boxes cost 24 bytes where full floats cost 96: one node is four 16-byte loads, where
-//! the pair nodes it replaced needed eight loads for four boxes. Loads are what traversal pays for,
-//! on lavapipe most of all (docs/benchmarks.md). Leaves get no node of their own: a leaf child names
-//! its primitives directly.
+//! Each node holds up to four children taken from the binary levels below it, chosen by a
+//! surface-area cost (`wide_nodes`), so a ray tests four boxes per node fetched. The children's
+//! boxes are stored as 8-bit offsets from the node's own min corner in steps of a power of two per
+//! axis (Ylitie, Karras and Laine 2017, "Efficient incoherent ray traversal on GPUs through
+//! compressed wide BVHs", section 3), rounded outwards, so the four boxes cost 24 bytes where full
+//! floats cost 96: one node is four 16-byte loads, where the pair nodes it replaced needed eight
+//! loads for four boxes. Loads are what traversal pays for, on lavapipe most of all
+//! (docs/benchmarks.md). Leaves get no node of their own: a leaf child names its primitives
+//! directly.
 
 use super::{Aabb, BvhNode};
 
@@ -157,12 +157,22 @@ fn quantum_exponent(min: f32, max: f32) -> u32 {
     biased
 }
 
+/// What a wide node's visit costs against one primitive test, in the surface-area cost that
+/// chooses the wide tree's shape (`plan_subtree`): a visit decodes and tests four boxes and sorts
+/// them. Measured on lavapipe (docs/benchmarks.md, stop 38): 2 gains; 4 merges more leaves and
+/// is level, 8 merges more still and loses 3 % on the mesh box.
+const NODE_COST: f32 = 2.0;
+
 /// The binary BVH `nodes` (depth-first, root at 0, layout contract on [`BvhNode`]) as wide nodes,
-/// root at 0, each node's children the grandchildren of a binary interior node (a binary child that
-/// is a leaf stays one). The wide tree is at most half as deep as the binary one, rounded up, which
-/// bounds the kernel's stack (`STACK_SIZE` in bvh.glsl). A root that is a leaf becomes a node of
+/// root at 0, each node's children chosen from the binary levels below it by a surface-area cost
+/// (Ylitie, Karras and Laine 2017, section 3.1): a binary subtree becomes an interior child, a leaf
+/// child of at most `max_leaf_size` primitives (its primitives are contiguous, the binary tree being
+/// depth-first), or is opened into more of the node's four slots, whichever costs least. Taking
+/// two binary levels a node instead left a quarter of the slots empty. Each wide level takes at
+/// least one binary level, so the wide tree is no deeper than the binary one, the bound the
+/// kernel's stack is sized by (`STACK_SIZE` in bvh.glsl). A root that is a leaf becomes a node of
 /// that one leaf; an empty BVH the node of no children.
-pub fn wide_nodes(nodes: &[BvhNode]) -> Vec<WideNode> {
+pub fn wide_nodes(nodes: &[BvhNode], max_leaf_size: usize) -> Vec<WideNode> {
     let root = &nodes[0];
     if root.is_leaf() {
         return vec![WideNode::new(&[leaf_child(root)])];
@@ -170,32 +180,102 @@ pub fn wide_nodes(nodes: &[BvhNode]) -> Vec<WideNode> {
     if nodes.len() == 1 {
         return vec![WideNode::EMPTY];
     }
+    let mut plans = vec![Plan::UNSET; nodes.len()];
+    plan_subtree(nodes, 0, max_leaf_size as u32, &mut plans);
     let mut wide = Vec::with_capacity(nodes.len() / 3 + 1);
-    collapse(nodes, 0, &mut wide);
+    emit_node(nodes, &plans, 0, &mut wide);
     wide
 }
 
-/// Appends the wide node of binary interior node `index` and, depth first, those below it; returns
-/// its index in `wide`.
-fn collapse(nodes: &[BvhNode], index: usize, wide: &mut Vec<WideNode>) -> u32 {
-    let at = wide.len();
-    wide.push(WideNode::EMPTY);
-    let mut children = Vec::with_capacity(WIDTH);
-    for child in binary_children(nodes, index) {
-        if nodes[child].is_leaf() {
-            children.push(child);
-        } else {
-            children.extend(binary_children(nodes, child));
+/// How a binary subtree is laid out in at most `slots` of a wide node's children.
+#[derive(Clone, Copy, Debug)]
+enum Layout {
+    /// One leaf child holding all its primitives (slots >= 1).
+    Leaf,
+    /// One interior child: a wide node of its own (slots >= 1).
+    Node,
+    /// As in one slot fewer.
+    Fewer,
+    /// Its binary children opened: the first in k slots, the second in the rest.
+    Opened(usize),
+}
+
+/// The cheapest layout of a binary subtree in 1 to WIDTH slots, and the primitives below it.
+#[derive(Clone, Copy, Debug)]
+struct Plan {
+    first: u32,
+    count: u32,
+    /// cost[i]: the surface-area cost in at most i slots (index 0 unused), areas absolute.
+    cost: [f32; WIDTH + 1],
+    layout: [Layout; WIDTH + 1],
+}
+
+impl Plan {
+    const UNSET: Plan = Plan { first: 0, count: 0, cost: [f32::INFINITY; WIDTH + 1], layout: [Layout::Fewer; WIDTH + 1] };
+}
+
+/// Fills `plans` for the subtree at binary node `index`, children before parents.
+fn plan_subtree(nodes: &[BvhNode], index: usize, max_leaf_size: u32, plans: &mut [Plan]) {
+    let n = &nodes[index];
+    let area = n.bounds().surface_area();
+    let mut plan = Plan::UNSET;
+    if n.is_leaf() {
+        (plan.first, plan.count) = (n.offset, n.prim_count());
+        plan.cost = [area * plan.count as f32; WIDTH + 1];
+        plan.layout[1] = Layout::Leaf;
+    } else {
+        let [a, b] = binary_children(nodes, index);
+        plan_subtree(nodes, a, max_leaf_size, plans);
+        plan_subtree(nodes, b, max_leaf_size, plans);
+        let (pa, pb) = (plans[a], plans[b]);
+        (plan.first, plan.count) = (pa.first, pa.count + pb.count);
+        let leaf = if plan.count <= max_leaf_size { area * plan.count as f32 } else { f32::INFINITY };
+        let node = area * NODE_COST + opened(&pa, &pb, WIDTH).0;
+        (plan.cost[1], plan.layout[1]) = if leaf <= node { (leaf, Layout::Leaf) } else { (node, Layout::Node) };
+        for slots in 2..=WIDTH {
+            let (cost, k) = opened(&pa, &pb, slots);
+            (plan.cost[slots], plan.layout[slots]) =
+                if plan.cost[slots - 1] <= cost { (plan.cost[slots - 1], Layout::Fewer) } else { (cost, Layout::Opened(k)) };
         }
     }
-    let children: Vec<WideChild> = children
+    plans[index] = plan;
+}
+
+/// The cheapest split of `slots` between two binary children's plans: (cost, the first's slots).
+fn opened(a: &Plan, b: &Plan, slots: usize) -> (f32, usize) {
+    (1..slots).map(|k| (a.cost[k] + b.cost[slots - k], k)).min_by(|x, y| x.0.total_cmp(&y.0)).expect("two slots or more")
+}
+
+/// The binary nodes that become the children of a subtree laid out in `slots`, in order.
+fn slot_roots(nodes: &[BvhNode], plans: &[Plan], index: usize, slots: usize, roots: &mut Vec<usize>) {
+    match plans[index].layout[slots] {
+        Layout::Fewer => slot_roots(nodes, plans, index, slots - 1, roots),
+        Layout::Opened(k) => {
+            let [a, b] = binary_children(nodes, index);
+            slot_roots(nodes, plans, a, k, roots);
+            slot_roots(nodes, plans, b, slots - k, roots);
+        }
+        Layout::Leaf | Layout::Node => roots.push(index),
+    }
+}
+
+/// Appends the wide node of binary interior node `index` (its two children opened into the four
+/// slots) and, depth first, those below it; returns its index in `wide`.
+fn emit_node(nodes: &[BvhNode], plans: &[Plan], index: usize, wide: &mut Vec<WideNode>) -> u32 {
+    let at = wide.len();
+    wide.push(WideNode::EMPTY);
+    let [a, b] = binary_children(nodes, index);
+    let k = opened(&plans[a], &plans[b], WIDTH).1;
+    let mut roots = Vec::with_capacity(WIDTH);
+    slot_roots(nodes, plans, a, k, &mut roots);
+    slot_roots(nodes, plans, b, WIDTH - k, &mut roots);
+    let children: Vec<WideChild> = roots
         .into_iter()
         .map(|c| {
-            let n = &nodes[c];
-            if n.is_leaf() {
-                leaf_child(n)
-            } else {
-                WideChild::Interior { bounds: n.bounds(), node: collapse(nodes, c, wide) }
+            let (plan, bounds) = (&plans[c], nodes[c].bounds());
+            match plan.layout[1] {
+                Layout::Leaf => WideChild::Leaf { bounds, first: plan.first, count: plan.count },
+                _ => WideChild::Interior { bounds, node: emit_node(nodes, plans, c, wide) },
             }
         })
         .collect();
@@ -278,20 +358,22 @@ mod tests {
         (below, depth)
     }
 
-    /// Every primitive is reachable exactly once through conservative, tight boxes, and the wide
-    /// tree is no deeper than half the binary one (rounded up), the bound the kernel's stack needs.
+    /// Every primitive is reachable exactly once through conservative, tight boxes, the wide tree is
+    /// no deeper than the binary one (the bound the kernel's stack needs) and fills its slots.
     #[test]
     fn wide_nodes_cover_the_binary_tree_with_conservative_boxes() {
         // Far from the origin and tiny, where f32 rounding of origin + steps * quantum matters.
         for (scale, offset) in [(1.0, Vec3::ZERO), (1e-3, Vec3::new(1e4, -3e3, 7.0)), (37.0, Vec3::splat(-1e5))] {
             let bounds = scattered_boxes(3000, scale, offset);
             let bvh = build(&bounds);
-            let wide = wide_nodes(&bvh.nodes);
+            let wide = wide_nodes(&bvh.nodes, crate::bvh::MAX_LEAF_SIZE);
             let mut seen = vec![0u32; bounds.len()];
             let (_, depth) = check_subtree(&wide, 0, &bvh, &bounds, &mut seen);
             assert!(seen.iter().all(|&s| s == 1), "every primitive once");
             let binary_levels = bvh.stats().max_depth + 1;
-            assert!(depth <= binary_levels.div_ceil(2), "wide depth {depth}, binary {binary_levels}");
+            assert!(depth <= binary_levels, "wide depth {depth}, binary {binary_levels}");
+            let slots: usize = wide.iter().map(|n| (0..WIDTH).filter(|&k| n.kind(k) != CHILD_NONE).count()).sum();
+            assert!(slots as f64 >= 3.25 * wide.len() as f64, "{slots} children in {} nodes", wide.len());
             assert!(wide.len() * 2 <= bvh.nodes.len(), "{} wide nodes for {} binary", wide.len(), bvh.nodes.len());
         }
     }
@@ -299,13 +381,13 @@ mod tests {
     #[test]
     fn a_leaf_root_is_one_child_and_an_empty_tree_has_none() {
         let one = build(&[Aabb::new(Vec3::ZERO, Vec3::ONE)]);
-        let wide = wide_nodes(&one.nodes);
+        let wide = wide_nodes(&one.nodes, crate::bvh::MAX_LEAF_SIZE);
         assert_eq!(wide.len(), 1);
         assert_eq!((wide[0].kind(0), wide[0].links[0]), (1, 0));
         assert!((1..WIDTH).all(|k| wide[0].kind(k) == CHILD_NONE));
         let stored = wide[0].child_bounds(0);
         assert!(stored.contains(&Aabb::new(Vec3::ZERO, Vec3::ONE)) && stored.max.cmplt(Vec3::splat(1.01)).all(), "{stored:?}");
-        assert_eq!(wide_nodes(&build(&[]).nodes), vec![WideNode::EMPTY]);
+        assert_eq!(wide_nodes(&build(&[]).nodes, crate::bvh::MAX_LEAF_SIZE), vec![WideNode::EMPTY]);
         assert!((0..WIDTH).all(|k| WideNode::EMPTY.kind(k) == CHILD_NONE));
     }
 

@@ -157,7 +157,7 @@ fn transformed_bounds(b: &Aabb, m: Mat4) -> Aabb {
 /// and leaf ranges onto the shared primitive array; returns its root's index.
 fn append_nodes(nodes: &mut Vec<WideNode>, bottom: &bvh::Bvh, prim_base: u32) -> u32 {
     let node_base = nodes.len() as u32;
-    nodes.extend(wide_nodes(&bottom.nodes).into_iter().map(|mut n| {
+    nodes.extend(wide_nodes(&bottom.nodes, bvh::MAX_LEAF_SIZE).into_iter().map(|mut n| {
         for k in 0..WIDTH {
             match n.kind(k) {
                 CHILD_NONE => {}
@@ -190,7 +190,8 @@ impl Acceleration {
             placements.push((Some(mesh), inst.transform, transformed_bounds(&meshes[mesh].root_bounds, inst.transform)));
         }
         let top = bvh::build_single_leaves(&placements.iter().map(|p| p.2).collect::<Vec<_>>());
-        let mut nodes = wide_nodes(&top.nodes);
+        // One instance a leaf, as the top level's walk reads them.
+        let mut nodes = wide_nodes(&top.nodes, 1);
 
         let mut primitives = Vec::new();
         let mut group_root = 0;
