@@ -252,7 +252,7 @@ uint placed_ray(uint instance, uvec4 info, vec3 o, vec3 d, out vec3 ro, out vec3
     ro = o;
     rd = d;
     if (instance_kind == INSTANCE_MESH) {
-        vec4 world_to_object[3] = instances[instance].world_to_object;
+        vec4 world_to_object[3] = load_instances(instance).world_to_object;
         ro = affine_point(world_to_object, o);
         rd = affine_vector(world_to_object, d);
     }
@@ -265,7 +265,7 @@ bool instance_walked(uvec4 info) {
 }
 
 bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
-    uvec4 info = instances[instance].info;
+    uvec4 info = load_instances(instance).info;
     if (!instance_walked(info)) return false;
     vec3 ro, rd;
     uint instance_kind = placed_ray(instance, info, o, d, ro, rd);

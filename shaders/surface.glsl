@@ -56,7 +56,7 @@ vec4 interpolated_tangent(uvec3 tri, vec3 w) {
 Surface surface_at(Hit hit, vec3 o, vec3 d) {
     Surface s;
     s.point = o + hit.t * d;
-    uvec4 info = instances[hit.instance].info;
+    uvec4 info = load_instances(hit.instance).info;
     if (SCENE_MESHES == 0 || (SCENE_PRIMITIVES == 1 && info.x == INSTANCE_PRIMITIVES)) {
         Primitive p = prims[hit.prim];
         s.ng = primitive_normal(p, s.point);
@@ -66,7 +66,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
         s.material = prim_material(p);
         return s;
     }
-    vec4 world_to_object[3] = instances[hit.instance].world_to_object;
+    vec4 world_to_object[3] = load_instances(hit.instance).world_to_object;
     MeshTriangle triangle = load_mesh_triangles(hit.prim);
     uvec3 tri = floatBitsToUint(vec3(triangle.v0.w, triangle.e1.w, triangle.e2.w));
     vec3 w = vec3(1.0 - hit.bary.x - hit.bary.y, hit.bary);
@@ -78,7 +78,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     // (src/scene/asset/mod.rs): MikkTSpace's, along growing u, carried to the world as directions.
     if (SCENE_ANISOTROPIC == 1 && (info.z & INSTANCE_HAS_TANGENTS) != 0u) {
         vec4 t = interpolated_tangent(tri, w);
-        s.tangent = affine_vector(instances[hit.instance].object_to_world, t.xyz);
+        s.tangent = affine_vector(load_instances(hit.instance).object_to_world, t.xyz);
     }
     // Texture coordinates serve textures alone.
     if (SCENE_TEXTURES == 1 && (info.z & INSTANCE_HAS_UVS) != 0u) {
@@ -96,7 +96,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
             uint normal_map = floatBitsToUint(load_materials(s.material).maps.y);
             if (normal_map != NO_TEXTURE && (info.z & INSTANCE_HAS_TANGENTS) != 0u) {
                 vec4 t = interpolated_tangent(tri, w);
-                ns = normal_mapped(normal_map, load_materials(s.material).maps.z, s.uv, normalize(n), t, instances[hit.instance].object_to_world, ns);
+                ns = normal_mapped(normal_map, load_materials(s.material).maps.z, s.uv, normalize(n), t, load_instances(hit.instance).object_to_world, ns);
             }
 #endif
             s.ns = side * ns;
@@ -109,8 +109,8 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 // Only emitters get here: without triangle lights (SCENE_TRIANGLE_LIGHTS; every emissive mesh
 // triangle is one) the hit is one of the scene's own shapes.
 Primitive world_primitive(Hit hit) {
-    if (SCENE_MESHES == 0 || SCENE_TRIANGLE_LIGHTS == 0 || (SCENE_PRIMITIVES == 1 && instances[hit.instance].info.x == INSTANCE_PRIMITIVES)) return prims[hit.prim];
-    vec4 object_to_world[3] = instances[hit.instance].object_to_world;
+    if (SCENE_MESHES == 0 || SCENE_TRIANGLE_LIGHTS == 0 || (SCENE_PRIMITIVES == 1 && load_instances(hit.instance).info.x == INSTANCE_PRIMITIVES)) return prims[hit.prim];
+    vec4 object_to_world[3] = load_instances(hit.instance).object_to_world;
     MeshTriangle tri = load_mesh_triangles(hit.prim);
     Primitive p;
     p.a = vec4(affine_point(object_to_world, tri.v0.xyz), uintBitsToFloat(hit.prim));

@@ -58,7 +58,7 @@ void queue_clear() {
 // Queues walk `walk` of instance `instance` by the world ray o + t d, 0 < t < t_max, in the
 // instance's object space as walk_placed puts it.
 void queue_walk(uint walk, uint instance, vec3 o, vec3 d, float t_max, bool any_hit) {
-    uvec4 info = instances[instance].info;
+    uvec4 info = load_instances(instance).info;
     vec3 ro, rd;
     uint instance_kind = placed_ray(instance, info, o, d, ro, rd);
     queue_origin[walk] = vec4(ro, t_max);
@@ -82,7 +82,7 @@ uint queue_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit, out uint 
     for (uint k = 1u; k <= entered; ++k) {
         if (kth_entry(k, t0, t1, t2, t3) > hit.t) break;
         uint instance = kth_child(k, c0, c1, c2, c3).x;
-        if (!instance_walked(instances[instance].info)) continue;
+        if (!instance_walked(load_instances(instance).info)) continue;
         if (count == 0u) i0 = instance;
         else if (count == 1u) i1 = instance;
         else if (count == 2u) i2 = instance;

@@ -188,7 +188,7 @@ const fn texel_buffer<T: GlslTexels>() -> Shape {
         assert!(T::TEXELS[k].words().bytes() == width, "a record's texels are all as wide: one texel format a buffer");
         k += 1;
     }
-    assert!(T::TEXELS.len() as u64 * width == size_of::<T>() as u64, "a record read as texels is a whole number of its texels");
+    assert!(Texel::record_texels(T::TEXELS) as u64 * width == size_of::<T>() as u64, "a record read as texels is a whole number of its texels");
     Shape::TexelBuffer { element: Element::of::<T>(), texels: T::TEXELS }
 }
 
@@ -211,8 +211,9 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     BufferBinding { buffer: Accum, binding: 6, name: "accum", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: EveryKernel, what: "accumulation image" },
     // Per-dispatch counters, cleared and read by the host (see GpuStats).
     BufferBinding { buffer: Stats, binding: 7, name: "stats", shape: Shape::StorageBlock(Block::of::<GpuStats>()), access: ReadWrite, bound_in: EveryKernel, what: "statistics" },
-    // Placements of bottom-level BVHs; the top-level BVH's leaves index them.
-    BufferBinding { buffer: Instances, binding: 8, name: "instances", shape: array::<GpuInstance>(), access: Read, bound_in: EveryKernel, what: "instances" },
+    // Placements of bottom-level BVHs; the top-level BVH's leaves index them. Read as texels: each
+    // lane reads its own ray's and hit's (mesh box 1.055x on lavapipe, docs/benchmarks.md, stop 39).
+    BufferBinding { buffer: Instances, binding: 8, name: "instances", shape: texel_buffer::<GpuInstance>(), access: Read, bound_in: EveryKernel, what: "instances" },
     // Every mesh's triangles by value (MeshTriangle) and their materials, in their BVH's leaf order.
     BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: texel_buffer::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },
     BufferBinding { buffer: TriangleMaterials, binding: 10, name: "triangle_materials", shape: texel_buffer::<u32>(), access: Read, bound_in: EveryKernel, what: "triangle materials" },
@@ -426,8 +427,13 @@ mod tests {
     #[test]
     fn the_generated_declarations_say_what_each_buffer_is() {
         let src = glsl(&UNSPLIT, KernelVariant { aovs: true, ..Default::default() });
-        let instances = format!("binding = {}) readonly buffer instances_buffer {{ Instance instances[]; }};", KernelBuffer::Instances.entry().binding);
-        assert!(src.contains(&instances), "{src}");
+        let textures = format!("binding = {}) readonly buffer texture_infos_buffer {{ TextureInfo texture_infos[]; }};", KernelBuffer::TextureInfos.entry().binding);
+        assert!(src.contains(&textures), "{src}");
+        // A record with matrix rows: each array member built from its texels.
+        let instance = "return Instance(vec4[3](uintBitsToFloat(texelFetch(instances_0, t + 0)), uintBitsToFloat(texelFetch(instances_0, t + 1)), \
+                        uintBitsToFloat(texelFetch(instances_0, t + 2))), vec4[3](uintBitsToFloat(texelFetch(instances_0, t + 3)), \
+                        uintBitsToFloat(texelFetch(instances_0, t + 4)), uintBitsToFloat(texelFetch(instances_0, t + 5))), texelFetch(instances_0, t + 6));";
+        assert!(src.contains("int t = int(j * 7u);") && src.contains(instance), "{src}");
         let materials = format!("binding = {}) uniform utextureBuffer materials_0;", KernelBuffer::Materials.entry().binding);
         assert!(src.contains(&materials) && src.contains("Material load_materials(uint i)"), "{src}");
         assert!(src.contains("    // Number of area lights: the entries of `lights`.\n    uint light_count;\n"), "{src}");

@@ -145,21 +145,25 @@ pub fn glsl_texels(array: &BufferBinding, element: Element, texels: &[Texel], pl
     }
     // One function a window, each fetching from its own binding.
     for c in 0..plan.chunks {
-        let members: Vec<String> = texels
-            .iter()
-            .enumerate()
-            .map(|(k, texel)| {
-                let fetch = format!("texelFetch({name}_{c}, t + {k})");
-                match texel {
-                    Texel::Vec4 => format!("uintBitsToFloat({fetch})"),
-                    Texel::Uvec4 => fetch,
-                    Texel::Vec2 => format!("uintBitsToFloat({fetch}.xy)"),
-                    Texel::Float => format!("uintBitsToFloat({fetch}.x)"),
-                    Texel::Uint => format!("{fetch}.x"),
+        let fetch = |k: usize| format!("texelFetch({name}_{c}, t + {k})");
+        let mut first = 0;
+        let mut members = Vec::new();
+        for texel in texels {
+            let k = first;
+            members.push(match texel {
+                Texel::Vec4 => format!("uintBitsToFloat({})", fetch(k)),
+                Texel::Uvec4 => fetch(k),
+                Texel::Vec2 => format!("uintBitsToFloat({}.xy)", fetch(k)),
+                Texel::Float => format!("uintBitsToFloat({}.x)", fetch(k)),
+                Texel::Uint => format!("{}.x", fetch(k)),
+                Texel::Vec4Array(n) => {
+                    let rows: Vec<String> = (k..k + n).map(|row| format!("uintBitsToFloat({})", fetch(row))).collect();
+                    format!("vec4[{n}]({})", rows.join(", "))
                 }
-            })
-            .collect();
-        out += &format!("{ty} {name}_{c}_record(uint j) {{\n    int t = int(j * {}u);\n    return {ty}({});\n}}\n", texels.len(), members.join(", "));
+            });
+            first += texel.count();
+        }
+        out += &format!("{ty} {name}_{c}_record(uint j) {{\n    int t = int(j * {first}u);\n    return {ty}({});\n}}\n", members.join(", "));
     }
     if plan.chunks == 1 {
         out += &format!("{ty} load_{name}(uint i) {{ return {name}_0_record(i); }}\n");

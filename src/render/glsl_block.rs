@@ -32,10 +32,10 @@ glsl_names! {
     [u32; 4] => "uvec4",
 }
 
-/// What one texel of a record read through a texel buffer holds: the record's member there is a
-/// `vec4` or `vec2` (the texel's bits reinterpreted), a `uvec4`, a `float` or a `uint`. A texel is
-/// as wide as its member, so that a record of single words (a CDF, packed normals) is read word by
-/// word rather than padded to 16 bytes.
+/// What one member of a record read through a texel buffer holds: a `vec4` or `vec2` (the texel's
+/// bits reinterpreted), a `uvec4`, a `float` or a `uint`, each one texel; or an array of `n`
+/// `vec4`s (a matrix's rows), `n` texels. A texel is as wide as its member, so that a record of
+/// single words (a CDF, packed normals) is read word by word rather than padded to 16 bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Texel {
     Vec4,
@@ -43,13 +43,33 @@ pub enum Texel {
     Vec2,
     Float,
     Uint,
+    Vec4Array(usize),
 }
 
 impl Texel {
+    /// How many texels the member takes.
+    pub const fn count(self) -> usize {
+        match self {
+            Texel::Vec4Array(n) => n,
+            _ => 1,
+        }
+    }
+
+    /// The record's size in texels: its members' counts added up.
+    pub const fn record_texels(members: &[Texel]) -> usize {
+        let mut total = 0;
+        let mut k = 0;
+        while k < members.len() {
+            total += members[k].count();
+            k += 1;
+        }
+        total
+    }
+
     /// How many 32-bit words the texel holds.
     pub const fn words(self) -> TexelWords {
         match self {
-            Texel::Vec4 | Texel::Uvec4 => TexelWords::Four,
+            Texel::Vec4 | Texel::Uvec4 | Texel::Vec4Array(_) => TexelWords::Four,
             Texel::Vec2 => TexelWords::Two,
             Texel::Float | Texel::Uint => TexelWords::One,
         }
@@ -57,8 +77,8 @@ impl Texel {
 }
 
 /// A host record the kernel reads as consecutive texels of a texel buffer (bindings.rs,
-/// `Shape::TexelBuffer`), all as wide: its GLSL type has one member a texel, of these kinds in
-/// order (a scalar or vector record is its one texel).
+/// `Shape::TexelBuffer`), all as wide: its GLSL type's members, of these kinds in order (a scalar
+/// or vector record is its one texel).
 pub trait GlslTexels: GlslType {
     const TEXELS: &'static [Texel];
 }

@@ -319,6 +319,10 @@ impl GlslTexels for GpuPrimitive {
 impl GlslTexels for GpuMeshTriangle {
     const TEXELS: &'static [Texel] = &[Texel::Vec4; 3];
 }
+// `world_to_object`, `object_to_world`, `info`: read by each lane for its own ray's instance.
+impl GlslTexels for GpuInstance {
+    const TEXELS: &'static [Texel] = &[Texel::Vec4Array(3), Texel::Vec4Array(3), Texel::Uvec4];
+}
 
 /// Trip count of the kernel's check for loops cut short (shaders/loop_limit.glsl): it runs fewer
 /// times exactly when the device's loop limit ran out in that invocation.
