@@ -181,8 +181,8 @@ const uint FILTER_GAUSSIAN = 2u;
 // kernel variant, scene and device. Arrays that can outgrow one storage binding are read with
 // load_<name>(i) (and accum and the AOV sums written with store_<name>); the others by name. The
 // arrays read at a per-lane index (BVH nodes, mesh triangles, instances, materials, area lights,
-// vertex attributes, textures, the environment map and its CDF) are texel buffers of 1, 2 or 4 words a
-// texel, their records built texel by texel by load_<name> (src/render/bindings.rs,
+// vertex attributes, textures, the environment map and its CDF) are texel buffers of 1, 2 or 4
+// words a texel, their records built texel by texel by load_<name> (src/render/bindings.rs,
 // Shape::TexelBuffer); a kernel that includes this file enables GL_EXT_samplerless_texture_functions
 // for their texelFetch.
 #include "interface.glsl"

@@ -149,15 +149,14 @@ pub fn glsl_texels(array: &BufferBinding, element: Element, texels: &[Texel], pl
         let mut first = 0;
         let mut members = Vec::new();
         for texel in texels {
-            let k = first;
             members.push(match texel {
-                Texel::Vec4 => format!("uintBitsToFloat({})", fetch(k)),
-                Texel::Uvec4 => fetch(k),
-                Texel::Vec2 => format!("uintBitsToFloat({}.xy)", fetch(k)),
-                Texel::Float => format!("uintBitsToFloat({}.x)", fetch(k)),
-                Texel::Uint => format!("{}.x", fetch(k)),
+                Texel::Vec4 => format!("uintBitsToFloat({})", fetch(first)),
+                Texel::Uvec4 => fetch(first),
+                Texel::Vec2 => format!("uintBitsToFloat({}.xy)", fetch(first)),
+                Texel::Float => format!("uintBitsToFloat({}.x)", fetch(first)),
+                Texel::Uint => format!("{}.x", fetch(first)),
                 Texel::Vec4Array(n) => {
-                    let rows: Vec<String> = (k..k + n).map(|row| format!("uintBitsToFloat({})", fetch(row))).collect();
+                    let rows: Vec<String> = (first..first + n).map(|row| format!("uintBitsToFloat({})", fetch(row))).collect();
                     format!("vec4[{n}]({})", rows.join(", "))
                 }
             });
