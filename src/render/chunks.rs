@@ -177,7 +177,7 @@ mod tests {
     use super::*;
     use crate::render::bindings::{Shape, BINDINGS};
 
-    /// BVH nodes: 32 bytes each.
+    /// BVH nodes: 64 bytes each.
     const NODE_BYTES: u64 = 64;
 
     #[test]
