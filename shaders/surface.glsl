@@ -53,12 +53,31 @@ vec4 interpolated_tangent(uvec3 tri, vec3 w) {
     return w.x * load_vertex_tangents(tri.x) + w.y * load_vertex_tangents(tri.y) + w.z * load_vertex_tangents(tri.z);
 }
 
+// Shape `i`'s record. Where the scene's shapes are a handful of few shapes (SCENE_FEW_SHAPE_SELECTS:
+// src/render/features.rs says how many), each is loaded at its constant index, a load lavapipe
+// makes once for all lanes, and each lane's own is picked by selects; a storage load at each
+// lane's own index runs lane by lane, behind a bounds check (docs/benchmarks.md, stop 40).
+// FEW_SHAPE is bvh.glsl's, redefined here for the one list and then left undefined, so that no
+// later file expands the list into the wrong code.
+#undef FEW_SHAPE
+#define FEW_SHAPE(k, kind) record = i == k ? prims[k] : record;
+Primitive shape_record(uint i) {
+#if SCENE_FEW_SHAPE_SELECTS
+    Primitive record = prims[0];
+    SCENE_FEW_SHAPES
+    return record;
+#else
+    return prims[i];
+#endif
+}
+#undef FEW_SHAPE
+
 Surface surface_at(Hit hit, vec3 o, vec3 d) {
     Surface s;
     s.point = o + hit.t * d;
     uvec4 info = load_instances(hit.instance).info;
     if (SCENE_MESHES == 0 || (SCENE_PRIMITIVES == 1 && info.x == INSTANCE_PRIMITIVES)) {
-        Primitive p = prims[hit.prim];
+        Primitive p = shape_record(hit.prim);
         s.ng = primitive_normal(p, s.point);
         s.ns = s.ng;
         s.tangent = SCENE_ANISOTROPIC == 1 ? primitive_tangent(p, s.point) : vec3(0.0);
@@ -109,7 +128,7 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
 // Only emitters get here: without triangle lights (SCENE_TRIANGLE_LIGHTS; every emissive mesh
 // triangle is one) the hit is one of the scene's own shapes.
 Primitive world_primitive(Hit hit) {
-    if (SCENE_MESHES == 0 || SCENE_TRIANGLE_LIGHTS == 0 || (SCENE_PRIMITIVES == 1 && load_instances(hit.instance).info.x == INSTANCE_PRIMITIVES)) return prims[hit.prim];
+    if (SCENE_MESHES == 0 || SCENE_TRIANGLE_LIGHTS == 0 || (SCENE_PRIMITIVES == 1 && load_instances(hit.instance).info.x == INSTANCE_PRIMITIVES)) return shape_record(hit.prim);
     vec4 object_to_world[3] = load_instances(hit.instance).object_to_world;
     MeshTriangle tri = load_mesh_triangles(hit.prim);
     Primitive p;

@@ -22,6 +22,12 @@ use crate::bvh::{CHILD_INTERIOR, WIDTH};
 /// the kernel's compile grows.
 pub const FEW_PRIMITIVES: usize = 32;
 
+/// Most few shapes for which a hit's shape record is picked by selects among loads at constant
+/// indices (`SCENE_FEW_SHAPE_SELECTS`, shaders/surface.glsl) rather than loaded at each lane's own
+/// index, which lavapipe does lane by lane. Measured on Mesa 25 (docs/benchmarks.md, stop 40):
+/// the selects gain 1.14x on the Cornell box's 9 shapes, are level at 17 and lose 0.90x at 31.
+pub const FEW_SHAPE_SELECTS: usize = 12;
+
 /// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl).
 pub const ALPHA_DELTA: f32 = 1e-3;
 
@@ -269,6 +275,8 @@ impl SceneFeatures {
     pub fn defines(&self) -> Vec<(&'static str, String)> {
         let mut defines: Vec<_> = self.table().into_iter().map(|(_, define, on)| (define, u32::from(on).to_string())).collect();
         defines.push(("SCENE_FEW_SHAPES", self.few_shapes.define()));
+        let selects = !self.few_shapes.is_empty() && self.few_shapes.len() <= FEW_SHAPE_SELECTS;
+        defines.push(("SCENE_FEW_SHAPE_SELECTS", u32::from(selects).to_string()));
         defines
     }
 
@@ -337,7 +345,9 @@ mod tests {
     fn every_feature_is_one_define_used_by_the_kernel() {
         let kernel: String = crate::render::kernel::SHADERS.iter().map(|(_, text)| *text).collect();
         for (name, value) in SceneFeatures::ALL.defines() {
-            assert_eq!(value, if name == "SCENE_FEW_SHAPES" { "" } else { "1" }, "{name}");
+            // The few shapes are a scene's own: the kernel that serves every scene lists none.
+            let none = matches!(name, "SCENE_FEW_SHAPES" | "SCENE_FEW_SHAPE_SELECTS");
+            assert_eq!(value, if name == "SCENE_FEW_SHAPES" { "" } else if none { "0" } else { "1" }, "{name}");
             assert!(kernel.contains(name), "{name} is defined for the kernel but no shader file uses it");
         }
     }
