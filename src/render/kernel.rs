@@ -108,6 +108,10 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
         ("BVH_MAX_DEPTH", format!("{}u", crate::bvh::MAX_DEPTH)),
         ("AOVS", u32::from(variant.aovs).to_string()),
         ("COUNT_LOOP_ITERATIONS", u32::from(variant.count_loop_iterations).to_string()),
+        // The devices that end loops early (llvmpipe before Mesa 24) also run every block of a
+        // loop body, taken or not: they keep walk_instance's child loop, the others its four
+        // steps unrolled (bvh.glsl).
+        ("WALK_CHILDREN_UNROLLED", u32::from(!variant.count_loop_iterations).to_string()),
     ];
     defines.extend(variant.features.defines());
     defines.extend(WalkQueue::defines(variant.walk_queue));
