@@ -5,7 +5,7 @@ high-spp reference. On a shared machine the per-CPU-second figures are the stead
 the device is caustica's own threads, and Dr.Jit's pool is Mitsuba's).
 
     python3 scripts/mitsuba_compare.py [SCENE.toml] [--width W] [--height H] [--spp N]
-        [--reference REF.pfm | --reference-spp N] [--out DIR] [--json]
+        [--reference REF.pfm | --reference-spp N] [--rounds N] [--out DIR] [--json]
 
     python3 scripts/mitsuba_compare.py SCENE.xml [--width W] [--spp N] [--reference-spp N]
         [--path DIR]... [--out DIR] [--json]
@@ -24,6 +24,12 @@ kernels (Dr.Jit caches them), then rendered again and timed up to the image in m
 evaluates lazily: the time stops only once the image is a numpy array). Both errors are relative MSE
 from `caustica compare` against a reference that caustica renders at --reference-spp (default
 16 x spp; seed 99, unlike the measured renders' seed 1), or against --reference.
+
+With --rounds N the two timed measurements alternate N times (caustica's bench, then Mitsuba's
+timed render, again and again; Mitsuba's scene is loaded and compiled once). A shared 2-core
+machine drifts by 10-30 % within seconds (docs/benchmarks.md, stop 37), so one pair of
+measurements can read the drift; the report gives every round's ratio and takes the round whose
+ratio is the median (the lower middle one of an even count) as the result.
 
 Needs: `pip install mitsuba numpy`; on Debian 12 also `apt-get install libllvm19` (Mitsuba's CPU
 variant crashes on the system's LLVM 15; Dr.Jit finds LLVM 19 by itself once it is installed,
@@ -315,11 +321,25 @@ def size_args(width, height, spp):
     return ["--width", width, "--height", height, "--spp", spp]
 
 
-def measure_caustica(caustica, scene, width, height, spp, out):
-    bench = json.loads(run([caustica, "bench", scene, *size_args(width, height, spp), "--json"]))
+def bench_caustica(caustica, scene, width, height, spp):
+    return json.loads(run([caustica, "bench", scene, *size_args(width, height, spp), "--json"]))
+
+
+def render_caustica(caustica, scene, width, height, spp, out):
     image = out / "caustica.pfm"
     run([caustica, "render", scene, "-o", image, *size_args(width, height, spp), "--seed", 1, "-q"])
-    return bench, image
+    return image
+
+
+def round_figures(bench, mitsuba):
+    """One round's rates (samples per second, and per CPU-second where both are known) and ratios."""
+    cpu = (bench.get("samples_per_cpu_second"), mitsuba["samples_per_cpu_second"])
+    return {
+        "caustica_samples_per_second": bench["samples_per_second"],
+        "mitsuba_samples_per_second": mitsuba["samples_per_second"],
+        "ratio": bench["samples_per_second"] / mitsuba["samples_per_second"],
+        "ratio_per_cpu_second": cpu[0] / cpu[1] if all(cpu) else None,
+    }
 
 
 def loaded_llvm():
@@ -346,45 +366,53 @@ def stdout_to_stderr():
         os.close(saved)
 
 
-def measure_mitsuba(scene_dict, width, height, spp, variant, out):
-    import mitsuba as mi
-    import numpy as np
+class MitsubaRun:
+    """Mitsuba's side: the scene loaded and its kernels compiled once, then timed renders."""
 
-    started = time.perf_counter()
-    scene = mi.load_dict(scene_dict)
-    load_seconds = time.perf_counter() - started
-    # Mitsuba's multi-jittered sampler rounds some counts up (512 becomes 528): the rate counts
-    # the samples it takes.
-    spp = scene.sensors()[0].sampler().sample_count()
-    # The first render compiles the kernels (cached by Dr.Jit); the second, with the same
-    # shapes and seed, reuses them and is the one timed. np.array forces the evaluation.
-    started = time.perf_counter()
-    np.array(mi.render(scene, spp=spp, seed=1))
-    first_seconds = time.perf_counter() - started
-    started, cpu_started = time.perf_counter(), time.process_time()
-    image = np.array(mi.render(scene, spp=spp, seed=1))
-    seconds = time.perf_counter() - started
-    # All of this process's threads (Dr.Jit's pool included), as caustica's bench counts its own:
-    # on a shared machine the per-CPU-second rates compare where wall-clock rates swing.
-    cpu_seconds = time.process_time() - cpu_started
-    path = out / "mitsuba.pfm"
-    write_pfm(path, image)
-    import drjit as dr
+    def __init__(self, scene_dict, width, height, spp, variant):
+        import mitsuba as mi
+        import numpy as np
 
-    return {
-        "version": mi.__version__,
-        "drjit_version": dr.__version__,
-        "variant": variant,
-        "llvm": loaded_llvm(),
-        "threads": os.cpu_count(),
-        "spp": spp,
-        "load_seconds": load_seconds,
-        "first_render_seconds": first_seconds,
-        "seconds": seconds,
-        "samples_per_second": width * height * spp / seconds,
-        "cpu_seconds": cpu_seconds,
-        "samples_per_cpu_second": width * height * spp / cpu_seconds if cpu_seconds > 0 else None,
-    }, path
+        self.width, self.height, self.variant = width, height, variant
+        started = time.perf_counter()
+        self.scene = mi.load_dict(scene_dict)
+        self.load_seconds = time.perf_counter() - started
+        # Mitsuba's multi-jittered sampler rounds some counts up (512 becomes 528): the rate
+        # counts the samples it takes.
+        self.spp = self.scene.sensors()[0].sampler().sample_count()
+        # The first render compiles the kernels (cached by Dr.Jit); the timed ones, with the
+        # same shapes and seed, reuse them. np.array forces the evaluation.
+        started = time.perf_counter()
+        np.array(mi.render(self.scene, spp=self.spp, seed=1))
+        self.first_seconds = time.perf_counter() - started
+
+    def timed(self):
+        """One timed render: its figures and its image (a numpy array)."""
+        import drjit as dr
+        import mitsuba as mi
+        import numpy as np
+
+        started, cpu_started = time.perf_counter(), time.process_time()
+        image = np.array(mi.render(self.scene, spp=self.spp, seed=1))
+        seconds = time.perf_counter() - started
+        # All of this process's threads (Dr.Jit's pool included), as caustica's bench counts its
+        # own: on a shared machine the per-CPU-second rates compare where wall-clock rates swing.
+        cpu_seconds = time.process_time() - cpu_started
+        samples = self.width * self.height * self.spp
+        return {
+            "version": mi.__version__,
+            "drjit_version": dr.__version__,
+            "variant": self.variant,
+            "llvm": loaded_llvm(),
+            "threads": os.cpu_count(),
+            "spp": self.spp,
+            "load_seconds": self.load_seconds,
+            "first_render_seconds": self.first_seconds,
+            "seconds": seconds,
+            "samples_per_second": samples / seconds,
+            "cpu_seconds": cpu_seconds,
+            "samples_per_cpu_second": samples / cpu_seconds if cpu_seconds > 0 else None,
+        }, image
 
 
 # --- a Mitsuba XML scene, read by both renderers -------------------------------------------------
@@ -566,9 +594,12 @@ def main():
     parser.add_argument("--reference-spp", type=int, help="spp of the reference caustica renders (default: 16 x spp)")
     parser.add_argument("--caustica", default=str(REPO / "target" / "release" / "caustica"), help="the caustica binary (default: target/release/caustica)")
     parser.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (default: llvm_ad_rgb, the CPU one)")
+    parser.add_argument("--rounds", type=int, default=1, help="timed measurements of each renderer, alternating; the median round is the result (default: 1)")
     parser.add_argument("--out", help="folder for the images (default: a temporary folder, kept and printed)")
     parser.add_argument("--json", action="store_true", help="print the results as one JSON document")
     args = parser.parse_args()
+    if args.rounds < 1:
+        sys.exit(f"mitsuba_compare: --rounds {args.rounds}: at least one round is measured")
 
     scene_path = Path(args.scene)
     doc = tomllib.loads(scene_path.read_text())
@@ -592,9 +623,20 @@ def main():
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="mitsuba-compare-"))
     out.mkdir(parents=True, exist_ok=True)
     load_before = os.getloadavg()
-    bench, caustica_image = measure_caustica(args.caustica, scene_path, width, height, spp, out)
+    caustica_image = render_caustica(args.caustica, scene_path, width, height, spp, out)
     with stdout_to_stderr():
-        mitsuba, mitsuba_image = measure_mitsuba(scene_dict, width, height, spp, args.variant, out)
+        mitsuba_run = MitsubaRun(scene_dict, width, height, spp, args.variant)
+    rounds = []
+    for _ in range(args.rounds):
+        bench = bench_caustica(args.caustica, scene_path, width, height, spp)
+        with stdout_to_stderr():
+            mitsuba, image = mitsuba_run.timed()
+        rounds.append((bench, mitsuba, image))
+    # The median round by its ratio of samples per second (the lower middle one of an even count).
+    by_ratio = sorted(rounds, key=lambda r: r[0]["samples_per_second"] / r[1]["samples_per_second"])
+    bench, mitsuba, image = by_ratio[(len(by_ratio) - 1) // 2]
+    mitsuba_image = out / "mitsuba.pfm"
+    write_pfm(mitsuba_image, image)
     reference, reference_spp = args.reference, None
     if reference is None:
         reference_spp = args.reference_spp or 16 * spp
@@ -616,6 +658,7 @@ def main():
         "mitsuba": {**mitsuba, **errors["mitsuba"], "image": str(mitsuba_image)},
         "caustica_over_mitsuba_samples_per_second": speed_ratio,
         "caustica_over_mitsuba_samples_per_cpu_second": cpu_ratio,
+        "rounds": [round_figures(b, m) for b, m, _ in rounds],
         "load_average_before": load_before,
         "load_average_after": load_after,
     }
@@ -638,6 +681,9 @@ def main():
         cpu = "-" if r.get("samples_per_cpu_second") is None else f"{r['samples_per_cpu_second'] / 1e6:.3f}"
         print(f"{name:<10}  {r['samples_per_second'] / 1e6:>10.3f}  {r['seconds']:>8.2f}  {cpu:>14}  {r['relative_mse']:>12.5f}  {ratio:>14}")
     print()
+    if len(rounds) > 1:
+        each = ", ".join(f"{r['ratio']:.3f}" for r in result["rounds"])
+        print(f"rounds (caustica / Mitsuba, samples per second): {each}; the median round is shown")
     print(f"caustica / Mitsuba, samples per second: {speed_ratio:.3f}")
     if cpu_ratio is not None:
         print(f"caustica / Mitsuba, samples per CPU-second: {cpu_ratio:.3f}")
