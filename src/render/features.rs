@@ -342,12 +342,30 @@ mod tests {
     }
 
     #[test]
+    fn shape_records_are_picked_by_selects_for_a_handful_of_few_shapes() {
+        let selects = |count: usize| {
+            let few_shapes = FewShapes::new(std::iter::repeat_n(PRIM_QUAD, count)).expect("at most FEW_PRIMITIVES");
+            let defines = SceneFeatures { few_shapes, ..SceneFeatures::ALL }.defines();
+            defines.into_iter().find(|(name, _)| *name == "SCENE_FEW_SHAPE_SELECTS").expect("defined").1
+        };
+        assert_eq!(selects(0), "0", "no few shapes: the walk meets the shapes");
+        assert_eq!(selects(1), "1");
+        assert_eq!(selects(FEW_SHAPE_SELECTS), "1");
+        assert_eq!(selects(FEW_SHAPE_SELECTS + 1), "0");
+        assert_eq!(selects(FEW_PRIMITIVES), "0");
+    }
+
+    #[test]
     fn every_feature_is_one_define_used_by_the_kernel() {
         let kernel: String = crate::render::kernel::SHADERS.iter().map(|(_, text)| *text).collect();
         for (name, value) in SceneFeatures::ALL.defines() {
             // The few shapes are a scene's own: the kernel that serves every scene lists none.
-            let none = matches!(name, "SCENE_FEW_SHAPES" | "SCENE_FEW_SHAPE_SELECTS");
-            assert_eq!(value, if name == "SCENE_FEW_SHAPES" { "" } else if none { "0" } else { "1" }, "{name}");
+            let expected = match name {
+                "SCENE_FEW_SHAPES" => "",
+                "SCENE_FEW_SHAPE_SELECTS" => "0",
+                _ => "1",
+            };
+            assert_eq!(value, expected, "{name}");
             assert!(kernel.contains(name), "{name} is defined for the kernel but no shader file uses it");
         }
     }
