@@ -632,9 +632,10 @@ def main():
         with stdout_to_stderr():
             mitsuba, image = mitsuba_run.timed()
         rounds.append((bench, mitsuba, image))
+    figures = [round_figures(b, m) for b, m, _ in rounds]
     # The median round by its ratio of samples per second (the lower middle one of an even count).
-    by_ratio = sorted(rounds, key=lambda r: r[0]["samples_per_second"] / r[1]["samples_per_second"])
-    bench, mitsuba, image = by_ratio[(len(by_ratio) - 1) // 2]
+    by_ratio = sorted(range(len(rounds)), key=lambda k: figures[k]["ratio"])
+    bench, mitsuba, image = rounds[by_ratio[(len(rounds) - 1) // 2]]
     mitsuba_image = out / "mitsuba.pfm"
     write_pfm(mitsuba_image, image)
     reference, reference_spp = args.reference, None
@@ -658,7 +659,7 @@ def main():
         "mitsuba": {**mitsuba, **errors["mitsuba"], "image": str(mitsuba_image)},
         "caustica_over_mitsuba_samples_per_second": speed_ratio,
         "caustica_over_mitsuba_samples_per_cpu_second": cpu_ratio,
-        "rounds": [round_figures(b, m) for b, m, _ in rounds],
+        "rounds": figures,
         "load_average_before": load_before,
         "load_average_after": load_after,
     }
