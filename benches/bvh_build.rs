@@ -1,7 +1,9 @@
 //! BVH build throughput: `cargo bench --bench bvh_build`. Builds each input three times (or
 //! $BVH_BENCH_RUNS, for a noisy machine) and reports the best time, throughput and the tree's
 //! shape and SAH cost. Real meshes are read with the crate's loader from $CAUSTICA_DATA (default
-//! ../shared/data next to the crate) and skipped when missing.
+//! ../shared/data next to the crate) and skipped when missing. The wide columns are the four-wide
+//! tree the kernel walks (src/bvh/wide_node.rs): its nodes, their bytes a triangle, its
+//! surface-area cost with the boxes as stored, and what their 8-bit steps add to that cost.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -14,8 +16,8 @@ type Triangle = [Vec3; 3];
 
 fn main() {
     println!(
-        "{:<24} {:>9} {:>9} {:>8} {:>9} {:>10} {:>10} {:>8} {:>6}",
-        "input", "tris", "build ms", "Mtris/s", "nodes", "nodes/tri", "bytes/tri", "SAH", "depth"
+        "{:<24} {:>9} {:>9} {:>8} {:>9} {:>10} {:>8} {:>6} {:>10} {:>10} {:>9} {:>9}",
+        "input", "tris", "build ms", "Mtris/s", "nodes", "nodes/tri", "SAH", "depth", "wide nodes", "wide B/tri", "wide SAH", "8-bit +%"
     );
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     report("random 1M", &random_triangles(&mut rng, 1_000_000));
@@ -95,17 +97,24 @@ fn report(name: &str, tris: &[Triangle]) {
     let bvh = built.unwrap();
     let stats = bvh.stats();
     let n = tris.len() as f64;
+    // The tree the kernel walks: its nodes' bytes a triangle, and the surface-area cost it was
+    // shaped by, with the boxes as stored and what their 8-bit steps add to it.
+    let wide = bvh::wide_nodes(&bvh.nodes, bvh::MAX_LEAF_SIZE);
+    let wide_cost = bvh::WideCost::of(&wide, &bvh, &bounds);
     println!(
-        "{:<24} {:>9} {:>9.1} {:>8.2} {:>9} {:>10.3} {:>10.2} {:>8.2} {:>6}",
+        "{:<24} {:>9} {:>9.1} {:>8.2} {:>9} {:>10.3} {:>8.2} {:>6} {:>10} {:>10.2} {:>9.2} {:>9.2}",
         name,
         tris.len(),
         best.as_secs_f64() * 1e3,
         n / best.as_secs_f64() / 1e6,
         stats.nodes,
         stats.nodes as f64 / n,
-        stats.nodes as f64 * 32.0 / n,
         stats.sah_cost,
-        stats.max_depth
+        stats.max_depth,
+        wide.len(),
+        (wide.len() * size_of::<bvh::WideNode>()) as f64 / n,
+        wide_cost.stored,
+        100.0 * (wide_cost.stored / wide_cost.exact - 1.0)
     );
 }
 

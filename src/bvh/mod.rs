@@ -29,7 +29,7 @@ pub use aabb::Aabb;
 pub use node::BvhNode;
 pub use stats::BuildStats;
 pub use traverse::{any_hit, closest_hit, ray_box, Ray};
-pub use wide_node::{wide_nodes, WideNode, CHILD_INTERIOR, CHILD_NONE, WIDTH};
+pub use wide_node::{wide_nodes, WideCost, WideNode, CHILD_INTERIOR, CHILD_NONE, WIDTH};
 
 /// Deepest leaf level (root = 0) the builder emits. It is also the traversal stack size: the stack
 /// holds at most one pending far child per level above the current node.
