@@ -33,7 +33,7 @@ pub const TAKE_TILES_VAR: &str = "CAUSTICA_TAKE_TILES";
 /// kernels where `wavefront`, in workgroups of `workgroup`, takes its tiles from the counter. An
 /// error where [`TAKE_TILES_VAR`] asks for what cannot run.
 pub fn takes_tiles(device: &DeviceInfo, loop_limit: bool, wavefront: bool, workgroup: Workgroup) -> Result<bool> {
-    let whole_subgroups = device.subgroup_size > 0 && workgroup.invocations() % device.subgroup_size == 0;
+    let whole_subgroups = device.subgroup_size > 0 && workgroup.invocations().is_multiple_of(device.subgroup_size);
     let possible = !loop_limit && !wavefront && whole_subgroups;
     decide(std::env::var(TAKE_TILES_VAR).ok().as_deref(), device.kind, possible).map_err(|why| {
         anyhow::anyhow!("{why} ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations a workgroup, subgroups of {})", device.name, workgroup.invocations(), device.subgroup_size)
