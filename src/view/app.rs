@@ -342,7 +342,13 @@ impl<'a> Viewer<'a> {
                     "2" => self.set_view(View::Albedo),
                     "3" => self.set_view(View::Normal),
                     "4" => self.set_view(View::Depth),
-                    "p" => self.print_camera(),
+                    "p" => {
+                        // Fly keys tapped since the last frame move the camera first: the camera
+                        // printed is where the input so far put it, however slow the frames are
+                        // (held keys move with the next frame's time, as before).
+                        self.fly(0.0);
+                        self.print_camera();
+                    }
                     "s" => {
                         if let Err(e) = self.save() {
                             self.report(format!("cannot save the image: {e:#}"));
