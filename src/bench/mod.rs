@@ -15,7 +15,7 @@ pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcom
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic};
 use crate::process_time::cpu_seconds;
-use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, Workgroup};
+use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, WalkRecords, Workgroup};
 use crate::scene::Scene;
 use anyhow::Result;
 use serde_json::{json, Value};
@@ -60,6 +60,8 @@ pub struct Measurement {
     pub walk_queue: Option<WalkQueue>,
     /// Whether its subgroups took their tiles from a counter (CPU devices; `CAUSTICA_TAKE_TILES`).
     pub take_tiles: bool,
+    /// How it read the walk's nodes and triangles (`CAUSTICA_WALK_RECORDS`).
+    pub walk_records: WalkRecords,
     /// Whether the wavefront's kernels ran instead of the megakernel (`CAUSTICA_WAVEFRONT`).
     pub wavefront: bool,
     /// The kernel's workgroup shape.
@@ -118,6 +120,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         group_order: renderer.group_order(),
         walk_queue: renderer.walk_queue,
         take_tiles: renderer.take_tiles,
+        walk_records: renderer.walk_records,
         wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
         setup_seconds,
@@ -168,6 +171,7 @@ impl Measurement {
             "walk_queue": self.walk_queue.map(|q| q.walks_per_ray),
             "walk_queue_barriers": self.walk_queue.map(|q| q.subgroup_barriers),
             "take_tiles": self.take_tiles,
+            "walk_records": self.walk_records.label(),
             "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
             "setup_seconds": self.setup_seconds,

@@ -3,7 +3,7 @@
 
 use super::{device_json, Measurement, SuiteOutcome};
 use crate::gpu::DeviceInfo;
-use crate::render::{GeometryReport, KernelChoice};
+use crate::render::{GeometryReport, KernelChoice, WalkRecords};
 use serde_json::{json, Value};
 
 /// `value / scale` to `digits` decimals, or "-" when nothing was timed (a render too quick to
@@ -37,8 +37,12 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         format!("; rays walked from the subgroup's queue (up to {} instances a ray{barriers})", q.walks_per_ray)
     });
     let tiles = if m.take_tiles { "; subgroups take tiles from a counter" } else { "" };
+    let records = match m.walk_records {
+        WalkRecords::Texels => "",
+        WalkRecords::Storage => "; nodes and triangles from storage buffers",
+    };
     let wavefront = if m.wavefront { "; the wavefront's three kernels (CAUSTICA_WAVEFRONT)" } else { "" };
-    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{tiles}{walks}{wavefront}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
+    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{tiles}{records}{walks}{wavefront}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.
         let figures: Vec<String> = m.kernel_statistics.iter().map(|s| format!("{} {}", s.name, s.value)).collect();

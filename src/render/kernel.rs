@@ -7,6 +7,7 @@ use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::tile_taking;
 use super::walk_queue::WalkQueue;
+use super::walk_records::WalkRecords;
 use super::wavefront::WavefrontStage;
 use super::workgroup::Workgroup;
 use crate::gpu::{assemble_source, compile_compute, ShaderSources};
@@ -99,6 +100,8 @@ pub struct KernelVariant {
     pub take_tiles: bool,
     /// One of the wavefront's kernels (wavefront.rs), or the megakernel.
     pub wavefront: Option<WavefrontStage>,
+    /// How it reads the walk's nodes and mesh triangles (walk_records.rs).
+    pub walk_records: WalkRecords,
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.

@@ -19,6 +19,7 @@ mod spirv_reflect;
 mod textured_emission;
 mod tile_taking;
 mod walk_queue;
+mod walk_records;
 mod wavefront;
 mod workgroup;
 
@@ -32,6 +33,7 @@ pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
 pub use tile_taking::TAKE_TILES_VAR;
 pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
+pub use walk_records::{WalkRecords, WALK_RECORDS_VAR};
 pub use wavefront::{WavefrontStage, WAVEFRONT_VAR};
 pub use workgroup::{Workgroup, WORKGROUP_VAR};
 

@@ -6,7 +6,7 @@
 //! dispatches are also sized from the loop iterations the kernel counts, and a band cut short is
 //! repeated in smaller steps, which gives the same sums bit for bit.
 
-use super::bindings::{BufferBinding, KernelBuffer, Shape, BINDINGS};
+use super::bindings::{self, BufferBinding, KernelBuffer, Shape};
 use super::chunks::{self, SplitPlans, UNSPLIT};
 use super::kernel::{kernel_spirv, KernelVariant};
 use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
@@ -17,6 +17,7 @@ use super::group_order::GroupOrder;
 use super::scene_data::SceneData;
 use super::tile_taking;
 use super::walk_queue::WalkQueue;
+use super::walk_records::WalkRecords;
 use super::wavefront::{self, WavefrontKernels, WavefrontStage};
 use super::workgroup::Workgroup;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic};
@@ -65,6 +66,8 @@ pub struct Renderer<'a> {
     pub walk_queue: Option<WalkQueue>,
     /// Whether the kernel's subgroups take their tiles from a counter (tile_taking.rs).
     pub take_tiles: bool,
+    /// How the kernel reads the walk's nodes and triangles (walk_records.rs).
+    pub walk_records: WalkRecords,
     /// The kernel's workgroup shape (workgroup.rs).
     pub workgroup: Workgroup,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
@@ -404,13 +407,12 @@ impl<'a> Renderer<'a> {
         };
         let take_tiles = tile_taking::takes_tiles(&ctx.info, loop_limit.is_some(), use_wavefront, workgroup)?;
         // The wavefront's three kernels bind the same buffers: the first stands for them here.
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, take_tiles, wavefront: use_wavefront.then_some(WavefrontStage::Extend) };
-        // Every buffer this kernel variant binds, in binding order, with what it starts as.
-        let contents: Vec<(&BufferBinding, Initial)> = BINDINGS
-            .iter()
-            .filter(|b| b.is_bound_in(variant))
-            .map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes)))
-            .collect();
+        let walk_records = WalkRecords::for_device(&ctx.info, loop_limit.is_some())?;
+        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, take_tiles, wavefront: use_wavefront.then_some(WavefrontStage::Extend), walk_records };
+        // Every buffer this kernel variant binds, in binding order, as it declares them, with what
+        // it starts as.
+        let bound: Vec<BufferBinding> = bindings::bound_in(variant).collect();
+        let contents: Vec<(&BufferBinding, Initial)> = bound.iter().map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes))).collect();
         let plans = plan_bindings(ctx, &scene.name, contents.iter().map(|(b, c)| (*b, c.bytes())))?;
         let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
@@ -462,7 +464,7 @@ impl<'a> Renderer<'a> {
             let statistics = k.statistics.clone();
             (Kernels::Megakernel(k), statistics)
         };
-        Ok(Self { ctx, kernels: Some(kernels), statistics, features, walk_queue, take_tiles, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
+        Ok(Self { ctx, kernels: Some(kernels), statistics, features, walk_queue, take_tiles, walk_records, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
             acceleration: data.acceleration.stats.clone(),
             geometry_bytes: data.acceleration.gpu_bytes(),
             texture_bytes: data.texture_bytes(),
