@@ -68,7 +68,9 @@ pub enum Shape {
     /// per-lane index: lavapipe fetches a texel for all of a subgroup's lanes as straight-line
     /// code, where it loads a storage buffer with a per-lane index one lane at a time, each lane's
     /// load behind a branch of its own (docs/benchmarks.md, stops 21 and 22). GPUs have read BVHs
-    /// through the texture path since Aila and Laine (2009).
+    /// through the texture path since Aila and Laine (2009). Which is faster depends on the CPU
+    /// under lavapipe too: [`WALK_RECORDS`] become storage arrays where the device reads them so
+    /// ([`BufferBinding::in_variant`], walk_records.rs).
     TexelBuffer { element: Element, texels: &'static [Texel] },
 }
 
@@ -220,7 +222,8 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // The camera, film, integrator settings and scene counts (see FrameParams).
     BufferBinding { buffer: Frame, binding: 0, name: "frame", shape: Shape::UniformBlock(Block::of::<FrameParams>()), access: Read, bound_in: EveryKernel, what: "frame parameters" },
     // BVH wide nodes (src/bvh/wide_node.rs): the top level over instances, its root at node 0,
-    // then every bottom-level BVH.
+    // then every bottom-level BVH. A storage array where the device reads the walk's records so
+    // (WALK_RECORDS, walk_records.rs), as are the mesh triangles.
     BufferBinding { buffer: Nodes, binding: 1, name: "nodes", shape: texel_buffer::<WideNode>(), access: Read, bound_in: EveryKernel, what: "BVH nodes" },
     // The scene's own spheres, quads and triangles, in their BVH's leaf order.
     BufferBinding { buffer: Primitives, binding: 2, name: "prims", shape: array::<GpuPrimitive>(), access: Read, bound_in: EveryKernel, what: "primitives" },
