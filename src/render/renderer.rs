@@ -407,7 +407,7 @@ impl<'a> Renderer<'a> {
         };
         let take_tiles = tile_taking::takes_tiles(&ctx.info, loop_limit.is_some(), use_wavefront, workgroup)?;
         // The wavefront's three kernels bind the same buffers: the first stands for them here.
-        let walk_records = WalkRecords::for_device(&ctx.info, loop_limit.is_some())?;
+        let walk_records = WalkRecords::for_device(&ctx.info)?;
         let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, take_tiles, wavefront: use_wavefront.then_some(WavefrontStage::Extend), walk_records };
         // Every buffer this kernel variant binds, in binding order, as it declares them, with what
         // it starts as.

@@ -8,14 +8,16 @@
 //!   spills its live vector registers around each call (docs/benchmarks.md, stop 41). A storage
 //!   load at a per-lane index is a loop over the lanes instead, each behind its own branch and
 //!   bounds check, inlined in the kernel.
-//! - On an AMD EPYC (Zen 4) the storage loads measured 1.10x on the mesh box and 1.30x on the
-//!   bunny under a sky; on an Intel Xeon (Sapphire Rapids) the nodes as storage measured 0.91x
-//!   on the mesh box (docs/benchmarks.md, stops 41 and 42). On Mesa 22.3 the texels measured
-//!   1.2-2x faster (stop 21), and on an NVIDIA GPU the two are level (stop 25).
+//! - With Mesa 25.0 on an AMD EPYC (Zen 4) the storage loads measured 1.09x on the mesh box and
+//!   1.43x on the bunny under a sky; on an Intel Xeon (Sapphire Rapids) the nodes as storage
+//!   measured 0.91x on the mesh box (docs/benchmarks.md, stops 41 and 42). With Mesa 26.2 (LLVM
+//!   22) on the same AMD EPYC the storage loads lost on the mesh box (0.90x, sky 1.03x). On Mesa
+//!   22.3 the texels measured 1.2-2x faster (stop 21), and on an NVIDIA GPU the two are level
+//!   (stop 25).
 //!
-//! So the storage buffers are the default on lavapipe running on an AMD CPU, where loops run to
-//! their end (Mesa 24 and newer), and texels everywhere else. `CAUSTICA_WALK_RECORDS` (`texels` or
-//! `storage`) overrides the choice on any device, for an A/B of one binary.
+//! So the storage buffers are the default on Mesa 25's lavapipe running on an AMD CPU, and texels
+//! everywhere else. `CAUSTICA_WALK_RECORDS` (`texels` or `storage`) overrides the choice on any
+//! device, for an A/B of one binary.
 
 use crate::gpu::DeviceInfo;
 use anyhow::{bail, Result};
@@ -34,11 +36,12 @@ pub enum WalkRecords {
 }
 
 impl WalkRecords {
-    /// The form for `device`, whose loops are cut short where `loop_limit`; an error where
-    /// [`WALK_RECORDS_VAR`] holds anything but `texels` or `storage`.
-    pub fn for_device(device: &DeviceInfo, loop_limit: bool) -> Result<WalkRecords> {
+    /// The form for `device`; an error where [`WALK_RECORDS_VAR`] holds anything but `texels` or
+    /// `storage`.
+    pub fn for_device(device: &DeviceInfo) -> Result<WalkRecords> {
         let lavapipe = device.driver_id == Some(vk::DriverId::MESA_LLVMPIPE);
-        decide(std::env::var(WALK_RECORDS_VAR).ok().as_deref(), lavapipe && !loop_limit && cpu_is_amd())
+        let storage_faster = lavapipe && mesa_major(&device.driver_info) == Some(25) && cpu_is_amd();
+        decide(std::env::var(WALK_RECORDS_VAR).ok().as_deref(), storage_faster)
     }
 
     pub fn label(self) -> &'static str {
@@ -59,6 +62,12 @@ fn decide(request: Option<&str>, storage_faster: bool) -> Result<WalkRecords> {
         Some("storage") => Ok(WalkRecords::Storage),
         Some(other) => bail!("{WALK_RECORDS_VAR}={other}: expected texels (uniform texel buffers) or storage (storage buffers)"),
     }
+}
+
+/// Mesa's major version in a driver's info string ("Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)").
+fn mesa_major(driver_info: &str) -> Option<u32> {
+    let version = driver_info.split("Mesa ").nth(1)?;
+    version.split('.').next()?.parse().ok()
 }
 
 /// Whether this process runs on an AMD CPU (CPUID's vendor string), where lavapipe runs its
@@ -90,6 +99,15 @@ mod tests {
         assert_eq!(decide(Some("storage"), false).unwrap(), WalkRecords::Storage);
         let bad = decide(Some("ssbo"), false).unwrap_err().to_string();
         assert!(bad.contains("CAUSTICA_WALK_RECORDS=ssbo") && bad.contains("expected texels"), "{bad}");
+    }
+
+    #[test]
+    fn mesa_s_major_version_is_read_from_the_driver_info() {
+        assert_eq!(mesa_major("Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"), Some(25));
+        assert_eq!(mesa_major("Mesa 26.2.6-1 (LLVM 22.1.8)"), Some(26));
+        assert_eq!(mesa_major("Mesa 22.3.6 (LLVM 15.0.6)"), Some(22));
+        assert_eq!(mesa_major("580.159.04"), None);
+        assert_eq!(mesa_major(""), None);
     }
 
     #[test]
