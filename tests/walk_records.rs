@@ -9,13 +9,13 @@ mod common;
 use caustica::render::{AovSet, KernelChoice, Renderer, WalkRecords, WALK_QUEUE_VAR, WALK_RECORDS_VAR};
 use caustica::scene::Scene;
 use common::two_meshes::{rendered_sums, two_meshes_in_a_room};
-use common::{gpu, gpu_with_storage_limit};
+use common::gpu_with_storage_limit;
 
 /// The sums of `scene` with the records read as `records`, the queue as `queue` says (`None`: the
 /// device's choice), on a device whose bindings see `limit` bytes where given; and the windows the
 /// mesh triangles span.
 fn sums(scene: &Scene, records: &str, queue: Option<&str>, limit: Option<u64>) -> (Vec<[u32; 4]>, caustica::render::AovSums, u32) {
-    let (_lock, ctx) = if limit.is_some() { gpu_with_storage_limit(limit) } else { gpu() };
+    let (_lock, ctx) = gpu_with_storage_limit(limit);
     // Read when a renderer is made; the lock keeps other tests of this binary from making one.
     std::env::set_var(WALK_RECORDS_VAR, records);
     if let Some(queue) = queue {
