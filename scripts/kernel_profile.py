@@ -2,7 +2,7 @@
 """Where a render's time goes inside lavapipe's JIT-compiled kernel, from the machine code.
 
     python3 scripts/kernel_profile.py [SCENE] [--width W] [--height H] [--seconds S]
-        [--warm-up S] [--caustica BIN]
+        [--warm-up S] [--caustica BIN] [--top N]
 
 Starts `caustica render SCENE` for long enough, samples it with `perf record` (with the top of
 each sample's stack), copies the JIT's executable memory out of the running process with gdb
@@ -146,7 +146,7 @@ def call_site_buffer(code, index):
     return None
 
 
-def report(hits, maps, code_files, names):
+def report(hits, maps, code_files, names, top):
     total = len(hits)
     kernel_start, kernel_end = max(maps, key=lambda m: m[1] - m[0])
     small = [(s, e) for s, e in maps if (s, e) != (kernel_start, kernel_end)]
@@ -187,6 +187,17 @@ def report(hits, maps, code_files, names):
     print(f"\nthe kernel's own samples by instruction class ({pct(placed).strip()} of all samples fall on an instruction of the dump):")
     for cls, n in classes.most_common():
         print(f"  {pct(n)}  {cls}")
+    if top:
+        # Each sample charged to the instruction before it, as the classes are, with the address's
+        # offset into the kernel: enough to tell a spill (a fixed offset from %rsp) from a private
+        # array's lane-by-lane access (an address computed in a register).
+        charged = collections.Counter()
+        for i, (address, _) in enumerate(code):
+            if counts[address]:
+                charged[max(i - 1, 0)] += counts[address]
+        print(f"\nthe {top} hottest instructions of the kernel:")
+        for i, n in charged.most_common(top):
+            print(f"  {pct(n)}  +{code[i][0] - kernel_start:#07x}  {code[i][1]}")
 
 
 def main():
@@ -197,6 +208,7 @@ def main():
     parser.add_argument("--seconds", type=float, default=10.0, help="how long to sample (default 10)")
     parser.add_argument("--warm-up", type=float, default=8.0, help="seconds before sampling starts: the kernel's compile and first dispatch (default 8)")
     parser.add_argument("--caustica", default=str(REPO / "target/release/caustica"))
+    parser.add_argument("--top", type=int, default=0, help="also list the N hottest instructions of the kernel")
     args = parser.parse_args()
     env = dict(os.environ)
     env.setdefault("CAUSTICA_DATA", str(REPO.parent / "shared" / "data"))
@@ -220,7 +232,7 @@ def main():
         finally:
             render.send_signal(signal.SIGKILL)
             render.wait()
-        report(samples(perf_data), maps, code_files, binding_names())
+        report(samples(perf_data), maps, code_files, binding_names(), args.top)
 
 
 if __name__ == "__main__":

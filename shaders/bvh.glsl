@@ -22,6 +22,33 @@ const float MISSED_BOX = uintBitsToFloat(0x7f800000u);  // +infinity
 // walks, whose levels number at most BVH_MAX_DEPTH + 1, plus the first entry.
 const uint STACK_SIZE = 3u * (BVH_MAX_DEPTH + 1u) + 1u;
 
+// A walk's stack entry: a node's index in the low bits, as many as the scene's node count needs,
+// and above them the top bits of the distance where the ray enters the node (a float of at least
+// zero, whose sign bit is 0), which read back as a float no larger. A node popped after the walk
+// found a hit nearer than that is left without loading it: the hit culls far siblings that a
+// node's own visit would only have culled after loading it (bunny under a sky, Mesa 25: 1.105x,
+// docs/benchmarks.md, stop 43). Node arrays hold fewer than 2^31 nodes (64 bytes each), so at
+// least one bit of the distance is kept.
+uint entry_index_bits() {
+    return min(uint(findMSB(frame.node_count)) + 1u, 31u);
+}
+
+uint stack_entry(uint node, float t_entry) {
+    uint bits = entry_index_bits();
+    return ((floatBitsToUint(t_entry) >> (bits - 1u)) << bits) | node;
+}
+
+uint entry_node(uint entry) {
+    uint bits = entry_index_bits();
+    return entry & ((1u << bits) - 1u);
+}
+
+// At most the distance the entry was made with.
+float entry_bound(uint entry) {
+    uint bits = entry_index_bits();
+    return uintBitsToFloat((entry >> bits) << (bits - 1u));
+}
+
 struct Hit {
     float t;
     uint prim;      // index into prims (group instance) or mesh_triangles (mesh instance)
@@ -199,11 +226,13 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
     vec3 inv_d = safe_inverse(rd);
     uint stack[STACK_SIZE];
     uint sp = 0u;
-    stack[sp++] = root;
+    stack[sp++] = stack_entry(root, 0.0);
     while (true) {
         LOOP_ITERATION();
         if (sp == 0u) break;
-        uint node_index = stack[--sp];
+        uint entry = stack[--sp];
+        if (entry_bound(entry) > hit.t) continue;
+        uint node_index = entry_node(entry);
         // Walk down from this node: test its children, intersect leaf children at once, go on to
         // the nearest interior child and leave the others on the stack, nearer on top.
         while (true) {
@@ -218,12 +247,14 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
             // (docs/benchmarks.md): a leaf's hit can no longer cull a farther sibling in the same
             // node, but fewer loops run in step.
             uint next = NO_INDEX;
+            float t_next = 0.0;
             // Child k (from 1) of the entered, its entry t_k and (link, kind) c.
 #define WALK_CHILD(k, t_k, c) \
             if (k <= entered && t_k <= hit.t) { \
                 if (c.y == WIDE_CHILD_INTERIOR) { \
-                    if (next != NO_INDEX) stack[sp++] = next; \
+                    if (next != NO_INDEX) stack[sp++] = stack_entry(next, t_next); \
                     next = c.x; \
+                    t_next = t_k; \
                 } else if (leaf_hit(c.x, c.y, instance, instance_kind, ro, rd, any_hit, hit)) { \
                     return true; \
                 } \

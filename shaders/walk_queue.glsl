@@ -140,7 +140,10 @@ void walk_queue() {
             hit = Hit(o.w, NO_INDEX, instance, vec2(0.0));
             node_index = w.y;
         } else if (node_index == NO_INDEX) {
-            node_index = stack[--sp];
+            // As walk_instance pops: a node entered beyond the hit is left unloaded.
+            uint entry = stack[--sp];
+            if (entry_bound(entry) > hit.t) continue;
+            node_index = entry_node(entry);
         }
         // One node, as walk_instance's walk down: leaf children intersected, the nearest interior
         // child next, the others on the stack.
@@ -148,14 +151,16 @@ void walk_queue() {
         uvec2 c0, c1, c2, c3;
         uint entered = sorted_children(node_index, ro, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
         uint next = NO_INDEX;
+        float t_next = 0.0;
         bool done = false;
         for (uint k = entered; k > 0u; --k) {
             float t_k = kth_entry(k, t0, t1, t2, t3);
             uvec2 c = kth_child(k, c0, c1, c2, c3);
             if (t_k > hit.t) continue;
             if (c.y == WIDE_CHILD_INTERIOR) {
-                if (next != NO_INDEX) stack[sp++] = next;
+                if (next != NO_INDEX) stack[sp++] = stack_entry(next, t_next);
                 next = c.x;
+                t_next = t_k;
             } else if (leaf_hit(c.x, c.y, instance, instance_kind, ro, rd, any_hit, hit)) {
                 done = true;
                 break;
