@@ -26,9 +26,10 @@ const uint STACK_SIZE = 3u * (BVH_MAX_DEPTH + 1u) + 1u;
 // and above them the top bits of the distance where the ray enters the node (a float of at least
 // zero, whose sign bit is 0), which read back as a float no larger. A node popped after the walk
 // found a hit nearer than that is left without loading it: the hit culls far siblings that a
-// node's own visit would only have culled after loading it (bunny under a sky, Mesa 25: 1.105x,
+// node's own visit would only have culled after loading it (bunny under a sky, Mesa 25: 1.068x,
 // docs/benchmarks.md, stop 43). Node arrays hold fewer than 2^31 nodes (64 bytes each), so at
-// least one bit of the distance is kept.
+// least one bit of the distance is kept. Only walks call these, and a scene walks only where it has
+// a node (trace_ray and queue_ray return first where frame.node_count is 0).
 uint entry_index_bits() {
     return min(uint(findMSB(frame.node_count)) + 1u, 31u);
 }
