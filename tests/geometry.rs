@@ -118,8 +118,18 @@ fn placements(count: usize) -> Vec<Mat4> {
 fn instanced_meshes_and_shapes_match_brute_force_ray_casting() {
     // 40 placements of two small meshes and two of the soup, with the sphere's instance: a top
     // level deeper than its root, walked with a stack of its own.
-    let features = instances_match_brute_force_ray_casting(40, 8);
+    let features = instances_match_brute_force_ray_casting(40, 8, 1.0);
     assert!(features.top_level && features.top_level_tree, "{features:?}");
+}
+
+#[test]
+fn a_scene_a_tenth_the_size_matches_brute_force_ray_casting() {
+    // The same scene shrunk tenfold about the origin, camera included: the same pixels, with every
+    // ray distance below 1. A walk's stack entries keep the top bits of a float distance
+    // (bvh.glsl's stack_entry), and a misread of them can overstate only some magnitudes'
+    // distances (mutation walk-stack-entry-bound-misread overstates those below 2 only): a
+    // node popped with an overstated distance is skipped, and a nearer surface in it missed.
+    instances_match_brute_force_ray_casting(40, 8, 0.1);
 }
 
 #[test]
@@ -127,16 +137,18 @@ fn a_top_level_of_few_instances_matches_brute_force_ray_casting() {
     // The two soups, which overlap on screen, and the sphere's instance: the top level is its root
     // alone (SCENE_TOP_LEVEL_TREE 0), whose instances are walked in turn, nearest first, and left
     // once the hit is nearer (mutation bvh-flat-top-level-walks-nearest-instance-only).
-    let features = instances_match_brute_force_ray_casting(0, 12);
+    let features = instances_match_brute_force_ray_casting(0, 12, 1.0);
     assert!(features.top_level && !features.top_level_tree, "{features:?}");
 }
 
 /// Renders `placed` placements of a tetrahedron and a folded strip (alternately), two of a triangle
 /// soup and a sphere, all black emitters of distinct colours, and checks every pixel that sees one
 /// thing over its whole footprint against brute-force ray casting, of which more than one in
-/// `sparsest` must see geometry. Returns the features its kernel was compiled with.
-fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize) -> SceneFeatures {
+/// `sparsest` must see geometry, with the whole scene, camera included, scaled by `scale` about the
+/// origin. Returns the features its kernel was compiled with.
+fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize, scale: f32) -> SceneFeatures {
     // Black emitters: a pixel's value is exactly the colour of what its rays see first.
+    let (sphere_center, sphere_radius) = (scale * Vec3::new(0.3, -0.2, 0.0), scale * 0.5);
     let emitters = [("red", [1, 0, 0], true), ("green", [0, 1, 0], true), ("blue", [0, 0, 1], false), ("yellow", [1, 1, 0], true), ("cyan", [0, 1, 1], true), ("magenta", [1, 0, 1], true)];
     let materials: String = emitters
         .iter()
@@ -144,14 +156,17 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize) -> Sc
         .collect();
     let mut scene = parse(&format!(
         r#"
-        camera = {{ position = [0, 0, 6], look_at = [0, 0, 0], fov = 40 }}
+        camera = {{ position = [0, 0, {eye_z}], look_at = [0, 0, 0], fov = 40 }}
         film = {{ width = 96, height = 96, spp = 2 }}
         {materials}
         [[spheres]]
-        center = [0.3, -0.2, 0]
-        radius = 0.5
+        center = [{sphere_x}, {sphere_y}, 0]
+        radius = {sphere_radius}
         material = "blue"
-        "#
+        "#,
+        eye_z = 6.0 * scale,
+        sphere_x = sphere_center.x,
+        sphere_y = sphere_center.y,
     ));
     let index = |name: &str| scene.materials.iter().position(|m| m.name == name).expect("material") as u32;
     let soup = triangle_soup([index("yellow"), index("cyan"), index("magenta")], 150);
@@ -161,6 +176,9 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize) -> Sc
     // The soup twice: once large on the left, once smaller, turned, behind the others on the right.
     scene.instances.push(Instance { mesh: 2, transform: Mat4::from_translation(Vec3::new(-1.0, 0.4, 0.5)) });
     scene.instances.push(Instance { mesh: 2, transform: Mat4::from_scale_rotation_translation(Vec3::splat(0.7), Quat::from_rotation_y(0.8), Vec3::new(1.2, -0.6, -1.0)) });
+    for inst in &mut scene.instances {
+        inst.transform = Mat4::from_scale(Vec3::splat(scale)) * inst.transform;
+    }
 
     // Brute force: every world-space triangle of every instance, and the sphere.
     let mut world: Vec<([Vec3; 3], [f32; 3])> = vec![];
@@ -183,9 +201,9 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize) -> Sc
             }
         }
         // Unit-direction sphere test; the blue sphere emits only outward, which is the side seen.
-        let oc = rays.eye - Vec3::new(0.3, -0.2, 0.0);
+        let oc = rays.eye - sphere_center;
         let b = oc.dot(d);
-        let disc = b * b - (oc.length_squared() - 0.25);
+        let disc = b * b - (oc.length_squared() - sphere_radius * sphere_radius);
         if disc >= 0.0 && -b - disc.sqrt() > 0.0 && -b - disc.sqrt() < best.0 {
             best = (-b - disc.sqrt(), [0.0, 0.0, 1.0], 1.0);
         }
