@@ -68,13 +68,22 @@ def cargo_test(tests, env, timeout):
     Returns (passed, seconds, tail of the output)."""
     args = ["cargo", "test", "--release", "-q"] + tests
     start = time.monotonic()
+    # In a session of its own, so that a timeout ends the test binaries cargo started too: killing
+    # cargo alone left a hung mutant's test running, holding a core through every later
+    # measurement. Being out of the terminal's process group, it misses a Ctrl-C: that ends it too.
+    child = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
     try:
-        done = subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
+        stdout, _ = child.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
+        os.killpg(child.pid, signal.SIGKILL)
+        child.communicate()
         return False, time.monotonic() - start, f"timed out after {timeout} s"
-    output = (done.stdout + done.stderr).strip().splitlines()
+    except BaseException:
+        os.killpg(child.pid, signal.SIGKILL)
+        raise
+    output = stdout.strip().splitlines()
     failures = [l for l in output if "panicked at" in l or l.startswith("test result") or "FAILED" in l]
-    return done.returncode == 0, time.monotonic() - start, "\n".join((failures or output)[-6:])
+    return child.returncode == 0, time.monotonic() - start, "\n".join((failures or output)[-6:])
 
 
 def run(mutation, timeout):
