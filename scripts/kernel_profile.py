@@ -34,6 +34,7 @@ otherwise, and the script then prints the raw offsets).
 
 import argparse
 import collections
+import contextlib
 import os
 import re
 import signal
@@ -209,10 +210,14 @@ def main():
     parser.add_argument("--warm-up", type=float, default=8.0, help="seconds before sampling starts: the kernel's compile and first dispatch (default 8)")
     parser.add_argument("--caustica", default=str(REPO / "target/release/caustica"))
     parser.add_argument("--top", type=int, default=0, help="also list the N hottest instructions of the kernel")
+    parser.add_argument("--keep", metavar="FOLDER", help="keep the machine code, perf's samples and the render in FOLDER "
+                        "(objdump -D -b binary -m i386:x86-64 FILE reads a mapping; its start address is in its name)")
     args = parser.parse_args()
     env = dict(os.environ)
     env.setdefault("CAUSTICA_DATA", str(REPO.parent / "shared" / "data"))
-    with tempfile.TemporaryDirectory() as tmp:
+    if args.keep:
+        Path(args.keep).mkdir(parents=True, exist_ok=True)
+    with (contextlib.nullcontext(str(Path(args.keep).resolve())) if args.keep else tempfile.TemporaryDirectory()) as tmp:
         folder = Path(tmp)
         seconds = args.warm_up + args.seconds + 30
         render = subprocess.Popen([args.caustica, "render", args.scene, "--width", str(args.width), "--height", str(args.height),
