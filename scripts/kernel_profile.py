@@ -2,7 +2,7 @@
 """Where a render's time goes inside lavapipe's JIT-compiled kernel, from the machine code.
 
     python3 scripts/kernel_profile.py [SCENE] [--width W] [--height H] [--seconds S]
-        [--warm-up S] [--caustica BIN] [--top N]
+        [--warm-up S] [--caustica BIN] [--top N] [--keep FOLDER]
 
 Starts `caustica render SCENE` for long enough, samples it with `perf record` (with the top of
 each sample's stack), copies the JIT's executable memory out of the running process with gdb

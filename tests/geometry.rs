@@ -4,9 +4,9 @@
 mod common;
 
 use caustica::render::frame_params;
-use caustica::render::{SceneData, SceneFeatures, WALK_QUEUE_VAR};
+use caustica::render::{Renderer, SceneData, SceneFeatures, WALK_QUEUE_VAR};
 use caustica::scene::{Environment, EnvironmentMap, Instance, MapProjection, Mesh, Scene, Texture};
-use common::{gpu, parse, render, srgb_to_linear};
+use common::{gpu, image_of, parse, render, srgb_to_linear};
 use glam::{Mat4, Quat, Vec2, Vec3};
 
 /// Primary rays through image-plane points (pixel units, y down), as camera.glsl builds them.
@@ -211,15 +211,22 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize, scale
     };
 
     let (_lock, ctx) = gpu();
-    // The scene's own kernel, and the same with the walk queue off: where the device walks a flat
-    // top level's rays from the queue (lavapipe from Mesa 24), trace_ray's own walk of it is what
-    // a GPU and Mesa 22.3 run, and it is checked here too (mutation
-    // bvh-flat-top-level-walks-nearest-instance-only survived on Mesa 25 without it).
-    let image = render(&ctx, &scene, 3);
-    // Read when a renderer is made; the lock keeps other tests of this binary from making one.
-    std::env::set_var(WALK_QUEUE_VAR, "0");
-    let unqueued = render(&ctx, &scene, 3);
-    std::env::remove_var(WALK_QUEUE_VAR);
+    // The scene's own kernel and, where it walks a flat top level's rays from the walk queue
+    // (lavapipe from Mesa 24), the same scene with the queue off: trace_ray's own walk of it is
+    // what a GPU and Mesa 22.3 run (mutation bvh-flat-top-level-walks-nearest-instance-only
+    // survived on Mesa 25 without it).
+    let own = Renderer::new(&ctx, &scene, 3).expect("scene uploads");
+    let queued = own.walk_queue.is_some();
+    let mut images = vec![("the scene's kernel", image_of(own, scene.film.spp))];
+    if queued {
+        // Read when a renderer is made; the lock keeps other tests of this binary from making one.
+        std::env::set_var(WALK_QUEUE_VAR, "0");
+        let plain = Renderer::new(&ctx, &scene, 3);
+        std::env::remove_var(WALK_QUEUE_VAR);
+        let plain = plain.expect("scene uploads");
+        assert!(plain.walk_queue.is_none(), "{WALK_QUEUE_VAR}=0 still walked from the queue");
+        images.push(("the kernel without the walk queue", image_of(plain, scene.film.spp)));
+    }
     let (mut checked, mut colored, mut soup_seen) = (0, 0, 0);
     for y in 0..scene.film.height {
         for x in 0..scene.film.width {
@@ -232,7 +239,7 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize, scale
                 continue;
             }
             let expected = views[0].0;
-            for (kernel, image) in [("the scene's kernel", &image), ("the kernel without the walk queue", &unqueued)] {
+            for (kernel, image) in &images {
                 let got = image.get(x, y);
                 assert!(
                     (0..3).all(|c| (got[c] - expected[c]).abs() < 1e-4),

@@ -96,9 +96,13 @@ pub fn texel_centre_uv(x: u32, y: u32, size: u32) -> (f32, f32) {
 }
 
 pub fn render(ctx: &GpuContext, scene: &Scene, seed: u32) -> RgbImage {
-    let mut r = Renderer::new(ctx, scene, seed).expect("scene uploads");
-    r.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
-    r.image().expect("readback")
+    image_of(Renderer::new(ctx, scene, seed).expect("scene uploads"), scene.film.spp)
+}
+
+/// Renders `spp` samples with a renderer already made, and reads the image back.
+pub fn image_of(mut renderer: Renderer, spp: u32) -> RgbImage {
+    renderer.render(spp, |_| {}).expect("render succeeds without validation messages");
+    renderer.image().expect("readback")
 }
 
 pub fn parse(toml: &str) -> Scene {
