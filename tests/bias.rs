@@ -12,6 +12,7 @@ use caustica::scene::{Environment, EnvironmentMap, LightSelection, MapProjection
 use common::*;
 use glam::Vec3;
 use std::f64::consts::PI;
+use std::path::Path;
 
 /// Mean over the image of the pixels' mean luminance, and its standard error from the scatter of
 /// the pixels: each pixel is an independent estimate (its random numbers are scrambled by pixel).
@@ -156,14 +157,14 @@ fn triangle_light_sampled_by_area_is_exact() {
 /// The floor under a one-triangle mesh light with vertices `v`, 256 spp, against Lambert's formula.
 fn assert_floor_under_triangle_is_exact(v: [Vec3; 3], seed: u32, bias: f64, what: &str) {
     let (_lock, ctx) = gpu();
-    let scene = floor_point_scene(&triangle_mesh_light(&v), 256, true);
+    let dir = temp_dir("bias-triangle");
+    let scene = floor_point_scene(&triangle_mesh_light(&dir, &v), 256, true);
     assert_mean_is(&render(&ctx, &scene, seed), 0.5 / PI * polygon_irradiance(&v, 4.0), 0.0002, bias, what);
 }
 
-/// A one-triangle OBJ with the lamp material, written to a scratch file, as a scene fragment;
-/// wound so that its front face looks down at the floor.
-fn triangle_mesh_light(v: &[Vec3; 3]) -> String {
-    let dir = temp_dir("bias-triangle");
+/// A one-triangle OBJ with the lamp material, written into `dir`, as a scene fragment; wound so
+/// that its front face looks down at the floor.
+fn triangle_mesh_light(dir: &Path, v: &[Vec3; 3]) -> String {
     let normal = (v[1] - v[0]).cross(v[2] - v[0]);
     let order = if normal.y < 0.0 { [0, 1, 2] } else { [0, 2, 1] };
     let mut obj = String::new();

@@ -256,7 +256,7 @@ fn a_gltf_clear_coat_reads_its_factor_and_roughness_textures() {
                                                     "clearcoatRoughnessFactor": 1, "clearcoatRoughnessTexture": {"index": 0}}}}"#;
     let resources = format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "{}"}}],"#, png_uri(&png_texel([128, 0, 255, 255])));
     write_gltf_square(&dir, "coated.gltf", 0.0, 2.0, material, &resources);
-    let scene = Scene::parse(&view_up([1.0; 3], 48, 64, "[[meshes]]\nfile = \"coated.gltf\"\n"), "gltf clear coat", Path::new(&dir)).expect("valid test scene");
+    let scene = Scene::parse(&view_up([1.0; 3], 48, 64, "[[meshes]]\nfile = \"coated.gltf\"\n"), "gltf clear coat", &dir).expect("valid test scene");
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &scene, 11);
     let c = 128.0 / 255.0;

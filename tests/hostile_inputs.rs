@@ -79,11 +79,8 @@ fn assert_refused(scene: &Path, extra: &[&str], needles: &[&str]) {
     }
 }
 
-fn fresh_dir(tag: &str) -> PathBuf {
-    let dir = common::temp_dir(tag);
-    std::fs::remove_dir_all(&dir).ok();
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn fresh_dir(tag: &str) -> common::ScratchDir {
+    common::temp_dir(tag)
 }
 
 fn write(path: &Path, text: impl AsRef<[u8]>) -> PathBuf {
@@ -227,7 +224,8 @@ fn files_over_their_size_cap_are_refused_before_reading() {
 #[test]
 fn a_sparse_accessor_claiming_2e28_positions_is_refused_in_bounded_memory() {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/gltf/sparse-position-count-2e28.gltf");
-    let out = fresh_dir("hostile-sparse").join("out.png");
+    let dir = fresh_dir("hostile-sparse");
+    let out = dir.join("out.png");
     let started = Instant::now();
     let o = run_with(&["render", file.to_str().unwrap(), "-o", out.to_str().unwrap()], &[], Some("ulimit -v 1048576"));
     assert_eq!(o.code, Some(1), "{}", o.stderr);
@@ -245,7 +243,8 @@ fn gltf_error(tag: &str, bin: &[u8], views: &str, accessors: &str, primitive: &s
         data_uri(bin),
         bin.len()
     );
-    let path = write(&fresh_dir(tag).join("bad.gltf"), json);
+    let dir = fresh_dir(tag);
+    let path = write(&dir.join("bad.gltf"), json);
     match load_asset(&path) {
         Ok(_) => panic!("{tag}: the glTF loaded"),
         Err(e) => {
@@ -299,7 +298,8 @@ fn gltf_accessor_counts_are_bounded_by_the_bytes_behind_them() {
         data_uri(&bin),
         no_view(3, 3)
     );
-    let ok = write(&fresh_dir("acc-ok").join("ok.gltf"), json_ok);
+    let dir = fresh_dir("acc-ok");
+    let ok = write(&dir.join("ok.gltf"), json_ok);
     let asset = load_asset(&ok).unwrap();
     assert_eq!(asset.meshes[0].positions, [glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y]);
 }
@@ -348,12 +348,15 @@ fn one_file_named_many_times_in_a_gltf_is_read_and_decoded_once() {
 
 /// A scene folder with a mesh, its MTL and its texture in subfolders, and files outside it.
 struct Confined {
+    /// Keeps `root` until the test ends.
+    _scratch: common::ScratchDir,
     root: PathBuf,
     scene_dir: PathBuf,
 }
 
 fn confined(tag: &str) -> Confined {
-    let root = fresh_dir(tag);
+    let scratch = fresh_dir(tag);
+    let root = scratch.to_path_buf();
     let scene_dir = root.join("farm/job");
     write(&scene_dir.join("meshes/tri.obj"), format!("mtllib ../materials/tri.mtl\nusemtl t\n{TRIANGLE_OBJ}"));
     write(&scene_dir.join("materials/tri.mtl"), "newmtl t\nKd 0.5 0.5 0.5\nmap_Kd ../textures/t.png\n");
@@ -365,7 +368,7 @@ fn confined(tag: &str) -> Confined {
     write(&root.join("secret/tri.mtl"), "newmtl t\nKd 1 0 0\n");
     write(&root.join("secret/tri.bin"), triangle_bin());
     write(&root.join("secret/t.png"), png_bytes(2, 2));
-    Confined { root, scene_dir }
+    Confined { _scratch: scratch, root, scene_dir }
 }
 
 #[test]

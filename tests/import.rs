@@ -7,9 +7,9 @@ mod common;
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
 use caustica::scene::{metal, AlphaMode, Conductor, Filter, Light, LightSelection, Microfacet, Sampler, Scene, Shape};
-use common::{gpu, render, temp_dir};
+use common::{gpu, render, temp_dir, write_files, WrittenFiles};
 use glam::{Mat4, Vec3};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A sensor block for scenes whose camera does not matter.
 const SENSOR: &str = r#"<sensor type="perspective">
@@ -19,13 +19,9 @@ const SENSOR: &str = r#"<sensor type="perspective">
     <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
 </sensor>"#;
 
-/// Writes `files` (name, text) into a fresh folder; returns the path of the first.
-fn write_scene(tag: &str, files: &[(&str, &str)]) -> PathBuf {
-    let dir = temp_dir(&format!("import-{tag}"));
-    for (name, text) in files {
-        std::fs::write(dir.join(name), text).unwrap();
-    }
-    dir.join(files[0].0)
+/// Writes `files` (name, text) into a fresh folder; reads as the path of the first.
+fn write_scene(tag: &str, files: &[(&str, &str)]) -> WrittenFiles {
+    write_files(&format!("import-{tag}"), files)
 }
 
 fn xml(body: &str) -> String {
@@ -593,9 +589,10 @@ fn checkerboard_and_bitmap_reflectances_become_albedo_textures_read_through_to_u
 
     // `convert` writes the textures, to_uv and shape_index out: the TOML, written elsewhere (so
     // with absolute paths), loads to the same meshes and textures.
-    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&temp_dir("textures-out")).unwrap();
+    let out = temp_dir("textures-out");
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&out).unwrap();
     assert!(toml.contains("shape_index = 1") && toml.contains("to_uv") && toml.contains("checkerboard"), "{toml}");
-    let t = Scene::parse(&toml, "converted.toml", &temp_dir("textures-out")).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
     assert_eq!(t.textures, s.textures);
     assert_eq!((t.meshes[0].uvs.clone(), t.meshes[1].positions.clone()), (s.meshes[0].uvs.clone(), s.meshes[1].positions.clone()));
 }
@@ -693,9 +690,10 @@ fn normalmap_and_mask_map_onto_normal_and_opacity_textures_in_mitsubas_frame() {
     assert!(s.meshes[0].tangents.iter().all(|t| (t.truncate() + Vec3::X).length() < 1e-5 && t.w == 1.0), "{:?}", s.meshes[0].tangents);
 
     // `convert` writes both textures out, and its TOML loads to the same scene.
-    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&temp_dir("normalmap-out")).unwrap();
+    let out = temp_dir("normalmap-out");
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&out).unwrap();
     assert!(toml.contains("normal_texture") && toml.contains("opacity_texture") && toml.contains("encoding = \"linear\""), "{toml}");
-    let t = Scene::parse(&toml, "converted.toml", &temp_dir("normalmap-out")).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
     assert_eq!((&t.textures, &t.meshes[0].tangents), (&s.textures, &s.meshes[0].tangents));
     assert_eq!(t.materials[0].maps, m.maps);
 }
@@ -761,9 +759,10 @@ fn flip_normals_and_face_normals_turn_and_flatten_meshes() {
     // One-sided (no twosided): the flipped square is black from the front, which the camera sees.
     assert!(s.materials[flipped.triangle_materials[0] as usize].one_sided);
 
-    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&temp_dir("sides-out")).unwrap();
+    let out = temp_dir("sides-out");
+    let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&out).unwrap();
     assert!(toml.contains("flip_normals = true") && toml.contains("face_normals = true"), "{toml}");
-    let t = Scene::parse(&toml, "converted.toml", &temp_dir("sides-out")).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
+    let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
     for k in 0..3 {
         assert_eq!((&t.meshes[k].triangles, &t.meshes[k].normals), (&s.meshes[k].triangles, &s.meshes[k].normals), "mesh {k}");
     }

@@ -9,20 +9,16 @@ mod common;
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
 use caustica::scene::{AlphaMode, Conductor, Environment, Filter, Light, LightSelection, Sampler, Scene, Shape};
-use common::{gpu, render, temp_dir};
+use common::{gpu, render, temp_dir, write_files, WrittenFiles};
 use glam::Vec3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Options for scenes whose camera does not matter: a 32 x 24 film looking down -z from z = 4.
 const OPTIONS: &str = "LookAt 0 1 4  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 24\nSampler \"independent\" \"integer pixelsamples\" 4\nPixelFilter \"box\"\n";
 
-/// Writes `files` (name, text) into a fresh folder; returns the path of the first.
-fn write_scene(tag: &str, files: &[(&str, &str)]) -> PathBuf {
-    let dir = temp_dir(&format!("pbrt-{tag}"));
-    for (name, text) in files {
-        std::fs::write(dir.join(name), text).unwrap();
-    }
-    dir.join(files[0].0)
+/// Writes `files` (name, text) into a fresh folder; reads as the path of the first.
+fn write_scene(tag: &str, files: &[(&str, &str)]) -> WrittenFiles {
+    write_files(&format!("pbrt-{tag}"), files)
 }
 
 fn imported(tag: &str, text: &str) -> anyhow::Result<Imported> {

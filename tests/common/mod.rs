@@ -5,6 +5,11 @@
 pub mod furnace;
 pub mod gltf_square;
 pub mod two_meshes;
+// The library's unit tests' scratch directories, one definition for both.
+#[path = "../../src/test_files.rs"]
+mod test_files;
+#[allow(unused_imports)]
+pub use test_files::{file_names, temp_dir, write_file, write_files, ScratchDir, WrittenFiles};
 
 use caustica::gpu::{ContextOptions, GpuContext};
 use caustica::image::RgbImage;
@@ -70,12 +75,6 @@ pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, G
     (guard, ctx)
 }
 
-/// A fresh scratch directory for one test, unique per process.
-pub fn temp_dir(tag: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("caustica-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("create a scratch directory");
-    dir
-}
 
 /// A square angular-map probe whose texel at map coordinates (u, v) in [-1, 1]^2 (u right, v up,
 /// at the texel centre) has the value `texel(u, v)`.

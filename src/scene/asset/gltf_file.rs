@@ -1019,9 +1019,8 @@ fn world_camera(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{load_asset, real_data, test_dir};
+    use super::super::{load_asset, real_data, write_file, WrittenFiles};
     use super::*;
-    use std::path::PathBuf;
 
     /// One triangle: positions, normals (length 2, to be normalized), uvs, u16 indices.
     fn triangle_bin() -> Vec<u8> {
@@ -1178,10 +1177,8 @@ mod tests {
         assert_eq!(camera.aspect, Some(1.5));
     }
 
-    fn write(tag: &str, name: &str, bytes: &[u8]) -> PathBuf {
-        let path = test_dir(tag).join(name);
-        std::fs::write(&path, bytes).unwrap();
-        path
+    fn write(tag: &str, name: &str, bytes: &[u8]) -> WrittenFiles {
+        write_file(tag, name, bytes)
     }
 
     /// The test document with three KHR_lights_punctual lights on nodes of their own.

@@ -324,7 +324,7 @@ fn unit_normals(normals: &[Vec3]) -> Vec<Vec3> {
 }
 
 #[cfg(test)]
-use crate::test_files::temp_dir as test_dir;
+use crate::test_files::{temp_dir as test_dir, write_file, write_files, WrittenFiles};
 
 /// A file of the shared real-data set ($CAUSTICA_DATA, default ../shared/data), or `None` with a
 /// SKIPPED note when it is not there (the data is not part of the repository).

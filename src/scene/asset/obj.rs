@@ -369,7 +369,7 @@ fn convert_material(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{load_asset, real_data, test_dir};
+    use super::super::{load_asset, real_data, test_dir, write_files, WrittenFiles};
     use super::*;
 
     const QUAD_OBJ: &str = "mtllib quad.mtl
@@ -417,11 +417,8 @@ newmtl tr_veil
 Tr 0.6
 ";
 
-    fn write_obj(tag: &str, obj: &str, mtl: &str) -> PathBuf {
-        let dir = test_dir(tag);
-        std::fs::write(dir.join("quad.mtl"), mtl).unwrap();
-        std::fs::write(dir.join("quad.obj"), obj).unwrap();
-        dir.join("quad.obj")
+    fn write_obj(tag: &str, obj: &str, mtl: &str) -> WrittenFiles {
+        write_files(tag, &[("quad.obj", obj), ("quad.mtl", mtl)])
     }
 
     #[test]

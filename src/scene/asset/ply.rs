@@ -259,9 +259,8 @@ impl PropertyAccess for Skipped {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{load_asset, real_data, test_dir};
+    use super::super::{load_asset, real_data, write_file, WrittenFiles};
     use super::*;
-    use std::path::PathBuf;
     use std::time::Instant;
 
     const HEADER_TAIL: &str = "element vertex 5
@@ -341,10 +340,8 @@ end_header
         bytes
     }
 
-    fn write(tag: &str, bytes: &[u8]) -> PathBuf {
-        let path = test_dir(tag).join("mesh.ply");
-        std::fs::write(&path, bytes).unwrap();
-        path
+    fn write(tag: &str, bytes: &[u8]) -> WrittenFiles {
+        write_file(tag, "mesh.ply", bytes)
     }
 
     fn check_quad(asset: &Asset) {
