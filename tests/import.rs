@@ -7,7 +7,7 @@ mod common;
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
 use caustica::scene::{metal, AlphaMode, Conductor, Filter, Light, LightSelection, Microfacet, Sampler, Scene, Shape};
-use common::{gpu, render, temp_dir, write_files, WrittenFiles};
+use common::{close, gpu, import_text, import_text_error, import_text_scene, render, temp_dir, write_files, WrittenFiles};
 use glam::{Mat4, Vec3};
 use std::path::Path;
 
@@ -29,22 +29,15 @@ fn xml(body: &str) -> String {
 }
 
 fn imported(tag: &str, body: &str) -> anyhow::Result<Imported> {
-    import(&InputFiles::anywhere(), &write_scene(tag, &[("scene.xml", &xml(body))]), &[])
+    import_text(&format!("import-{tag}"), "scene.xml", &xml(body))
 }
 
 fn scene(tag: &str, body: &str) -> Scene {
-    imported(tag, body).and_then(|i| i.into_scene(&InputFiles::anywhere())).unwrap_or_else(|e| panic!("{e:#}"))
+    import_text_scene(&format!("import-{tag}"), "scene.xml", &xml(body)).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
 fn error(tag: &str, body: &str) -> String {
-    match imported(tag, body).and_then(|i| i.into_scene(&InputFiles::anywhere())) {
-        Ok(_) => panic!("the scene must be refused"),
-        Err(e) => format!("{e:#}"),
-    }
-}
-
-fn close(a: Vec3, b: Vec3) -> bool {
-    (a - b).abs().max_element() < 1e-5
+    import_text_error(&format!("import-{tag}"), "scene.xml", &xml(body))
 }
 
 #[test]

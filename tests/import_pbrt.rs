@@ -9,7 +9,7 @@ mod common;
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
 use caustica::scene::{AlphaMode, Conductor, Environment, Filter, Light, LightSelection, Sampler, Scene, Shape};
-use common::{gpu, render, temp_dir, write_files, WrittenFiles};
+use common::{close, gpu, import_text, import_text_error, import_text_scene, render, temp_dir, write_files, WrittenFiles};
 use glam::Vec3;
 use std::path::Path;
 
@@ -22,7 +22,7 @@ fn write_scene(tag: &str, files: &[(&str, &str)]) -> WrittenFiles {
 }
 
 fn imported(tag: &str, text: &str) -> anyhow::Result<Imported> {
-    import(&InputFiles::anywhere(), &write_scene(tag, &[("scene.pbrt", text)]), &[])
+    import_text(&format!("pbrt-{tag}"), "scene.pbrt", text)
 }
 
 /// The scene of `OPTIONS`, WorldBegin and `world`.
@@ -31,18 +31,11 @@ fn scene(tag: &str, world: &str) -> Scene {
 }
 
 fn scene_of(tag: &str, text: &str) -> Scene {
-    imported(tag, text).and_then(|i| i.into_scene(&InputFiles::anywhere())).unwrap_or_else(|e| panic!("{e:#}"))
+    import_text_scene(&format!("pbrt-{tag}"), "scene.pbrt", text).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
 fn error(tag: &str, text: &str) -> String {
-    match imported(tag, text).and_then(|i| i.into_scene(&InputFiles::anywhere())) {
-        Ok(_) => panic!("the scene must be refused:\n{text}"),
-        Err(e) => format!("{e:#}"),
-    }
-}
-
-fn close(a: Vec3, b: Vec3) -> bool {
-    (a - b).abs().max_element() < 1e-5
+    import_text_error(&format!("pbrt-{tag}"), "scene.pbrt", text)
 }
 
 /// Where a world point lies across caustica's image: > 0 right of the centre.
@@ -89,7 +82,7 @@ fn an_asymmetric_scene_renders_with_pbrts_left_and_right() {
 fn fov_is_for_the_shorter_axis_and_the_lens_and_screenwindow_map() {
     let camera = |params: &str, w: u32, h: u32| -> anyhow::Result<Scene> {
         let text = format!("LookAt 1 2 3  1 2 0  0 1 0\nCamera \"perspective\" \"float fov\" 60 {params}\nFilm \"rgb\" \"integer xresolution\" {w} \"integer yresolution\" {h}\nWorldBegin\n");
-        imported("camera", &text).and_then(|i| i.into_scene(&InputFiles::anywhere()))
+        import_text_scene("pbrt-camera", "scene.pbrt", &text)
     };
     let tan30 = 30f32.to_radians().tan();
     let vertical = |t: f32| 2.0 * t.atan().to_degrees();
