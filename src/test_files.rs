@@ -81,4 +81,3 @@ pub fn file_names(dir: &Path) -> Vec<String> {
     names.sort();
     names
 }
-

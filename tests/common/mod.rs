@@ -11,32 +11,6 @@ mod test_files;
 #[allow(unused_imports)]
 pub use test_files::{file_names, temp_dir, write_file, write_files, ScratchDir, WrittenFiles};
 
-/// Imports the one-file scene `name` (Mitsuba XML or pbrt-v4, by its extension) with the text
-/// `text`, written into a fresh scratch folder tagged `tag`.
-pub fn import_text(tag: &str, name: &str, text: &str) -> anyhow::Result<caustica::scene::import::Imported> {
-    caustica::scene::import::import(&caustica::input_file::InputFiles::anywhere(), &write_files(tag, &[(name, text)]), &[])
-}
-
-/// As [`import_text`], then made a scene, the folder kept until then.
-pub fn import_text_scene(tag: &str, name: &str, text: &str) -> anyhow::Result<Scene> {
-    let files = write_files(tag, &[(name, text)]);
-    let anywhere = caustica::input_file::InputFiles::anywhere();
-    caustica::scene::import::import(&anywhere, &files, &[])?.into_scene(&anywhere)
-}
-
-/// The message of the scene `import_text_scene` must refuse.
-pub fn import_text_error(tag: &str, name: &str, text: &str) -> String {
-    match import_text_scene(tag, name, text) {
-        Ok(_) => panic!("the scene must be refused:\n{text}"),
-        Err(e) => format!("{e:#}"),
-    }
-}
-
-/// Two points or vectors within 1e-5 in every coordinate.
-pub fn close(a: glam::Vec3, b: glam::Vec3) -> bool {
-    (a - b).abs().max_element() < 1e-5
-}
-
 use caustica::gpu::{ContextOptions, GpuContext};
 use caustica::image::RgbImage;
 use caustica::render::Renderer;
@@ -101,6 +75,31 @@ pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, G
     (guard, ctx)
 }
 
+/// Imports the one-file scene `name` (Mitsuba XML or pbrt-v4, by its extension) with the text
+/// `text`, written into a fresh scratch folder tagged `tag`.
+pub fn import_text(tag: &str, name: &str, text: &str) -> anyhow::Result<caustica::scene::import::Imported> {
+    caustica::scene::import::import(&caustica::input_file::InputFiles::anywhere(), &write_files(tag, &[(name, text)]), &[])
+}
+
+/// As [`import_text`], then made a scene, the folder kept until then.
+pub fn import_text_scene(tag: &str, name: &str, text: &str) -> anyhow::Result<Scene> {
+    let files = write_files(tag, &[(name, text)]);
+    let anywhere = caustica::input_file::InputFiles::anywhere();
+    caustica::scene::import::import(&anywhere, &files, &[])?.into_scene(&anywhere)
+}
+
+/// The message of the scene `import_text_scene` must refuse.
+pub fn import_text_error(tag: &str, name: &str, text: &str) -> String {
+    match import_text_scene(tag, name, text) {
+        Ok(_) => panic!("the scene must be refused:\n{text}"),
+        Err(e) => format!("{e:#}"),
+    }
+}
+
+/// Two points or vectors within 1e-5 in every coordinate.
+pub fn close(a: glam::Vec3, b: glam::Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-5
+}
 
 /// A square angular-map probe whose texel at map coordinates (u, v) in [-1, 1]^2 (u right, v up,
 /// at the texel centre) has the value `texel(u, v)`.
