@@ -182,7 +182,7 @@ mod tests {
 
     #[test]
     fn shared_data_scenes_are_skipped_without_the_data_and_run_with_it() {
-        let dir = std::env::temp_dir().join(format!("caustica-suite-{}", std::process::id()));
+        let dir = crate::test_files::temp_dir("suite");
         let (scenes, data) = (dir.join("scenes"), dir.join("data"));
         std::fs::create_dir_all(&scenes).unwrap();
         std::fs::write(scenes.join("cornell.toml"), DEFAULT_SCENE_TOML).unwrap();
@@ -198,7 +198,6 @@ mod tests {
         std::fs::create_dir_all(&data).unwrap();
         let with = suite_entries(&scenes, &data).unwrap();
         assert_eq!(names(&with), [(BUILT_IN, true), ("a_shared.toml", true), ("b_local.toml", true)]);
-        std::fs::remove_dir_all(dir).ok();
     }
 
     #[test]

@@ -297,12 +297,12 @@ mod tests {
             aovs: AovSet::default(),
             aov_sums: None,
         };
-        let path = std::env::temp_dir().join(format!("caustica-partial-{}.exr", std::process::id()));
+        let dir = crate::test_files::temp_dir("partial");
+        let path = dir.join("part.exr");
         partial.write(&path).unwrap();
         let back = PartialRender::read(&path).unwrap();
         assert_eq!(back, partial);
         assert_eq!(crate::image::read_image(&path).unwrap(), partial.image());
-        std::fs::remove_file(path).ok();
     }
 
     #[test]
@@ -373,11 +373,11 @@ mod tests {
             aovs: AovSet { albedo: true, depth: true, ..AovSet::default() },
             aov_sums: Some(sums),
         };
-        let path = std::env::temp_dir().join(format!("caustica-partial-aov-{}.exr", std::process::id()));
+        let dir = crate::test_files::temp_dir("partial-aov");
+        let path = dir.join("part.exr");
         partial.write(&path).unwrap();
         let back = PartialRender::read(&path);
         let doc = read_exr_document(&path);
-        std::fs::remove_file(path).ok();
         assert_eq!(back.unwrap(), partial);
         let doc = doc.unwrap();
         assert_eq!(doc.attributes[AOVS], "albedo,depth");

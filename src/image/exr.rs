@@ -76,10 +76,6 @@ pub(crate) fn exr_error(path: &Path, cause: ::exr::error::Error) -> ImageError {
 mod tests {
     use super::*;
 
-    fn temp_path(tag: &str) -> std::path::PathBuf {
-        std::env::temp_dir().join(format!("caustica-exr-{tag}-{}.exr", std::process::id()))
-    }
-
     #[test]
     fn round_trip_is_exact() {
         let mut img = RgbImage::new(5, 3);
@@ -90,19 +86,17 @@ mod tests {
                 img.set(x, y, [v, -v * 3.0, v * 1e20]);
             }
         }
-        let path = temp_path("roundtrip");
+        let dir = crate::test_files::temp_dir("exr-roundtrip");
+        let path = dir.join("image.exr");
         write(&path, &img).unwrap();
         let back = read(&InputFiles::anywhere(), &path);
-        std::fs::remove_file(&path).unwrap();
         assert_eq!(back.unwrap(), img);
     }
 
     #[test]
     fn garbage_is_rejected_with_file_name() {
-        let path = temp_path("garbage");
-        std::fs::write(&path, b"not an exr file at all").unwrap();
+        let path = crate::test_files::write_file("exr-garbage", "garbage.exr", b"not an exr file at all");
         let err = read(&InputFiles::anywhere(), &path).unwrap_err().to_string();
-        std::fs::remove_file(&path).unwrap();
         assert!(
             err.starts_with(&format!("{}: EXR: ", path.display())),
             "{err}"

@@ -256,20 +256,18 @@ mod tests {
 
     #[test]
     fn read_dispatch_is_case_insensitive() {
-        let path =
-            std::env::temp_dir().join(format!("caustica-dispatch-{}.PFM", std::process::id()));
+        let dir = crate::test_files::temp_dir("dispatch");
+        let path = dir.join("image.PFM");
         let mut img = RgbImage::new(2, 1);
         img.set(1, 0, [0.5, 1.5, 2.5]);
         write_image(&path, &img, 0.0).unwrap();
         let back = read_image(&path);
-        std::fs::remove_file(&path).unwrap();
         assert_eq!(back.unwrap(), img);
     }
 
     #[test]
     fn every_format_leaves_only_the_target() {
-        let dir = std::env::temp_dir().join(format!("caustica-formats-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_files::temp_dir("formats");
         let mut img = RgbImage::new(2, 1);
         img.set(0, 0, [0.5, 1.5, 2.5]);
         let options = OutputOptions {
@@ -286,7 +284,6 @@ mod tests {
             .collect();
         names.sort();
         let exr = read_image(&dir.join("b.exr"));
-        std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(names, ["a.pfm", "b.exr", "c.png"]);
         assert_eq!(exr.unwrap(), img);
     }

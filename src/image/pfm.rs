@@ -244,11 +244,11 @@ mod tests {
 
     #[test]
     fn round_trip_through_file() {
-        let path = std::env::temp_dir().join(format!("caustica-pfm-{}.pfm", std::process::id()));
+        let dir = crate::test_files::temp_dir("pfm");
+        let path = dir.join("image.pfm");
         let img = asymmetric();
         write(&path, &img).unwrap();
         let back = read(&InputFiles::anywhere(), &path);
-        std::fs::remove_file(&path).unwrap();
         assert_eq!(back.unwrap(), img);
     }
 

@@ -192,10 +192,10 @@ mod tests {
 
     #[test]
     fn write_creates_file_and_reports_bad_path() {
-        let path = std::env::temp_dir().join(format!("caustica-png-{}.png", std::process::id()));
+        let dir = crate::test_files::temp_dir("png");
+        let path = dir.join("out.png");
         write(&path, &RgbImage::new(3, 1), &OutputOptions::default()).unwrap();
         let bytes = std::fs::read(&path).unwrap();
-        std::fs::remove_file(&path).unwrap();
         assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"));
 
         let err = write(

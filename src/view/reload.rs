@@ -59,8 +59,7 @@ mod tests {
 
     #[test]
     fn a_rewritten_file_is_reported_once_it_settles() {
-        let dir = std::env::temp_dir().join(format!("caustica-watch-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_files::temp_dir("watch");
         let file = dir.join("scene.toml");
         std::fs::write(&file, "a").unwrap();
         let mut watcher = FileWatcher::new(vec![file.clone()]);
@@ -79,6 +78,5 @@ mod tests {
         std::fs::write(&file, "ccc").unwrap();
         assert!(!tick(&mut watcher));
         assert!(tick(&mut watcher), "back again: reload");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
