@@ -48,12 +48,6 @@ impl Deref for WrittenFiles {
     }
 }
 
-impl AsRef<Path> for WrittenFiles {
-    fn as_ref(&self) -> &Path {
-        &self.first
-    }
-}
-
 /// Writes `files` (name, text) into a fresh scratch directory tagged `tag`.
 pub fn write_files(tag: &str, files: &[(&str, &str)]) -> WrittenFiles {
     let dir = temp_dir(tag);

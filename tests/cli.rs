@@ -38,7 +38,6 @@ fn every_scene_renders_to_pfm_exr_and_png() {
         rendered += 1;
     }
     assert!(rendered >= 3);
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
@@ -48,7 +47,6 @@ fn default_scene_renders_with_no_scene_argument() {
     let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "1", "-q"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(read_image(&out).unwrap().width, 16);
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
@@ -90,7 +88,6 @@ fn bad_input_fails_with_a_message_and_nonzero_exit() {
         assert_eq!(o.status.code(), Some(1), "{args:?}: exit status {:?}, stderr {stderr}", o.status);
         assert!(stderr.contains(needle) && stderr.contains("error"), "{args:?}: stderr does not name '{needle}': {stderr}");
     }
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
@@ -112,7 +109,6 @@ fn compare_prints_the_error_metrics_and_rejects_mismatched_sizes() {
     let o = caustica(&["compare", a.to_str().unwrap(), narrow.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("c.pfm"), "{}", String::from_utf8_lossy(&o.stderr));
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// A device no machine has: a run that fails for another reason failed before it looked for a
@@ -145,7 +141,6 @@ fn non_finite_exposure_is_refused_by_render_and_merge() {
     assert!(!Path::new(png).exists(), "a refused run wrote its image");
     let o = caustica(&["render", "-o", png, "--width", "8", "--height", "8", "--spp", "1", "-q", "--exposure", "-1.5"]);
     assert!(o.status.success(), "a negative exposure is fine: {}", String::from_utf8_lossy(&o.stderr));
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
@@ -186,7 +181,6 @@ fn bad_output_checkpoint_and_sample_range_fail_before_the_device_is_touched() {
     }
     let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     assert!(names.iter().all(|n| !n.contains(".tmp-")), "a probe left a file: {names:?}");
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
@@ -204,7 +198,6 @@ fn compare_refuses_images_with_non_finite_pixels() {
         fails_naming(&o, &[&format!("{bad} holds 2 non-finite pixels"), "(1, 0)"]);
         assert!(o.stdout.is_empty(), "no figures: {}", String::from_utf8_lossy(&o.stdout));
     }
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
@@ -222,7 +215,6 @@ fn errors_say_each_cause_once() {
         let stderr = fails_naming(&caustica(args), &[cause]);
         assert_eq!(stderr.matches(cause).count(), 1, "{args:?}: {stderr}");
     }
-    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]
@@ -256,7 +248,6 @@ fn temp_files_of_killed_writes_are_cleared_and_no_others() {
     for kept in [&recent, &live_writer, &other_target] {
         assert!(kept.exists(), "{} was removed", kept.display());
     }
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// A shared data folder that is not there, so the suite must skip the scenes that need it.

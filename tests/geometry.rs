@@ -412,7 +412,6 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
         assert!((0.0..0.05).contains(&coat) && grey, "pixel ({x}, {y}) sees the emissive square: {p:?}");
     }
     assert_eq!(image.get(0, 0), [1.0, 1.0, 1.0], "the corner sees the white sky");
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// The square of [`write_square_gltf_with`] with base colour `base`, the given metallic and
@@ -507,7 +506,6 @@ fn gltf_metallic_roughness_texture_matches_the_same_values_as_factors() {
             assert!(d.abs() <= 5.0 * stderr + 1e-4, "band {band} (metallic {metallic}, roughness {roughness}), channel {c}: textured mean {:.4} differs from the factors' by {d:.5} ({stderr:.5} standard error)", mean[c] / n);
         }
     }
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// A textured, normal-mapped sphere mesh (uv sphere) placed twice, under a lat-long sky with a

@@ -79,10 +79,6 @@ fn assert_refused(scene: &Path, extra: &[&str], needles: &[&str]) {
     }
 }
 
-fn fresh_dir(tag: &str) -> common::ScratchDir {
-    common::temp_dir(tag)
-}
-
 fn write(path: &Path, text: impl AsRef<[u8]>) -> PathBuf {
     std::fs::create_dir_all(path.parent().unwrap()).unwrap();
     std::fs::write(path, text).unwrap();
@@ -149,7 +145,7 @@ fn triangle_gltf(buffer_uri: &str, image_uri: Option<&str>) -> String {
 #[cfg(unix)]
 #[test]
 fn dev_zero_and_directories_are_refused_as_every_kind_of_input() {
-    let dir = fresh_dir("hostile-zero");
+    let dir = common::temp_dir("hostile-zero");
     let zero = Path::new("/dev/zero");
     for name in ["zero.toml", "zero.obj", "zero.ply", "zero.gltf", "zero.glb", "zero.mtl", "zero.bin", "zero.png", "zero.pfm", "zero.exr"] {
         link(zero, &dir.join(name));
@@ -186,7 +182,7 @@ fn dev_zero_and_directories_are_refused_as_every_kind_of_input() {
 #[cfg(unix)]
 #[test]
 fn a_fifo_is_refused_without_waiting_for_a_writer() {
-    let dir = fresh_dir("hostile-fifo");
+    let dir = common::temp_dir("hostile-fifo");
     for name in ["scene.toml", "pipe.obj"] {
         let status = Command::new("mkfifo").arg(dir.join(name)).status().expect("mkfifo");
         assert!(status.success());
@@ -198,7 +194,7 @@ fn a_fifo_is_refused_without_waiting_for_a_writer() {
 
 #[test]
 fn files_over_their_size_cap_are_refused_before_reading() {
-    let dir = fresh_dir("hostile-caps");
+    let dir = common::temp_dir("hostile-caps");
     // Sparse files: over the cap by their length, no disk used.
     let sparse = |name: &str, length: u64| {
         let path = dir.join(name);
@@ -224,7 +220,7 @@ fn files_over_their_size_cap_are_refused_before_reading() {
 #[test]
 fn a_sparse_accessor_claiming_2e28_positions_is_refused_in_bounded_memory() {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/gltf/sparse-position-count-2e28.gltf");
-    let dir = fresh_dir("hostile-sparse");
+    let dir = common::temp_dir("hostile-sparse");
     let out = dir.join("out.png");
     let started = Instant::now();
     let o = run_with(&["render", file.to_str().unwrap(), "-o", out.to_str().unwrap()], &[], Some("ulimit -v 1048576"));
@@ -243,7 +239,7 @@ fn gltf_error(tag: &str, bin: &[u8], views: &str, accessors: &str, primitive: &s
         data_uri(bin),
         bin.len()
     );
-    let dir = fresh_dir(tag);
+    let dir = common::temp_dir(tag);
     let path = write(&dir.join("bad.gltf"), json);
     match load_asset(&path) {
         Ok(_) => panic!("{tag}: the glTF loaded"),
@@ -298,7 +294,7 @@ fn gltf_accessor_counts_are_bounded_by_the_bytes_behind_them() {
         data_uri(&bin),
         no_view(3, 3)
     );
-    let dir = fresh_dir("acc-ok");
+    let dir = common::temp_dir("acc-ok");
     let ok = write(&dir.join("ok.gltf"), json_ok);
     let asset = load_asset(&ok).unwrap();
     assert_eq!(asset.meshes[0].positions, [glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y]);
@@ -323,7 +319,7 @@ fn one_accessor_reused_by_very_many_primitives_cannot_multiply_the_file() {
 #[cfg(unix)]
 #[test]
 fn one_file_named_many_times_in_a_gltf_is_read_and_decoded_once() {
-    let dir = fresh_dir("hostile-reuse");
+    let dir = common::temp_dir("hostile-reuse");
     std::fs::File::create(dir.join("big.bin")).unwrap().set_len(8 << 20).unwrap();
     let mut png = Vec::new();
     let mut encoder = png::Encoder::new(&mut png, 4096, 4096);
@@ -348,15 +344,12 @@ fn one_file_named_many_times_in_a_gltf_is_read_and_decoded_once() {
 
 /// A scene folder with a mesh, its MTL and its texture in subfolders, and files outside it.
 struct Confined {
-    /// Keeps `root` until the test ends.
-    _scratch: common::ScratchDir,
-    root: PathBuf,
+    root: common::ScratchDir,
     scene_dir: PathBuf,
 }
 
 fn confined(tag: &str) -> Confined {
-    let scratch = fresh_dir(tag);
-    let root = scratch.to_path_buf();
+    let root = common::temp_dir(tag);
     let scene_dir = root.join("farm/job");
     write(&scene_dir.join("meshes/tri.obj"), format!("mtllib ../materials/tri.mtl\nusemtl t\n{TRIANGLE_OBJ}"));
     write(&scene_dir.join("materials/tri.mtl"), "newmtl t\nKd 0.5 0.5 0.5\nmap_Kd ../textures/t.png\n");
@@ -368,7 +361,7 @@ fn confined(tag: &str) -> Confined {
     write(&root.join("secret/tri.mtl"), "newmtl t\nKd 1 0 0\n");
     write(&root.join("secret/tri.bin"), triangle_bin());
     write(&root.join("secret/t.png"), png_bytes(2, 2));
-    Confined { _scratch: scratch, root, scene_dir }
+    Confined { root, scene_dir }
 }
 
 #[test]
@@ -431,7 +424,7 @@ fn confine_allows_the_scene_folder_and_the_shared_data_folder() {
 
 #[test]
 fn a_long_toml_line_gives_a_short_message() {
-    let dir = fresh_dir("hostile-long-line");
+    let dir = common::temp_dir("hostile-long-line");
     let scene = write(&dir.join("long.toml"), format!("{CAMERA}fov = \"{}\"\n", "x".repeat(1 << 20)));
     let out = dir.join("out.png");
     let o = run(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);

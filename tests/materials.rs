@@ -352,7 +352,6 @@ fn gltf_metallic_roughness_maps_onto_rough_conductors_plastics_and_glass() {
     assert_eq!((plastic.reflectivity, plastic.transparency, plastic.roughness, plastic.coat), (0.0, 0.0, 0.6, true));
     let glass = get(":glass");
     assert_eq!((glass.reflectivity, glass.transparency, glass.roughness, glass.ior), (0.0, 1.0, 0.2, 1.4));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 

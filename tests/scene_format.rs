@@ -270,7 +270,6 @@ fn obj_mesh_loads_with_transform() {
     // (1, 0, 0) scaled by 2 -> (2, 0, 0), rotated 90 degrees about +y -> (0, 0, -2), translated -> (0, 0, -7).
     let p = scene.instances[0].transform.transform_point3(scene.meshes[0].positions[1]);
     assert!((p - glam::Vec3::new(0.0, 0.0, -7.0)).length() < 1e-5, "{p:?}");
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// Placing one file several times, by repeated entries or an `instances` list, stores it once.
@@ -297,7 +296,6 @@ fn repeated_mesh_placements_share_one_mesh() {
     assert!(e.contains("spin"), "{e}");
     let e = format!("{:#}", Scene::parse(&format!("{MINIMAL}[[meshes]]\nfile = \"tri.obj\"\ninstances = [{{ scale = [1, 0, 1] }}]\n"), "zero.toml", &dir).unwrap_err());
     assert!(e.contains("meshes[0].instances[0].scale"), "{e}");
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// An OBJ with its MTL brings its own materials, emitters among them.
@@ -328,7 +326,6 @@ fn malformed_obj_is_rejected_with_the_file_name() {
         let e = format!("{:#}", Scene::parse(&text, "mesh.toml", &dir).expect_err("bad mesh rejected"));
         assert!(e.contains(file), "{file}: {e}");
     }
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// A mesh placed with an anisotropic material (`roughness_v` differing from `roughness`) gets
@@ -359,5 +356,4 @@ fn anisotropic_mesh_materials_give_their_meshes_tangents_along_u() {
     assert!(scene.meshes[0].tangents.iter().all(|t| (t.truncate() - glam::Vec3::X).length() < 1e-5), "{:?}", scene.meshes[0].tangents);
     let e = error_of(&format!("{MINIMAL}[materials.m]\nroughness_v = 1.5\n"));
     assert!(e.contains("materials.m.roughness_v must be in [0, 1], got 1.5"), "{e}");
-    std::fs::remove_dir_all(dir).ok();
 }

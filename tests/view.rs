@@ -356,7 +356,6 @@ fn screenshot_is_the_render_png_pixel_for_pixel() {
     assert_same_pixels(&dir.join("shown.png"), &rendered);
     let (w, h, pixels) = png_pixels(&rendered);
     assert!(w == 40 && h == 30 && pixels.iter().any(|&v| v > 0), "a lit image");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -417,7 +416,6 @@ fn window_has_the_size_and_title_and_input_moves_the_camera_and_restarts_accumul
         viewer.stdout.lock().unwrap().iter().rev().find(|l| l.starts_with('#'))?.contains("(320x240)").then_some(())
     });
     viewer.quit();
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The scene `text` with every albedo set to `albedo` and the camera's field of view to `fov`: a
@@ -458,7 +456,6 @@ fn a_scene_rewritten_on_disk_is_reloaded_keeping_the_camera() {
     let rendered = render_png(&dir, &expected_scene, &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()], "expected.png");
     assert_same_pixels(&png, &rendered);
     viewer.quit();
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -490,7 +487,6 @@ fn minimizing_pauses_accumulation_and_restoring_resumes_it() {
     viewer.xdotool(&["windowactivate", "--sync", &w]);
     wait_until("samples after restoring", || (viewer.samples_shown() > paused_at).then_some(()));
     viewer.quit();
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -520,7 +516,6 @@ fn a_swapchain_made_out_of_date_by_quick_resizes_is_re_created() {
         (viewer.samples_shown() > settled).then_some(())
     });
     viewer.quit();
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A Python 3 that has python3-xlib: the one on PATH, else Debian's (where PATH leads to another,
@@ -558,7 +553,6 @@ fn a_file_dropped_on_the_window_is_opened_with_its_own_camera() {
     let rendered = render_png(&dir, &dropped, &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()], "expected.png");
     assert_same_pixels(&png, &rendered);
     viewer.quit();
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -580,7 +574,6 @@ fn bad_scenes_and_screenshot_names_fail_before_a_window_opens() {
     let out = run(&["view", "--screenshot", "shot.exr"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains(".png"), "{}", String::from_utf8_lossy(&out.stderr));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The renderer calls the viewer is built on, on the device alone (no window).

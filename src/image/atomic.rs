@@ -225,7 +225,6 @@ mod tests {
         .unwrap();
         let contents = std::fs::read(&path).unwrap();
         let names = file_names(&dir);
-        std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(contents, b"new");
         assert_eq!(names, ["out.bin"]);
     }
@@ -246,7 +245,6 @@ mod tests {
         .unwrap_err();
         let contents = std::fs::read(&path).unwrap();
         let names = file_names(&dir);
-        std::fs::remove_dir_all(&dir).unwrap();
         assert!(matches!(err, ImageError::Truncated { .. }), "{err}");
         assert_eq!(contents, b"old");
         assert_eq!(names, ["out.bin"]);
@@ -294,7 +292,6 @@ mod tests {
         let mut expected = vec![stale, stale_of_ours];
         expected.sort();
         let left: Vec<bool> = [&live_writer, &recent, &other_target, &not_ours].iter().map(|p| p.exists()).collect();
-        std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(removed, expected);
         assert_eq!(left, [true; 4], "a running writer's, a recent, another target's and a foreign file stay");
     }
@@ -314,7 +311,6 @@ mod tests {
             Ok(())
         });
         let (after, contents) = (file_names(&dir), std::fs::read(&path).unwrap());
-        std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(during.len(), 2, "the temporary file exists while writing: {during:?}");
         assert!(result.is_err(), "the write cannot complete once its file is gone");
         assert_eq!((after, contents), (vec!["out.bin".to_owned()], b"old".to_vec()));
@@ -327,7 +323,6 @@ mod tests {
         let names = file_names(&dir);
         let on_dir = check_writable(&dir).unwrap_err().to_string();
         let missing = check_writable(&dir.join("missing/out.exr")).unwrap_err().to_string();
-        std::fs::remove_dir_all(&dir).unwrap();
         assert!(names.is_empty(), "{names:?}");
         assert!(on_dir.ends_with("cannot be written: it is a directory"), "{on_dir}");
         assert!(missing.contains("missing/out.exr: cannot be written: cannot create a file in"), "{missing}");

@@ -345,7 +345,6 @@ mod tests {
         write_exr_document(&path, &doc).unwrap();
         let back = read_exr_document(&path);
         let names = file_names(&dir);
-        std::fs::remove_dir_all(&dir).unwrap();
         assert_bit_exact(&back.unwrap(), &doc);
         // Only the target: the temporary file was renamed over it.
         assert_eq!(names, ["render.exr"]);
@@ -370,7 +369,6 @@ mod tests {
         write_exr_document(&path, &doc).unwrap();
         let read = crate::image::read_image(&path);
         let back = read_exr_document(&path);
-        std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(read.unwrap(), beauty);
         let back = back.unwrap();
         assert_eq!(
@@ -403,7 +401,6 @@ mod tests {
         };
         write_exr_document(&path, &doc).unwrap();
         let back = read_exr_document(&path);
-        std::fs::remove_dir_all(&dir).unwrap();
         let back = back.unwrap();
         assert_eq!(back.layers[0].channels, strings(&["R", "G", "B", "A"]));
         assert_eq!(back.layers[0].data, [1.0, 2.0, 3.0, 4.0]);
@@ -448,7 +445,6 @@ mod tests {
         });
         assert!(err.contains("too large"), "{err}");
         let names = file_names(&dir);
-        std::fs::remove_dir_all(&dir).unwrap();
         assert!(names.is_empty(), "{names:?}");
     }
 
@@ -494,7 +490,6 @@ mod tests {
                 }
             }
         }
-        std::fs::remove_dir_all(&dir).unwrap();
         assert!(failures.is_empty(), "{failures:#?}");
     }
 
@@ -513,7 +508,6 @@ mod tests {
         std::fs::write(&path, &bytes).unwrap();
         let err = read_exr_document(&path).unwrap_err().to_string();
         let plain = crate::image::read_image(&path).unwrap_err().to_string();
-        std::fs::remove_dir_all(&dir).unwrap();
         let expected = format!(
             "{}: image of 1000000 x 1000000 pixels is too large (limit 2^28 pixels)",
             path.display()

@@ -1019,7 +1019,7 @@ fn world_camera(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{load_asset, real_data, write_file, WrittenFiles};
+    use super::super::{load_asset, real_data, write_file};
     use super::*;
 
     /// One triangle: positions, normals (length 2, to be normalized), uvs, u16 indices.
@@ -1177,10 +1177,6 @@ mod tests {
         assert_eq!(camera.aspect, Some(1.5));
     }
 
-    fn write(tag: &str, name: &str, bytes: &[u8]) -> WrittenFiles {
-        write_file(tag, name, bytes)
-    }
-
     /// The test document with three KHR_lights_punctual lights on nodes of their own.
     fn document_with_lights(lights: &str) -> String {
         let bin = triangle_bin();
@@ -1209,7 +1205,7 @@ mod tests {
           {"type": "directional", "intensity": 6830}
         ]"#;
         let json = document_with_lights(lights);
-        let path = write("gltf-lights", "lights.gltf", json.as_bytes());
+        let path = write_file("gltf-lights", "lights.gltf", json.as_bytes());
         let asset = match load_asset(&path) {
             Ok(asset) => asset,
             Err(e) => panic!("{e}\n{json}"),
@@ -1229,10 +1225,10 @@ mod tests {
         assert_eq!(scene.lights[3], Light::Point { position: Vec3::new(6.0, 2.0, 13.0), intensity: Vec3::new(1.0, 0.5, 0.25) });
 
         let negative = document_with_lights(r#"[{"type": "point", "intensity": -1}, {"type": "point"}, {"type": "point"}]"#);
-        let err = load_asset(&write("gltf-lights", "negative.gltf", negative.as_bytes())).unwrap_err().to_string();
+        let err = load_asset(&write_file("gltf-lights", "negative.gltf", negative.as_bytes())).unwrap_err().to_string();
         assert!(err.contains("negative.gltf") && err.contains("KHR_lights_punctual light 0: intensity must be finite and >= 0"), "{err}");
         let wide = document_with_lights(r#"[{"type": "point"}, {"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.4}}, {"type": "point"}]"#);
-        let err = load_asset(&write("gltf-lights", "wide.gltf", wide.as_bytes())).unwrap_err().to_string();
+        let err = load_asset(&write_file("gltf-lights", "wide.gltf", wide.as_bytes())).unwrap_err().to_string();
         assert!(err.contains("KHR_lights_punctual light 1: spot angles"), "{err}");
     }
 
@@ -1246,7 +1242,7 @@ mod tests {
             ),
             r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#,
         );
-        let path = write("gltf-external", "scene.gltf", json.as_bytes());
+        let path = write_file("gltf-external", "scene.gltf", json.as_bytes());
         std::fs::write(path.with_file_name("tri angle.bin"), &bin).unwrap();
         check_scene(&load_asset(&path).unwrap());
 
@@ -1283,9 +1279,9 @@ mod tests {
         glb.extend((bin.len() as u32).to_le_bytes());
         glb.extend(b"BIN\0");
         glb.extend(&bin);
-        check_scene(&load_asset(&write("glb", "scene.GLB", &glb)).unwrap());
+        check_scene(&load_asset(&write_file("glb", "scene.GLB", &glb)).unwrap());
 
-        let err = load_asset(&write("glb-cut", "cut.glb", &glb[..glb.len() - 40]))
+        let err = load_asset(&write_file("glb-cut", "cut.glb", &glb[..glb.len() - 40]))
             .unwrap_err()
             .to_string();
         assert!(err.contains("cut.glb"), "{err}");
@@ -1300,7 +1296,7 @@ mod tests {
         let png = format!(r#"{{"uri": "data:image/png;base64,{}"}}"#, encode(&png_bytes()));
         let images = format!("[{png}, {png}]");
         let plain = document(&buffer, &images);
-        let path = write("gltf-required-extension", "required.gltf", plain.replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_draco_mesh_compression"], "scene": 0,"#, 1).as_bytes());
+        let path = write_file("gltf-required-extension", "required.gltf", plain.replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_draco_mesh_compression"], "scene": 0,"#, 1).as_bytes());
         let err = load_asset(&path).unwrap_err().to_string();
         assert!(err.contains(&path.display().to_string()) && err.contains("KHR_draco_mesh_compression"), "{err}");
 
@@ -1317,7 +1313,7 @@ mod tests {
                 "occlusion textures are ignored (a path tracer computes occlusion)",
             ]
         );
-        let path = write("gltf-used-extension", "used.gltf", used.as_bytes());
+        let path = write_file("gltf-used-extension", "used.gltf", used.as_bytes());
         assert!(load_asset(&path).is_ok(), "a used extension caustica lacks is no error");
     }
 
@@ -1341,7 +1337,7 @@ mod tests {
     fn clearcoat_and_volume_are_read() {
         let coat = r#""KHR_materials_clearcoat": {"clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.5, "clearcoatTexture": {"index": 1}, "clearcoatRoughnessTexture": {"index": 0}}"#;
         let volume = r#""KHR_materials_volume": {"thicknessFactor": 3, "attenuationColor": [0.5, 0.25, 1], "attenuationDistance": 2}"#;
-        let path = write("gltf-coat-volume", "coated.gltf", document_with_material_extensions(&format!("{coat}, {volume}"), "0.5").as_bytes());
+        let path = write_file("gltf-coat-volume", "coated.gltf", document_with_material_extensions(&format!("{coat}, {volume}"), "0.5").as_bytes());
         let asset = load_asset(&path).unwrap_or_else(|e| panic!("{e}"));
         let m = &asset.materials[0];
         let normal_texture = m.maps.normal.expect("the normal map").texture;
@@ -1358,7 +1354,7 @@ mod tests {
             (r#""KHR_materials_clearcoat": {"clearcoatRoughnessFactor": 0.5}, "KHR_materials_volume": {"thicknessFactor": 1}"#, "0.5"),
             (volume, "0"),
         ] {
-            let path = write("gltf-no-coat-volume", "plain.gltf", document_with_material_extensions(extensions, transmission).as_bytes());
+            let path = write_file("gltf-no-coat-volume", "plain.gltf", document_with_material_extensions(extensions, transmission).as_bytes());
             let asset = load_asset(&path).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!((asset.materials[0].clearcoat, asset.materials[0].attenuation), (None, None), "{extensions}");
         }
@@ -1373,7 +1369,7 @@ mod tests {
             (r#""KHR_materials_clearcoat": {"clearcoatFactor": 1e39}"#, "clearcoatFactor or clearcoatRoughnessFactor is not finite"),
             (r#""KHR_materials_volume": {"attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 0}"#, "attenuationDistance is not > 0"),
         ] {
-            let path = write("gltf-bad-coat-volume", "bad.gltf", document_with_material_extensions(extensions, "0.5").as_bytes());
+            let path = write_file("gltf-bad-coat-volume", "bad.gltf", document_with_material_extensions(extensions, "0.5").as_bytes());
             let err = load_asset(&path).unwrap_err().to_string();
             assert!(err.contains("bad.gltf") && err.contains(fault), "{extensions}: {err}");
         }
@@ -1391,7 +1387,7 @@ mod tests {
     #[test]
     fn cyclic_node_graph_is_an_error() {
         let json = r#"{"asset": {"version": "2.0"}, "nodes": [{"children": [1]}, {"children": [0]}], "scenes": [{"nodes": [0]}]}"#;
-        let path = write("gltf-cycle", "cycle.gltf", json.as_bytes());
+        let path = write_file("gltf-cycle", "cycle.gltf", json.as_bytes());
         let err = load_asset(&path).unwrap_err().to_string();
         assert!(
             err.contains("cycle.gltf") && err.contains("cyclic"),
@@ -1407,7 +1403,7 @@ mod tests {
             &format!(r#"{{"uri": "t.bin", "byteLength": {}}}"#, bin.len()),
             r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#,
         );
-        let path = write("gltf-index", "scene.gltf", json.as_bytes());
+        let path = write_file("gltf-index", "scene.gltf", json.as_bytes());
         std::fs::write(path.with_file_name("t.bin"), &bin).unwrap();
         let err = load_asset(&path).unwrap_err().to_string();
         assert!(
