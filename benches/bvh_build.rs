@@ -17,17 +17,26 @@ type Triangle = [Vec3; 3];
 fn main() {
     println!(
         "{:<24} {:>9} {:>9} {:>8} {:>9} {:>10} {:>8} {:>6} {:>10} {:>10} {:>9} {:>9}",
-        "input", "tris", "build ms", "Mtris/s", "nodes", "nodes/tri", "SAH", "depth", "wide nodes", "wide B/tri", "wide SAH", "8-bit +%"
+        "input",
+        "tris",
+        "build ms",
+        "Mtris/s",
+        "nodes",
+        "nodes/tri",
+        "SAH",
+        "depth",
+        "wide nodes",
+        "wide B/tri",
+        "wide SAH",
+        "8-bit +%"
     );
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     report("random 1M", &random_triangles(&mut rng, 1_000_000));
     report("terrain 1M", &terrain(708));
     report("terrain 100k", &terrain(224));
     report("terrain 70k", &terrain(187));
-    let data = std::env::var_os("CAUSTICA_DATA").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-        PathBuf::from,
-    );
+    let data = std::env::var_os("CAUSTICA_DATA")
+        .map_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"), PathBuf::from);
     let bunny = load_mesh(&data.join("meshes/bunny/bun_zipper.ply"));
     let lucy = load_mesh(&data.join("meshes/lucy/Lucy100k.ply"));
     for (name, mesh) in [("bunny 69k", &bunny), ("lucy 100k", &lucy)] {
@@ -44,15 +53,7 @@ fn main() {
 /// All triangles of a mesh file's meshes, in the file's object space.
 fn load_mesh(path: &Path) -> Result<Vec<Triangle>, AssetError> {
     let asset = load_asset(path)?;
-    Ok(asset
-        .meshes
-        .iter()
-        .flat_map(|m| {
-            m.triangles
-                .iter()
-                .map(|t| t.map(|v| m.positions[v as usize]))
-        })
-        .collect())
+    Ok(asset.meshes.iter().flat_map(|m| m.triangles.iter().map(|t| t.map(|v| m.positions[v as usize]))).collect())
 }
 
 /// A ~1.9M-triangle scene: a 5 x 4 grid of bunnies and a row of five Lucys scaled to twice a
@@ -81,10 +82,8 @@ fn crowd(bunny: &[Triangle], lucy: &[Triangle]) -> Vec<Triangle> {
 }
 
 fn report(name: &str, tris: &[Triangle]) {
-    let bounds: Vec<Aabb> = tris
-        .iter()
-        .map(|t| Aabb::new(t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
-        .collect();
+    let bounds: Vec<Aabb> =
+        tris.iter().map(|t| Aabb::new(t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))).collect();
     let runs = std::env::var("BVH_BENCH_RUNS").map_or(3, |r| r.parse().expect("BVH_BENCH_RUNS"));
     let mut best = Duration::MAX;
     let mut built = None;
@@ -154,12 +153,7 @@ fn terrain(cells: usize) -> Vec<Triangle> {
     let mut tris = Vec::with_capacity(2 * cells * cells);
     for i in 0..cells {
         for j in 0..cells {
-            let [a, b, c, d] = [
-                vertex(i, j),
-                vertex(i + 1, j),
-                vertex(i, j + 1),
-                vertex(i + 1, j + 1),
-            ];
+            let [a, b, c, d] = [vertex(i, j), vertex(i + 1, j), vertex(i, j + 1), vertex(i + 1, j + 1)];
             tris.extend([[a, b, c], [b, d, c]]);
         }
     }

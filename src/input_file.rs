@@ -281,7 +281,10 @@ impl Read for CappedFile {
         let read = self.file.read(&mut buffer[..length])?;
         self.position += read as u64;
         if self.position > self.kind.cap() {
-            return Err(io::Error::other(InputError { path: self.path.clone(), problem: Problem::Grew { kind: self.kind } }));
+            return Err(io::Error::other(InputError {
+                path: self.path.clone(),
+                problem: Problem::Grew { kind: self.kind },
+            }));
         }
         Ok(read)
     }

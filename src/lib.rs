@@ -15,6 +15,6 @@ pub mod input_file;
 pub mod process_time;
 pub mod render;
 pub mod scene;
-pub mod view;
 #[cfg(test)]
 mod test_files;
+pub mod view;

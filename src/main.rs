@@ -1,12 +1,12 @@
 //! The `caustica` command line: a thin layer over the library.
 
 use anyhow::{Context as _, Result};
+use caustica::bench::{self, FilmOverrides, KernelSetup};
 use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
-use caustica::bench::{self, FilmOverrides, KernelSetup};
-use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer};
 use caustica::input_file::InputFiles;
+use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer};
 use caustica::scene::{check_film, Film, Filter, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -35,7 +35,11 @@ struct DeviceArgs {
 
 impl DeviceArgs {
     fn context(&self) -> Result<GpuContext> {
-        GpuContext::new(&ContextOptions { device: self.device.clone(), validation: self.validation, storage_binding_limit: None })
+        GpuContext::new(&ContextOptions {
+            device: self.device.clone(),
+            validation: self.validation,
+            storage_binding_limit: None,
+        })
     }
 }
 
@@ -102,7 +106,11 @@ fn exposure(text: &str) -> Result<f32, String> {
     const RANGE: std::ops::RangeInclusive<f32> = -126.0..=127.0;
     match text.trim().parse::<f32>() {
         Ok(ev) if RANGE.contains(&ev) => Ok(ev),
-        Ok(ev) if ev.is_finite() => Err(format!("{ev} stops is out of range: 2^EV must be a float, so from {} to {}", RANGE.start(), RANGE.end())),
+        Ok(ev) if ev.is_finite() => Err(format!(
+            "{ev} stops is out of range: 2^EV must be a float, so from {} to {}",
+            RANGE.start(),
+            RANGE.end()
+        )),
         Ok(_) => Err(format!("'{text}' is not a finite number of stops (e.g. -1, 0, 2.5)")),
         Err(_) => Err(format!("'{text}' is not a number of stops (e.g. -1, 0, 2.5)")),
     }
@@ -215,10 +223,7 @@ enum Command {
     },
     /// Compare an image with a reference (PFM or EXR): relative MSE, mean absolute error and the
     /// ratio of their means.
-    Compare {
-        image: PathBuf,
-        reference: PathBuf,
-    },
+    Compare { image: PathBuf, reference: PathBuf },
     /// Render a scene (default: the Cornell box) and report geometry, BVH build, memory, and samples
     /// and rays per second; with --suite, every checked-in scene in one table.
     Bench {
@@ -281,7 +286,9 @@ struct SceneFileArgs {
 /// `name=value` of `-D`.
 fn define(text: &str) -> Result<(String, String), String> {
     match text.split_once('=') {
-        Some((name, value)) if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') => Ok((name.to_owned(), value.to_owned())),
+        Some((name, value)) if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') => {
+            Ok((name.to_owned(), value.to_owned()))
+        }
         _ => Err(format!("'{text}' is not NAME=VALUE (a parameter name of letters, digits and _)")),
     }
 }
@@ -292,7 +299,9 @@ impl SceneFileArgs {
         match path {
             Some(p) if self.confine => Scene::load_with(&caustica::scene::confinement(p), p, &self.define),
             Some(p) => Scene::load_with(&InputFiles::anywhere(), p, &self.define),
-            None if !self.define.is_empty() => anyhow::bail!("-D sets parameters of a Mitsuba XML scene; the built-in scene has none"),
+            None if !self.define.is_empty() => {
+                anyhow::bail!("-D sets parameters of a Mitsuba XML scene; the built-in scene has none")
+            }
             None => Ok(Scene::default_scene()),
         }
     }
@@ -312,7 +321,9 @@ fn progress_bar(total: Option<u32>, quiet: bool) -> ProgressBar {
     }
     let Some(total) = total else {
         let counter = ProgressBar::new_spinner();
-        counter.set_style(ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} spp  {per_sec}").expect("valid template"));
+        counter.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} spp  {per_sec}").expect("valid template"),
+        );
         return counter;
     };
     let bar = ProgressBar::new(total as u64);
@@ -360,20 +371,31 @@ struct RenderRequest {
     json: bool,
 }
 
-fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_args: &FarmArgs, gpu: &DeviceArgs) -> Result<()> {
+fn render(
+    scene: Scene,
+    request: RenderRequest,
+    output_args: &OutputArgs,
+    farm_args: &FarmArgs,
+    gpu: &DeviceArgs,
+) -> Result<()> {
     let output = &request.output;
     let checkpoint = farm_args.checkpoint_path(output);
     // Fail on a bad output or checkpoint path before spending minutes rendering.
     farm::check_render_files(output, &checkpoint)?;
     if !request.aovs.is_empty() && !is_exr(output) {
-        anyhow::bail!("--aov {}: AOVs are layers of an EXR file, so the output must be .exr, not {}", request.aovs, output.display());
+        anyhow::bail!(
+            "--aov {}: AOVs are layers of an EXR file, so the output must be .exr, not {}",
+            request.aovs,
+            output.display()
+        );
     }
     let resume_from = if farm_args.resume { Some(PartialRender::read(&checkpoint)?) } else { None };
     if let Some(spp) = request.spp {
         match &resume_from {
             Some(partial) => farm::check_sample_range(farm::resumable_range(partial, &checkpoint)?.start, spp)
                 .with_context(|| format!("{}: cannot resume to --spp {spp}", checkpoint.display()))?,
-            None => farm::check_sample_range(farm_args.sample_offset, spp).with_context(|| format!("--sample-offset {} --spp {spp}", farm_args.sample_offset))?,
+            None => farm::check_sample_range(farm_args.sample_offset, spp)
+                .with_context(|| format!("--sample-offset {} --spp {spp}", farm_args.sample_offset))?,
         }
     }
     remove_leftovers(&[output, &checkpoint], request.quiet);
@@ -388,8 +410,15 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
     let resumed = resume_from.map_or(0, |p| p.samples());
     let bar = progress_bar(request.spp, request.quiet);
     bar.set_position(resumed as u64);
-    let job = RenderJob { spp: request.spp, time: farm_args.time, checkpoint: checkpoint.clone(), checkpoint_every: farm_args.checkpoint_every, stop: &STOP };
-    let outcome = farm::run(&mut renderer, &job, |done| bar.set_position(done as u64)).with_context(|| scene.name.clone())?;
+    let job = RenderJob {
+        spp: request.spp,
+        time: farm_args.time,
+        checkpoint: checkpoint.clone(),
+        checkpoint_every: farm_args.checkpoint_every,
+        stop: &STOP,
+    };
+    let outcome =
+        farm::run(&mut renderer, &job, |done| bar.set_position(done as u64)).with_context(|| scene.name.clone())?;
     bar.finish_and_clear();
     let partial = farm::snapshot(&renderer)?.context("no samples were rendered")?;
     if let Err(e) = write_render(output, &partial, output_args) {
@@ -410,7 +439,8 @@ fn render(scene: Scene, request: RenderRequest, output_args: &OutputArgs, farm_a
     }
     let rendered = renderer.samples_done - resumed;
     let pixel_samples = scene.film.width as f64 * scene.film.height as f64 * rendered as f64;
-    let (samples_per_s, rays_per_s) = (per_second(pixel_samples, renderer.seconds), per_second(renderer.rays_traced as f64, renderer.seconds));
+    let (samples_per_s, rays_per_s) =
+        (per_second(pixel_samples, renderer.seconds), per_second(renderer.rays_traced as f64, renderer.seconds));
     if !request.quiet {
         let why = match outcome {
             Outcome::Done => String::new(),
@@ -485,7 +515,13 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
         eprintln!("caustica: note: the AOV layers ({}) are kept only by .exr output", merged.aovs);
     }
     if !quiet {
-        eprintln!("wrote {} ({} partial renders, {} spp: samples {})", output.display(), inputs.len(), merged.samples(), format_ranges(&merged.ranges));
+        eprintln!(
+            "wrote {} ({} partial renders, {} spp: samples {})",
+            output.display(),
+            inputs.len(),
+            merged.samples(),
+            format_ranges(&merged.ranges)
+        );
     }
     Ok(())
 }
@@ -507,7 +543,8 @@ fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<
     let text = imported.to_toml(folder)?;
     // The TOML must stand on its own before it replaces anything; what stops it is most often a
     // file the scene names (a mesh, a map) that is missing or unreadable, which the error names.
-    Scene::parse(&text, &output.display().to_string(), folder).with_context(|| format!("{}: the converted scene does not load", input.display()))?;
+    Scene::parse(&text, &output.display().to_string(), folder)
+        .with_context(|| format!("{}: the converted scene does not load", input.display()))?;
     std::fs::write(output, text).with_context(|| format!("writing {}", output.display()))?;
     eprintln!("wrote {}", output.display());
     Ok(())
@@ -515,8 +552,20 @@ fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<
 
 /// `bench SCENE`: one scene, by default at 256x256 and 64 spp (not the scene's own film, so that
 /// figures of different scenes compare).
-fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, kernel: KernelSetup, json: bool, gpu: &DeviceArgs) -> Result<()> {
-    apply_overrides(&mut scene, Some(film.width.unwrap_or(256)), Some(film.height.unwrap_or(256)), Some(film.spp.unwrap_or(64)))?;
+fn bench(
+    mut scene: Scene,
+    film: FilmOverrides,
+    aovs: AovSet,
+    kernel: KernelSetup,
+    json: bool,
+    gpu: &DeviceArgs,
+) -> Result<()> {
+    apply_overrides(
+        &mut scene,
+        Some(film.width.unwrap_or(256)),
+        Some(film.height.unwrap_or(256)),
+        Some(film.spp.unwrap_or(64)),
+    )?;
     let ctx = gpu.context()?;
     let measured = bench::measure(&ctx, &scene, aovs, kernel)?;
     if json {
@@ -529,13 +578,23 @@ fn bench(mut scene: Scene, film: FilmOverrides, aovs: AovSet, kernel: KernelSetu
 
 /// `bench --suite`: every scene of the suite on one device; fails (after the table) when a scene
 /// that should have run did not.
-fn bench_suite(scenes: &Path, overrides: FilmOverrides, aovs: AovSet, kernel: KernelSetup, json: bool, scene_files: &SceneFileArgs, gpu: &DeviceArgs) -> Result<()> {
+fn bench_suite(
+    scenes: &Path,
+    overrides: FilmOverrides,
+    aovs: AovSet,
+    kernel: KernelSetup,
+    json: bool,
+    scene_files: &SceneFileArgs,
+    gpu: &DeviceArgs,
+) -> Result<()> {
     // A bad override is refused once, before any work, rather than by every scene in turn.
     let (w, h, spp) = (overrides.width.unwrap_or(1), overrides.height.unwrap_or(1), overrides.spp.unwrap_or(1));
     check_film(&Film { width: w, height: h, spp, filter: Filter::Box }).context("command-line film settings")?;
     let entries = bench::suite_entries(scenes, &caustica::scene::data_dir())?;
     let ctx = gpu.context()?;
-    let outcome = bench::run_suite(&ctx, &entries, overrides, aovs, kernel, |path| scene_files.load_scene(Some(&path.to_path_buf())));
+    let outcome = bench::run_suite(&ctx, &entries, overrides, aovs, kernel, |path| {
+        scene_files.load_scene(Some(&path.to_path_buf()))
+    });
     if json {
         println!("{}", bench::suite_json(&outcome, &ctx.info));
         bench::print_left_out(&outcome);
@@ -560,17 +619,41 @@ fn parse_command_line() -> Cli {
 
 fn run() -> Result<()> {
     match parse_command_line().command {
-        Command::Render { scene, output, spp, width, height, seed, aov, output_args, farm, quiet, json, scene_files, gpu } => {
+        Command::Render {
+            scene,
+            output,
+            spp,
+            width,
+            height,
+            seed,
+            aov,
+            output_args,
+            farm,
+            quiet,
+            json,
+            scene_files,
+            gpu,
+        } => {
             let mut s = scene_files.load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
-            render(s, RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json }, &output_args, &farm, &gpu)
+            render(
+                s,
+                RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json },
+                &output_args,
+                &farm,
+                &gpu,
+            )
         }
         Command::View { scene, spp, width, height, seed, exposure, tonemap, screenshot, scene_files, gpu } => {
             handle_signals(true)?;
             caustica::view::run(caustica::view::ViewOptions {
-                source: caustica::view::SceneSource { path: scene, confine: scene_files.confine, defines: scene_files.define },
+                source: caustica::view::SceneSource {
+                    path: scene,
+                    confine: scene_files.confine,
+                    defines: scene_files.define,
+                },
                 spp,
                 width,
                 height,
@@ -613,7 +696,20 @@ fn run() -> Result<()> {
             }
             Ok(())
         }
-        Command::Bench { width, height, spp, scene, suite, scenes, aov, json, general_kernel, group_order, scene_files, gpu } => {
+        Command::Bench {
+            width,
+            height,
+            spp,
+            scene,
+            suite,
+            scenes,
+            aov,
+            json,
+            general_kernel,
+            group_order,
+            scene_files,
+            gpu,
+        } => {
             let (aovs, film) = (aov.unwrap_or_default(), FilmOverrides { width, height, spp });
             let choice = if general_kernel { KernelChoice::General } else { KernelChoice::ForScene };
             let kernel = KernelSetup { choice, group_order };
@@ -658,7 +754,9 @@ mod tests {
     #[test]
     fn error_report_says_each_cause_once() {
         let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory (os error 2)");
-        let repeating = anyhow::Error::new(io).context("out.exr: No such file or directory (os error 2)").context("writing the image");
+        let repeating = anyhow::Error::new(io)
+            .context("out.exr: No such file or directory (os error 2)")
+            .context("writing the image");
         assert_eq!(error_report(&repeating), "writing the image: out.exr: No such file or directory (os error 2)");
         let plain = anyhow::anyhow!("disk full").context("out.png");
         assert_eq!(error_report(&plain), "out.png: disk full");

@@ -28,7 +28,8 @@ fn png_rgba(width: u32, height: u32, texels: &[[u8; 4]]) -> Vec<u8> {
 /// 0 in the others (RGB black). Bilinear filtering blends blocks only within half a texel of their
 /// edges, so inside a block the opacity is exactly 0 or 1.
 fn checker() -> Vec<u8> {
-    let texels: Vec<[u8; 4]> = (0..64).map(|i| if (i / 32 + (i % 8) / 4) % 2 == 0 { [0, 0, 0, 255] } else { [0; 4] }).collect();
+    let texels: Vec<[u8; 4]> =
+        (0..64).map(|i| if (i / 32 + (i % 8) / 4) % 2 == 0 { [0, 0, 0, 255] } else { [0; 4] }).collect();
     png_rgba(8, 8, &texels)
 }
 
@@ -36,7 +37,10 @@ fn checker() -> Vec<u8> {
 /// their texture coordinates, glTF's way: u = x / 2 half + 0.5, v = z / 2 half + 0.5 (the
 /// texture's top row at z = -half).
 fn square(y: f32, half: f32) -> ([[f32; 3]; 4], [[f32; 2]; 4]) {
-    ([[-half, y, -half], [half, y, -half], [half, y, half], [-half, y, half]], [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    (
+        [[-half, y, -half], [half, y, -half], [half, y, half], [-half, y, half]],
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+    )
 }
 
 /// `square.obj` with material `m` of `square.mtl` (`mtl`, black diffuse before it), and `tex.png`.
@@ -60,10 +64,15 @@ fn write_obj_square(dir: &Path, y: f32, half: f32, mtl: &str, texture: &[u8]) {
 /// `mode` (a JSON fragment such as `"alphaMode": "MASK"`) and, when given, a base colour texture.
 fn write_gltf_square(dir: &Path, y: f32, half: f32, factor: f32, mode: &str, texture: Option<&[u8]>) {
     let (texture_ref, resources) = match texture {
-        Some(png) => (r#", "baseColorTexture": {"index": 0}"#.to_owned(), format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "{}"}}],"#, png_uri(png))),
+        Some(png) => (
+            r#", "baseColorTexture": {"index": 0}"#.to_owned(),
+            format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "{}"}}],"#, png_uri(png)),
+        ),
         None => (String::new(), String::new()),
     };
-    let material = format!(r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, {factor}]{texture_ref}, "metallicFactor": 0, "roughnessFactor": 1}}, {mode}}}"#);
+    let material = format!(
+        r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, {factor}]{texture_ref}, "metallicFactor": 0, "roughnessFactor": 1}}, {mode}}}"#
+    );
     gltf_square::write_gltf_square(dir, "square.gltf", y, half, &material, &resources);
 }
 
@@ -118,7 +127,10 @@ fn an_alpha_checkered_square_shows_half_the_background() {
                 for x in 8 * bx + 2..8 * bx + 6 {
                     let p = image.get(x, y);
                     for (c, value) in p.iter().enumerate() {
-                        assert!((value - expected).abs() <= 1e-5, "{what}: pixel ({x}, {y}) channel {c} is {value}, expected {expected}");
+                        assert!(
+                            (value - expected).abs() <= 1e-5,
+                            "{what}: pixel ({x}, {y}) channel {c} is {value}, expected {expected}"
+                        );
                     }
                 }
             }
@@ -136,8 +148,16 @@ const PASS_PROBABILITY_RESOLUTION: f64 = 0.01;
 fn assert_mean_is(image: &RgbImage, expected: f64, scale: f64, what: &str) {
     let values: Vec<f64> = image.pixels.iter().map(|&p| luminance(p) / scale).collect();
     let (mean, stderr) = mean_and_stderr(&values);
-    assert!(5.0 * stderr < PASS_PROBABILITY_RESOLUTION, "{what}: five standard errors ({:.4}) exceed the error this test must catch", 5.0 * stderr);
-    assert!((mean - expected).abs() <= 5.0 * stderr, "{what}: {mean:.4} of the light passes, expected {expected} (five standard errors: {:.4})", 5.0 * stderr);
+    assert!(
+        5.0 * stderr < PASS_PROBABILITY_RESOLUTION,
+        "{what}: five standard errors ({:.4}) exceed the error this test must catch",
+        5.0 * stderr
+    );
+    assert!(
+        (mean - expected).abs() <= 5.0 * stderr,
+        "{what}: {mean:.4} of the light passes, expected {expected} (five standard errors: {:.4})",
+        5.0 * stderr
+    );
 }
 
 /// A square of uniform opacity 0.3 lets 70 % of the background through, met by each ray with
@@ -235,16 +255,24 @@ fn emitters_with_alpha_light_as_much_as_rays_find_of_them() {
     let (_lock, ctx) = gpu();
     let dir = temp_dir("alpha-emitter");
     let emissive = r#""emissiveFactor": [1, 1, 1], "#;
-    let cases = [(0.3, r#""alphaMode": "BLEND""#, None, "glTF BLEND, alpha 0.3"), (1.0, r#""alphaMode": "MASK""#, Some(checker()), "glTF MASK, alpha checker")];
+    let cases = [
+        (0.3, r#""alphaMode": "BLEND""#, None, "glTF BLEND, alpha 0.3"),
+        (1.0, r#""alphaMode": "MASK""#, Some(checker()), "glTF MASK, alpha checker"),
+    ];
     for (factor, mode, texture, what) in cases {
         write_gltf_square(&dir, 1.0, 2.0, factor, &format!("{emissive}{mode}"), texture.as_deref());
         let with_nee = floor_under_emitter(&ctx, &dir, "square.gltf", true, 32);
         let bsdf_only = floor_under_emitter(&ctx, &dir, "square.gltf", false, 128);
-        let differences: Vec<f64> = with_nee.pixels.iter().zip(&bsdf_only.pixels).map(|(&a, &b)| luminance(a) - luminance(b)).collect();
+        let differences: Vec<f64> =
+            with_nee.pixels.iter().zip(&bsdf_only.pixels).map(|(&a, &b)| luminance(a) - luminance(b)).collect();
         let (difference, stderr) = mean_and_stderr(&differences);
         let mean = bsdf_only.pixels.iter().map(|&p| luminance(p)).sum::<f64>() / bsdf_only.pixels.len() as f64;
         eprintln!("{what}: floor {mean:.4} by BSDF sampling, next-event estimation differs by {difference:+.4} (five standard errors {:.4})", 5.0 * stderr);
-        assert!(5.0 * stderr < EMITTER_ALPHA_RESOLUTION * mean, "{what}: five standard errors ({:.4}) exceed 3 % of the floor ({mean:.4})", 5.0 * stderr);
+        assert!(
+            5.0 * stderr < EMITTER_ALPHA_RESOLUTION * mean,
+            "{what}: five standard errors ({:.4}) exceed 3 % of the floor ({mean:.4})",
+            5.0 * stderr
+        );
         assert!(difference.abs() <= 5.0 * stderr, "{what}: next-event estimation gives the floor {difference:+.4} more than BSDF sampling ({mean:.4}); five standard errors: {:.4}", 5.0 * stderr);
     }
 }

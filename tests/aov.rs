@@ -47,7 +47,13 @@ struct Layers {
 fn layers(p: &PartialRender) -> Layers {
     let samples: Vec<f32> = p.accumulation.iter().map(|a| a[3]).collect();
     let sums = p.aov_sums.as_ref().expect("kernel AOVs were requested");
-    Layers { width: p.width, albedo: sums.albedo(&samples), normal: sums.normal(&samples), depth: sums.depth(), samples }
+    Layers {
+        width: p.width,
+        albedo: sums.albedo(&samples),
+        normal: sums.normal(&samples),
+        depth: sums.depth(),
+        samples,
+    }
 }
 
 fn close(a: [f32; 3], b: [f32; 3], tolerance: f32) -> bool {
@@ -66,7 +72,9 @@ fn ray(scene: &Scene, film: Vec2) -> Vec3 {
 /// mean of a smooth `f` falls in.
 fn footprint_range(x: u32, y: u32, f: impl Fn(Vec2) -> f32) -> (f32, f32) {
     let n = 8;
-    let values: Vec<f32> = (0..=n * n + 2 * n).map(|i| f(Vec2::new(x as f32 + (i % (n + 1)) as f32 / n as f32, y as f32 + (i / (n + 1)) as f32 / n as f32))).collect();
+    let values: Vec<f32> = (0..=n * n + 2 * n)
+        .map(|i| f(Vec2::new(x as f32 + (i % (n + 1)) as f32 / n as f32, y as f32 + (i / (n + 1)) as f32 / n as f32)))
+        .collect();
     (values.iter().copied().fold(f32::INFINITY, f32::min), values.iter().copied().fold(f32::NEG_INFINITY, f32::max))
 }
 
@@ -76,7 +84,11 @@ fn assert_depth(scene: &Scene, l: &Layers, distance: impl Fn(Vec2) -> f32) {
         let (x, y) = (i as u32 % l.width, i as u32 / l.width);
         let (lo, hi) = footprint_range(x, y, &distance);
         let slack = 1e-5 * hi;
-        assert!(z >= lo - slack && z <= hi + slack, "pixel ({x}, {y}) of {}: depth {z} outside [{lo}, {hi}]", scene.name);
+        assert!(
+            z >= lo - slack && z <= hi + slack,
+            "pixel ({x}, {y}) of {}: depth {z} outside [{lo}, {hi}]",
+            scene.name
+        );
     }
 }
 
@@ -172,9 +184,17 @@ fn textured_mesh_gives_material_albedo_times_texture() {
         "#,
     );
     let texel = [200u8, 100, 50, 255];
-    scene.textures = vec![Texture { name: "flat".into(), width: 1, height: 1, texels: vec![texel], srgb: true, wrap: Default::default() }];
+    scene.textures = vec![Texture {
+        name: "flat".into(),
+        width: 1,
+        height: 1,
+        texels: vec![texel],
+        srgb: true,
+        wrap: Default::default(),
+    }];
     scene.materials[0].albedo_texture = Some(0);
-    let corners = [Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0)];
+    let corners =
+        [Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0)];
     scene.meshes = vec![Mesh {
         name: "square".into(),
         positions: corners.to_vec(),
@@ -219,11 +239,22 @@ fn aov_sums_split_across_bindings_are_the_same() {
         let (_lock, ctx) = gpu_with_storage_limit(limit);
         let mut r = Renderer::with_aovs(&ctx, &scene, 2, AovSet::ALL).unwrap();
         r.render(2, |_| {}).unwrap();
-        let split: Vec<_> = r.geometry.split_arrays.iter().filter(|(name, _)| name.ends_with("sums")).map(|&(_, windows)| windows).collect();
+        let split: Vec<_> = r
+            .geometry
+            .split_arrays
+            .iter()
+            .filter(|(name, _)| name.ends_with("sums"))
+            .map(|&(_, windows)| windows)
+            .collect();
         (split, r.accumulation().unwrap(), r.aov_sums().unwrap().unwrap())
     };
     let (whole, split) = (render(None), render(Some(4096)));
-    assert!(whole.0.is_empty() && split.0.len() == 2 && split.0.iter().all(|&w| w > 1), "windows: {:?} and {:?}", whole.0, split.0);
+    assert!(
+        whole.0.is_empty() && split.0.len() == 2 && split.0.iter().all(|&w| w > 1),
+        "windows: {:?} and {:?}",
+        whole.0,
+        split.0
+    );
     assert!(whole.1 == split.1 && whole.2 == split.2, "the split render differs");
 }
 
@@ -244,18 +275,28 @@ fn exr_output_carries_the_documented_layers() {
             .collect();
         (channels, layer.attributes.other.get(&exr::prelude::Text::from("caustica.aovs")).cloned())
     };
-    let names = |channels: &[(String, Vec<f32>)]| channels.iter().map(|(n, _)| n.clone()).filter(|n| !n.starts_with("accumulation")).collect::<Vec<_>>();
+    let names = |channels: &[(String, Vec<f32>)]| {
+        channels.iter().map(|(n, _)| n.clone()).filter(|n| !n.starts_with("accumulation")).collect::<Vec<_>>()
+    };
     let (channels, attribute) = read(&all);
     // EXR stores channels sorted by name.
-    let expected = ["B", "G", "R", "Z", "albedo.B", "albedo.G", "albedo.R", "normal.X", "normal.Y", "normal.Z", "samples.Y"];
+    let expected =
+        ["B", "G", "R", "Z", "albedo.B", "albedo.G", "albedo.R", "normal.X", "normal.Y", "normal.Z", "samples.Y"];
     assert_eq!(names(&channels), expected);
     assert_eq!(attribute, Some(exr::prelude::AttributeValue::Text("albedo,normal,depth,samples".into())));
     let samples = &channels.iter().find(|(n, _)| n == "samples.Y").unwrap().1;
     assert!(samples.len() == 64 && samples.iter().all(|&n| n == 2.0), "{samples:?}");
     // The middle of the image looks into the Cornell box; at the rim some rays pass it by.
     let depth = &channels.iter().find(|(n, _)| n == "Z").unwrap().1;
-    assert!(depth.iter().all(|&z| z > 0.0) && (2..6).all(|y| (2..6).all(|x| depth[y * 8 + x].is_finite())), "{depth:?}");
-    assert_eq!(caustica::image::read_image(&all).unwrap(), PartialRender::read(&all).unwrap().image(), "viewers still get the beauty");
+    assert!(
+        depth.iter().all(|&z| z > 0.0) && (2..6).all(|y| (2..6).all(|x| depth[y * 8 + x].is_finite())),
+        "{depth:?}"
+    );
+    assert_eq!(
+        caustica::image::read_image(&all).unwrap(),
+        PartialRender::read(&all).unwrap().image(),
+        "viewers still get the beauty"
+    );
     assert_eq!(names(&read(&albedo).0), ["B", "G", "R", "albedo.B", "albedo.G", "albedo.R"]);
 }
 
@@ -279,9 +320,20 @@ fn resumed_and_merged_renders_keep_the_aovs_bit_for_bit() {
     }
     let (whole, merged) = (path("whole.exr"), path("merged.exr"));
     render_cli(&whole, &["--spp", "3", "--aov", "all"]);
-    let o = caustica(&["merge", "-q", "-o", merged.to_str().unwrap(), ones[1].to_str().unwrap(), ones[0].to_str().unwrap(), ones[2].to_str().unwrap()]);
+    let o = caustica(&[
+        "merge",
+        "-q",
+        "-o",
+        merged.to_str().unwrap(),
+        ones[1].to_str().unwrap(),
+        ones[0].to_str().unwrap(),
+        ones[2].to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(PartialRender::read(&whole).unwrap() == PartialRender::read(&merged).unwrap(), "3 x 1 spp merged differs from 3 spp");
+    assert!(
+        PartialRender::read(&whole).unwrap() == PartialRender::read(&merged).unwrap(),
+        "3 x 1 spp merged differs from 3 spp"
+    );
 }
 
 #[test]
@@ -294,8 +346,26 @@ fn bad_aov_combinations_fail_with_a_message() {
     render_cli(Path::new(&with), &["--spp", "1", "--aov", "all", "--checkpoint", &ck]);
     render_cli(Path::new(&without), &["--spp", "1", "--sample-offset", "1"]);
     let merged = path("merged.exr");
-    fails_with(&caustica(&["merge", "-o", &merged, &with, &without]), "different AOVs (none, not albedo,normal,depth,samples)");
+    fails_with(
+        &caustica(&["merge", "-o", &merged, &with, &without]),
+        "different AOVs (none, not albedo,normal,depth,samples)",
+    );
     assert!(!Path::new(&merged).exists(), "a refused merge wrote its output");
-    let resume = ["render", "-o", &path("more.exr"), "--width", "8", "--height", "8", "--spp", "2", "--resume", "--checkpoint", &ck, "--aov", "albedo"];
+    let resume = [
+        "render",
+        "-o",
+        &path("more.exr"),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "2",
+        "--resume",
+        "--checkpoint",
+        &ck,
+        "--aov",
+        "albedo",
+    ];
     fails_with(&caustica(&resume), "cannot resume: different AOVs (albedo,normal,depth,samples, not albedo)");
 }

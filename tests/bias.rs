@@ -27,9 +27,23 @@ fn mean_and_stderr_of(image: &RgbImage) -> (f64, f64) {
 fn assert_mean_is(image: &RgbImage, expected: f64, floor: f64, bias: f64, what: &str) {
     let (mean, stderr) = mean_and_stderr_of(image);
     let tolerance = 5.0 * stderr + floor * expected;
-    eprintln!("{what}: mean {mean:.6}, expected {expected:.6}, difference {:+.4} %, tolerance {:.4} %", (mean / expected - 1.0) * 100.0, tolerance / expected * 100.0);
-    assert!(tolerance <= bias * expected, "{what}: the tolerance {:.3} % no longer resolves a {:.2} % bias: raise the sample count", tolerance / expected * 100.0, bias * 100.0);
-    assert!((mean - expected).abs() <= tolerance, "{what}: mean {mean:.6}, expected {expected:.6} ({:+.3} %, tolerance {:.3} %)", (mean / expected - 1.0) * 100.0, tolerance / expected * 100.0);
+    eprintln!(
+        "{what}: mean {mean:.6}, expected {expected:.6}, difference {:+.4} %, tolerance {:.4} %",
+        (mean / expected - 1.0) * 100.0,
+        tolerance / expected * 100.0
+    );
+    assert!(
+        tolerance <= bias * expected,
+        "{what}: the tolerance {:.3} % no longer resolves a {:.2} % bias: raise the sample count",
+        tolerance / expected * 100.0,
+        bias * 100.0
+    );
+    assert!(
+        (mean - expected).abs() <= tolerance,
+        "{what}: mean {mean:.6}, expected {expected:.6} ({:+.3} %, tolerance {:.3} %)",
+        (mean / expected - 1.0) * 100.0,
+        tolerance / expected * 100.0
+    );
 }
 
 /// The camera inside a closed, two-sided emissive diffuse sphere: every surface point sees only
@@ -94,7 +108,8 @@ fn polygon_irradiance(vertices: &[Vec3], radiance: f64) -> f64 {
 #[test]
 fn sphere_light_irradiance_is_exact() {
     let (_lock, ctx) = gpu();
-    let scene = floor_point_scene("[[spheres]]\ncenter = [0.0, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 256, true);
+    let scene =
+        floor_point_scene("[[spheres]]\ncenter = [0.0, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 256, true);
     let irradiance = PI * 4.0 * (0.5f64 / 2.0).powi(2);
     assert_mean_is(&render(&ctx, &scene, 1), 0.5 / PI * irradiance, 0.0002, 0.001, "floor under a sphere light");
 }
@@ -105,8 +120,15 @@ fn quad_light_irradiance_is_exact() {
     let (_lock, ctx) = gpu();
     // The emitting side faces cross(edge_u, edge_v) = -y: down at the floor.
     let scene = floor_point_scene("[[quads]]\norigin = [-0.3, 1.5, -0.2]\nedge_u = [1.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, 1.0]\nmaterial = \"lamp\"", 512, true);
-    let corners = [Vec3::new(-0.3, 1.5, -0.2), Vec3::new(-0.3, 1.5, 0.8), Vec3::new(0.7, 1.5, 0.8), Vec3::new(0.7, 1.5, -0.2)];
-    assert_mean_is(&render(&ctx, &scene, 2), 0.5 / PI * polygon_irradiance(&corners, 4.0), 0.0002, 0.002, "floor under a quad light");
+    let corners =
+        [Vec3::new(-0.3, 1.5, -0.2), Vec3::new(-0.3, 1.5, 0.8), Vec3::new(0.7, 1.5, 0.8), Vec3::new(0.7, 1.5, -0.2)];
+    assert_mean_is(
+        &render(&ctx, &scene, 2),
+        0.5 / PI * polygon_irradiance(&corners, 4.0),
+        0.0002,
+        0.002,
+        "floor under a quad light",
+    );
 }
 
 /// A sphere light (as above, off axis) and a two-sided square light together: the irradiances add.
@@ -123,9 +145,16 @@ fn assert_two_lights_sum_exactly(selection: LightSelection, seed: u32) {
     // A sphere wholly above the horizon: E = pi L (r / d)^2 cos(theta) towards its centre.
     let centre = glam::DVec3::new(1.5, 2.0, 0.0);
     let sphere = PI * 4.0 * (0.5 / centre.length()).powi(2) * centre.normalize().y;
-    let corners = [Vec3::new(-0.3, 1.5, -0.2), Vec3::new(-0.3, 1.5, 0.8), Vec3::new(0.7, 1.5, 0.8), Vec3::new(0.7, 1.5, -0.2)];
+    let corners =
+        [Vec3::new(-0.3, 1.5, -0.2), Vec3::new(-0.3, 1.5, 0.8), Vec3::new(0.7, 1.5, 0.8), Vec3::new(0.7, 1.5, -0.2)];
     let expected = 0.5 / PI * (sphere + polygon_irradiance(&corners, 1.0));
-    assert_mean_is(&render(&ctx, &scene, seed), expected, 0.0002, 0.005, &format!("floor under a sphere and a two-sided quad, lights picked by {selection:?}"));
+    assert_mean_is(
+        &render(&ctx, &scene, seed),
+        expected,
+        0.0002,
+        0.005,
+        &format!("floor under a sphere and a two-sided quad, lights picked by {selection:?}"),
+    );
 }
 
 #[test]
@@ -198,7 +227,12 @@ fn floor_under_a_latlong_sky_is_its_cosine_weighted_integral() {
     }
     let column_mean = (0..w).map(column_value).sum::<f64>() / w as f64;
     let mut scene = floor_point_scene("", 512, true);
-    scene.environment = Environment::Map(EnvironmentMap { projection: MapProjection::LatLong, image: map, intensity: 1.0, rotation_deg: 0.0 });
+    scene.environment = Environment::Map(EnvironmentMap {
+        projection: MapProjection::LatLong,
+        image: map,
+        intensity: 1.0,
+        rotation_deg: 0.0,
+    });
     // Radiance at polar angle theta: linear in the texel coordinate between row centres, held
     // beyond the first and last (the kernel's bilinear lookup, constant along a row).
     let radiance = |theta: f64| {
@@ -210,7 +244,10 @@ fn floor_under_a_latlong_sky_is_its_cosine_weighted_integral() {
     // Irradiance: 2 pi int_0^{pi/2} L(theta) cos sin dtheta, by the midpoint rule (exact to 1e-9 here).
     let steps = 200_000;
     let dtheta = PI / 2.0 / steps as f64;
-    let irradiance: f64 = column_mean * 2.0 * PI * (0..steps).map(|k| (k as f64 + 0.5) * dtheta).map(|t| radiance(t) * t.cos() * t.sin() * dtheta).sum::<f64>();
+    let irradiance: f64 = column_mean
+        * 2.0
+        * PI
+        * (0..steps).map(|k| (k as f64 + 0.5) * dtheta).map(|t| radiance(t) * t.cos() * t.sin() * dtheta).sum::<f64>();
     assert_mean_is(&render(&ctx, &scene, 5), 0.5 / PI * irradiance, 0.0002, 0.002, "floor under a lat-long sky");
 }
 
@@ -221,12 +258,24 @@ fn floor_under_a_latlong_sky_is_its_cosine_weighted_integral() {
 #[test]
 fn sky_and_sphere_light_add_up_exactly() {
     let (_lock, ctx) = gpu();
-    let mut scene = floor_point_scene("[[spheres]]\ncenter = [1.5, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 512, true);
+    let mut scene =
+        floor_point_scene("[[spheres]]\ncenter = [1.5, 2.0, 0.0]\nradius = 0.5\nmaterial = \"lamp\"", 512, true);
     let mut map = RgbImage::new(16, 8);
     map.pixels.fill([0.5; 3]);
-    scene.environment = Environment::Map(EnvironmentMap { projection: MapProjection::LatLong, image: map, intensity: 1.0, rotation_deg: 0.0 });
+    scene.environment = Environment::Map(EnvironmentMap {
+        projection: MapProjection::LatLong,
+        image: map,
+        intensity: 1.0,
+        rotation_deg: 0.0,
+    });
     let centre = glam::DVec3::new(1.5, 2.0, 0.0);
     let sphere_cosine_solid_angle = PI * (0.5 / centre.length()).powi(2) * centre.normalize().y;
     let irradiance = PI * 0.5 + (4.0 - 0.5) * sphere_cosine_solid_angle;
-    assert_mean_is(&render(&ctx, &scene, 8), 0.5 / PI * irradiance, 0.0002, 0.005, "floor under a lat-long sky and a sphere light");
+    assert_mean_is(
+        &render(&ctx, &scene, 8),
+        0.5 / PI * irradiance,
+        0.0002,
+        0.005,
+        "floor under a lat-long sky and a sphere light",
+    );
 }

@@ -18,9 +18,11 @@ mod common;
 
 use bytemuck::Zeroable;
 use caustica::gpu::{compile_compute, Binding, Buffer, BufferKind, ComputeKernel, GpuContext};
-use caustica::render::{assemble_with_kernel_files, shader_file};
 use caustica::render::bindings::KernelBuffer;
-use caustica::render::layout::{GpuMaterial, ALPHA_OPAQUE, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, MATERIAL_BECKMANN, MATERIAL_THIN, NO_TEXTURE};
+use caustica::render::layout::{
+    GpuMaterial, ALPHA_OPAQUE, CONDUCTOR_ALBEDO, CONDUCTOR_COMPLEX, MATERIAL_BECKMANN, MATERIAL_THIN, NO_TEXTURE,
+};
+use caustica::render::{assemble_with_kernel_files, shader_file};
 use caustica::scene::{average_fresnel, fresnel_dielectric};
 use common::*;
 use std::f64::consts::PI;
@@ -118,8 +120,15 @@ const TANGENT: [f64; 4] = [0.866_025_403_784_438_6, 0.5, 0.4, 0.0];
 const THETA_BINS: usize = 80;
 const PHI_BINS: usize = 160;
 /// Gauss-Legendre nodes and weights on [-1, 1] (5 points: exact for degree 9 in each variable).
-const GL_NODES: [f64; 5] = [-0.906_179_845_938_664, -0.538_469_310_105_683_1, 0.0, 0.538_469_310_105_683_1, 0.906_179_845_938_664];
-const GL_WEIGHTS: [f64; 5] = [0.236_926_885_056_189_1, 0.478_628_670_499_366_5, 0.568_888_888_888_888_9, 0.478_628_670_499_366_5, 0.236_926_885_056_189_1];
+const GL_NODES: [f64; 5] =
+    [-0.906_179_845_938_664, -0.538_469_310_105_683_1, 0.0, 0.538_469_310_105_683_1, 0.906_179_845_938_664];
+const GL_WEIGHTS: [f64; 5] = [
+    0.236_926_885_056_189_1,
+    0.478_628_670_499_366_5,
+    0.568_888_888_888_888_9,
+    0.478_628_670_499_366_5,
+    0.236_926_885_056_189_1,
+];
 /// Number of chi-square tests in this file (lobes tested), for the Bonferroni correction.
 const TESTS: f64 = 28.0;
 const SIGNIFICANCE: f64 = 1e-4 / TESTS;
@@ -191,11 +200,17 @@ impl<'a> Kernel<'a> {
         let spirv = compile_compute(&assemble_with_kernel_files(TEST_KERNEL).unwrap()).expect("test kernel compiles");
         let dirs_len = THETA_BINS * PHI_BINS * GL_NODES.len() * GL_NODES.len();
         let results_len = (3 * SAMPLES as usize).max(dirs_len);
-        let material = Buffer::with_data(ctx, "material", BufferKind::HostStorage, bytemuck::bytes_of(&GpuMaterial::zeroed())).unwrap();
+        let material =
+            Buffer::with_data(ctx, "material", BufferKind::HostStorage, bytemuck::bytes_of(&GpuMaterial::zeroed()))
+                .unwrap();
         let query = Buffer::with_data(ctx, "query", BufferKind::HostStorage, &[0u8; 48]).unwrap();
-        let dirs = Buffer::with_data(ctx, "dirs", BufferKind::HostStorage, bytemuck::cast_slice(&quadrature().0)).unwrap();
+        let dirs =
+            Buffer::with_data(ctx, "dirs", BufferKind::HostStorage, bytemuck::cast_slice(&quadrature().0)).unwrap();
         let results = Buffer::with_data(ctx, "results", BufferKind::HostStorage, &vec![0u8; results_len * 16]).unwrap();
-        let materials = Binding { as_texels: KernelBuffer::Materials.entry().texel_words(), ..Binding::whole(KernelBuffer::Materials.entry().binding, &material) };
+        let materials = Binding {
+            as_texels: KernelBuffer::Materials.entry().texel_words(),
+            ..Binding::whole(KernelBuffer::Materials.entry().binding, &material)
+        };
         let bindings = [materials, Binding::whole(30, &query), Binding::whole(31, &dirs), Binding::whole(32, &results)];
         let kernel = ComputeKernel::new(ctx, &spirv, &bindings, 16).unwrap();
         Kernel { ctx, kernel, material, query, dirs, results }
@@ -234,9 +249,16 @@ impl<'a> Kernel<'a> {
     /// Integral of the lobe's pdf over each bin.
     fn bin_probabilities(&mut self, case: &Case, lobe: u32, weights: &[f64]) -> Vec<f64> {
         let pdf = self.run(case, 1, weights.len() as u32, lobe);
-        assert!(pdf.iter().all(|p| p[0] >= 0.0 && p[0].is_finite()), "{}: eval_lobe pdf negative or not finite (or lobe {lobe} never picked)", case.name);
+        assert!(
+            pdf.iter().all(|p| p[0] >= 0.0 && p[0].is_finite()),
+            "{}: eval_lobe pdf negative or not finite (or lobe {lobe} never picked)",
+            case.name
+        );
         let per_bin = GL_NODES.len() * GL_NODES.len();
-        pdf.chunks(per_bin).zip(weights.chunks(per_bin)).map(|(p, w)| p.iter().zip(w).map(|(p, w)| p[0] as f64 * w).sum()).collect()
+        pdf.chunks(per_bin)
+            .zip(weights.chunks(per_bin))
+            .map(|(p, w)| p.iter().zip(w).map(|(p, w)| p[0] as f64 * w).sum())
+            .collect()
     }
 
     fn destroy(self) {
@@ -350,7 +372,11 @@ fn rel(a: f32, b: f32, floor: f32) -> f32 {
 fn check_case(kernel: &mut Kernel, weights: &[f64], case: &Case, kind: u32) -> Vec<String> {
     let samples = kernel.samples(case);
     // A lobe's code is kind * 4 + fresnel.
-    assert!(samples.iter().any(|s| s.lobe / 4 == kind), "{}: never picks the lobe of kind {kind} it is a case of", case.name);
+    assert!(
+        samples.iter().any(|s| s.lobe / 4 == kind),
+        "{}: never picks the lobe of kind {kind} it is a case of",
+        case.name
+    );
     // Consistency: sample_lobe's pdf is eval_lobe's for the same direction, and its weight is
     // eval_lobe's f cos over that pdf. Float rounding (the half vector recomputed from wo + wi)
     // leaves a few samples near the horizon off by more; allow 1 in 10^4 beyond 1e-3.
@@ -364,13 +390,24 @@ fn check_case(kernel: &mut Kernel, weights: &[f64], case: &Case, kind: u32) -> V
             bad += 1;
         }
         if err.is_nan() || err > worst.0 {
-            worst = (err, format!("dir {:?}: pdf {} against eval_lobe's {}, weight {:?} against eval / pdf {:?}", s.dir, s.pdf, s.eval_pdf, s.weight, s.eval.map(|e| e / s.eval_pdf)));
+            worst = (
+                err,
+                format!(
+                    "dir {:?}: pdf {} against eval_lobe's {}, weight {:?} against eval / pdf {:?}",
+                    s.dir,
+                    s.pdf,
+                    s.eval_pdf,
+                    s.weight,
+                    s.eval.map(|e| e / s.eval_pdf)
+                ),
+            );
         }
     }
     eprintln!("{}: {bad} samples off eval_lobe by more than 1e-3, worst relative error {:.1e}", case.name, worst.0);
     let mut failures = Vec::new();
     if bad > SAMPLES as usize / 10_000 {
-        failures.push(format!("{}: {bad} samples disagree with eval_lobe by more than 1e-3; worst {}", case.name, worst.1));
+        failures
+            .push(format!("{}: {bad} samples disagree with eval_lobe by more than 1e-3; worst {}", case.name, worst.1));
     }
 
     let mut lobes: Vec<u32> = samples.iter().map(|s| s.lobe).collect();
@@ -461,10 +498,16 @@ const LOBES: [(&str, Cases); 4] = [
 ];
 
 /// Lobes that are always delta (no pdf to test against), each with the test that checks it.
-const DELTA_LOBES: [(&str, &str); 1] = [("LOBE_THIN_DIELECTRIC", "a_thin_sheet_reflects_two_f_over_one_plus_f_and_passes_the_rest_straight")];
+const DELTA_LOBES: [(&str, &str); 1] =
+    [("LOBE_THIN_DIELECTRIC", "a_thin_sheet_reflects_two_f_over_one_plus_f_and_passes_the_rest_straight")];
 
 fn diffuse_cases() -> Vec<Case> {
-    vec![Case { name: "diffuse (cos 0.6)".into(), material: material(0.7, 0.0, 0.0, 1.5, 0.0), cos_o: 0.6, entering: true }]
+    vec![Case {
+        name: "diffuse (cos 0.6)".into(),
+        material: material(0.7, 0.0, 0.0, 1.5, 0.0),
+        cos_o: 0.6,
+        entering: true,
+    }]
 }
 
 /// Rough conductors (the plastic's coat reflects by this lobe too, tested with the plastic).
@@ -480,14 +523,29 @@ fn reflector_cases() -> Vec<Case> {
     // Beckmann samples all normals by D cos rather than the visible ones: grazing incidence at
     // high alpha is where its rejected samples (normals facing away) and its weights differ most.
     for (alpha, cos_o) in [(0.05, 0.2), (0.3, 0.9), (1.0, 0.2)] {
-        cases.push(Case { name: format!("Beckmann conductor, alpha {alpha} (cos {cos_o})"), material: beckmann(gold(alpha)), cos_o, entering: true });
+        cases.push(Case {
+            name: format!("Beckmann conductor, alpha {alpha} (cos {cos_o})"),
+            material: beckmann(gold(alpha)),
+            cos_o,
+            entering: true,
+        });
     }
     // Anisotropic, the viewer at 30 degrees from the tangent's azimuth (TANGENT): narrow along u
     // and wide along v, or the other way round for Beckmann.
     for cos_o in [0.9, 0.2] {
-        cases.push(Case { name: format!("anisotropic conductor, alpha 0.05 along u, 0.5 along v (cos {cos_o})"), material: anisotropic(gold(0.05), 0.5), cos_o, entering: true });
+        cases.push(Case {
+            name: format!("anisotropic conductor, alpha 0.05 along u, 0.5 along v (cos {cos_o})"),
+            material: anisotropic(gold(0.05), 0.5),
+            cos_o,
+            entering: true,
+        });
     }
-    cases.push(Case { name: "anisotropic Beckmann conductor, alpha 0.5 along u, 0.05 along v (cos 0.2)".into(), material: anisotropic(beckmann(gold(0.5)), 0.05), cos_o: 0.2, entering: true });
+    cases.push(Case {
+        name: "anisotropic Beckmann conductor, alpha 0.5 along u, 0.05 along v (cos 0.2)".into(),
+        material: anisotropic(beckmann(gold(0.5)), 0.05),
+        cos_o: 0.2,
+        entering: true,
+    });
     cases
 }
 
@@ -508,7 +566,12 @@ fn dielectric_cases() -> Vec<Case> {
         let name = format!("anisotropic dielectric ior 1.5, alpha 0.1 along u, 0.6 along v, {side} (cos 0.7)");
         cases.push(Case { name, material: anisotropic(glass, 0.6), cos_o: 0.7, entering });
         let name = format!("anisotropic Beckmann dielectric ior 1.5, alpha 0.6 along u, 0.1 along v, {side} (cos 0.7)");
-        cases.push(Case { name, material: anisotropic(beckmann(material(1.0, 0.0, 1.0, 1.5, 0.6)), 0.1), cos_o: 0.7, entering });
+        cases.push(Case {
+            name,
+            material: anisotropic(beckmann(material(1.0, 0.0, 1.0, 1.5, 0.6)), 0.1),
+            cos_o: 0.7,
+            entering,
+        });
     }
     cases
 }
@@ -523,7 +586,12 @@ fn coated_diffuse_cases() -> Vec<Case> {
     clearcoated.coat[..2].copy_from_slice(&[1.0, 0.5]);
     vec![
         Case { name: "plastic ior 1.5, roughness 0.2 (cos 0.6)".into(), material: plastic, cos_o: 0.6, entering: true },
-        Case { name: "clear coat roughness 0.5 over that plastic (cos 0.3)".into(), material: clearcoated, cos_o: 0.3, entering: true },
+        Case {
+            name: "clear coat roughness 0.5 over that plastic (cos 0.3)".into(),
+            material: clearcoated,
+            cos_o: 0.3,
+            entering: true,
+        },
     ]
 }
 
@@ -544,7 +612,11 @@ fn kernel_lobes() -> Vec<(String, u32)> {
 #[test]
 fn every_lobe_of_the_kernel_has_chi_square_cases() {
     let mut kernel: Vec<String> = kernel_lobes().into_iter().map(|(name, _)| name).collect();
-    let mut tested: Vec<String> = LOBES.iter().map(|(name, _)| name.to_string()).chain(DELTA_LOBES.iter().map(|(name, _)| name.to_string())).collect();
+    let mut tested: Vec<String> = LOBES
+        .iter()
+        .map(|(name, _)| name.to_string())
+        .chain(DELTA_LOBES.iter().map(|(name, _)| name.to_string()))
+        .collect();
     kernel.sort();
     tested.sort();
     assert_eq!(kernel, tested, "the lobes of materials.glsl and the lobes with chi-square cases here differ");
@@ -555,7 +627,11 @@ fn every_lobe_of_the_kernel_has_chi_square_cases() {
 
 /// Runs the cases of `lobe` (a LOBE_* name); each must pick that lobe among those it tests.
 fn run_lobe(lobe: &str) {
-    let kind = kernel_lobes().into_iter().find(|(name, _)| name == lobe).unwrap_or_else(|| panic!("materials.glsl has no {lobe}")).1;
+    let kind = kernel_lobes()
+        .into_iter()
+        .find(|(name, _)| name == lobe)
+        .unwrap_or_else(|| panic!("materials.glsl has no {lobe}"))
+        .1;
     let cases = LOBES.iter().find(|(name, _)| *name == lobe).expect("listed in LOBES").1();
     run_cases(&cases, kind);
 }
@@ -589,7 +665,11 @@ fn plastic_samples_follow_its_pdfs() {
 fn a_thin_sheet_reflects_two_f_over_one_plus_f_and_passes_the_rest_straight() {
     let (_lock, ctx) = gpu();
     let mut kernel = Kernel::new(&ctx);
-    let kind = kernel_lobes().into_iter().find(|(name, _)| name == "LOBE_THIN_DIELECTRIC").expect("materials.glsl has LOBE_THIN_DIELECTRIC").1;
+    let kind = kernel_lobes()
+        .into_iter()
+        .find(|(name, _)| name == "LOBE_THIN_DIELECTRIC")
+        .expect("materials.glsl has LOBE_THIN_DIELECTRIC")
+        .1;
     let mut sheet = material(1.0, 0.0, 1.0, 1.5, 0.0);
     sheet.maps[3] = f32::from_bits(MATERIAL_THIN);
     let cos_o = 0.7f64;
@@ -605,19 +685,37 @@ fn a_thin_sheet_reflects_two_f_over_one_plus_f_and_passes_the_rest_straight() {
         let mirror = [-sin_o as f32, 0.0, cos_o as f32];
         let mut reflected = 0usize;
         for s in &samples {
-            assert!(s.ok && s.lobe / 4 == kind, "{}: sample_lobe failed or picked another lobe ({})", case.name, s.lobe);
-            assert!(s.weight.iter().all(|&w| (w - 1.0).abs() < 1e-6), "{}: weight {:?}, expected 1", case.name, s.weight);
+            assert!(
+                s.ok && s.lobe / 4 == kind,
+                "{}: sample_lobe failed or picked another lobe ({})",
+                case.name,
+                s.lobe
+            );
+            assert!(
+                s.weight.iter().all(|&w| (w - 1.0).abs() < 1e-6),
+                "{}: weight {:?}, expected 1",
+                case.name,
+                s.weight
+            );
             let is = |v: [f32; 3]| (0..3).all(|c| (s.dir[c] - v[c]).abs() < 1e-5);
             if is(mirror) {
                 reflected += 1;
             } else {
-                assert!(is(d), "{}: direction {:?} is neither the mirror direction {mirror:?} nor straight on {d:?}", case.name, s.dir);
+                assert!(
+                    is(d),
+                    "{}: direction {:?} is neither the mirror direction {mirror:?} nor straight on {d:?}",
+                    case.name,
+                    s.dir
+                );
             }
         }
         let n = samples.len() as f64;
         let share = reflected as f64 / n;
         let five_sigma = 5.0 * (expected * (1.0 - expected) / n).sqrt();
-        eprintln!("{}: reflected {share:.5}, expected 2F / (1 + F) = {expected:.5} (five standard errors {five_sigma:.5})", case.name);
+        eprintln!(
+            "{}: reflected {share:.5}, expected 2F / (1 + F) = {expected:.5} (five standard errors {five_sigma:.5})",
+            case.name
+        );
         assert!((share - expected).abs() <= five_sigma, "{}: reflects {share:.5} of the light, expected 2F / (1 + F) = {expected:.5} (F = {f:.5}); five standard errors {five_sigma:.5}", case.name);
     }
     kernel.destroy();
@@ -642,7 +740,15 @@ fn visible_normals_integrate_to_one_for_ggx_and_beckmann() {
             for cos_o in [0.9, 0.3] {
                 let mut m = anisotropic(material(1.0, 1.0, 0.0, 1.0, alpha), alpha_v);
                 m.maps[3] = f32::from_bits(distribution);
-                let case = Case { name: format!("{name}, alpha {alpha} along u, {} along v, cos {cos_o}", if alpha_v > 0.0 { alpha_v } else { alpha }), material: m, cos_o, entering: true };
+                let case = Case {
+                    name: format!(
+                        "{name}, alpha {alpha} along u, {} along v, cos {cos_o}",
+                        if alpha_v > 0.0 { alpha_v } else { alpha }
+                    ),
+                    material: m,
+                    cos_o,
+                    entering: true,
+                };
                 let values = kernel.run(&case, 2, weights.len() as u32, 0);
                 let integral: f64 = values.iter().zip(&weights).map(|(v, w)| v[0] as f64 * w).sum();
                 eprintln!("{}: the visible normals integrate to {integral:.5}", case.name);
@@ -699,14 +805,23 @@ fn slope_shares(ax: f64, ay: f64, turn: f64, beckmann: bool) -> (f64, f64) {
 fn anisotropic_lobes_are_rough_by_alpha_u_along_the_tangent_and_alpha_v_across() {
     let (_lock, ctx) = gpu();
     let mut kernel = Kernel::new(&ctx);
-    let kind = kernel_lobes().into_iter().find(|(name, _)| name == "LOBE_REFLECT").expect("materials.glsl has LOBE_REFLECT").1;
+    let kind =
+        kernel_lobes().into_iter().find(|(name, _)| name == "LOBE_REFLECT").expect("materials.glsl has LOBE_REFLECT").1;
     let (alpha_u, alpha_v) = (0.5f32, 0.1f32);
     let tangent_length = TANGENT[0].hypot(TANGENT[1]);
-    let (t, b) = ([TANGENT[0] / tangent_length, TANGENT[1] / tangent_length], [-TANGENT[1] / tangent_length, TANGENT[0] / tangent_length]);
+    let (t, b) = (
+        [TANGENT[0] / tangent_length, TANGENT[1] / tangent_length],
+        [-TANGENT[1] / tangent_length, TANGENT[0] / tangent_length],
+    );
     let mut failures = Vec::new();
     for (name, beckmann_lobe) in [("GGX", false), ("Beckmann", true)] {
         let conductor = anisotropic(material(1.0, 1.0, 0.0, 1.0, alpha_u), alpha_v);
-        let case = Case { name: format!("{name} anisotropic conductor"), material: if beckmann_lobe { beckmann(conductor) } else { conductor }, cos_o: 1.0, entering: true };
+        let case = Case {
+            name: format!("{name} anisotropic conductor"),
+            material: if beckmann_lobe { beckmann(conductor) } else { conductor },
+            cos_o: 1.0,
+            entering: true,
+        };
         let (mut steeper_along_x, mut first_and_third, mut n) = (0usize, 0usize, 0usize);
         for s in kernel.samples(&case).iter().filter(|s| s.ok) {
             assert_eq!(s.lobe / 4, kind, "{}: picked lobe {}", case.name, s.lobe);
@@ -729,7 +844,8 @@ fn anisotropic_lobes_are_rough_by_alpha_u_along_the_tangent_and_alpha_v_across()
         assert!((alpha_off - expected.0).abs() > tolerances.0 && (turned - expected.1).abs() > tolerances.1, "{}: the tolerances {tolerances:?} would pass alpha_v off by 3 % ({alpha_off}) or a tangent turned by 0.25 degrees ({turned})", case.name);
         eprintln!("{}: steeper along the tangent {:.4} (expected {:.4} +- {:.4}), first and third quadrants {:.4} (expected {:.4} +- {:.4}), of {n} samples", case.name, measured.0, expected.0, tolerances.0, measured.1, expected.1, tolerances.1);
         if !((measured.0 - expected.0).abs() <= tolerances.0 && (measured.1 - expected.1).abs() <= tolerances.1) {
-            failures.push(format!("{}: slope shares {measured:?}, expected {expected:?} within {tolerances:?}", case.name));
+            failures
+                .push(format!("{}: slope shares {measured:?}, expected {expected:?} within {tolerances:?}", case.name));
         }
     }
     kernel.destroy();
@@ -739,7 +855,8 @@ fn anisotropic_lobes_are_rough_by_alpha_u_along_the_tangent_and_alpha_v_across()
 /// The p-value routine itself, against known chi-square quantiles.
 #[test]
 fn chi_square_p_values_match_tables() {
-    for (x, dof, p) in [(37.697, 15.0, 0.001), (3.841, 1.0, 0.05), (124.342, 100.0, 0.05), (1_143.917, 1_000.0, 0.001)] {
+    for (x, dof, p) in [(37.697, 15.0, 0.001), (3.841, 1.0, 0.05), (124.342, 100.0, 0.05), (1_143.917, 1_000.0, 0.001)]
+    {
         let q = gamma_q(dof / 2.0, x / 2.0);
         assert!((q / p - 1.0).abs() < 0.02, "chi-square {x} with {dof} dof: p {q:.4e}, expected {p:.1e}");
     }

@@ -52,7 +52,10 @@ fn assert_every_pixel(img: &RgbImage, x_range: std::ops::Range<u32>, expected: [
     for y in 0..img.height {
         for x in x_range.clone() {
             let p = img.get(x, y);
-            assert!((0..3).all(|c| (p[c] - expected[c]).abs() <= 1e-6 * expected[c]), "{what}: pixel ({x},{y}) is {p:?}, expected {expected:?}");
+            assert!(
+                (0..3).all(|c| (p[c] - expected[c]).abs() <= 1e-6 * expected[c]),
+                "{what}: pixel ({x},{y}) is {p:?}, expected {expected:?}"
+            );
         }
     }
 }
@@ -91,7 +94,8 @@ fn flat_regions_keep_their_value_with_every_filter_and_lens() {
 #[test]
 fn tent_and_gaussian_filters_widen_an_edge_by_their_footprint() {
     let (_lock, ctx) = gpu();
-    let edge = |filter: &str| render(&ctx, &scene(16, 256, "", &format!("filter = \"{filter}\""), "", &half_plane(4.0)), 5);
+    let edge =
+        |filter: &str| render(&ctx, &scene(16, 256, "", &format!("filter = \"{filter}\""), "", &half_plane(4.0)), 5);
     let boxed = edge("box");
     assert!(mixed_per_row(&boxed).iter().all(|&n| n == 0), "box: {:?}", mixed_per_row(&boxed));
     // Columns 7 and 8 have their centres half a pixel from the edge: the share of each filter
@@ -99,7 +103,11 @@ fn tent_and_gaussian_filters_widen_an_edge_by_their_footprint() {
     for (filter, leak) in [("tent", 0.125), ("gaussian", 0.158_655)] {
         let img = edge(filter);
         let (left, right) = (column_mean(&img, 7), column_mean(&img, 8));
-        assert!((left - (1.0 - leak)).abs() < 0.03 && (right - leak).abs() < 0.03, "{filter}: columns 7 and 8 are {left:.4}, {right:.4}, expected {:.4}, {leak:.4}", 1.0 - leak);
+        assert!(
+            (left - (1.0 - leak)).abs() < 0.03 && (right - leak).abs() < 0.03,
+            "{filter}: columns 7 and 8 are {left:.4}, {right:.4}, expected {:.4}, {leak:.4}",
+            1.0 - leak
+        );
         assert!(mixed_per_row(&img).iter().all(|&n| n >= 2), "{filter}: {:?}", mixed_per_row(&img));
     }
     // The tent's radius is 1 pixel: columns 6 and 9, 1.5 pixels from the edge, never see across.

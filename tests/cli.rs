@@ -21,19 +21,39 @@ fn every_scene_renders_to_pfm_exr_and_png() {
             continue;
         }
         let stem = scene.file_name().unwrap().to_string_lossy().replace('.', "_");
-        if std::fs::read_to_string(&scene).unwrap().contains("$CAUSTICA_DATA") && !caustica::scene::data_dir().exists() {
-            eprintln!("SKIPPED: {stem} needs the shared data folder ({} is missing)", caustica::scene::data_dir().display());
+        if std::fs::read_to_string(&scene).unwrap().contains("$CAUSTICA_DATA") && !caustica::scene::data_dir().exists()
+        {
+            eprintln!(
+                "SKIPPED: {stem} needs the shared data folder ({} is missing)",
+                caustica::scene::data_dir().display()
+            );
             continue;
         }
         for ext in ["pfm", "exr", "png"] {
             let out = dir.join(format!("{stem}.{ext}"));
-            let o = caustica(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "24", "--height", "16", "--spp", "2", "-q", "--validation"]);
+            let o = caustica(&[
+                "render",
+                scene.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--width",
+                "24",
+                "--height",
+                "16",
+                "--spp",
+                "2",
+                "-q",
+                "--validation",
+            ]);
             assert!(o.status.success(), "{stem}.{ext}: {}", String::from_utf8_lossy(&o.stderr));
             assert!(out.metadata().map(|m| m.len() > 0).unwrap_or(false), "{} was not written", out.display());
         }
         let image = read_image(&dir.join(format!("{stem}.exr"))).unwrap();
         assert_eq!((image.width, image.height), (24, 16));
-        assert!(image.pixels.iter().flatten().all(|c| c.is_finite() && *c >= 0.0), "{stem}: non-finite or negative radiance");
+        assert!(
+            image.pixels.iter().flatten().all(|c| c.is_finite() && *c >= 0.0),
+            "{stem}: non-finite or negative radiance"
+        );
         assert!(image.pixels.iter().flatten().any(|c| *c > 0.0), "{stem}: the image is black");
         rendered += 1;
     }
@@ -70,11 +90,20 @@ fn same_seed_gives_the_same_image_however_samples_are_split() {
 #[test]
 fn bad_input_fails_with_a_message_and_nonzero_exit() {
     let dir = temp_dir("cli-bad");
-    std::fs::write(dir.join("typo.toml"), "[camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\nfovv = 30.0\n").unwrap();
-    std::fs::write(dir.join("probe.toml"), "[camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\n[environment]\nprobe = \"broken.pfm\"\n").unwrap();
+    std::fs::write(
+        dir.join("typo.toml"),
+        "[camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\nfovv = 30.0\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("probe.toml"),
+        "[camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\n[environment]\nprobe = \"broken.pfm\"\n",
+    )
+    .unwrap();
     std::fs::write(dir.join("broken.pfm"), "PF\n4 4\n-1.0\nshort").unwrap();
     let path = |name: &str| dir.join(name).to_string_lossy().into_owned();
-    let (out, missing, typo, probe, bmp) = (path("x.png"), path("missing.toml"), path("typo.toml"), path("probe.toml"), path("x.bmp"));
+    let (out, missing, typo, probe, bmp) =
+        (path("x.png"), path("missing.toml"), path("typo.toml"), path("probe.toml"), path("x.bmp"));
     let cases: [(&[&str], &str); 5] = [
         (&["render", &missing, "-o", &out], "missing.toml"),
         (&["render", &typo, "-o", &out], "fovv"),
@@ -86,7 +115,10 @@ fn bad_input_fails_with_a_message_and_nonzero_exit() {
         let o = caustica(args);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{args:?}: exit status {:?}, stderr {stderr}", o.status);
-        assert!(stderr.contains(needle) && stderr.contains("error"), "{args:?}: stderr does not name '{needle}': {stderr}");
+        assert!(
+            stderr.contains(needle) && stderr.contains("error"),
+            "{args:?}: stderr does not name '{needle}': {stderr}"
+        );
     }
 }
 
@@ -95,7 +127,20 @@ fn compare_prints_the_error_metrics_and_rejects_mismatched_sizes() {
     let dir = temp_dir("cli-compare");
     let render_to = |name: &str, seed: &str, width: &str| {
         let out = dir.join(name);
-        let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", width, "--height", "8", "--spp", "4", "--seed", seed, "-q"]);
+        let o = caustica(&[
+            "render",
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            width,
+            "--height",
+            "8",
+            "--spp",
+            "4",
+            "--seed",
+            seed,
+            "-q",
+        ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         out
     };
@@ -133,7 +178,8 @@ fn non_finite_exposure_is_refused_by_render_and_merge() {
     let (png, part) = (dir.join("out.png"), dir.join("part.exr"));
     let (png, part) = (png.to_str().unwrap(), part.to_str().unwrap());
     for value in ["NaN", "inf", "-inf", "1e9"] {
-        let render = caustica(&["render", "-o", png, "--width", "8", "--height", "8", "--spp", "1", "-q", "--exposure", value]);
+        let render =
+            caustica(&["render", "-o", png, "--width", "8", "--height", "8", "--spp", "1", "-q", "--exposure", value]);
         fails_naming(&render, &["--exposure", value]);
         let merge = caustica(&["merge", part, "-o", png, "-q", "--exposure", value]);
         fails_naming(&merge, &["--exposure", value]);
@@ -150,8 +196,10 @@ fn bad_output_checkpoint_and_sample_range_fail_before_the_device_is_touched() {
     std::fs::create_dir_all(dir.join("folder.png")).unwrap();
     std::fs::write(dir.join("plain-file"), b"not a directory").unwrap();
     std::fs::write(dir.join("out.png"), b"an earlier image").unwrap();
-    let (out, folder, in_missing, in_file) = (path("out.png"), path("folder.png"), path("missing/out.png"), path("plain-file/out.png"));
-    let (ck_missing, ck_png, out_again) = (path("missing/ck.exr"), path("ck.png"), format!("{}/./out.png", dir.display()));
+    let (out, folder, in_missing, in_file) =
+        (path("out.png"), path("folder.png"), path("missing/out.png"), path("plain-file/out.png"));
+    let (ck_missing, ck_png, out_again) =
+        (path("missing/ck.exr"), path("ck.png"), format!("{}/./out.png", dir.display()));
     let cases: [(&[&str], &[&str]); 8] = [
         (&["-o", &folder], &[&folder, "is a directory"]),
         (&["-o", &in_missing], &[&in_missing, "does not exist"]),
@@ -160,7 +208,10 @@ fn bad_output_checkpoint_and_sample_range_fail_before_the_device_is_touched() {
         (&["-o", &out, "--checkpoint", &out_again], &[&out_again, "are the same file"]),
         (&["-o", &out, "--checkpoint", &out], &["-o", "--checkpoint", "are the same file"]),
         (&["-o", &out, "--checkpoint", &ck_png], &["--checkpoint", &ck_png, "must end in .exr"]),
-        (&["-o", &out, "--sample-offset", "4294967290", "--spp", "4294967295"], &["--sample-offset 4294967290", "at most 5 samples per pixel"]),
+        (
+            &["-o", &out, "--sample-offset", "4294967290", "--spp", "4294967295"],
+            &["--sample-offset 4294967290", "at most 5 samples per pixel"],
+        ),
     ];
     for (args, needles) in cases {
         let mut all = vec!["render", "--width", "8", "--height", "8", "-q"];
@@ -179,7 +230,8 @@ fn bad_output_checkpoint_and_sample_range_fail_before_the_device_is_touched() {
         let stderr = fails_naming(&caustica(&["merge", &missing_input, "-o", output]), &[output, problem]);
         assert!(!stderr.contains("missing-part.exr"), "{stderr}");
     }
-    let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let names: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     assert!(names.iter().all(|n| !n.contains(".tmp-")), "a probe left a file: {names:?}");
 }
 
@@ -257,14 +309,17 @@ const NO_DATA: &str = "/nonexistent/caustica-shared-data";
 fn tiny_suite(extra: &[&str]) -> (String, String) {
     let mut args = vec!["bench", "--suite", "--width", "8", "--height", "8", "--spp", "1"];
     args.extend_from_slice(extra);
-    let o = caustica_command(&args).env("CAUSTICA_DATA", NO_DATA).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
-    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned());
+    let o =
+        caustica_command(&args).env("CAUSTICA_DATA", NO_DATA).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+    let (stdout, stderr) =
+        (String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned());
     assert!(o.status.success(), "{stderr}");
     (stdout, stderr)
 }
 
 /// The checked-in scenes that need no shared data, and one that does.
-const LOCAL_SCENES: [&str; 5] = ["cornell.toml (built-in)", "cornell_original.toml", "materials.toml", "probe.toml", "sky.toml"];
+const LOCAL_SCENES: [&str; 5] =
+    ["cornell.toml (built-in)", "cornell_original.toml", "materials.toml", "probe.toml", "sky.toml"];
 const SHARED_SCENE: &str = "bunny_cornell.toml";
 
 #[test]
@@ -282,10 +337,20 @@ fn bench_suite_prints_one_table_and_says_loudly_what_it_skipped() {
         assert!(cells[2..].iter().all(|c| c.parse::<f64>().is_ok_and(|v| v >= 0.0)), "{row}");
     }
     assert!(!stdout.contains(SHARED_SCENE), "{stdout}");
-    assert_eq!(lines.iter().filter(|l| l.starts_with("cornell.toml")).count(), 1, "the built-in box runs once (it is scenes/cornell.toml): {stdout}");
-    let skip = stderr.lines().find(|l| l.contains(&format!("SKIPPED {SHARED_SCENE}"))).unwrap_or_else(|| panic!("no skip line for {SHARED_SCENE}: {stderr}"));
+    assert_eq!(
+        lines.iter().filter(|l| l.starts_with("cornell.toml")).count(),
+        1,
+        "the built-in box runs once (it is scenes/cornell.toml): {stdout}"
+    );
+    let skip = stderr
+        .lines()
+        .find(|l| l.contains(&format!("SKIPPED {SHARED_SCENE}")))
+        .unwrap_or_else(|| panic!("no skip line for {SHARED_SCENE}: {stderr}"));
     assert!(skip.contains("shared data") && skip.contains(NO_DATA), "the reason names the folder: {skip}");
-    assert!(stderr.lines().any(|l| l.starts_with("caustica: SKIPPED") && l.contains("of the suite's scenes")), "a summary of the skips at the end: {stderr}");
+    assert!(
+        stderr.lines().any(|l| l.starts_with("caustica: SKIPPED") && l.contains("of the suite's scenes")),
+        "a summary of the skips at the end: {stderr}"
+    );
 }
 
 #[test]
@@ -301,13 +366,20 @@ fn bench_suite_json_is_one_document_with_the_device_and_a_row_per_scene() {
         assert!(scenes.contains(&scene), "no row for {scene}: {scenes:?}");
     }
     for row in rows {
-        assert_eq!((row["width"].as_u64(), row["height"].as_u64(), row["samples"].as_u64()), (Some(8), Some(8), Some(1)), "{row}");
+        assert_eq!(
+            (row["width"].as_u64(), row["height"].as_u64(), row["samples"].as_u64()),
+            (Some(8), Some(8), Some(1)),
+            "{row}"
+        );
         for key in ["samples_per_second", "rays_per_second", "rays_per_sample", "seconds"] {
             assert!(row[key].as_f64().is_some_and(|v| v > 0.0), "{key} in {row}");
         }
     }
     let skipped = doc["skipped"].as_array().unwrap();
-    let bunny = skipped.iter().find(|s| s["scene"] == SHARED_SCENE).unwrap_or_else(|| panic!("{SHARED_SCENE} not among the skipped: {doc}"));
+    let bunny = skipped
+        .iter()
+        .find(|s| s["scene"] == SHARED_SCENE)
+        .unwrap_or_else(|| panic!("{SHARED_SCENE} not among the skipped: {doc}"));
     assert!(bunny["reason"].as_str().unwrap().contains(NO_DATA), "{bunny}");
     assert_eq!(doc["failed"].as_array().map(Vec::len), Some(0), "{doc}");
     assert!(stderr.contains(&format!("SKIPPED {SHARED_SCENE}")), "said on stderr too: {stderr}");
@@ -319,8 +391,23 @@ fn bench_of_one_scene_keeps_its_json_keys() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let keys = [
-        "scene", "device", "device_type", "width", "height", "samples", "aovs", "setup_seconds", "seconds", "samples_per_second",
-        "rays_per_second", "rays_per_sample", "nonfinite_samples", "loop_limit", "repeated_dispatches", "primitives", "gpu_bytes",
+        "scene",
+        "device",
+        "device_type",
+        "width",
+        "height",
+        "samples",
+        "aovs",
+        "setup_seconds",
+        "seconds",
+        "samples_per_second",
+        "rays_per_second",
+        "rays_per_sample",
+        "nonfinite_samples",
+        "loop_limit",
+        "repeated_dispatches",
+        "primitives",
+        "gpu_bytes",
         "walk_queue",
     ];
     for key in keys {

@@ -36,8 +36,15 @@ fn assert_channel_means(image: &caustica::image::RgbImage, expected: [f64; 3], r
         let values: Vec<f64> = image.pixels.iter().map(|p| p[c] as f64).collect();
         let (mean, stderr) = mean_and_stderr(&values);
         eprintln!("{what}: channel {c}: mean {mean:.5} +- {stderr:.5}, expected {:.5}", expected[c]);
-        assert!(5.0 * stderr < resolution * expected[c], "{what}: channel {c}: too noisy to resolve {resolution}: stderr {stderr:.2e}");
-        assert!((mean - expected[c]).abs() <= 5.0 * stderr + 1e-3 * expected[c], "{what}: channel {c}: mean {mean:.5} +- {stderr:.5}, expected {:.5}", expected[c]);
+        assert!(
+            5.0 * stderr < resolution * expected[c],
+            "{what}: channel {c}: too noisy to resolve {resolution}: stderr {stderr:.2e}"
+        );
+        assert!(
+            (mean - expected[c]).abs() <= 5.0 * stderr + 1e-3 * expected[c],
+            "{what}: channel {c}: mean {mean:.5} +- {stderr:.5}, expected {:.5}",
+            expected[c]
+        );
     }
 }
 
@@ -135,7 +142,12 @@ const FACING_QUAD: &str = r#"
 
 /// A diffuse quad of `albedo` under a white sky, with `coat` on its material.
 fn coated_quad(albedo: f32, coat: Option<Clearcoat>, size: u32, spp: u32) -> Scene {
-    let mut scene = parse(&view_up([1.0; 3], size, spp, &format!("[materials.m]\nalbedo = [{albedo}, {albedo}, {albedo}]\n{FACING_QUAD}")));
+    let mut scene = parse(&view_up(
+        [1.0; 3],
+        size,
+        spp,
+        &format!("[materials.m]\nalbedo = [{albedo}, {albedo}, {albedo}]\n{FACING_QUAD}"),
+    ));
     scene.materials[0].clearcoat = coat;
     scene
 }
@@ -164,7 +176,12 @@ fn a_smooth_clear_coat_over_black_reflects_factor_times_fresnel() {
     let image = render(&ctx, &coated_quad(0.0, smooth_coat(0.6), 48, 64), 7);
     assert_channel_means(&image, [0.6 * F0; 3], 0.05, "clear coat 0.6 over black, head-on");
     let image = render(&ctx, &coated_quad_at_60_degrees(0.0, smooth_coat(0.6), 48, 64), 7);
-    assert_channel_means(&image, [0.6 * fresnel_dielectric(0.5, 1.5); 3], 0.05, "clear coat 0.6 over black, at 60 degrees");
+    assert_channel_means(
+        &image,
+        [0.6 * fresnel_dielectric(0.5, 1.5); 3],
+        0.05,
+        "clear coat 0.6 over black, at 60 degrees",
+    );
 }
 
 /// The scene file's `clearcoat` and `clearcoat_roughness` keys give the material glTF's clear coat
@@ -172,14 +189,30 @@ fn a_smooth_clear_coat_over_black_reflects_factor_times_fresnel() {
 /// 0.6 gives the closed form of the test above, bit for bit the image of the coat set directly.
 #[test]
 fn the_clearcoat_keys_are_the_gltf_clear_coat() {
-    let keyed = parse(&view_up([1.0; 3], 48, 64, &format!("[materials.m]\nalbedo = [0.0, 0.0, 0.0]\nclearcoat = 0.6\n{FACING_QUAD}")));
+    let keyed = parse(&view_up(
+        [1.0; 3],
+        48,
+        64,
+        &format!("[materials.m]\nalbedo = [0.0, 0.0, 0.0]\nclearcoat = 0.6\n{FACING_QUAD}"),
+    ));
     assert_eq!(keyed.materials[0].clearcoat, smooth_coat(0.6));
-    let rough = parse(&view_up([1.0; 3], 8, 1, &format!("[materials.m]\nclearcoat = 0.25\nclearcoat_roughness = 0.5\n{FACING_QUAD}")));
-    assert_eq!(rough.materials[0].clearcoat, Some(Clearcoat { factor: 0.25, roughness: 0.5, texture: None, roughness_texture: None }));
+    let rough = parse(&view_up(
+        [1.0; 3],
+        8,
+        1,
+        &format!("[materials.m]\nclearcoat = 0.25\nclearcoat_roughness = 0.5\n{FACING_QUAD}"),
+    ));
+    assert_eq!(
+        rough.materials[0].clearcoat,
+        Some(Clearcoat { factor: 0.25, roughness: 0.5, texture: None, roughness_texture: None })
+    );
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &keyed, 7);
     assert_channel_means(&image, [0.6 * F0; 3], 0.05, "clear coat 0.6 from the scene file's key over black, head-on");
-    assert!(image.pixels == render(&ctx, &coated_quad(0.0, smooth_coat(0.6), 48, 64), 7).pixels, "the key and the coat set directly render alike");
+    assert!(
+        image.pixels == render(&ctx, &coated_quad(0.0, smooth_coat(0.6), 48, 64), 7).pixels,
+        "the key and the coat set directly render alike"
+    );
     for (keys, needle) in [
         ("clearcoat = 1.5", "materials.m.clearcoat must be in [0, 1], got 1.5"),
         ("clearcoat = 0.5\nclearcoat_roughness = -0.1", "materials.m.clearcoat_roughness must be in [0, 1], got -0.1"),
@@ -209,7 +242,8 @@ fn a_clear_coat_over_white_conserves_energy_in_a_white_furnace() {
 /// The accumulated sums of `scene` rendered by the general kernel (which has the clear coat's code),
 /// as bits.
 fn general_sums(ctx: &caustica::gpu::GpuContext, scene: &Scene) -> Vec<[u32; 4]> {
-    let mut renderer = Renderer::with_kernel(ctx, scene, 3, AovSet::default(), KernelChoice::General).expect("scene uploads");
+    let mut renderer =
+        Renderer::with_kernel(ctx, scene, 3, AovSet::default(), KernelChoice::General).expect("scene uploads");
     renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
     renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect()
 }
@@ -223,7 +257,8 @@ fn a_clear_coat_of_factor_zero_renders_exactly_as_none() {
     uncoated.materials[0].coat = true;
     uncoated.materials[0].roughness = 0.4;
     let mut zero = uncoated.clone();
-    zero.materials[0].clearcoat = Some(Clearcoat { factor: 0.0, roughness: 0.3, texture: None, roughness_texture: None });
+    zero.materials[0].clearcoat =
+        Some(Clearcoat { factor: 0.0, roughness: 0.3, texture: None, roughness_texture: None });
     let (_lock, ctx) = gpu();
     let (a, b) = (general_sums(&ctx, &uncoated), general_sums(&ctx, &zero));
     let differing = a.iter().zip(&b).filter(|(p, q)| p != q).count();
@@ -254,9 +289,14 @@ fn a_gltf_clear_coat_reads_its_factor_and_roughness_textures() {
     let material = r#"{"pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 0},
         "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatTexture": {"index": 0},
                                                     "clearcoatRoughnessFactor": 1, "clearcoatRoughnessTexture": {"index": 0}}}}"#;
-    let resources = format!(r#""textures": [{{"source": 0}}], "images": [{{"uri": "{}"}}],"#, png_uri(&png_texel([128, 0, 255, 255])));
+    let resources = format!(
+        r#""textures": [{{"source": 0}}], "images": [{{"uri": "{}"}}],"#,
+        png_uri(&png_texel([128, 0, 255, 255]))
+    );
     write_gltf_square(&dir, "coated.gltf", 0.0, 2.0, material, &resources);
-    let scene = Scene::parse(&view_up([1.0; 3], 48, 64, "[[meshes]]\nfile = \"coated.gltf\"\n"), "gltf clear coat", &dir).expect("valid test scene");
+    let scene =
+        Scene::parse(&view_up([1.0; 3], 48, 64, "[[meshes]]\nfile = \"coated.gltf\"\n"), "gltf clear coat", &dir)
+            .expect("valid test scene");
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &scene, 11);
     let c = 128.0 / 255.0;
@@ -277,6 +317,7 @@ fn a_plastic_with_internal_reflections_darkens_and_saturates_its_base() {
     let expected = [0.8, 0.5, 0.2].map(|rho: f64| F0 + (1.0 - F0) * rho * leaves / (1.0 - rho * (1.0 - leaves)));
     let (_lock, ctx) = gpu();
     assert_channel_means(&render(&ctx, &scene, 7), expected, 0.02, "plastic with internal reflections, head-on");
-    let refused = Scene::parse(&text.replace("coat = true\n", ""), "t.toml", std::path::Path::new(".")).expect_err("refused without a coat");
+    let refused = Scene::parse(&text.replace("coat = true\n", ""), "t.toml", std::path::Path::new("."))
+        .expect_err("refused without a coat");
     assert!(format!("{refused:#}").contains("materials.m.coat_internal_reflections"), "{refused:#}");
 }

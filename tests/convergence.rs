@@ -25,5 +25,8 @@ fn error_falls_as_one_over_spp() {
     let (coarse, fine) = (error_at(8), error_at(32));
     let ratio = coarse / fine;
     // Heavy-tailed caustic paths make the estimate itself noisy.
-    assert!((2.5..6.4).contains(&ratio), "relative MSE at 8 spp {coarse:.4e}, at 32 spp {fine:.4e}: ratio {ratio:.2}, expected about 3.7");
+    assert!(
+        (2.5..6.4).contains(&ratio),
+        "relative MSE at 8 spp {coarse:.4e}, at 32 spp {fine:.4e}: ratio {ratio:.2}, expected about 3.7"
+    );
 }

@@ -78,7 +78,12 @@ fn importance_sampled_maps_agree_with_bsdf_sampling() {
         let env = environment(projection, w, h, sky_with_sun);
         let sampled = render(&ctx, &sphere_on_floor(64, true, env.clone()), 11);
         let bsdf = render(&ctx, &sphere_on_floor(256, false, env), 12);
-        assert_same_mean(&sampled, &bsdf, 5.0, &format!("{projection:?} map: importance sampling + MIS against BSDF sampling"));
+        assert_same_mean(
+            &sampled,
+            &bsdf,
+            5.0,
+            &format!("{projection:?} map: importance sampling + MIS against BSDF sampling"),
+        );
     }
 }
 

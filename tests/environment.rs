@@ -5,7 +5,10 @@ mod common;
 
 use caustica::gpu::GpuContext;
 use caustica::image::{self, RgbImage};
-use caustica::scene::{angular_map_uv, Camera, Environment, EnvironmentMap, Film, Filter, Integrator, LightSelection, MapProjection, Sampler, Scene};
+use caustica::scene::{
+    angular_map_uv, Camera, Environment, EnvironmentMap, Film, Filter, Integrator, LightSelection, MapProjection,
+    Sampler, Scene,
+};
 use common::*;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
@@ -18,7 +21,16 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
         name: "environment probe".into(),
         camera: Camera::pinhole(Vec3::ZERO, dir, up, 0.001),
         film: Film { width: 1, height: 1, spp: 1, filter: Filter::Box },
-        integrator: Integrator { rr_start: 4, absorption: None, nee: true, max_bounces: 16, sample_environment: true, clamp: None, sampler: Sampler::Sobol, light_selection: LightSelection::Power },
+        integrator: Integrator {
+            rr_start: 4,
+            absorption: None,
+            nee: true,
+            max_bounces: 16,
+            sample_environment: true,
+            clamp: None,
+            sampler: Sampler::Sobol,
+            light_selection: LightSelection::Power,
+        },
         materials: vec![],
         shapes: vec![],
         meshes: vec![],
@@ -56,7 +68,10 @@ fn angular_probe_maps_known_directions_to_debevec_coordinates() {
     for (dir, expected) in cases {
         let seen = radiance_along(&ctx, &env, dir);
         let uv = Vec2::new(seen[0] - 2.0, seen[1] - 2.0);
-        assert!((uv - expected).length() < 2e-3, "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}");
+        assert!(
+            (uv - expected).length() < 2e-3,
+            "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}"
+        );
         let host = angular_map_uv(dir.normalize());
         assert!((host - expected).length() < 1e-5, "host mapping of {dir:?} is {host:?}");
     }
@@ -72,7 +87,8 @@ fn angular_probe_never_uses_texels_outside_the_circle() {
     // Through the scene loader, which prepares probes for the kernel.
     let dir = temp_dir("rim");
     image::pfm::write(&dir.join("rim.pfm"), &img).unwrap();
-    let scene_text = "[camera]\nposition = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\n[environment]\nprobe = \"rim.pfm\"\n";
+    let scene_text =
+        "[camera]\nposition = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\n[environment]\nprobe = \"rim.pfm\"\n";
     std::fs::write(dir.join("rim.toml"), scene_text).unwrap();
     let loaded = Scene::load(&dir.join("rim.toml")).expect("scene with probe loads");
     for k in 0..16 {
@@ -80,7 +96,10 @@ fn angular_probe_never_uses_texels_outside_the_circle() {
         // 2 degrees from straight back, all around.
         let back = Vec3::new(a.cos() * 0.035, a.sin() * 0.035, 1.0);
         let seen = radiance_along(&ctx, &loaded.environment, back);
-        assert!(seen.iter().all(|&c| (c - 1.0).abs() < 1e-4), "direction {back:?} saw {seen:?}: a texel outside the circle was used");
+        assert!(
+            seen.iter().all(|&c| (c - 1.0).abs() < 1e-4),
+            "direction {back:?} saw {seen:?}: a texel outside the circle was used"
+        );
     }
 }
 
@@ -100,8 +119,8 @@ fn latlong_map_maps_known_directions() {
     let (_lock, ctx) = gpu();
     let env = map(MapProjection::LatLong, coordinate_latlong(512, 256), 0.0);
     let cases = [
-        (Vec3::new(0.0, 0.0, -1.0), Vec2::new(0.5, 0.5)),  // forward: centre of the image
-        (Vec3::new(1.0, 0.0, 0.0), Vec2::new(0.75, 0.5)),  // right
+        (Vec3::new(0.0, 0.0, -1.0), Vec2::new(0.5, 0.5)), // forward: centre of the image
+        (Vec3::new(1.0, 0.0, 0.0), Vec2::new(0.75, 0.5)), // right
         (Vec3::new(-1.0, 0.0, 0.0), Vec2::new(0.25, 0.5)), // left
         (Vec3::new(0.0, 1.0, -1.0), Vec2::new(0.5, 0.25)), // 45 degrees up
         (Vec3::new(0.0, -1.0, -1.0), Vec2::new(0.5, 0.75)),
@@ -109,7 +128,10 @@ fn latlong_map_maps_known_directions() {
     for (dir, expected) in cases {
         let seen = radiance_along(&ctx, &env, dir);
         let uv = Vec2::new(seen[0] - 1.0, seen[1] - 1.0);
-        assert!((uv - expected).length() < 2e-3, "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}");
+        assert!(
+            (uv - expected).length() < 2e-3,
+            "direction {dir:?}: kernel looked up (u, v) = {uv:?}, expected {expected:?}"
+        );
     }
 }
 
@@ -119,7 +141,12 @@ fn rotation_turns_the_map_about_up_by_the_right_hand_rule() {
     let (_lock, ctx) = gpu();
     let env = map(MapProjection::LatLong, coordinate_latlong(512, 256), 90.0);
     let seen = radiance_along(&ctx, &env, Vec3::new(0.0, 0.0, -1.0));
-    assert!((seen[0] - 1.75).abs() < 2e-3 && (seen[1] - 1.5).abs() < 2e-3, "front saw (u, v) = ({}, {})", seen[0] - 1.0, seen[1] - 1.0);
+    assert!(
+        (seen[0] - 1.75).abs() < 2e-3 && (seen[1] - 1.5).abs() < 2e-3,
+        "front saw (u, v) = ({}, {})",
+        seen[0] - 1.0,
+        seen[1] - 1.0
+    );
 }
 
 fn data_dir() -> Option<PathBuf> {
@@ -154,7 +181,10 @@ fn grace_probe_texel_centres_are_seen_in_their_directions() {
             let seen = radiance_along(&ctx, &env, dir);
             let want = probe.get(x, y);
             for c in 0..3 {
-                assert!((seen[c] - want[c]).abs() <= 2e-2 * want[c].abs() + 1e-3, "texel ({x}, {y}) direction {dir:?}: saw {seen:?}, texel {want:?}");
+                assert!(
+                    (seen[c] - want[c]).abs() <= 2e-2 * want[c].abs() + 1e-3,
+                    "texel ({x}, {y}) direction {dir:?}: saw {seen:?}, texel {want:?}"
+                );
             }
             checked += 1;
         }

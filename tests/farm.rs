@@ -36,7 +36,8 @@ fn fails_with(o: &Output, needle: &str) {
 #[test]
 fn resume_from_a_checkpoint_is_bit_exact() {
     let dir = temp_dir("farm-resume");
-    let (full, part, resumed, checkpoint) = (dir.join("full.exr"), dir.join("part.png"), dir.join("resumed.exr"), dir.join("ck.exr"));
+    let (full, part, resumed, checkpoint) =
+        (dir.join("full.exr"), dir.join("part.png"), dir.join("resumed.exr"), dir.join("ck.exr"));
     render(&full, &["--spp", "7", "--seed", "5"]);
     render(&part, &["--spp", "3", "--seed", "5", "--checkpoint", checkpoint.to_str().unwrap()]);
     assert_eq!(PartialRender::read(&checkpoint).unwrap().samples(), 3);
@@ -110,14 +111,44 @@ fn merge_refuses_other_scenes_sizes_seeds_and_overlaps() {
     render(&path("a.exr"), &["--spp", "2"]);
     render(&path("overlap.exr"), &["--spp", "2", "--sample-offset", "1"]);
     render(&path("seed.exr"), &["--spp", "2", "--sample-offset", "2", "--seed", "9"]);
-    let small = caustica(&["render", "-o", path("small.exr").to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "2", "--sample-offset", "2", "-q"]);
+    let small = caustica(&[
+        "render",
+        "-o",
+        path("small.exr").to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "2",
+        "--sample-offset",
+        "2",
+        "-q",
+    ]);
     assert!(small.status.success());
     let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sky.toml");
-    let other = caustica(&["render", sky.to_str().unwrap(), "-o", path("sky.exr").to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "2", "--sample-offset", "2", "-q"]);
+    let other = caustica(&[
+        "render",
+        sky.to_str().unwrap(),
+        "-o",
+        path("sky.exr").to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "2",
+        "--sample-offset",
+        "2",
+        "-q",
+    ]);
     assert!(other.status.success());
     std::fs::write(path("plain.pfm"), b"PF\n1 1\n-1.0\n\0\0\0\0\0\0\0\0\0\0\0\0").unwrap();
     let a = path("a.exr");
-    fails_with(&merge(&[&a, &path("overlap.exr")], &path("m.exr")), "overlap.exr: samples 1..3 overlap samples 0..2 of");
+    fails_with(
+        &merge(&[&a, &path("overlap.exr")], &path("m.exr")),
+        "overlap.exr: samples 1..3 overlap samples 0..2 of",
+    );
     fails_with(&merge(&[&a, &path("seed.exr")], &path("m.exr")), "seed.exr: cannot merge with");
     fails_with(&merge(&[&a, &path("small.exr")], &path("m.exr")), "different size (8x8, not 16x16)");
     fails_with(&merge(&[&a, &path("sky.exr")], &path("m.exr")), "different scene");
@@ -165,11 +196,24 @@ fn sigint_and_sigterm_finish_the_pass_and_write_the_image() {
     for signal in ["INT", "TERM"] {
         let (out, checkpoint) = (dir.join(format!("{signal}.exr")), dir.join(format!("{signal}.checkpoint.exr")));
         // A checkpoint after every pass tells the test that rendering is under way.
-        let mut child = caustica_command(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "10000000", "-q", "--checkpoint-every", "0s"])
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
+        let mut child = caustica_command(&[
+            "render",
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "10000000",
+            "-q",
+            "--checkpoint-every",
+            "0s",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
         let deadline = Instant::now() + Duration::from_secs(120);
         while !checkpoint.exists() {
             assert!(Instant::now() < deadline && child.try_wait().unwrap().is_none(), "no checkpoint appeared");
@@ -225,10 +269,12 @@ fn renderer_restore_continues_the_sample_stream() {
     assert!(rest.accumulation().unwrap() == whole.accumulation().unwrap());
     let mut stops = 0;
     let mut stopped = Renderer::new(&ctx, &scene, 3).unwrap();
-    stopped.render_while(50, |_| {
-        stops += 1;
-        false
-    }).unwrap();
+    stopped
+        .render_while(50, |_| {
+            stops += 1;
+            false
+        })
+        .unwrap();
     assert_eq!((stops, stopped.samples_done), (1, 1), "the first pass is one sample, then it stops");
 }
 
@@ -254,12 +300,30 @@ fn partials_whose_ranges_disagree_with_their_counts_are_refused() {
     let (good, bad, out) = (dir.join("good.exr"), dir.join("bad.exr"), dir.join("out.png"));
     write_partial(&good, 0..4, 4.0);
     write_partial(&bad, 4..8, 3.0);
-    let needles = [&format!("{} is not a caustica EXR checkpoint/partial", bad.display()), "pixel (0, 0) holds 3 samples (and 63 more pixels disagree), but its sample ranges 4..8 hold 4"];
+    let needles = [
+        &format!("{} is not a caustica EXR checkpoint/partial", bad.display()),
+        "pixel (0, 0) holds 3 samples (and 63 more pixels disagree), but its sample ranges 4..8 hold 4",
+    ];
     let merged = merge(&[&good, &bad], &out);
     for needle in needles {
         fails_with(&merged, needle);
     }
-    let resumed = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "9", "--resume", "--checkpoint", bad.to_str().unwrap(), "--device", "no-such-gpu"]);
+    let resumed = caustica(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "9",
+        "--resume",
+        "--checkpoint",
+        bad.to_str().unwrap(),
+        "--device",
+        "no-such-gpu",
+    ]);
     for needle in needles {
         fails_with(&resumed, needle);
     }
@@ -271,7 +335,22 @@ fn resuming_past_the_last_sample_index_is_refused_before_rendering() {
     let dir = temp_dir("farm-resume-range");
     let (checkpoint, out) = (dir.join("ck.exr"), dir.join("out.png"));
     write_partial(&checkpoint, 4294967290..4294967292, 2.0);
-    let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "10", "--resume", "--checkpoint", checkpoint.to_str().unwrap(), "--device", "no-such-gpu"]);
+    let o = caustica(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "10",
+        "--resume",
+        "--checkpoint",
+        checkpoint.to_str().unwrap(),
+        "--device",
+        "no-such-gpu",
+    ]);
     fails_with(&o, "ck.exr: cannot resume to --spp 10: samples 4294967290..4294967300 run past the last sample index (4294967294): from sample 4294967290, at most 5 samples per pixel");
 }
 
@@ -281,10 +360,26 @@ fn a_resume_that_adds_no_samples_says_so() {
     let (out, checkpoint) = (dir.join("out.png"), dir.join("ck.exr"));
     let ck = checkpoint.to_str().unwrap();
     render(&out, &["--spp", "2", "--checkpoint", ck]);
-    let o = caustica(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "2", "--resume", "--checkpoint", ck]);
+    let o = caustica(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "2",
+        "--resume",
+        "--checkpoint",
+        ck,
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
-    assert!(stderr.contains("no samples added (") && stderr.contains("already held 2 spp") && !stderr.contains("NaN"), "{stderr}");
+    assert!(
+        stderr.contains("no samples added (") && stderr.contains("already held 2 spp") && !stderr.contains("NaN"),
+        "{stderr}"
+    );
     let o = render(&out, &["--spp", "2", "--resume", "--checkpoint", ck, "--json"]);
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints JSON");
     assert_eq!(summary["samples_this_run"], 0);
@@ -297,11 +392,26 @@ fn a_failed_image_write_keeps_the_samples_in_the_checkpoint() {
     let (images, checkpoint) = (dir.join("images"), dir.join("ck.exr"));
     std::fs::create_dir_all(&images).unwrap();
     let out = images.join("out.png");
-    let mut child = caustica_command(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "16", "--spp", "10000000", "-q", "--checkpoint-every", "0s", "--checkpoint", checkpoint.to_str().unwrap()])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut child = caustica_command(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "10000000",
+        "-q",
+        "--checkpoint-every",
+        "0s",
+        "--checkpoint",
+        checkpoint.to_str().unwrap(),
+    ])
+    .stdout(Stdio::null())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
     let deadline = Instant::now() + Duration::from_secs(120);
     while !checkpoint.exists() {
         assert!(Instant::now() < deadline && child.try_wait().unwrap().is_none(), "no checkpoint appeared");

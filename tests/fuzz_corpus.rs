@@ -105,7 +105,9 @@ fn serialized_corpus() {
     replay("serialized", |bytes| {
         std::fs::write(&path, bytes).unwrap();
         for shape_index in [None, Some(1)] {
-            if let Err(e) = caustica::scene::load_asset_part(&caustica::input_file::InputFiles::anywhere(), &path, shape_index) {
+            if let Err(e) =
+                caustica::scene::load_asset_part(&caustica::input_file::InputFiles::anywhere(), &path, shape_index)
+            {
                 assert_names(&e.to_string(), &path.display().to_string());
             }
         }

@@ -60,14 +60,34 @@ fn ray_triangle(o: Vec3, d: Vec3, v: [Vec3; 3]) -> Option<(f32, Vec2)> {
 /// A closed tetrahedron and an open, folded strip: different shapes, so instances of each overlap
 /// in depth in every way.
 fn tetrahedron(material: u32) -> Mesh {
-    let positions = vec![Vec3::new(1.0, 1.0, 1.0), Vec3::new(1.0, -1.0, -1.0), Vec3::new(-1.0, 1.0, -1.0), Vec3::new(-1.0, -1.0, 1.0)];
+    let positions = vec![
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(1.0, -1.0, -1.0),
+        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(-1.0, -1.0, 1.0),
+    ];
     let triangles = vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]];
-    Mesh { name: "tetrahedron".into(), positions, triangle_materials: vec![material; 4], triangles, ..Default::default() }
+    Mesh {
+        name: "tetrahedron".into(),
+        positions,
+        triangle_materials: vec![material; 4],
+        triangles,
+        ..Default::default()
+    }
 }
 
 fn folded_strip(material: u32) -> Mesh {
-    let positions: Vec<Vec3> = (0..10).map(|i| Vec3::new((i / 2) as f32 * 0.5 - 1.0, if i % 2 == 0 { -1.0 } else { 1.0 }, if (i / 2) % 2 == 0 { 0.0 } else { 0.4 })).collect();
-    let triangles: Vec<[u32; 3]> = (0..8).map(|i| if i % 2 == 0 { [i, i + 1, i + 2] } else { [i + 1, i, i + 2] }).collect();
+    let positions: Vec<Vec3> = (0..10)
+        .map(|i| {
+            Vec3::new(
+                (i / 2) as f32 * 0.5 - 1.0,
+                if i % 2 == 0 { -1.0 } else { 1.0 },
+                if (i / 2) % 2 == 0 { 0.0 } else { 0.4 },
+            )
+        })
+        .collect();
+    let triangles: Vec<[u32; 3]> =
+        (0..8).map(|i| if i % 2 == 0 { [i, i + 1, i + 2] } else { [i + 1, i, i + 2] }).collect();
     Mesh { name: "strip".into(), positions, triangle_materials: vec![material; 8], triangles, ..Default::default() }
 }
 
@@ -149,10 +169,19 @@ fn a_top_level_of_few_instances_matches_brute_force_ray_casting() {
 fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize, scale: f32) -> SceneFeatures {
     // Black emitters: a pixel's value is exactly the colour of what its rays see first.
     let (sphere_center, sphere_radius) = (scale * Vec3::new(0.3, -0.2, 0.0), scale * 0.5);
-    let emitters = [("red", [1, 0, 0], true), ("green", [0, 1, 0], true), ("blue", [0, 0, 1], false), ("yellow", [1, 1, 0], true), ("cyan", [0, 1, 1], true), ("magenta", [1, 0, 1], true)];
+    let emitters = [
+        ("red", [1, 0, 0], true),
+        ("green", [0, 1, 0], true),
+        ("blue", [0, 0, 1], false),
+        ("yellow", [1, 1, 0], true),
+        ("cyan", [0, 1, 1], true),
+        ("magenta", [1, 0, 1], true),
+    ];
     let materials: String = emitters
         .iter()
-        .map(|(name, [r, g, b], two_sided)| format!("[materials.{name}]\nalbedo = [0, 0, 0]\nemission = [{r}, {g}, {b}]\ntwo_sided = {two_sided}\n"))
+        .map(|(name, [r, g, b], two_sided)| {
+            format!("[materials.{name}]\nalbedo = [0, 0, 0]\nemission = [{r}, {g}, {b}]\ntwo_sided = {two_sided}\n")
+        })
         .collect();
     let mut scene = parse(&format!(
         r#"
@@ -172,10 +201,18 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize, scale
     let soup = triangle_soup([index("yellow"), index("cyan"), index("magenta")], 150);
     scene.meshes = vec![tetrahedron(index("red")), folded_strip(index("green")), soup];
     let transforms = placements(placed);
-    scene.instances = transforms.iter().enumerate().map(|(k, &transform)| Instance { mesh: (k % 2) as u32, transform }).collect();
+    scene.instances =
+        transforms.iter().enumerate().map(|(k, &transform)| Instance { mesh: (k % 2) as u32, transform }).collect();
     // The soup twice: once large on the left, once smaller, turned, behind the others on the right.
     scene.instances.push(Instance { mesh: 2, transform: Mat4::from_translation(Vec3::new(-1.0, 0.4, 0.5)) });
-    scene.instances.push(Instance { mesh: 2, transform: Mat4::from_scale_rotation_translation(Vec3::splat(0.7), Quat::from_rotation_y(0.8), Vec3::new(1.2, -0.6, -1.0)) });
+    scene.instances.push(Instance {
+        mesh: 2,
+        transform: Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.7),
+            Quat::from_rotation_y(0.8),
+            Vec3::new(1.2, -0.6, -1.0),
+        ),
+    });
     for inst in &mut scene.instances {
         inst.transform = Mat4::from_scale(Vec3::splat(scale)) * inst.transform;
     }
@@ -185,7 +222,10 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize, scale
     for inst in &scene.instances {
         let mesh = &scene.meshes[inst.mesh as usize];
         for (t, &m) in mesh.triangles.iter().zip(&mesh.triangle_materials) {
-            world.push((t.map(|i| inst.transform.transform_point3(mesh.positions[i as usize])), scene.materials[m as usize].emission.to_array()));
+            world.push((
+                t.map(|i| inst.transform.transform_point3(mesh.positions[i as usize])),
+                scene.materials[m as usize].emission.to_array(),
+            ));
         }
     }
     let rays = PinholeRays::new(&scene);
@@ -234,7 +274,9 @@ fn instances_match_brute_force_ray_casting(placed: usize, sparsest: usize, scale
             // a 6 x 6 grid over the pixel, edges included, so slivers cannot slip between points.
             // Rays through a triangle edge may pass between the two triangles under rounding
             // (Moller-Trumbore is not watertight), so pixels an edge crosses are left out too.
-            let views: Vec<([f32; 3], f32)> = (0..36).map(|k| seen(Vec2::new(x as f32 + (k % 6) as f32 / 5.0, y as f32 + (k / 6) as f32 / 5.0))).collect();
+            let views: Vec<([f32; 3], f32)> = (0..36)
+                .map(|k| seen(Vec2::new(x as f32 + (k % 6) as f32 / 5.0, y as f32 + (k / 6) as f32 / 5.0)))
+                .collect();
             if views.iter().any(|v| v.0 != views[0].0 || v.1 < 0.05) {
                 continue;
             }
@@ -288,10 +330,13 @@ fn textured_albedo_is_sampled_bilinearly_with_wrapping() {
         albedo = [1, 1, 1]
         "#,
     );
-    let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true, wrap: Default::default() }];
+    let texels: Vec<[u8; 4]> =
+        (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
+    scene.textures =
+        vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
-    let corners = [Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0)];
+    let corners =
+        [Vec3::new(-1.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0)];
     let uv_of = |p: Vec3| Vec2::new(p.x + 0.5, 0.5 - p.y);
     scene.meshes = vec![Mesh {
         name: "square".into(),
@@ -324,7 +369,10 @@ fn textured_albedo_is_sampled_bilinearly_with_wrapping() {
             }
             let expected = bilinear(texture, uv);
             let got = image.get(x, y);
-            assert!((0..3).all(|c| (got[c] - expected[c]).abs() < 0.03), "pixel ({x}, {y}) at uv {uv}: got {got:?}, expected {expected:?}");
+            assert!(
+                (0..3).all(|c| (got[c] - expected[c]).abs() < 0.03),
+                "pixel ({x}, {y}) at uv {uv}: got {got:?}, expected {expected:?}"
+            );
             checked += 1;
         }
     }
@@ -340,7 +388,8 @@ fn write_square_gltf_with(path: &std::path::Path, material: &str, top_level: &st
     let positions: [[f32; 3]; 4] = [[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]];
     let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
     let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
-    let mut bytes: Vec<u8> = positions.iter().flatten().chain(uvs.iter().flatten()).flat_map(|f| f.to_le_bytes()).collect();
+    let mut bytes: Vec<u8> =
+        positions.iter().flatten().chain(uvs.iter().flatten()).flat_map(|f| f.to_le_bytes()).collect();
     bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
     let json = format!(
         r#"{{
@@ -416,7 +465,13 @@ fn gltf_file_renders_as_a_scene_with_its_camera() {
 
 /// The square of [`write_square_gltf_with`] with base colour `base`, the given metallic and
 /// roughness factors and, if given, a metallic-roughness texture (width x 1 texels of (G, B)).
-fn write_metal_square_gltf(path: &std::path::Path, base: [f32; 3], metallic: f32, roughness: f32, texture: Option<&[(u8, u8)]>) {
+fn write_metal_square_gltf(
+    path: &std::path::Path,
+    base: [f32; 3],
+    metallic: f32,
+    roughness: f32,
+    texture: Option<&[(u8, u8)]>,
+) {
     use base64::Engine as _;
     let (texture_json, textures) = match texture {
         Some(texels) => {
@@ -456,7 +511,8 @@ fn gltf_metallic_roughness_texture_matches_the_same_values_as_factors() {
     // values lie between 0 and 1, where decoding the (linear) texture as sRGB would change them.
     let half = 128.0f32 / 255.0;
     let bands = [(0.0, 1.0), (1.0, 0.0), (1.0, 1.0), (half, half)];
-    let texels: Vec<(u8, u8)> = bands.iter().flat_map(|&(m, r)| [((r * 255.0).round() as u8, (m * 255.0).round() as u8); 4]).collect();
+    let texels: Vec<(u8, u8)> =
+        bands.iter().flat_map(|&(m, r)| [((r * 255.0).round() as u8, (m * 255.0).round() as u8); 4]).collect();
     let band_width = 1.0 / bands.len() as f32;
     let size = 64;
     let load = |name: &str, metallic: f32, roughness: f32, texture: Option<&[(u8, u8)]>| {
@@ -493,7 +549,10 @@ fn gltf_metallic_roughness_texture_matches_the_same_values_as_factors() {
                     mean[c] += f64::from(got[c]);
                 }
                 if (metallic, roughness) == (1.0, 0.0) {
-                    assert!((0..3).all(|c| (got[c] - base[c]).abs() < 1e-3), "band {band}, pixel ({x}, {y}): smooth metal {got:?}, expected its F0 {base:?}");
+                    assert!(
+                        (0..3).all(|c| (got[c] - base[c]).abs() < 1e-3),
+                        "band {band}, pixel ({x}, {y}): smooth metal {got:?}, expected its F0 {base:?}"
+                    );
                 }
             }
         }
@@ -520,10 +579,19 @@ fn sphere_scene() -> Scene {
         "#,
     );
     let (rings, segments) = (12u32, 16u32);
-    let mut mesh = Mesh { name: "uv sphere".into(), positions: vec![], normals: vec![], uvs: vec![], tangents: vec![], triangles: vec![], triangle_materials: vec![] };
+    let mut mesh = Mesh {
+        name: "uv sphere".into(),
+        positions: vec![],
+        normals: vec![],
+        uvs: vec![],
+        tangents: vec![],
+        triangles: vec![],
+        triangle_materials: vec![],
+    };
     for r in 0..=rings {
         for s in 0..=segments {
-            let (theta, phi) = (std::f32::consts::PI * r as f32 / rings as f32, std::f32::consts::TAU * s as f32 / segments as f32);
+            let (theta, phi) =
+                (std::f32::consts::PI * r as f32 / rings as f32, std::f32::consts::TAU * s as f32 / segments as f32);
             let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
             mesh.positions.push(n);
             mesh.normals.push(n);
@@ -541,10 +609,19 @@ fn sphere_scene() -> Scene {
     scene.meshes = vec![mesh];
     scene.instances = vec![
         Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(-0.9, 0.0, 0.0)) },
-        Instance { mesh: 0, transform: Mat4::from_scale_rotation_translation(Vec3::splat(0.7), Quat::from_rotation_z(0.5), Vec3::new(1.0, 0.2, -0.5)) },
+        Instance {
+            mesh: 0,
+            transform: Mat4::from_scale_rotation_translation(
+                Vec3::splat(0.7),
+                Quat::from_rotation_z(0.5),
+                Vec3::new(1.0, 0.2, -0.5),
+            ),
+        },
     ];
-    let texels: Vec<[u8; 4]> = (0..64 * 32u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i % 256) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "noise".into(), width: 64, height: 32, texels, srgb: true, wrap: Default::default() }];
+    let texels: Vec<[u8; 4]> =
+        (0..64 * 32u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i % 256) as u8, 255]).collect();
+    scene.textures =
+        vec![Texture { name: "noise".into(), width: 64, height: 32, texels, srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
     let mut sky = caustica::image::RgbImage::new(32, 16);
     for y in 0..16 {
@@ -553,7 +630,12 @@ fn sphere_scene() -> Scene {
             sky.set(x, y, [0.3 + sun, 0.4 + 0.02 * y as f32, 0.6]);
         }
     }
-    scene.environment = Environment::Map(EnvironmentMap { projection: MapProjection::LatLong, image: sky, intensity: 1.0, rotation_deg: 0.0 });
+    scene.environment = Environment::Map(EnvironmentMap {
+        projection: MapProjection::LatLong,
+        image: sky,
+        intensity: 1.0,
+        rotation_deg: 0.0,
+    });
     scene
 }
 
@@ -589,5 +671,11 @@ fn scene_too_large_for_the_device_fails_before_upload() {
     scene.film.width = 256;
     scene.film.height = 256;
     let e = format!("{:#}", caustica::render::Renderer::new(&ctx, &scene, 1).err().expect("too large for the device"));
-    assert!(e.contains("accumulation image") && e.contains("1.0 MiB") && e.contains(&ctx.info.name) && e.contains("8 bindings of 0.1 MiB"), "{e}");
+    assert!(
+        e.contains("accumulation image")
+            && e.contains("1.0 MiB")
+            && e.contains(&ctx.info.name)
+            && e.contains("8 bindings of 0.1 MiB"),
+        "{e}"
+    );
 }

@@ -147,7 +147,18 @@ fn triangle_gltf(buffer_uri: &str, image_uri: Option<&str>) -> String {
 fn dev_zero_and_directories_are_refused_as_every_kind_of_input() {
     let dir = common::temp_dir("hostile-zero");
     let zero = Path::new("/dev/zero");
-    for name in ["zero.toml", "zero.obj", "zero.ply", "zero.gltf", "zero.glb", "zero.mtl", "zero.bin", "zero.png", "zero.pfm", "zero.exr"] {
+    for name in [
+        "zero.toml",
+        "zero.obj",
+        "zero.ply",
+        "zero.gltf",
+        "zero.glb",
+        "zero.mtl",
+        "zero.bin",
+        "zero.png",
+        "zero.pfm",
+        "zero.exr",
+    ] {
         link(zero, &dir.join(name));
     }
     std::fs::create_dir_all(dir.join("folder.obj")).unwrap();
@@ -219,13 +230,18 @@ fn files_over_their_size_cap_are_refused_before_reading() {
 #[cfg(unix)]
 #[test]
 fn a_sparse_accessor_claiming_2e28_positions_is_refused_in_bounded_memory() {
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/gltf/sparse-position-count-2e28.gltf");
+    let file =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions/gltf/sparse-position-count-2e28.gltf");
     let dir = common::temp_dir("hostile-sparse");
     let out = dir.join("out.png");
     let started = Instant::now();
     let o = run_with(&["render", file.to_str().unwrap(), "-o", out.to_str().unwrap()], &[], Some("ulimit -v 1048576"));
     assert_eq!(o.code, Some(1), "{}", o.stderr);
-    assert!(o.stderr.contains("sparse-position-count-2e28.gltf") && o.stderr.contains("accessor 0 has no buffer view"), "{}", o.stderr);
+    assert!(
+        o.stderr.contains("sparse-position-count-2e28.gltf") && o.stderr.contains("accessor 0 has no buffer view"),
+        "{}",
+        o.stderr
+    );
     assert!(started.elapsed() < Duration::from_secs(10), "took {:?}", started.elapsed());
 }
 
@@ -254,9 +270,12 @@ fn gltf_error(tag: &str, bin: &[u8], views: &str, accessors: &str, primitive: &s
 #[test]
 fn gltf_accessor_counts_are_bounded_by_the_bytes_behind_them() {
     let bin = triangle_bin();
-    let views = r#"[{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}]"#;
+    let views =
+        r#"[{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}]"#;
     let position = |count: u64, sparse: &str| {
-        format!(r#"{{"bufferView": 0, "componentType": 5126, "count": {count}, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]{sparse}}}"#)
+        format!(
+            r#"{{"bufferView": 0, "componentType": 5126, "count": {count}, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]{sparse}}}"#
+        )
     };
     let indices = r#"{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}"#;
     let primitive = r#"{"attributes": {"POSITION": 0}, "indices": 1}"#;
@@ -264,22 +283,38 @@ fn gltf_accessor_counts_are_bounded_by_the_bytes_behind_them() {
     let e = gltf_error("acc-count", &bin, views, &format!("[{}, {indices}]", position(1 << 28, "")), primitive);
     assert!(e.contains("accessor 0's 268435456 elements need 3 GiB but buffer view 0 holds 36 bytes"), "{e}");
 
-    let e = gltf_error("acc-indices", &bin, views, &format!("[{}, {}]", position(3, ""), indices.replace("\"count\": 3", "\"count\": 1000000")), primitive);
+    let e = gltf_error(
+        "acc-indices",
+        &bin,
+        views,
+        &format!("[{}, {}]", position(3, ""), indices.replace("\"count\": 3", "\"count\": 1000000")),
+        primitive,
+    );
     assert!(e.contains("accessor 1's 1000000 elements need") && e.contains("indices"), "{e}");
 
-    let past = r#"[{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 600}]"#;
+    let past =
+        r#"[{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 600}]"#;
     let e = gltf_error("acc-view", &bin, past, &format!("[{}, {indices}]", position(3, "")), primitive);
     assert!(e.contains("buffer view 1 ends at byte 636 but buffer 0 holds 44 bytes"), "{e}");
 
     // Sparse blocks: the view 1 holds three u16 indices; view 0 three positions as values.
-    let sparse = |count: u64| format!(r#", "sparse": {{"count": {count}, "indices": {{"bufferView": 1, "componentType": 5123}}, "values": {{"bufferView": 0}}}}"#);
-    let no_view = |count: u64, sparse_count: u64| position(count, &sparse(sparse_count)).replace(r#""bufferView": 0, "componentType""#, r#""componentType""#);
+    let sparse = |count: u64| {
+        format!(
+            r#", "sparse": {{"count": {count}, "indices": {{"bufferView": 1, "componentType": 5123}}, "values": {{"bufferView": 0}}}}"#
+        )
+    };
+    let no_view = |count: u64, sparse_count: u64| {
+        position(count, &sparse(sparse_count)).replace(r#""bufferView": 0, "componentType""#, r#""componentType""#)
+    };
     let e = gltf_error("acc-sparse-count", &bin, views, &format!("[{}, {indices}]", no_view(3, 4)), primitive);
     assert!(e.contains("replaces 4 sparse elements but has only 3"), "{e}");
     let e = gltf_error("acc-sparse-indices", &bin, views, &format!("[{}, {indices}]", no_view(10, 5)), primitive);
     assert!(e.contains("accessor 0's 5 sparse indices need 10 bytes but buffer view 1 holds 6 bytes"), "{e}");
     let e = gltf_error("acc-zeros", &bin, views, &format!("[{}, {indices}]", no_view(1 << 28, 3)), primitive);
-    assert!(e.contains("accessor 0 has no buffer view: its 268435456 zero-initialised elements (3 GiB) are more data than"), "{e}");
+    assert!(
+        e.contains("accessor 0 has no buffer view: its 268435456 zero-initialised elements (3 GiB) are more data than"),
+        "{e}"
+    );
     // NORMAL and TEXCOORD_0 get the same checks as POSITION.
     let normal = no_view(1 << 28, 3).replace(r#", "min": [0, 0, 0], "max": [1, 1, 0]"#, "");
     let with_normal = r#"{"attributes": {"POSITION": 0, "NORMAL": 2}, "indices": 1}"#;
@@ -307,7 +342,9 @@ fn one_accessor_reused_by_very_many_primitives_cannot_multiply_the_file() {
     let bin = vec![0u8; (vertices * 12) as usize];
     let primitives = vec![r#"{"attributes": {"POSITION": 0}}"#; 400].join(", ");
     let views = format!(r#"[{{"buffer": 0, "byteOffset": 0, "byteLength": {}}}]"#, bin.len());
-    let accessors = format!(r#"[{{"bufferView": 0, "componentType": 5126, "count": {vertices}, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 0]}}]"#);
+    let accessors = format!(
+        r#"[{{"bufferView": 0, "componentType": 5126, "count": {vertices}, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 0]}}]"#
+    );
     let e = gltf_error("acc-reuse", &bin, &views, &accessors, &primitives);
     assert!(e.contains("more than 64 times the") && e.contains("glTF and its buffers"), "{e}");
 }
@@ -327,12 +364,17 @@ fn one_file_named_many_times_in_a_gltf_is_read_and_decoded_once() {
     encoder.write_header().unwrap().write_image_data(&vec![200; 4096 * 4096]).unwrap();
     write(&dir.join("big.png"), png);
     let buffers = vec![format!(r#"{{"uri": "big.bin", "byteLength": {}}}"#, 8 << 20); 2000].join(", ");
-    let materials = (0..200).map(|i| format!(r#"{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": {i}}}}}}}"#)).collect::<Vec<_>>().join(", ");
+    let materials = (0..200)
+        .map(|i| format!(r#"{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": {i}}}}}}}"#))
+        .collect::<Vec<_>>()
+        .join(", ");
     let textures = (0..200).map(|i| format!(r#"{{"source": {i}}}"#)).collect::<Vec<_>>().join(", ");
     let images = vec![r#"{"uri": "big.png"}"#; 200].join(", ");
     let gltf = write(
         &dir.join("reuse.gltf"),
-        format!(r#"{{"asset": {{"version": "2.0"}}, "buffers": [{buffers}], "materials": [{materials}], "textures": [{textures}], "images": [{images}]}}"#),
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "buffers": [{buffers}], "materials": [{materials}], "textures": [{textures}], "images": [{images}]}}"#
+        ),
     );
     let out = dir.join("out.png");
     let started = Instant::now();
@@ -373,8 +415,14 @@ fn confine_refuses_files_that_resolve_outside_the_scene_folder() {
         (write(&dir.join("mtllib.obj"), format!("mtllib ../../secret/tri.mtl\n{TRIANGLE_OBJ}")), "secret/tri.mtl"),
         (write(&dir.join("map.obj"), format!("mtllib map.mtl\nusemtl t\n{TRIANGLE_OBJ}")), "secret/t.png"),
         (write(&dir.join("buffer.gltf"), triangle_gltf("../../secret/tri.bin", None)), "secret/tri.bin"),
-        (write(&dir.join("image.gltf"), triangle_gltf("meshes/tri.bin", Some("..%2F..%2Fsecret%2Ft.png"))), "secret/t.png"),
-        (write(&dir.join("absolute.toml"), scene_with_mesh(c.root.join("secret/tri.obj").to_str().unwrap(), "")), "secret/tri.obj"),
+        (
+            write(&dir.join("image.gltf"), triangle_gltf("meshes/tri.bin", Some("..%2F..%2Fsecret%2Ft.png"))),
+            "secret/t.png",
+        ),
+        (
+            write(&dir.join("absolute.toml"), scene_with_mesh(c.root.join("secret/tri.obj").to_str().unwrap(), "")),
+            "secret/tri.obj",
+        ),
         (write(&dir.join("passwd.gltf"), triangle_gltf("../../../../../../../../etc/passwd", None)), "/etc/passwd"),
     ];
     write(&dir.join("map.mtl"), "newmtl t\nmap_Kd ../../secret/t.png\n");
@@ -391,7 +439,11 @@ fn confine_refuses_files_that_resolve_outside_the_scene_folder() {
         let linked = link(&c.root.join("secret/tri.obj"), &dir.join("meshes/link.obj"));
         let scene = write(&dir.join("link.toml"), scene_with_mesh("meshes/link.obj", ""));
         assert!(linked.exists());
-        assert_refused(&scene, &["--confine"], &["meshes/link.obj", "secret/tri.obj", "outside the folders that --confine allows"]);
+        assert_refused(
+            &scene,
+            &["--confine"],
+            &["meshes/link.obj", "secret/tri.obj", "outside the folders that --confine allows"],
+        );
     }
 }
 
@@ -407,7 +459,20 @@ fn confine_allows_the_scene_folder_and_the_shared_data_folder() {
         ),
     );
     let out = c.scene_dir.join("out.pfm");
-    let args = ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--confine", "--width", "4", "--height", "4", "--spp", "1", "-q"];
+    let args = [
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--confine",
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--spp",
+        "1",
+        "-q",
+    ];
     let o = run_with(&args, &[("CAUSTICA_DATA", &data)], None);
     assert_eq!(o.code, Some(0), "{}", o.stderr);
     assert!(out.exists());
@@ -419,7 +484,11 @@ fn confine_allows_the_scene_folder_and_the_shared_data_folder() {
     let args = ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--confine", "-q"];
     let o = run_with(&args, &[("CAUSTICA_DATA", &elsewhere)], None);
     assert_eq!(o.code, Some(1), "{}", o.stderr);
-    assert!(o.stderr.contains("data/shared.obj") && o.stderr.contains("outside the folders that --confine allows"), "{}", o.stderr);
+    assert!(
+        o.stderr.contains("data/shared.obj") && o.stderr.contains("outside the folders that --confine allows"),
+        "{}",
+        o.stderr
+    );
 }
 
 #[test]

@@ -7,7 +7,9 @@ mod common;
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
 use caustica::scene::{metal, AlphaMode, Conductor, Filter, Light, LightSelection, Microfacet, Sampler, Scene, Shape};
-use common::{close, gpu, import_text, import_text_error, import_text_scene, render, temp_dir, write_files, WrittenFiles};
+use common::{
+    close, gpu, import_text, import_text_error, import_text_scene, render, temp_dir, write_files, WrittenFiles,
+};
 use glam::{Mat4, Vec3};
 use std::path::Path;
 
@@ -64,10 +66,17 @@ fn the_camera_follows_lookat_fov_axis_and_the_thin_lens() {
     ] {
         let s = scene("camera", &sensor(axis, w, h));
         assert!((s.camera.fov_deg - expected).abs() < 1e-4, "{axis} {w}x{h}: {} against {expected}", s.camera.fov_deg);
-        assert!(close(s.camera.position, Vec3::new(1.0, 2.0, 3.0)) && close(s.camera.look_at, Vec3::new(1.0, 2.0, 2.0)) && close(s.camera.up, Vec3::Y));
+        assert!(
+            close(s.camera.position, Vec3::new(1.0, 2.0, 3.0))
+                && close(s.camera.look_at, Vec3::new(1.0, 2.0, 2.0))
+                && close(s.camera.up, Vec3::Y)
+        );
         assert_eq!((s.camera.aperture, s.camera.focus_distance), (0.25, 3.0));
         // Mitsuba's default filter and sampler.
-        assert_eq!((s.film.width, s.film.height, s.film.filter, s.film.spp, s.integrator.sampler), (w, h, Filter::Gaussian, 4, Sampler::Independent));
+        assert_eq!(
+            (s.film.width, s.film.height, s.film.filter, s.film.spp, s.integrator.sampler),
+            (w, h, Filter::Gaussian, 4, Sampler::Independent)
+        );
     }
 }
 
@@ -119,11 +128,24 @@ fn max_depth_is_the_longest_path_in_segments_and_rr_depth_where_roulette_starts(
         let s = scene("depth", &format!("{SENSOR}{integrator}"));
         (s.integrator.max_bounces, s.integrator.rr_start)
     };
-    assert_eq!(depth(r#"<integrator type="path"><integer name="max_depth" value="3"/><integer name="rr_depth" value="2"/></integrator>"#), (3, 2));
+    assert_eq!(
+        depth(
+            r#"<integrator type="path"><integer name="max_depth" value="3"/><integer name="rr_depth" value="2"/></integrator>"#
+        ),
+        (3, 2)
+    );
     assert_eq!(depth(r#"<integrator type="path"><integer name="max_depth" value="-1"/></integrator>"#), (1024, 5));
     assert_eq!(depth(""), (1024, 5), "a scene without an integrator gets path's defaults");
-    assert_eq!(scene("selection", SENSOR).integrator.light_selection, LightSelection::Uniform, "Mitsuba picks emitters uniformly");
-    assert!(error("depth0", &format!(r#"{SENSOR}<integrator type="path"><integer name="max_depth" value="0"/></integrator>"#)).contains("max_depth 0"));
+    assert_eq!(
+        scene("selection", SENSOR).integrator.light_selection,
+        LightSelection::Uniform,
+        "Mitsuba picks emitters uniformly"
+    );
+    assert!(error(
+        "depth0",
+        &format!(r#"{SENSOR}<integrator type="path"><integer name="max_depth" value="0"/></integrator>"#)
+    )
+    .contains("max_depth 0"));
 }
 
 #[test]
@@ -150,19 +172,37 @@ fn bsdfs_map_onto_caustica_materials_with_named_metals_and_iors() {
     )
     .unwrap();
     let s = i.into_scene(&InputFiles::anywhere()).unwrap();
-    let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no material {name}")).clone();
+    let m = |name: &str| {
+        s.materials.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no material {name}")).clone()
+    };
     let (eta, k) = metal("gold").unwrap();
-    assert_eq!((m("gold").conductor, m("gold").reflectivity, m("gold").roughness), (Conductor::Complex { eta, k }, 1.0, 0.0));
-    assert!((m("rough").roughness - 0.2).abs() < 1e-6 && m("rough").conductor == Conductor::Mirror && m("rough").reflectivity == 1.0);
+    assert_eq!(
+        (m("gold").conductor, m("gold").reflectivity, m("gold").roughness),
+        (Conductor::Complex { eta, k }, 1.0, 0.0)
+    );
+    assert!(
+        (m("rough").roughness - 0.2).abs() < 1e-6
+            && m("rough").conductor == Conductor::Mirror
+            && m("rough").reflectivity == 1.0
+    );
     assert!((m("water").ior - 1.3330 / 1.000277).abs() < 1e-6 && m("water").transparency == 1.0);
     let plastic = m("plastic");
-    assert!(plastic.coat && plastic.ior == 1.5 && (plastic.roughness - 0.1f32.sqrt()).abs() < 1e-6 && close(plastic.albedo, Vec3::new(0.2, 0.4, 0.6)));
+    assert!(
+        plastic.coat
+            && plastic.ior == 1.5
+            && (plastic.roughness - 0.1f32.sqrt()).abs() < 1e-6
+            && close(plastic.albedo, Vec3::new(0.2, 0.4, 0.6))
+    );
     assert!(close(m("paper").albedo, Vec3::splat(0.7)));
     // Mitsuba's default distribution is Beckmann, and caustica's kernel has it.
-    assert_eq!((m("brushed").microfacet, m("rough").microfacet, plastic.microfacet), (Microfacet::Beckmann, Microfacet::Ggx, Microfacet::Ggx));
+    assert_eq!(
+        (m("brushed").microfacet, m("rough").microfacet, plastic.microfacet),
+        (Microfacet::Beckmann, Microfacet::Ggx, Microfacet::Ggx)
+    );
     assert!((m("brushed").roughness - 0.3).abs() < 1e-6);
     // Mitsuba's reflecting BSDFs are black from behind unless twosided; its dielectrics are not.
-    let sides: Vec<bool> = ["gold", "rough", "plastic", "brushed", "paper", "water", "pane"].iter().map(|&n| m(n).one_sided).collect();
+    let sides: Vec<bool> =
+        ["gold", "rough", "plastic", "brushed", "paper", "water", "pane"].iter().map(|&n| m(n).one_sided).collect();
     assert_eq!(sides, [true, true, true, true, false, false, false]);
     let pane = m("pane");
     assert!(pane.thin && pane.transparency == 1.0 && (pane.ior - 1.52 / 1.000277).abs() < 1e-6, "{pane:?}");
@@ -196,13 +236,20 @@ fn defaults_includes_refs_and_d_overrides() {
         <shape type="sphere"><float name="radius" value="$radius"/><ref id="later"/></shape>
         <bsdf type="diffuse" id="later"><rgb name="reflectance" value="0.25"/></bsdf>"#
     ));
-    let parts = xml(r#"<emitter type="point"><point name="position" x="1" y="2" z="3"/><rgb name="intensity" value="5, 6, 7"/></emitter>"#);
+    let parts = xml(
+        r#"<emitter type="point"><point name="position" x="1" y="2" z="3"/><rgb name="intensity" value="5, 6, 7"/></emitter>"#,
+    );
     let path = write_scene("defaults", &[("scene.xml", &main), ("parts.xml", &parts)]);
-    let load = |defines: &[(String, String)]| import(&InputFiles::anywhere(), &path, defines).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
+    let load = |defines: &[(String, String)]| {
+        import(&InputFiles::anywhere(), &path, defines).unwrap().into_scene(&InputFiles::anywhere()).unwrap()
+    };
     let s = load(&[]);
     assert!(matches!(s.shapes[0], Shape::Sphere { radius: 2.0, .. }));
     assert_eq!(s.materials[s.shapes[0].material() as usize].albedo, Vec3::splat(0.25));
-    assert_eq!(s.lights, vec![Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(5.0, 6.0, 7.0) }]);
+    assert_eq!(
+        s.lights,
+        vec![Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(5.0, 6.0, 7.0) }]
+    );
     let s = load(&[("radius".into(), "0.5".into())]);
     assert!(matches!(s.shapes[0], Shape::Sphere { radius: 0.5, .. }), "-D wins over <default>");
 }
@@ -210,11 +257,17 @@ fn defaults_includes_refs_and_d_overrides() {
 #[test]
 fn meshes_are_placed_by_their_to_world_and_shears_are_refused() {
     let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-    let body = |transform: &str| xml(&format!(r#"{SENSOR}<shape type="obj"><string name="filename" value="tri.obj"/><transform name="to_world">{transform}</transform></shape>"#));
+    let body = |transform: &str| {
+        xml(&format!(
+            r#"{SENSOR}<shape type="obj"><string name="filename" value="tri.obj"/><transform name="to_world">{transform}</transform></shape>"#
+        ))
+    };
     let placed = body(r#"<scale value="2"/><rotate z="1" angle="90"/><translate x="1" y="2" z="3"/>"#);
     let path = write_scene("mesh", &[("scene.xml", &placed), ("tri.obj", obj)]);
     let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
-    let expected = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)) * Mat4::from_rotation_z(90f32.to_radians()) * Mat4::from_scale(Vec3::splat(2.0));
+    let expected = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0))
+        * Mat4::from_rotation_z(90f32.to_radians())
+        * Mat4::from_scale(Vec3::splat(2.0));
     assert!(s.instances[0].transform.abs_diff_eq(expected, 1e-5), "{:?}", s.instances[0].transform);
     let sheared = body(r#"<rotate z="1" angle="30"/><scale x="3"/>"#);
     let path = write_scene("shear", &[("scene.xml", &sheared), ("tri.obj", obj)]);
@@ -238,12 +291,20 @@ fn shapegroup_instances_share_their_meshes() {
     let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
     assert_eq!((s.meshes.len(), s.instances.len()), (1, 2), "the mesh is stored once and placed twice");
     let placed = |k: usize| s.instances[k].transform;
-    assert!(placed(0).abs_diff_eq(Mat4::from_translation(Vec3::X) * Mat4::from_scale(Vec3::splat(2.0)), 1e-6), "{:?}", placed(0));
+    assert!(
+        placed(0).abs_diff_eq(Mat4::from_translation(Vec3::X) * Mat4::from_scale(Vec3::splat(2.0)), 1e-6),
+        "{:?}",
+        placed(0)
+    );
     assert!(placed(1).abs_diff_eq(Mat4::from_translation(-3.0 * Vec3::X) * Mat4::from_scale(Vec3::splat(2.0)), 1e-6));
-    let centers: Vec<Vec3> = s.shapes.iter().map(|sh| match *sh {
-        Shape::Sphere { center, radius: 0.5, .. } => center,
-        _ => panic!("a sphere of radius 0.5"),
-    }).collect();
+    let centers: Vec<Vec3> = s
+        .shapes
+        .iter()
+        .map(|sh| match *sh {
+            Shape::Sphere { center, radius: 0.5, .. } => center,
+            _ => panic!("a sphere of radius 0.5"),
+        })
+        .collect();
     assert_eq!(centers, vec![Vec3::X, -3.0 * Vec3::X]);
 }
 
@@ -271,7 +332,10 @@ fn unsupported_or_bad_input_is_an_error_naming_file_line_and_element() {
         }
     }
     // An include cycle ends with an error, not a hang.
-    let path = write_scene("cycle", &[("a.xml", &xml(r#"<include filename="b.xml"/>"#)), ("b.xml", &xml(r#"<include filename="a.xml"/>"#))]);
+    let path = write_scene(
+        "cycle",
+        &[("a.xml", &xml(r#"<include filename="b.xml"/>"#)), ("b.xml", &xml(r#"<include filename="a.xml"/>"#))],
+    );
     let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).err().expect("a cycle is refused"));
     assert!(e.contains("nest more than"), "{e}");
 }
@@ -359,7 +423,11 @@ fn an_xml_scene_renders_bit_for_bit_like_its_toml_twin() {
     assert_eq!(twin.shapes.len(), from_xml.shapes.len());
     for k in 0..twin.shapes.len() {
         let (a, b) = (material(&twin, k), material(&from_xml, k));
-        assert_eq!((a.albedo, a.emission, a.ior, a.transparency, a.reflectivity, a.coat, a.roughness), (b.albedo, b.emission, b.ior, b.transparency, b.reflectivity, b.coat, b.roughness), "shape {k}");
+        assert_eq!(
+            (a.albedo, a.emission, a.ior, a.transparency, a.reflectivity, a.coat, a.roughness),
+            (b.albedo, b.emission, b.ior, b.transparency, b.reflectivity, b.coat, b.roughness),
+            "shape {k}"
+        );
     }
     assert!((twin.camera.fov_deg - from_xml.camera.fov_deg).abs() < 1e-5);
     twin.camera.fov_deg = from_xml.camera.fov_deg;
@@ -388,7 +456,8 @@ fn max_depth_one_shows_only_what_emits() {
 
 #[test]
 fn the_command_line_converts_and_fails_with_file_and_line() {
-    let caustica = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_caustica")).args(args).output().unwrap();
+    let caustica =
+        |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_caustica")).args(args).output().unwrap();
     let sphere = "<default name=\"r\" value=\"1\"/>\n<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></shape>";
     let path = write_scene("cli", &[("scene.xml", &xml(&format!("{SENSOR}\n{sphere}")))]);
     let out = path.with_file_name("scene.toml");
@@ -396,8 +465,18 @@ fn the_command_line_converts_and_fails_with_file_and_line() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = Scene::load(&out).unwrap();
     assert!(matches!(s.shapes[..], [Shape::Sphere { radius: 2.5, .. }]), "{:?}", s.shapes);
-    let bad = write_scene("cli-bad", &[("scene.xml", &xml(&format!("{SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>")))]);
-    for args in [vec!["render", bad.to_str().unwrap(), "-o", "/tmp/never.png"], vec!["convert", bad.to_str().unwrap(), "-o", "/tmp/never.toml"], vec!["render", "-D", "x"]] {
+    let bad = write_scene(
+        "cli-bad",
+        &[(
+            "scene.xml",
+            &xml(&format!("{SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>")),
+        )],
+    );
+    for args in [
+        vec!["render", bad.to_str().unwrap(), "-o", "/tmp/never.png"],
+        vec!["convert", bad.to_str().unwrap(), "-o", "/tmp/never.toml"],
+        vec!["render", "-D", "x"],
+    ] {
         let o = caustica(&args);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
@@ -408,7 +487,14 @@ fn the_command_line_converts_and_fails_with_file_and_line() {
 /// One mesh of a Mitsuba `.serialized` file as Mitsuba writes it (src/shapes/serialized.cpp):
 /// the uncompressed header, then the zlib stream of flags, (version 4) name, counts, positions,
 /// normals, texture coordinates and u32 indices, in f64 when `double`.
-fn serialized_mesh(version: u16, positions: &[[f64; 3]], normals: Option<&[[f64; 3]]>, uvs: Option<&[[f64; 2]]>, triangles: &[[u32; 3]], double: bool) -> Vec<u8> {
+fn serialized_mesh(
+    version: u16,
+    positions: &[[f64; 3]],
+    normals: Option<&[[f64; 3]]>,
+    uvs: Option<&[[f64; 2]]>,
+    triangles: &[[u32; 3]],
+    double: bool,
+) -> Vec<u8> {
     use std::io::Write;
     let mut raw = Vec::new();
     let flags = u32::from(normals.is_some()) | (2 * u32::from(uvs.is_some())) | if double { 0x2000 } else { 0x1000 };
@@ -489,18 +575,31 @@ fn serialized_scene(tag: &str, file: &[u8], shape: &str) -> anyhow::Result<Scene
 fn serialized_meshes_are_read_back_exactly_in_both_versions() {
     for version in [3, 4] {
         let file = serialized_quads(version);
-        let shape = |index: u32| format!(r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/><integer name="shape_index" value="{index}"/></shape>"#);
+        let shape = |index: u32| {
+            format!(
+                r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/><integer name="shape_index" value="{index}"/></shape>"#
+            )
+        };
         let s = serialized_scene("serialized", &file, &shape(1)).unwrap_or_else(|e| panic!("{e:#}"));
         let mesh = &s.meshes[0];
-        let expected: Vec<Vec3> = QUAD.iter().map(|p| Vec3::new(p[0] as f32 + 0.125, p[1] as f32, 0.5 * p[0] as f32)).collect();
+        let expected: Vec<Vec3> =
+            QUAD.iter().map(|p| Vec3::new(p[0] as f32 + 0.125, p[1] as f32, 0.5 * p[0] as f32)).collect();
         assert_eq!(mesh.positions, expected, "version {version}: the f64 positions of mesh 1");
         assert_eq!(mesh.triangles, QUAD_TRIANGLES.to_vec());
         // Texture coordinates as stored (Mitsuba's (0, 0) is the image's top-left, as caustica's).
         assert_eq!(mesh.uvs, QUAD_UVS.iter().map(|uv| glam::Vec2::new(uv[0] as f32, uv[1] as f32)).collect::<Vec<_>>());
         assert_eq!(mesh.normals, vec![Vec3::Z, Vec3::Z, Vec3::new(0.0, 0.6, 0.8), Vec3::Z], "unit normals as stored");
         // Mesh 0 (the default index) has no normals: Mitsuba's smooth ones, here the face's.
-        let s = serialized_scene("serialized-0", &file, r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/></shape>"#).unwrap();
-        assert_eq!(s.meshes[0].positions, QUAD.iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect::<Vec<_>>());
+        let s = serialized_scene(
+            "serialized-0",
+            &file,
+            r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/></shape>"#,
+        )
+        .unwrap();
+        assert_eq!(
+            s.meshes[0].positions,
+            QUAD.iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect::<Vec<_>>()
+        );
         assert_eq!(s.meshes[0].normals, vec![Vec3::Z; 4]);
         assert!(s.meshes[0].uvs.is_empty());
     }
@@ -509,7 +608,11 @@ fn serialized_meshes_are_read_back_exactly_in_both_versions() {
 #[test]
 fn bad_serialized_files_are_errors_naming_the_file() {
     let good = serialized_quads(4);
-    let shape = |index: i64| format!(r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/><integer name="shape_index" value="{index}"/></shape>"#);
+    let shape = |index: i64| {
+        format!(
+            r#"<shape type="serialized"><string name="filename" value="mesh.serialized"/><integer name="shape_index" value="{index}"/></shape>"#
+        )
+    };
     let mut lying = serialized_mesh(4, &QUAD, None, None, &QUAD_TRIANGLES, false);
     // A header claiming 2^31 vertices over the same few compressed bytes: refused before any
     // allocation (the counts cannot fit in what the stream can inflate to).
@@ -527,7 +630,11 @@ fn bad_serialized_files_are_errors_naming_the_file() {
     for (file, index, needles) in [
         (good.clone(), 2, vec!["mesh.serialized", "shape_index 2", "out of range", "2 meshes"]),
         (good.clone(), -1, vec!["scene.xml:8:", "shape_index must be >= 0"]),
-        (serialized_mesh(4, &QUAD, None, None, &QUAD_TRIANGLES, false)[..40].to_vec(), 0, vec!["mesh.serialized", "shape_index 0", "compressed data"]),
+        (
+            serialized_mesh(4, &QUAD, None, None, &QUAD_TRIANGLES, false)[..40].to_vec(),
+            0,
+            vec!["mesh.serialized", "shape_index 0", "compressed data"],
+        ),
         (good[..good.len() / 2].to_vec(), 1, vec!["mesh.serialized", "shape_index 1"]),
         (good[..3].to_vec(), 0, vec!["mesh.serialized", "truncated"]),
         (b"PK\x03\x04 not a mesh at all".to_vec(), 0, vec!["mesh.serialized", "not a Mitsuba serialized mesh"]),
@@ -563,7 +670,8 @@ fn checkerboard_and_bitmap_reflectances_become_albedo_textures_read_through_to_u
     let path = write_scene("textures", &[("scene.xml", &body), ("tri.obj", obj)]);
     let dir = path.parent().unwrap();
     std::fs::write(dir.join("mesh.serialized"), serialized_quads(4)).unwrap();
-    caustica::image::png::write(&dir.join("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default()).unwrap();
+    caustica::image::png::write(&dir.join("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default())
+        .unwrap();
     let i = import(&InputFiles::anywhere(), &path, &[]).unwrap();
     let s = i.into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
     assert_eq!(s.textures.len(), 2);
@@ -571,8 +679,15 @@ fn checkerboard_and_bitmap_reflectances_become_albedo_textures_read_through_to_u
     let (checks, wood) = (material(0), material(1));
     assert_eq!((checks.albedo, wood.albedo), (Vec3::ONE, Vec3::ONE), "the texture is the whole colour");
     let checker = &s.textures[checks.albedo_texture.unwrap() as usize];
-    let texel = |u: f32, v: f32| checker.texels[(v * checker.height as f32) as usize * checker.width as usize + (u * checker.width as f32) as usize];
-    assert_eq!((texel(0.1, 0.1), texel(0.6, 0.1)), ([102, 102, 102, 255], [51, 51, 51, 255]), "Mitsuba's colour 0 where u and v agree");
+    let texel = |u: f32, v: f32| {
+        checker.texels
+            [(v * checker.height as f32) as usize * checker.width as usize + (u * checker.width as f32) as usize]
+    };
+    assert_eq!(
+        (texel(0.1, 0.1), texel(0.6, 0.1)),
+        ([102, 102, 102, 255], [51, 51, 51, 255]),
+        "Mitsuba's colour 0 where u and v agree"
+    );
     assert_eq!(&s.textures[wood.albedo_texture.unwrap() as usize].name, "wood.png");
     // to_uv maps the mesh's texture coordinates (OBJ's v turned upside down, as Mitsuba does):
     // (8 u + 0.5, 4 v).
@@ -587,7 +702,10 @@ fn checkerboard_and_bitmap_reflectances_become_albedo_textures_read_through_to_u
     assert!(toml.contains("shape_index = 1") && toml.contains("to_uv") && toml.contains("checkerboard"), "{toml}");
     let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
     assert_eq!(t.textures, s.textures);
-    assert_eq!((t.meshes[0].uvs.clone(), t.meshes[1].positions.clone()), (s.meshes[0].uvs.clone(), s.meshes[1].positions.clone()));
+    assert_eq!(
+        (t.meshes[0].uvs.clone(), t.meshes[1].positions.clone()),
+        (s.meshes[0].uvs.clone(), s.meshes[1].positions.clone())
+    );
 }
 
 #[test]
@@ -601,8 +719,14 @@ fn textured_materials_need_meshes_with_texture_coordinates() {
             assert!(e.contains(needle), "'{needle}' missing from: {e}");
         }
     };
-    refused("[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"checks\"\n", &["materials.checks.albedo_texture", "texture coordinates"]);
-    refused("[[meshes]]\nfile = \"bare.obj\"\nmaterial = \"checks\"\n", &["bare.obj", "no texture coordinates", "checks"]);
+    refused(
+        "[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"checks\"\n",
+        &["materials.checks.albedo_texture", "texture coordinates"],
+    );
+    refused(
+        "[[meshes]]\nfile = \"bare.obj\"\nmaterial = \"checks\"\n",
+        &["bare.obj", "no texture coordinates", "checks"],
+    );
     let both = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.m]\nalbedo_texture = { file = \"a.png\", checkerboard = [[0.4, 0.4, 0.4], [0.2, 0.2, 0.2]] }\n";
     let e = format!("{:#}", Scene::parse(both, "t.toml", &dir).expect_err("refused"));
     assert!(e.contains("materials.m.albedo_texture") && e.contains("one of file and checkerboard"), "{e}");
@@ -618,10 +742,15 @@ fn an_envmap_turned_off_the_y_axis_is_resampled_to_its_axes() {
             map.set(x, y, [1.0; 3]);
         }
     }
-    let body = xml(&format!(r#"{SENSOR}<emitter type="envmap"><string name="filename" value="sky.pfm"/><transform name="to_world"><rotate x="1" angle="180"/></transform></emitter>"#));
+    let body = xml(&format!(
+        r#"{SENSOR}<emitter type="envmap"><string name="filename" value="sky.pfm"/><transform name="to_world"><rotate x="1" angle="180"/></transform></emitter>"#
+    ));
     let path = write_scene("envmap-axes", &[("scene.xml", &body)]);
     caustica::image::pfm::write(&path.parent().unwrap().join("sky.pfm"), &map).unwrap();
-    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    let s = import(&InputFiles::anywhere(), &path, &[])
+        .unwrap()
+        .into_scene(&InputFiles::anywhere())
+        .unwrap_or_else(|e| panic!("{e:#}"));
     let caustica::scene::Environment::Map(m) = &s.environment else { panic!("a map") };
     for x in 0..16 {
         assert_eq!((m.image.get(x, 0), m.image.get(x, 7)), ([0.0; 3], [1.0; 3]), "column {x}");
@@ -664,7 +793,18 @@ const TILT_TEXEL: [u8; 3] = [128, 191, 238];
 
 #[test]
 fn normalmap_and_mask_map_onto_normal_and_opacity_textures_in_mitsubas_frame() {
-    let path = write_scene("normalmap", &[("scene.xml", &mapped_square_xml(r#"<texture name="opacity" type="bitmap"><string name="filename" value="holes.png"/></texture>"#)), ("square.obj", SQUARE_OBJ)]);
+    let path = write_scene(
+        "normalmap",
+        &[
+            (
+                "scene.xml",
+                &mapped_square_xml(
+                    r#"<texture name="opacity" type="bitmap"><string name="filename" value="holes.png"/></texture>"#,
+                ),
+            ),
+            ("square.obj", SQUARE_OBJ),
+        ],
+    );
     let dir = path.parent().unwrap();
     solid_png(&dir.join("tilt.png"), TILT_TEXEL);
     solid_png(&dir.join("holes.png"), [200, 100, 50]);
@@ -673,19 +813,30 @@ fn normalmap_and_mask_map_onto_normal_and_opacity_textures_in_mitsubas_frame() {
     let normal = m.maps.normal.expect("the normalmap is the material's normal map");
     assert!(!s.textures[normal.texture as usize].srgb, "raw: read as stored");
     let alpha = m.maps.alpha.expect("the mask is the material's opacity");
-    assert_eq!((alpha.factor, alpha.mode), (1.0, AlphaMode::Blend), "Mitsuba's mask is met with probability equal to its opacity");
+    assert_eq!(
+        (alpha.factor, alpha.mode),
+        (1.0, AlphaMode::Blend),
+        "Mitsuba's mask is met with probability equal to its opacity"
+    );
     // The opacity is the colour's luminance after sRGB decoding (Mitsuba's eval_1 of a bitmap).
     let decode = |b: u8| caustica::scene::srgb_to_linear(b);
     let luminance = 0.2126 * decode(200) + 0.7152 * decode(100) + 0.0722 * decode(50);
     assert_eq!(s.textures[alpha.texture.unwrap() as usize].texels[0][3], (luminance * 255.0).round() as u8);
     // Mitsuba's frame whichever way v grows: the tangent along -x (growing u) and the bitangent
     // cross(n, t) = -y, though v grows along +y (MikkTSpace's bitangent would follow it).
-    assert!(s.meshes[0].tangents.iter().all(|t| (t.truncate() + Vec3::X).length() < 1e-5 && t.w == 1.0), "{:?}", s.meshes[0].tangents);
+    assert!(
+        s.meshes[0].tangents.iter().all(|t| (t.truncate() + Vec3::X).length() < 1e-5 && t.w == 1.0),
+        "{:?}",
+        s.meshes[0].tangents
+    );
 
     // `convert` writes both textures out, and its TOML loads to the same scene.
     let out = temp_dir("normalmap-out");
     let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&out).unwrap();
-    assert!(toml.contains("normal_texture") && toml.contains("opacity_texture") && toml.contains("encoding = \"linear\""), "{toml}");
+    assert!(
+        toml.contains("normal_texture") && toml.contains("opacity_texture") && toml.contains("encoding = \"linear\""),
+        "{toml}"
+    );
     let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
     assert_eq!((&t.textures, &t.meshes[0].tangents), (&s.textures, &s.meshes[0].tangents));
     assert_eq!(t.materials[0].maps, m.maps);
@@ -697,7 +848,10 @@ fn normalmap_and_mask_map_onto_normal_and_opacity_textures_in_mitsubas_frame() {
 /// bitangent, following v), n'.l rises from 0.259 to 0.965: a frame turned either way fails.
 #[test]
 fn a_normal_mapped_square_shades_with_the_bent_normal_mitsuba_would() {
-    let path = write_scene("normalmap-render", &[("scene.xml", &mapped_square_xml(r#"<float name="opacity" value="1"/>"#)), ("square.obj", SQUARE_OBJ)]);
+    let path = write_scene(
+        "normalmap-render",
+        &[("scene.xml", &mapped_square_xml(r#"<float name="opacity" value="1"/>"#)), ("square.obj", SQUARE_OBJ)],
+    );
     solid_png(&path.parent().unwrap().join("tilt.png"), TILT_TEXEL);
     let s = scene_at(&path);
     let texel = Vec3::from(TILT_TEXEL.map(|b| f32::from(b) / 255.0 * 2.0 - 1.0));
@@ -707,7 +861,11 @@ fn a_normal_mapped_square_shades_with_the_bent_normal_mitsuba_would() {
     let (_lock, ctx) = gpu();
     let image = render(&ctx, &s, 3);
     for p in &image.pixels {
-        assert!((p[0] - expected).abs() < 2e-3 * expected, "pixel {p:?}, expected {expected} (with the bitangent along -y: {})", 0.5 / std::f32::consts::PI * 2.0 * Vec3::new(bent.x, -bent.y, bent.z).dot(light));
+        assert!(
+            (p[0] - expected).abs() < 2e-3 * expected,
+            "pixel {p:?}, expected {expected} (with the bitangent along -y: {})",
+            0.5 / std::f32::consts::PI * 2.0 * Vec3::new(bent.x, -bent.y, bent.z).dot(light)
+        );
     }
 }
 
@@ -726,7 +884,10 @@ fn masks_and_normal_maps_need_meshes_and_one_texture_map() {
             assert!(e.contains(needle), "'{needle}' missing from: {e}");
         }
     };
-    refused("[materials.m]\nnormal_texture = { file = \"n.png\" }\n[[meshes]]\nfile = \"flat.obj\"\nmaterial = \"m\"\n", &["flat.obj", "no vertex normals", "normal_texture"]);
+    refused(
+        "[materials.m]\nnormal_texture = { file = \"n.png\" }\n[[meshes]]\nfile = \"flat.obj\"\nmaterial = \"m\"\n",
+        &["flat.obj", "no vertex normals", "normal_texture"],
+    );
     refused("[materials.m]\nopacity = 0.5\n[[quads]]\norigin = [0, 0, 0]\nedge_u = [1, 0, 0]\nedge_v = [0, 1, 0]\nmaterial = \"m\"\n", &["materials.m.opacity", "needs a mesh"]);
     refused("[materials.m]\nopacity = 1.5\n", &["materials.m.opacity", "[0, 1]"]);
     refused(
@@ -736,17 +897,32 @@ fn masks_and_normal_maps_need_meshes_and_one_texture_map() {
 }
 
 fn scene_at(path: &Path) -> Scene {
-    import(&InputFiles::anywhere(), path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).unwrap_or_else(|e| panic!("{e:#}"))
+    import(&InputFiles::anywhere(), path, &[])
+        .and_then(|i| i.into_scene(&InputFiles::anywhere()))
+        .unwrap_or_else(|e| panic!("{e:#}"))
 }
 
 #[test]
 fn flip_normals_and_face_normals_turn_and_flatten_meshes() {
-    let shape = |params: &str| format!(r#"<shape type="obj"><string name="filename" value="square.obj"/>{params}<bsdf type="diffuse"/></shape>"#);
-    let body = xml(&format!("{SENSOR}{}{}{}", shape(""), shape(r#"<boolean name="flip_normals" value="true"/>"#), shape(r#"<boolean name="face_normals" value="true"/>"#)));
+    let shape = |params: &str| {
+        format!(
+            r#"<shape type="obj"><string name="filename" value="square.obj"/>{params}<bsdf type="diffuse"/></shape>"#
+        )
+    };
+    let body = xml(&format!(
+        "{SENSOR}{}{}{}",
+        shape(""),
+        shape(r#"<boolean name="flip_normals" value="true"/>"#),
+        shape(r#"<boolean name="face_normals" value="true"/>"#)
+    ));
     let path = write_scene("sides", &[("scene.xml", &body), ("square.obj", SQUARE_OBJ)]);
     let s = scene_at(&path);
     let [plain, flipped, flat] = [0, 1, 2].map(|k| &s.meshes[k]);
-    assert_eq!(flipped.triangles, plain.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect::<Vec<_>>(), "the winding turns round");
+    assert_eq!(
+        flipped.triangles,
+        plain.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect::<Vec<_>>(),
+        "the winding turns round"
+    );
     assert_eq!(flipped.normals, plain.normals.iter().map(|n| -*n).collect::<Vec<_>>(), "and the normals with it");
     assert!(flat.normals.is_empty() && flat.triangles == plain.triangles, "face_normals drops the vertex normals");
     // One-sided (no twosided): the flipped square is black from the front, which the camera sees.
@@ -757,7 +933,11 @@ fn flip_normals_and_face_normals_turn_and_flatten_meshes() {
     assert!(toml.contains("flip_normals = true") && toml.contains("face_normals = true"), "{toml}");
     let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
     for k in 0..3 {
-        assert_eq!((&t.meshes[k].triangles, &t.meshes[k].normals), (&s.meshes[k].triangles, &s.meshes[k].normals), "mesh {k}");
+        assert_eq!(
+            (&t.meshes[k].triangles, &t.meshes[k].normals),
+            (&s.meshes[k].triangles, &s.meshes[k].normals),
+            "mesh {k}"
+        );
     }
 }
 
@@ -780,14 +960,30 @@ fn alpha_u_and_alpha_v_map_onto_roughness_and_roughness_v() {
             <shape type="sphere"><ref id="even"/></shape>"#
         ),
     );
-    let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no material {name}")).clone();
+    let m = |name: &str| {
+        s.materials.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no material {name}")).clone()
+    };
     let near = |a: f32, b: f32| (a - b).abs() < 1e-6;
-    for (name, u, v, distribution) in [("brushed", 0.2, 0.5, Microfacet::Ggx), ("frosted", 0.6, 0.1, Microfacet::Beckmann), ("satin", 0.3, 0.4, Microfacet::Beckmann)] {
+    for (name, u, v, distribution) in [
+        ("brushed", 0.2, 0.5, Microfacet::Ggx),
+        ("frosted", 0.6, 0.1, Microfacet::Beckmann),
+        ("satin", 0.3, 0.4, Microfacet::Beckmann),
+    ] {
         let material = m(name);
-        assert!(near(material.roughness, u) && material.roughness_v.is_some_and(|r| near(r, v)) && material.microfacet == distribution, "{name}: {material:?}");
+        assert!(
+            near(material.roughness, u)
+                && material.roughness_v.is_some_and(|r| near(r, v))
+                && material.microfacet == distribution,
+            "{name}: {material:?}"
+        );
         assert!(material.is_anisotropic(), "{name}");
     }
     assert!(near(m("even").roughness, 0.3) && m("even").roughness_v.is_none() && !m("even").is_anisotropic());
-    let e = error("anisotropic-range", &format!(r#"{SENSOR}<bsdf type="roughconductor" id="b"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="1.5"/></bsdf><shape type="sphere"><ref id="b"/></shape>"#));
+    let e = error(
+        "anisotropic-range",
+        &format!(
+            r#"{SENSOR}<bsdf type="roughconductor" id="b"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="1.5"/></bsdf><shape type="sphere"><ref id="b"/></shape>"#
+        ),
+    );
     assert!(e.contains("alpha_v must be in [0, 1], got 1.5"), "{e}");
 }

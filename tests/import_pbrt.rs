@@ -9,7 +9,9 @@ mod common;
 use caustica::input_file::InputFiles;
 use caustica::scene::import::{import, Imported};
 use caustica::scene::{AlphaMode, Conductor, Environment, Filter, Light, LightSelection, Sampler, Scene, Shape};
-use common::{close, gpu, import_text, import_text_error, import_text_scene, render, temp_dir, write_files, WrittenFiles};
+use common::{
+    close, gpu, import_text, import_text_error, import_text_scene, render, temp_dir, write_files, WrittenFiles,
+};
 use glam::Vec3;
 use std::path::Path;
 
@@ -73,7 +75,10 @@ fn an_asymmetric_scene_renders_with_pbrts_left_and_right() {
         (0..image.width).filter(|&x| (0..image.height).any(|y| image.get(x, y)[0] > 0.5)).collect::<Vec<_>>()
     };
     let right = lit_columns("", "lr");
-    assert!(!right.is_empty() && right.iter().all(|&x| x >= 8), "lit columns {right:?}: the patch must be on the right");
+    assert!(
+        !right.is_empty() && right.iter().all(|&x| x >= 8),
+        "lit columns {right:?}: the patch must be on the right"
+    );
     let left = lit_columns("Scale -1 1 1\n", "lr-mirrored");
     assert!(!left.is_empty() && left.iter().all(|&x| x < 8), "lit columns {left:?}: mirrored, on the left");
 }
@@ -92,15 +97,26 @@ fn fov_is_for_the_shorter_axis_and_the_lens_and_screenwindow_map() {
         ("\"float screenwindow\" [-2 2 -1.5 1.5]", 32, 24, vertical(tan30 * 1.5)),
     ] {
         let s = camera(params, w, h).unwrap();
-        assert!((s.camera.fov_deg - expected).abs() < 1e-4, "{params} {w}x{h}: {} against {expected}", s.camera.fov_deg);
-        assert!(close(s.camera.position, Vec3::new(-1.0, 2.0, 3.0)) && close(s.camera.look_at, Vec3::new(-1.0, 2.0, 2.0)) && close(s.camera.up, Vec3::Y));
+        assert!(
+            (s.camera.fov_deg - expected).abs() < 1e-4,
+            "{params} {w}x{h}: {} against {expected}",
+            s.camera.fov_deg
+        );
+        assert!(
+            close(s.camera.position, Vec3::new(-1.0, 2.0, 3.0))
+                && close(s.camera.look_at, Vec3::new(-1.0, 2.0, 2.0))
+                && close(s.camera.up, Vec3::Y)
+        );
         assert_eq!((s.film.width, s.film.height, s.camera.aperture), (w, h, 0.0));
     }
     let s = camera("\"float lensradius\" 0.25 \"float focaldistance\" 3", 32, 24).unwrap();
     assert_eq!((s.camera.aperture, s.camera.focus_distance), (0.25, 3.0));
     // pbrt's defaults: 1280 x 720, 16 spp, its Gaussian filter, the Sobol family of samplers.
     let s = scene_of("defaults", "Camera \"perspective\"\nWorldBegin\n");
-    assert_eq!((s.film.width, s.film.height, s.film.spp, s.film.filter, s.integrator.sampler), (1280, 720, 16, Filter::Gaussian, Sampler::Sobol));
+    assert_eq!(
+        (s.film.width, s.film.height, s.film.spp, s.film.filter, s.integrator.sampler),
+        (1280, 720, 16, Filter::Gaussian, Sampler::Sobol)
+    );
     let e = camera("\"float screenwindow\" [-1 3 -1.5 1.5]", 32, 24).unwrap_err().to_string();
     assert!(e.contains("scene.pbrt:2: Camera \"perspective\"") && e.contains("screenwindow"), "{e}");
 }
@@ -117,12 +133,22 @@ fn transformations_apply_in_pbrts_order_and_blocks_restore_them() {
          Shape \"sphere\"\nCoordSysTransform \"up2\"\nTranslate 0 0 1\nShape \"sphere\"\n\
          Transform [2 0 0 0  0 2 0 0  0 0 2 0  3 0 0 1]\nShape \"sphere\"\n",
     );
-    let centres: Vec<(Vec3, f32)> = s.shapes.iter().map(|s| match *s {
-        Shape::Sphere { center, radius, .. } => (center, radius),
-        _ => panic!("spheres only"),
-    }).collect();
+    let centres: Vec<(Vec3, f32)> = s
+        .shapes
+        .iter()
+        .map(|s| match *s {
+            Shape::Sphere { center, radius, .. } => (center, radius),
+            _ => panic!("spheres only"),
+        })
+        .collect();
     // In caustica's (mirrored) world x is negated.
-    let expected = [(Vec3::new(0.0, 0.0, -1.0), 1.0), (Vec3::new(-1.0, 0.0, 0.0), 1.0), (Vec3::ZERO, 1.0), (Vec3::new(0.0, 2.0, 1.0), 1.0), (Vec3::new(-3.0, 0.0, 0.0), 2.0)];
+    let expected = [
+        (Vec3::new(0.0, 0.0, -1.0), 1.0),
+        (Vec3::new(-1.0, 0.0, 0.0), 1.0),
+        (Vec3::ZERO, 1.0),
+        (Vec3::new(0.0, 2.0, 1.0), 1.0),
+        (Vec3::new(-3.0, 0.0, 0.0), 2.0),
+    ];
     for (k, ((c, r), (ec, er))) in centres.iter().zip(expected).enumerate() {
         assert!(close(*c, ec) && *r == er, "sphere {k}: {c} r {r}, expected {ec} r {er}");
     }
@@ -139,10 +165,14 @@ fn include_shares_the_graphics_state_and_import_keeps_its_own() {
         ],
     );
     let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
-    let spheres: Vec<(Vec3, Vec3)> = s.shapes.iter().map(|shape| match *shape {
-        Shape::Sphere { center, material, .. } => (center, s.materials[material as usize].albedo),
-        _ => panic!("spheres only"),
-    }).collect();
+    let spheres: Vec<(Vec3, Vec3)> = s
+        .shapes
+        .iter()
+        .map(|shape| match *shape {
+            Shape::Sphere { center, material, .. } => (center, s.materials[material as usize].albedo),
+            _ => panic!("spheres only"),
+        })
+        .collect();
     // Include: the translation and material carry on; Import: they stay inside the imported file.
     assert!(close(spheres[0].0, Vec3::Y) && close(spheres[0].1, Vec3::splat(0.2)), "{spheres:?}");
     assert!(close(spheres[1].0, Vec3::Y) && close(spheres[1].1, Vec3::splat(0.2)), "{spheres:?}");
@@ -172,10 +202,14 @@ fn maxdepth_counts_bounces_one_less_than_caustica_segments() {
         (s.integrator.max_bounces, s.integrator.rr_start, s.integrator.light_selection)
     };
     assert_eq!(integrator("Integrator \"path\" \"integer maxdepth\" 0"), (1, 1, LightSelection::Power));
-    assert_eq!(integrator("Integrator \"volpath\" \"integer maxdepth\" 3 \"string lightsampler\" \"uniform\""), (4, 1, LightSelection::Uniform));
+    assert_eq!(
+        integrator("Integrator \"volpath\" \"integer maxdepth\" 3 \"string lightsampler\" \"uniform\""),
+        (4, 1, LightSelection::Uniform)
+    );
     assert_eq!(integrator(""), (6, 1, LightSelection::Power), "pbrt's default maxdepth is 5");
     assert_eq!(integrator("Integrator \"path\" \"integer maxdepth\" -1").0, 1024);
-    assert!(error("bdpt", "Camera \"perspective\"\nIntegrator \"bdpt\"\nWorldBegin\n").contains("scene.pbrt:2: Integrator \"bdpt\""));
+    assert!(error("bdpt", "Camera \"perspective\"\nIntegrator \"bdpt\"\nWorldBegin\n")
+        .contains("scene.pbrt:2: Integrator \"bdpt\""));
 }
 
 #[test]
@@ -213,7 +247,11 @@ fn materials_map_with_named_spectra_roughness_and_constant_textures() {
     let e = error("imagemap", &format!("{OPTIONS}WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.png\"\nMaterial \"conductor\" \"texture reflectance\" \"t\"\nShape \"sphere\"\n"));
     assert!(e.contains("scene.pbrt:8: 'texture reflectance': the texture varies over the surface"), "{e}");
     let s = scene("thin", "Material \"thindielectric\" \"float eta\" 1.33\nShape \"sphere\"");
-    assert!(s.materials[0].thin && s.materials[0].transparency == 1.0 && s.materials[0].ior == 1.33, "{:?}", s.materials[0]);
+    assert!(
+        s.materials[0].thin && s.materials[0].transparency == 1.0 && s.materials[0].ior == 1.33,
+        "{:?}",
+        s.materials[0]
+    );
 }
 
 #[test]
@@ -236,7 +274,13 @@ fn fronts_follow_the_winding_reverse_orientation_and_normals_through_the_mirror(
     assert!(matches!(s.shapes[0], Shape::Quad { .. }), "a parallelogram patch is a quad");
     let fronts: Vec<Vec3> = s.shapes.iter().map(normal).collect();
     // Object +z, mirrored in x, is still +z; ReverseOrientation turns it, unless normals decide.
-    assert!(close(fronts[1], Vec3::Z) && close(fronts[2], -Vec3::Z) && close(fronts[3], Vec3::Z) && close(fronts[0], -Vec3::Z), "{fronts:?}");
+    assert!(
+        close(fronts[1], Vec3::Z)
+            && close(fronts[2], -Vec3::Z)
+            && close(fronts[3], Vec3::Z)
+            && close(fronts[0], -Vec3::Z),
+        "{fronts:?}"
+    );
 }
 
 /// A two-triangle square in ASCII PLY.
@@ -261,14 +305,26 @@ fn object_instances_share_meshes_and_copy_other_shapes() {
     let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
     assert_eq!((s.meshes.len(), s.instances.len()), (1, 2), "one mesh placed twice");
     assert!(close(s.instances[1].transform.transform_point3(Vec3::X), Vec3::new(-3.0, 0.0, 0.0)));
-    let spheres: Vec<Vec3> = s.shapes.iter().filter_map(|s| if let Shape::Sphere { center, .. } = *s { Some(center) } else { None }).collect();
-    assert!(spheres.len() == 2 && close(spheres[0], Vec3::new(0.0, 0.0, 1.0)) && close(spheres[1], Vec3::new(-2.0, 0.0, 1.0)), "{spheres:?}");
+    let spheres: Vec<Vec3> = s
+        .shapes
+        .iter()
+        .filter_map(|s| if let Shape::Sphere { center, .. } = *s { Some(center) } else { None })
+        .collect();
+    assert!(
+        spheres.len() == 2
+            && close(spheres[0], Vec3::new(0.0, 0.0, 1.0))
+            && close(spheres[1], Vec3::new(-2.0, 0.0, 1.0)),
+        "{spheres:?}"
+    );
     // The emitting mesh is written out as triangles facing as pbrt has them (+z).
     let triangles: Vec<&Shape> = s.shapes.iter().filter(|s| matches!(s, Shape::Triangle { .. })).collect();
     assert_eq!(triangles.len(), 2);
     for t in triangles {
         let Shape::Triangle { v, material } = *t else { unreachable!() };
-        assert!(close((v[1] - v[0]).cross(v[2] - v[0]).normalize(), Vec3::Z) && s.materials[material as usize].is_emissive());
+        assert!(
+            close((v[1] - v[0]).cross(v[2] - v[0]).normalize(), Vec3::Z)
+                && s.materials[material as usize].is_emissive()
+        );
     }
     let e = error("no-object", &format!("{OPTIONS}WorldBegin\nObjectInstance \"nothing\"\n"));
     assert!(e.contains("scene.pbrt:7: ObjectInstance \"nothing\""), "{e}");
@@ -284,20 +340,27 @@ fn lights_map_to_caustica_lights_in_the_mirrored_world() {
          LightSource \"infinite\" \"rgb L\" [0.1 0.2 0.3]\n",
     );
     match s.lights[0] {
-        Light::Point { position, intensity } => assert!(close(position, Vec3::new(-1.0, 2.0, 3.0)) && close(intensity, Vec3::new(2.0, 4.0, 6.0))),
+        Light::Point { position, intensity } => {
+            assert!(close(position, Vec3::new(-1.0, 2.0, 3.0)) && close(intensity, Vec3::new(2.0, 4.0, 6.0)))
+        }
         ref other => panic!("{other:?}"),
     }
     match s.lights[1] {
         Light::Spot { position, axis, cone_angle, falloff_start, .. } => {
             assert!(close(position, Vec3::new(-1.0, 0.0, 0.0)) && close(axis, -Vec3::Y));
-            assert!((cone_angle - 30f32.to_radians()).abs() < 1e-6 && (falloff_start - 20f32.to_radians()).abs() < 1e-6);
+            assert!(
+                (cone_angle - 30f32.to_radians()).abs() < 1e-6 && (falloff_start - 20f32.to_radians()).abs() < 1e-6
+            );
         }
         ref other => panic!("{other:?}"),
     }
     match s.lights[2] {
         Light::Directional { direction, irradiance, .. } => {
             assert!(close(direction, Vec3::new(1.0, -1.0, 0.0).normalize()), "{direction}");
-            assert!((0.2126 * irradiance.x + 0.7152 * irradiance.y + 0.0722 * irradiance.z - 1.0).abs() < 1e-3, "a black body has unit luminance: {irradiance}");
+            assert!(
+                (0.2126 * irradiance.x + 0.7152 * irradiance.y + 0.0722 * irradiance.z - 1.0).abs() < 1e-3,
+                "a black body has unit luminance: {irradiance}"
+            );
         }
         ref other => panic!("{other:?}"),
     }
@@ -321,13 +384,23 @@ fn an_equal_area_environment_map_is_resampled_to_lat_long_with_its_rotation() {
     std::fs::write(&path, format!("{OPTIONS}WorldBegin\nAttributeBegin\nRotate -90 1 0 0\nLightSource \"infinite\" \"string filename\" \"sky.pfm\" \"float scale\" 2\nAttributeEnd\n")).unwrap();
     let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
     let Environment::Map(map) = &s.environment else { panic!("an environment map") };
-    assert_eq!((map.projection, map.intensity, map.image.width, map.image.height), (caustica::scene::MapProjection::LatLong, 2.0, 64, 32));
+    assert_eq!(
+        (map.projection, map.intensity, map.image.width, map.image.height),
+        (caustica::scene::MapProjection::LatLong, 2.0, 64, 32)
+    );
     for y in [0, 5, 10] {
-        assert!((0..64).all(|x| map.image.get(x, y)[0] == 1.0 && map.image.get(x, 31 - y)[0] == 0.0), "row {y} bright, row {} dark", 31 - y);
+        assert!(
+            (0..64).all(|x| map.image.get(x, y)[0] == 1.0 && map.image.get(x, 31 - y)[0] == 0.0),
+            "row {y} bright, row {} dark",
+            31 - y
+        );
     }
     // Not square: an error naming the file.
     caustica::image::pfm::write(&dir.join("sky.pfm"), &caustica::image::RgbImage::new(8, 4)).unwrap();
-    let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).err().unwrap());
+    let e = format!(
+        "{:#}",
+        import(&InputFiles::anywhere(), &path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).err().unwrap()
+    );
     assert!(e.contains("sky.pfm") && e.contains("must be square"), "{e}");
 }
 
@@ -337,20 +410,46 @@ fn bad_input_is_an_error_naming_file_and_line_never_a_panic() {
         ("Shape \"sphere\" \"float radius\" [1]\nShape \"sph", "scene.pbrt:8: unterminated string", "unterminated"),
         ("Frobnicate 1 2 3", "scene.pbrt:7: unknown directive 'Frobnicate'", "unknown directive"),
         ("Include \"missing.pbrt\"", "scene.pbrt:7: in the Include of", "missing include"),
-        ("Shape \"sphere\" \"string radius\" \"1\"", "scene.pbrt:7: 'string radius': Shape \"sphere\": 'radius' is a float", "wrong type"),
-        ("Shape \"sphere\" \"float radius\" \"one\"", "scene.pbrt:7: 'float radius': the values are not numbers", "string for a float"),
-        ("Shape \"sphere\"\n  \"float radiuss\" 1", "scene.pbrt:8: 'float radiuss': Shape \"sphere\": the parameter 'radiuss' is not supported", "unknown parameter"),
+        (
+            "Shape \"sphere\" \"string radius\" \"1\"",
+            "scene.pbrt:7: 'string radius': Shape \"sphere\": 'radius' is a float",
+            "wrong type",
+        ),
+        (
+            "Shape \"sphere\" \"float radius\" \"one\"",
+            "scene.pbrt:7: 'float radius': the values are not numbers",
+            "string for a float",
+        ),
+        (
+            "Shape \"sphere\"\n  \"float radiuss\" 1",
+            "scene.pbrt:8: 'float radiuss': Shape \"sphere\": the parameter 'radiuss' is not supported",
+            "unknown parameter",
+        ),
         ("Shape \"disk\"", "scene.pbrt:7: Shape \"disk\": this shape is not supported", "unknown shape"),
         ("AttributeEnd", "scene.pbrt:7: AttributeEnd without AttributeBegin", "unbalanced"),
         ("AttributeBegin\nShape \"sphere\"", "scene.pbrt:7: this AttributeBegin is never ended", "unended"),
-        ("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 3]", "scene.pbrt:7: Shape \"trianglemesh\": index 3 is not one of the 3 vertices", "bad index"),
-        ("Shape \"sphere\" \"float radius\" [1", "scene.pbrt:7: \"float radius\": the file ends before the list's ']'", "open list"),
+        (
+            "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 3]",
+            "scene.pbrt:7: Shape \"trianglemesh\": index 3 is not one of the 3 vertices",
+            "bad index",
+        ),
+        (
+            "Shape \"sphere\" \"float radius\" [1",
+            "scene.pbrt:7: \"float radius\": the file ends before the list's ']'",
+            "open list",
+        ),
     ];
     for (world, expected, what) in cases {
         let e = error("bad", &format!("{OPTIONS}WorldBegin\n{world}\n"));
         assert!(e.contains(expected), "{what}: {e}");
     }
-    let looped = write_scene("loop", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\nInclude \"loop.pbrt\"\n")), ("loop.pbrt", "Include \"loop.pbrt\"\n")]);
+    let looped = write_scene(
+        "loop",
+        &[
+            ("scene.pbrt", &format!("{OPTIONS}WorldBegin\nInclude \"loop.pbrt\"\n")),
+            ("loop.pbrt", "Include \"loop.pbrt\"\n"),
+        ],
+    );
     let e = format!("{:#}", import(&InputFiles::anywhere(), &looped, &[]).err().expect("an include cycle is refused"));
     assert!(e.contains("loop.pbrt:1: Include \"loop.pbrt\": includes nest more than 16 deep"), "{e}");
     let e = error("no-world", "Camera \"perspective\"\n");
@@ -434,7 +533,13 @@ fn a_pbrt_scene_renders_bit_for_bit_like_its_toml_twin() {
     let mut twin = Scene::parse(LIT_SCENE_TOML, "twin.toml", Path::new(".")).unwrap();
     // The camera goes through pbrt's look-at matrix and its inverse: equal up to rounding.
     let (c, t) = (&from_pbrt.camera, &twin.camera);
-    assert!(close(c.position, t.position) && close(c.look_at, t.look_at) && close(c.up, t.up) && (c.fov_deg - t.fov_deg).abs() < 1e-5, "{c:?} against {t:?}");
+    assert!(
+        close(c.position, t.position)
+            && close(c.look_at, t.look_at)
+            && close(c.up, t.up)
+            && (c.fov_deg - t.fov_deg).abs() < 1e-5,
+        "{c:?} against {t:?}"
+    );
     twin.camera = from_pbrt.camera.clone();
     // Everything but the names is the same scene.
     let (mut a, mut b) = (from_pbrt.clone(), twin.clone());
@@ -457,28 +562,50 @@ fn convert_writes_toml_that_loads_to_the_same_scene_and_the_cli_fails_with_file_
     (converted.name, direct.name) = (String::new(), String::new());
     assert_eq!(format!("{converted:?}"), format!("{direct:?}"));
 
-    let caustica = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_caustica")).args(args).output().unwrap();
+    let caustica =
+        |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_caustica")).args(args).output().unwrap();
     let out = path.with_file_name("scene.toml");
     let o = caustica(&["convert", path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(Scene::load(&out).is_ok());
-    let bad = write_scene("cli-bad", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\nShape \"sphere\" \"float radius\" -1\n"))]);
-    for args in [vec!["render", bad.to_str().unwrap(), "-o", "/tmp/never.png"], vec!["convert", bad.to_str().unwrap(), "-o", "/tmp/never.toml"], vec!["render", path.to_str().unwrap(), "-D", "x=1", "-o", "/tmp/never.png"]] {
+    let bad = write_scene(
+        "cli-bad",
+        &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\nShape \"sphere\" \"float radius\" -1\n"))],
+    );
+    for args in [
+        vec!["render", bad.to_str().unwrap(), "-o", "/tmp/never.png"],
+        vec!["convert", bad.to_str().unwrap(), "-o", "/tmp/never.toml"],
+        vec!["render", path.to_str().unwrap(), "-D", "x=1", "-o", "/tmp/never.png"],
+    ] {
         let o = caustica(&args);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
-        assert!(stderr.contains("scene.pbrt:7: Shape \"sphere\": radius must be > 0") || stderr.contains("-D x=..."), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("scene.pbrt:7: Shape \"sphere\": radius must be > 0") || stderr.contains("-D x=..."),
+            "{args:?}: {stderr}"
+        );
     }
 }
 
 #[test]
 fn scenes_cornell_pbrt_is_the_cornell_box_of_scenes_cornell_toml() {
     // The pbrt file is the TOML box mirrored in x, as pbrt shows it; caustica reads it back.
-    let (pbrt, toml) = (Scene::load(Path::new("scenes/cornell.pbrt")).unwrap(), Scene::load(Path::new("scenes/cornell.toml")).unwrap());
+    let (pbrt, toml) = (
+        Scene::load(Path::new("scenes/cornell.pbrt")).unwrap(),
+        Scene::load(Path::new("scenes/cornell.toml")).unwrap(),
+    );
     assert_eq!(format!("{:?}", pbrt.shapes), format!("{:?}", toml.shapes), "the same walls, light and spheres");
     let (c, t) = (&pbrt.camera, &toml.camera);
-    assert!(close(c.position, t.position) && close(c.look_at - c.position, (t.look_at - t.position).normalize()) && close(c.up, t.up) && (c.fov_deg - t.fov_deg).abs() < 1e-4);
-    assert_eq!((pbrt.film.width, pbrt.film.height, pbrt.film.spp, pbrt.film.filter), (toml.film.width, toml.film.height, toml.film.spp, toml.film.filter));
+    assert!(
+        close(c.position, t.position)
+            && close(c.look_at - c.position, (t.look_at - t.position).normalize())
+            && close(c.up, t.up)
+            && (c.fov_deg - t.fov_deg).abs() < 1e-4
+    );
+    assert_eq!(
+        (pbrt.film.width, pbrt.film.height, pbrt.film.spp, pbrt.film.filter),
+        (toml.film.width, toml.film.height, toml.film.spp, toml.film.filter)
+    );
     for (a, b) in pbrt.materials.iter().zip(&toml.materials) {
         assert!(a.name.starts_with(&b.name), "{} against {}", a.name, b.name);
         assert_eq!((a.emission, a.transparency, a.ior), (b.emission, b.transparency, b.ior), "{}", b.name);
@@ -501,19 +628,34 @@ fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them
                  Texture \"checks\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4] \"rgb tex2\" [0.2 0.2 0.2] \"float uscale\" 4\n\
                  Material \"coateddiffuse\" \"texture reflectance\" \"checks\"\n\
                  Shape \"plymesh\" \"string filename\" \"square.ply\"\n";
-    let path = write_scene("textures", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}")), ("square.ply", UV_SQUARE_PLY)]);
+    let path = write_scene(
+        "textures",
+        &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}")), ("square.ply", UV_SQUARE_PLY)],
+    );
     let dir = path.parent().unwrap();
-    caustica::image::png::write(&dir.join("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default()).unwrap();
-    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    caustica::image::png::write(&dir.join("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default())
+        .unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[])
+        .unwrap()
+        .into_scene(&InputFiles::anywhere())
+        .unwrap_or_else(|e| panic!("{e:#}"));
     let material = |mesh: usize| &s.materials[s.meshes[mesh].triangle_materials[0] as usize];
     let (wood, checks) = (material(0), material(1));
-    assert_eq!((wood.albedo, checks.albedo), (Vec3::splat(0.25), Vec3::ONE), "the image's scale and the scale texture's multiply it");
+    assert_eq!(
+        (wood.albedo, checks.albedo),
+        (Vec3::splat(0.25), Vec3::ONE),
+        "the image's scale and the scale texture's multiply it"
+    );
     assert!(checks.coat);
     assert_eq!(&s.textures[wood.albedo_texture.unwrap() as usize].name, "wood.png");
     // pbrt reads the image at (s, 1 - t) = (2 u, 1 - (v + 0.25)) from its top-left corner.
     let uv = |mesh: usize| -> Vec<(f32, f32)> { s.meshes[mesh].uvs.iter().map(|uv| (uv.x, uv.y)).collect() };
     let expected = [(0.1f32, 0.1f32), (0.3, 0.1), (0.1, 0.3), (0.3, 0.3)].map(|(u, v)| (2.0 * u, 1.0 - (v + 0.25)));
-    assert!(uv(0).iter().zip(expected).all(|(a, b)| (a.0 - b.0).abs() < 1e-6 && (a.1 - b.1).abs() < 1e-6), "{:?} against {expected:?}", uv(0));
+    assert!(
+        uv(0).iter().zip(expected).all(|(a, b)| (a.0 - b.0).abs() < 1e-6 && (a.1 - b.1).abs() < 1e-6),
+        "{:?} against {expected:?}",
+        uv(0)
+    );
     // pbrt's checkerboard: tex1 where floor(4 u) + floor(v) is even, so at the vertices of u = 0.1
     // (4 u = 0.4), tex2 at those of u = 0.3 (4 u = 1.2).
     let checker = &s.textures[checks.albedo_texture.unwrap() as usize];
@@ -533,7 +675,10 @@ fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them
                 [[meshes]]\nfile = \"square.ply\"\nmaterial = \"checks\"\n";
     let t = Scene::parse(twin, "twin.toml", dir).unwrap_or_else(|e| panic!("{e:#}"));
     assert_eq!(t.textures, s.textures);
-    assert_eq!(format!("{:?}", t.meshes.iter().map(|m| &m.uvs).collect::<Vec<_>>()), format!("{:?}", s.meshes.iter().map(|m| &m.uvs).collect::<Vec<_>>()));
+    assert_eq!(
+        format!("{:?}", t.meshes.iter().map(|m| &m.uvs).collect::<Vec<_>>()),
+        format!("{:?}", s.meshes.iter().map(|m| &m.uvs).collect::<Vec<_>>())
+    );
     let unnamed = |s: &Scene, mesh: usize| {
         let mut m = s.materials[s.meshes[mesh].triangle_materials[0] as usize].clone();
         m.name = String::new();
@@ -543,14 +688,26 @@ fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them
 
     // What caustica cannot texture is an error naming the line.
     let refused = |tag: &str, world: &str, needles: &[&str]| {
-        let path = write_scene(tag, &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}\n")), ("square.ply", UV_SQUARE_PLY)]);
-        let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).and_then(|i| i.into_scene(&InputFiles::anywhere())).expect_err("refused"));
+        let path = write_scene(
+            tag,
+            &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}\n")), ("square.ply", UV_SQUARE_PLY)],
+        );
+        let e = format!(
+            "{:#}",
+            import(&InputFiles::anywhere(), &path, &[])
+                .and_then(|i| i.into_scene(&InputFiles::anywhere()))
+                .expect_err("refused")
+        );
         for needle in needles {
             assert!(e.contains(needle), "{tag}: '{needle}' missing from: {e}");
         }
     };
     let checks = "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.4 0.4 0.4]";
-    refused("tex-sphere", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"sphere\""), &["scene.pbrt:9: Shape \"sphere\"", "texture coordinates"]);
+    refused(
+        "tex-sphere",
+        &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"sphere\""),
+        &["scene.pbrt:9: Shape \"sphere\"", "texture coordinates"],
+    );
     refused("tex-patch", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]"), &["scene.pbrt:9: Shape \"bilinearmesh\"", "albedo_texture is supported on a plymesh"]);
     refused("tex-emitting", &format!("{checks}\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nAreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]"), &["scene.pbrt:10: Shape \"trianglemesh\"", "does not emit"]);
     refused("tex-exr", "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"a.exr\"\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"plymesh\" \"string filename\" \"square.ply\"", &["scene.pbrt:7: Texture \"imagemap\"", "a.exr", "PNG and JPEG"]);
@@ -559,7 +716,11 @@ fn image_and_checkerboard_reflectances_become_albedo_textures_as_pbrt_reads_them
     refused("tex-3d", &format!("{checks} \"integer dimension\" 3\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"plymesh\" \"string filename\" \"square.ply\""), &["scene.pbrt:7:", "dimension 2"]);
     refused("tex-bright", &format!("{checks} \"rgb tex2\" [2 2 2]\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"plymesh\" \"string filename\" \"square.ply\""), &["scene.pbrt:8:", "energy conservation"]);
     refused("tex-roughness", "Texture \"r\" \"float\" \"checkerboard\"\nMaterial \"conductor\" \"texture roughness\" \"r\"\nShape \"sphere\"", &["scene.pbrt:7: Texture \"r\" \"checkerboard\"", "float"]);
-    refused("tex-conductor", &format!("{checks}\nMaterial \"conductor\" \"texture reflectance\" \"c\"\nShape \"sphere\""), &["scene.pbrt:8:", "varies over the surface"]);
+    refused(
+        "tex-conductor",
+        &format!("{checks}\nMaterial \"conductor\" \"texture reflectance\" \"c\"\nShape \"sphere\""),
+        &["scene.pbrt:8:", "varies over the surface"],
+    );
 }
 
 #[test]
@@ -575,20 +736,37 @@ fn coatedconductor_is_causticas_clear_coat_over_the_conductor() {
     // alpha = sqrt(roughness), caustica's roughness sqrt(alpha): the coat's 0.01 -> 0.1^0.5, the
     // conductor's 0.0625 -> 0.5.
     let coat = m(0).clearcoat.expect("a clear coat");
-    assert!((coat.factor, coat.texture, coat.roughness_texture) == (1.0, None, None) && (coat.roughness - 0.1f32.sqrt()).abs() < 1e-6, "{coat:?}");
+    assert!(
+        (coat.factor, coat.texture, coat.roughness_texture) == (1.0, None, None)
+            && (coat.roughness - 0.1f32.sqrt()).abs() < 1e-6,
+        "{coat:?}"
+    );
     assert!((m(0).roughness - 0.5).abs() < 1e-6 && m(0).reflectivity == 1.0);
     let Conductor::Complex { eta, k } = m(1).conductor else { panic!("a complex conductor") };
     assert!(close(eta, Vec3::ONE) && ((k.x * k.x) / (4.0 + k.x * k.x) - 0.5).abs() < 1e-5);
     assert_eq!(m(1).clearcoat.map(|c| (c.factor, c.roughness)), Some((1.0, 0.0)), "a smooth coat by default");
-    let warnings = imported("coat-warn", &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"float interface.eta\" 1.33\nShape \"sphere\"\n")).unwrap().warnings;
-    assert!(warnings.iter().any(|w| w.contains("scene.pbrt:7:") && w.contains("coatedconductor becomes caustica's clear coat")), "{warnings:?}");
+    let warnings = imported(
+        "coat-warn",
+        &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"float interface.eta\" 1.33\nShape \"sphere\"\n"),
+    )
+    .unwrap()
+    .warnings;
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("scene.pbrt:7:") && w.contains("coatedconductor becomes caustica's clear coat")),
+        "{warnings:?}"
+    );
     assert!(warnings.iter().any(|w| w.contains("interface.eta 1.33 becomes 1.5")), "{warnings:?}");
     // The TOML twin: the same material from the scene file's clearcoat keys.
     let twin = "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\n[materials.m]\nmetal = \"gold\"\nroughness = 0.5\nclearcoat = 1.0\nclearcoat_roughness = 0.31622776\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n";
     let mut t = Scene::parse(twin, "twin.toml", Path::new(".")).unwrap().materials[0].clone();
     t.name = m(0).name.clone();
     assert_eq!(format!("{t:?}"), format!("{:?}", m(0)));
-    let e = error("coat-albedo", &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"rgb albedo\" [0.5 0.5 0.5]\nShape \"sphere\"\n"));
+    let e = error(
+        "coat-albedo",
+        &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"rgb albedo\" [0.5 0.5 0.5]\nShape \"sphere\"\n"),
+    );
     assert!(e.contains("scene.pbrt:7: Material \"coatedconductor\": a scattering coat"), "{e}");
     let e = error("coat-both", &format!("{OPTIONS}WorldBegin\nMaterial \"coatedconductor\" \"rgb reflectance\" [0.5 0.5 0.5] \"rgb conductor.eta\" [1 1 1]\nShape \"sphere\"\n"));
     assert!(e.contains("scene.pbrt:7:") && e.contains("reflectance or conductor.eta and conductor.k"), "{e}");
@@ -612,19 +790,27 @@ fn power_and_illuminance_scale_lights_as_pbrt_v4_does() {
     // pbrt scales the spectrum at unit luminance (the RGB as given) by power / k_e, whatever
     // the RGB's own brightness.
     match s.lights[0] {
-        Light::Point { intensity, .. } => assert!(close(intensity, Vec3::new(0.5, 1.0, 1.0) * 2.0 * 100.0 / (4.0 * PI)), "{intensity}"),
+        Light::Point { intensity, .. } => {
+            assert!(close(intensity, Vec3::new(0.5, 1.0, 1.0) * 2.0 * 100.0 / (4.0 * PI)), "{intensity}")
+        }
         ref other => panic!("{other:?}"),
     }
     // coneangle = conedeltaangle = 60: the falloff starts at the axis, k_e = 2 pi (1 - cos 60) / 2.
     match s.lights[1] {
-        Light::Spot { intensity, falloff_start, .. } => assert!(close(intensity, Vec3::splat(10.0 / (PI * 0.5))) && falloff_start == 0.0, "{intensity}"),
+        Light::Spot { intensity, falloff_start, .. } => {
+            assert!(close(intensity, Vec3::splat(10.0 / (PI * 0.5))) && falloff_start == 0.0, "{intensity}")
+        }
         ref other => panic!("{other:?}"),
     }
     match s.lights[2] {
         Light::Directional { irradiance, .. } => assert!(close(irradiance, Vec3::splat(3.0)), "{irradiance}"),
         ref other => panic!("{other:?}"),
     }
-    assert!(matches!(s.environment, Environment::Constant(c) if close(c, Vec3::new(1.0, 0.5, 0.5) * 2.0 / PI)), "{:?}", s.environment);
+    assert!(
+        matches!(s.environment, Environment::Constant(c) if close(c, Vec3::new(1.0, 0.5, 0.5) * 2.0 / PI)),
+        "{:?}",
+        s.environment
+    );
     // Each shape (each triangle of a mesh) emits the whole power: L = power / (pi area), halved
     // on two sides; a sphere's area is pbrt's, without its transformation's scale.
     let emission = |k: usize| s.materials[s.shapes[k].material() as usize].emission;
@@ -634,7 +820,12 @@ fn power_and_illuminance_scale_lights_as_pbrt_v4_does() {
     assert!(close(emission(1), Vec3::splat(8.0 / (PI * 2.0 * 2.0))), "two-sided quad: {}", emission(1));
     assert!(close(emission(2), Vec3::new(1.0, 0.5, 0.5) * 6.0 / (PI * 0.5)), "triangle of area 1/2: {}", emission(2));
     assert!(close(emission(3), Vec3::new(1.0, 0.5, 0.5) * 6.0 / (PI * 1.0)), "triangle of area 1: {}", emission(3));
-    assert_eq!(s.materials.len(), 4, "one material per area, none left over: {:?}", s.materials.iter().map(|m| &m.name).collect::<Vec<_>>());
+    assert_eq!(
+        s.materials.len(),
+        4,
+        "one material per area, none left over: {:?}",
+        s.materials.iter().map(|m| &m.name).collect::<Vec<_>>()
+    );
 
     // An equal-area map of constant radiance c: pbrt's own illuminance is c pi / 2 (its 2 pi /
     // texels; the true one is c pi), so the map is scaled by E / (c pi / 2).
@@ -655,7 +846,10 @@ fn power_and_illuminance_scale_lights_as_pbrt_v4_does() {
     // A map dark above its horizon cannot be scaled to an illuminance.
     caustica::image::pfm::write(&dir.join("sky.pfm"), &caustica::image::RgbImage::new(8, 8)).unwrap();
     let e = format!("{:#}", import(&InputFiles::anywhere(), &path, &[]).err().unwrap());
-    assert!(e.contains("scene.pbrt:7: LightSource \"infinite\"") && e.contains("no light onto its upper hemisphere"), "{e}");
+    assert!(
+        e.contains("scene.pbrt:7: LightSource \"infinite\"") && e.contains("no light onto its upper hemisphere"),
+        "{e}"
+    );
     let e = error("power-curved", &format!("{OPTIONS}WorldBegin\nAreaLightSource \"diffuse\" \"float power\" 1\nShape \"bilinearmesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0  1 1 1]\n"));
     assert!(e.contains("scene.pbrt:8: Shape \"bilinearmesh\"") && e.contains("not planar"), "{e}");
 }
@@ -671,9 +865,21 @@ fn a_textured_trianglemesh_keeps_its_texture_coordinates_and_convert_writes_it_a
                  Material \"diffuse\"\n\
                  Shape \"trianglemesh\" \"point3 P\" [0 0 2  1 0 2  0 1 2] \"float uv\" [0 0 1 0 1 1]\n";
     let path = write_scene("textured-trianglemesh", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}"))]);
-    caustica::image::png::write(&path.with_file_name("wood.png"), &caustica::image::RgbImage::new(3, 2), &Default::default()).unwrap();
-    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
-    assert_eq!((s.meshes.len(), s.shapes.len()), (2, 1), "the textured meshes are meshes, the untextured one a triangle");
+    caustica::image::png::write(
+        &path.with_file_name("wood.png"),
+        &caustica::image::RgbImage::new(3, 2),
+        &Default::default(),
+    )
+    .unwrap();
+    let s = import(&InputFiles::anywhere(), &path, &[])
+        .unwrap()
+        .into_scene(&InputFiles::anywhere())
+        .unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(
+        (s.meshes.len(), s.shapes.len()),
+        (2, 1),
+        "the textured meshes are meshes, the untextured one a triangle"
+    );
     // The mirror turns the winding, which the import turns back: corners 0, 2, 1, at the world
     // points pbrt has mirrored in x.
     let positions: Vec<Vec3> = s.meshes[0].positions.clone();
@@ -681,7 +887,10 @@ fn a_textured_trianglemesh_keeps_its_texture_coordinates_and_convert_writes_it_a
     assert_eq!(s.instances.iter().map(|i| i.transform).collect::<Vec<_>>(), vec![glam::Mat4::IDENTITY; 2]);
     // pbrt's checkerboard: tex1 where floor(4 u) + floor(v) is even (u = 0.1), tex2 at u = 0.3.
     let checker = &s.textures[s.materials[s.meshes[0].triangle_materials[0] as usize].albedo_texture.unwrap() as usize];
-    let texel = |uv: glam::Vec2| checker.texels[(uv.y.rem_euclid(1.0) * checker.height as f32) as usize * checker.width as usize + (uv.x.rem_euclid(1.0) * checker.width as f32) as usize];
+    let texel = |uv: glam::Vec2| {
+        checker.texels[(uv.y.rem_euclid(1.0) * checker.height as f32) as usize * checker.width as usize
+            + (uv.x.rem_euclid(1.0) * checker.width as f32) as usize]
+    };
     assert_eq!(s.meshes[0].uvs.iter().map(|&uv| texel(uv)[0]).collect::<Vec<_>>(), vec![102, 102, 51]);
     // Without uv, pbrt's (0, 0), (1, 0), (1, 1) at the corners (here in the order 0, 2, 1), v
     // turned down for caustica.
@@ -691,10 +900,25 @@ fn a_textured_trianglemesh_keeps_its_texture_coordinates_and_convert_writes_it_a
     // convert writes each as a PLY beside the TOML, which loads to the same meshes and textures.
     let out = temp_dir("textured-trianglemesh-out");
     let toml = import(&InputFiles::anywhere(), &path, &[]).unwrap().to_toml(&out).unwrap();
-    assert!(toml.contains("scene-mesh-0.ply") && toml.contains("scene-mesh-1.ply") && out.join("scene-mesh-1.ply").is_file(), "{toml}");
+    assert!(
+        toml.contains("scene-mesh-0.ply")
+            && toml.contains("scene-mesh-1.ply")
+            && out.join("scene-mesh-1.ply").is_file(),
+        "{toml}"
+    );
     let t = Scene::parse(&toml, "converted.toml", &out).unwrap_or_else(|e| panic!("{e:#}\n{toml}"));
     assert_eq!(t.textures, s.textures);
-    let meshes = |s: &Scene| s.meshes.iter().map(|m| format!("{:?} {:?} {:?} {:?}", m.positions, m.uvs, m.triangles, s.materials[m.triangle_materials[0] as usize].albedo_texture)).collect::<Vec<_>>();
+    let meshes = |s: &Scene| {
+        s.meshes
+            .iter()
+            .map(|m| {
+                format!(
+                    "{:?} {:?} {:?} {:?}",
+                    m.positions, m.uvs, m.triangles, s.materials[m.triangle_materials[0] as usize].albedo_texture
+                )
+            })
+            .collect::<Vec<_>>()
+    };
     assert_eq!(meshes(&t), meshes(&s));
 
     let e = error("bad-uv", &format!("{OPTIONS}WorldBegin\nTexture \"c\" \"spectrum\" \"checkerboard\"\nMaterial \"diffuse\" \"texture reflectance\" \"c\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0  1 0 0  0 1 0] \"point2 uv\" [0 0 1 0]\n"));
@@ -711,12 +935,18 @@ fn normalmaps_and_alpha_cut_outs_become_normal_textures_and_opacity() {
                  Texture \"leaf\" \"float\" \"imagemap\" \"string filename\" \"leaf.png\"\n\
                  Shape \"plymesh\" \"string filename\" \"square.ply\" \"texture alpha\" \"leaf\"\n\
                  Shape \"plymesh\" \"string filename\" \"square.ply\" \"float alpha\" 1\n";
-    let path = write_scene("alpha", &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}")), ("square.ply", NORMAL_SQUARE_PLY)]);
+    let path = write_scene(
+        "alpha",
+        &[("scene.pbrt", &format!("{OPTIONS}WorldBegin\n{world}")), ("square.ply", NORMAL_SQUARE_PLY)],
+    );
     let dir = path.parent().unwrap();
     for name in ["bumps.png", "leaf.png"] {
         image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255])).save(dir.join(name)).unwrap();
     }
-    let s = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap_or_else(|e| panic!("{e:#}"));
+    let s = import(&InputFiles::anywhere(), &path, &[])
+        .unwrap()
+        .into_scene(&InputFiles::anywhere())
+        .unwrap_or_else(|e| panic!("{e:#}"));
     let material = |mesh: usize| &s.materials[s.meshes[mesh].triangle_materials[0] as usize];
     let [faded, leaf, whole] = [0, 1, 2].map(material);
     for m in [faded, leaf, whole] {
@@ -724,7 +954,11 @@ fn normalmaps_and_alpha_cut_outs_become_normal_textures_and_opacity() {
         assert!(!s.textures[normal.texture as usize].srgb, "pbrt reads normal maps as linear");
     }
     let faded_alpha = faded.maps.alpha.expect("alpha 0.4 is an opacity");
-    assert_eq!((faded_alpha.factor, faded_alpha.texture, faded_alpha.mode), (0.4, None, AlphaMode::Blend), "pbrt's alpha is stochastic");
+    assert_eq!(
+        (faded_alpha.factor, faded_alpha.texture, faded_alpha.mode),
+        (0.4, None, AlphaMode::Blend),
+        "pbrt's alpha is stochastic"
+    );
     let leaf_alpha = leaf.maps.alpha.expect("an alpha texture is an opacity texture");
     assert_eq!(s.textures[leaf_alpha.texture.unwrap() as usize].name, "leaf.png");
     assert_eq!(whole.maps.alpha, None, "alpha 1 is a whole surface, sharing the material");
@@ -732,7 +966,10 @@ fn normalmaps_and_alpha_cut_outs_become_normal_textures_and_opacity() {
 
     let e = error("alpha-sphere", &format!("{OPTIONS}WorldBegin\nShape \"sphere\" \"float alpha\" 0.5\n"));
     assert!(e.contains("scene.pbrt:7") && e.contains("opacity") && e.contains("Shape \"sphere\""), "{e}");
-    let e = error("alpha-range", &format!("{OPTIONS}WorldBegin\nShape \"plymesh\" \"string filename\" \"square.ply\" \"float alpha\" -0.5\n"));
+    let e = error(
+        "alpha-range",
+        &format!("{OPTIONS}WorldBegin\nShape \"plymesh\" \"string filename\" \"square.ply\" \"float alpha\" -0.5\n"),
+    );
     assert!(e.contains("scene.pbrt:7") && e.contains("alpha must be in [0, 1]"), "{e}");
 }
 
@@ -755,7 +992,10 @@ fn uroughness_and_vroughness_map_onto_roughness_and_roughness_v() {
     // roughness stands for uroughness: alpha 0.09 along u, 0.16 along v.
     for (k, u, v) in [(0, 0.1, 0.5), (1, 0.2, 0.5), (2, 0.3, 0.4)] {
         let material = m(k);
-        assert!(near(material.roughness, u) && material.roughness_v.is_some_and(|r| near(r, v)), "material {k}: {material:?}");
+        assert!(
+            near(material.roughness, u) && material.roughness_v.is_some_and(|r| near(r, v)),
+            "material {k}: {material:?}"
+        );
     }
     assert!(near(m(3).roughness, 0.1f32.sqrt()) && m(3).roughness_v.is_none());
     let e = error("anisotropic-range", &format!("{OPTIONS}WorldBegin\nMaterial \"conductor\" \"float uroughness\" 0.1 \"float vroughness\" -1\nShape \"sphere\"\n"));

@@ -55,13 +55,31 @@ fn many_lights(spp: u32, nee: bool, selection: LightSelection) -> Scene {
     let grid_material = scene.materials.iter().position(|m| m.name == "grid").expect("grid material") as u32;
     // The unit square in xz at y = 0; triangles wound so that their front faces -y.
     let (nx, nz) = GRID;
-    let positions = (0..=nz).flat_map(|j| (0..=nx).map(move |i| Vec3::new(i as f32 / nx as f32, 0.0, j as f32 / nz as f32))).collect();
+    let positions = (0..=nz)
+        .flat_map(|j| (0..=nx).map(move |i| Vec3::new(i as f32 / nx as f32, 0.0, j as f32 / nz as f32)))
+        .collect();
     let vertex = |i: u32, j: u32| j * (nx + 1) + i;
     let triangles: Vec<[u32; 3]> = (0..nz)
-        .flat_map(|j| (0..nx).flat_map(move |i| [[vertex(i, j), vertex(i + 1, j), vertex(i, j + 1)], [vertex(i + 1, j), vertex(i + 1, j + 1), vertex(i, j + 1)]]))
+        .flat_map(|j| {
+            (0..nx).flat_map(move |i| {
+                [
+                    [vertex(i, j), vertex(i + 1, j), vertex(i, j + 1)],
+                    [vertex(i + 1, j), vertex(i + 1, j + 1), vertex(i, j + 1)],
+                ]
+            })
+        })
         .collect();
-    scene.meshes = vec![Mesh { name: "emissive grid".into(), positions, triangle_materials: vec![grid_material; triangles.len()], triangles, ..Default::default() }];
-    scene.instances = vec![Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(-2.0, 1.0, -2.0)) * Mat4::from_scale(Vec3::splat(4.0)) }];
+    scene.meshes = vec![Mesh {
+        name: "emissive grid".into(),
+        positions,
+        triangle_materials: vec![grid_material; triangles.len()],
+        triangles,
+        ..Default::default()
+    }];
+    scene.instances = vec![Instance {
+        mesh: 0,
+        transform: Mat4::from_translation(Vec3::new(-2.0, 1.0, -2.0)) * Mat4::from_scale(Vec3::splat(4.0)),
+    }];
     scene
 }
 
@@ -108,21 +126,31 @@ fn assert_floor_is_analytic(scene: &Scene, radiance: impl Fn(Vec3, Vec3) -> f64,
     let (_lock, ctx) = gpu();
     let params = frame_params(scene, &SceneData::new(scene, 0), 0);
     let v = Vec3::from_array;
-    let (eye, forward, right, up, tan_half) = (v(params.cam_origin), v(params.cam_forward), v(params.cam_right), v(params.cam_up), params.tan_half_fov);
+    let (eye, forward, right, up, tan_half) =
+        (v(params.cam_origin), v(params.cam_forward), v(params.cam_right), v(params.cam_up), params.tan_half_fov);
     let size = scene.film.width as f32;
     let expected = |x: u32, y: u32| {
         let f = |p: u32, s: u32| (p as f32 + (s as f32 + 0.5) / 8.0) / size * 2.0 - 1.0;
-        (0..64).map(|k| radiance(eye, (forward + f(x, k % 8) * tan_half * right - f(y, k / 8) * tan_half * up).normalize())).sum::<f64>() / 64.0
+        (0..64)
+            .map(|k| {
+                radiance(eye, (forward + f(x, k % 8) * tan_half * right - f(y, k / 8) * tan_half * up).normalize())
+            })
+            .sum::<f64>()
+            / 64.0
     };
     let (a, b) = (render(&ctx, scene, 1), render(&ctx, scene, 2));
     let pixels: Vec<(u32, u32)> = (14..24).flat_map(|y| (0..24).map(move |x| (x, y))).collect();
     let n = pixels.len() as f64;
-    let variance = pixels.iter().map(|&(x, y)| (luminance(a.get(x, y)) - luminance(b.get(x, y))).powi(2)).sum::<f64>() / (2.0 * n);
+    let variance =
+        pixels.iter().map(|&(x, y)| (luminance(a.get(x, y)) - luminance(b.get(x, y))).powi(2)).sum::<f64>() / (2.0 * n);
     let stderr = (variance / 2.0 / n).sqrt();
     let got = pixels.iter().map(|&(x, y)| 0.5 * (luminance(a.get(x, y)) + luminance(b.get(x, y)))).sum::<f64>() / n;
     let want = pixels.iter().map(|&(x, y)| expected(x, y)).sum::<f64>() / n;
     eprintln!("{what}: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
-    assert!((got - want).abs() <= 5.0 * stderr + 0.005 * want, "{what}: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})");
+    assert!(
+        (got - want).abs() <= 5.0 * stderr + 0.005 * want,
+        "{what}: mean {got:.5}, analytic {want:.5} (standard error {stderr:.5})"
+    );
 }
 
 /// Where a ray from `eye` meets the floor.
@@ -184,7 +212,8 @@ fn large_triangle_light_gives_the_analytic_direct_light() {
         }
         let p = floor_point(eye.as_vec3(), d.as_vec3()).as_dvec3();
         let q = v.map(|c| (c - p).normalize());
-        let sum: f64 = (0..3).map(|i| q[i].angle_between(q[(i + 1) % 3]) * q[i].cross(q[(i + 1) % 3]).normalize().y).sum();
+        let sum: f64 =
+            (0..3).map(|i| q[i].angle_between(q[(i + 1) % 3]) * q[i].cross(q[(i + 1) % 3]).normalize().y).sum();
         0.7 / std::f64::consts::PI * emitted / 2.0 * sum.abs()
     };
     assert_floor_is_analytic(&scene, radiance, "floor under a large triangle light");
@@ -194,7 +223,21 @@ fn large_triangle_light_gives_the_analytic_direct_light() {
 fn light_selection_defaults_to_power_and_rejects_unknown_choices() {
     let camera = "camera = { position = [0, 0, 3], look_at = [0, 0, 0] }\n";
     assert_eq!(parse(camera).integrator.light_selection, LightSelection::Power);
-    assert_eq!(parse(&format!("{camera}[integrator]\nlight_selection = \"uniform\"\n")).integrator.light_selection, LightSelection::Uniform);
-    let e = format!("{:#}", Scene::parse(&format!("{camera}[integrator]\nlight_selection = \"random\"\n"), "s.toml", std::path::Path::new(".")).expect_err("rejected"));
-    assert!(e.contains("light_selection") && e.contains("random") && e.contains("power") && e.contains("uniform"), "{e}");
+    assert_eq!(
+        parse(&format!("{camera}[integrator]\nlight_selection = \"uniform\"\n")).integrator.light_selection,
+        LightSelection::Uniform
+    );
+    let e = format!(
+        "{:#}",
+        Scene::parse(
+            &format!("{camera}[integrator]\nlight_selection = \"random\"\n"),
+            "s.toml",
+            std::path::Path::new(".")
+        )
+        .expect_err("rejected")
+    );
+    assert!(
+        e.contains("light_selection") && e.contains("random") && e.contains("power") && e.contains("uniform"),
+        "{e}"
+    );
 }

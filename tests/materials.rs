@@ -26,8 +26,16 @@ fn furnace_sphere(material: &str, spp: u32) -> (f64, f64) {
 fn assert_furnace_within(material: &str, spp: u32, floor: f64, what: &str) -> f64 {
     let (mean, stderr) = furnace_sphere(material, spp);
     eprintln!("{what}: furnace sphere mean {mean:.4} (standard error {stderr:.4})");
-    assert!(mean <= 1.0 + 5.0 * stderr, "{what}: mean {mean:.5} creates energy (5 standard errors = {:.5})", 5.0 * stderr);
-    assert!(mean >= floor - 5.0 * stderr, "{what}: mean {mean:.5} below {floor} (5 standard errors = {:.5})", 5.0 * stderr);
+    assert!(
+        mean <= 1.0 + 5.0 * stderr,
+        "{what}: mean {mean:.5} creates energy (5 standard errors = {:.5})",
+        5.0 * stderr
+    );
+    assert!(
+        mean >= floor - 5.0 * stderr,
+        "{what}: mean {mean:.5} below {floor} (5 standard errors = {:.5})",
+        5.0 * stderr
+    );
     mean
 }
 
@@ -64,7 +72,12 @@ fn white_plastic_under_a_smooth_coat_is_invisible_in_furnace() {
 
 #[test]
 fn white_plastic_under_a_rough_coat_stays_at_most_one() {
-    assert_furnace_within("albedo = [1.0, 1.0, 1.0]\ncoat = true\nroughness = 0.5", 64, 0.9, "white plastic, coat roughness 0.5");
+    assert_furnace_within(
+        "albedo = [1.0, 1.0, 1.0]\ncoat = true\nroughness = 0.5",
+        64,
+        0.9,
+        "white plastic, coat roughness 0.5",
+    );
 }
 
 /// A camera looking along -z at the centre of a unit sphere with a field of view so narrow that
@@ -213,7 +226,8 @@ fn lit_floor(floor: &str, extra: &str) -> String {
 fn nee_lights_a_diffuse_floor_beyond_the_lights_footprint() {
     // Regression: shadow rays measured from the surface point rather than from their offset
     // origin hit the light's own plane at grazing angles, darkening NEE there by up to 100%.
-    let scene = lit_floor("albedo = [0.5, 0.5, 0.5]", "").replace("position = [0.0, 1.0, 3.0]", "position = [0.0, 0.3, 3.0]");
+    let scene =
+        lit_floor("albedo = [0.5, 0.5, 0.5]", "").replace("position = [0.0, 1.0, 3.0]", "position = [0.0, 0.3, 3.0]");
     assert_nee_agrees(&scene, "diffuse floor seen low");
 }
 
@@ -311,8 +325,14 @@ fn metal_keys_make_a_conductor_and_keep_the_rt_defaults() {
     assert_eq!(get("gold").conductor, Conductor::Complex { eta, k });
     assert_eq!((get("gold").reflectivity, get("gold").roughness), (1.0, 0.3), "a metal defaults to R = 1");
     assert_eq!(get("half").reflectivity, 0.5);
-    assert_eq!(get("custom").conductor, Conductor::Complex { eta: Vec3::new(0.2, 0.3, 0.4), k: Vec3::new(3.0, 2.0, 1.0) });
-    assert_eq!((get("plain").conductor, get("plain").reflectivity, get("plain").roughness), (Conductor::Mirror, 0.25, 0.0));
+    assert_eq!(
+        get("custom").conductor,
+        Conductor::Complex { eta: Vec3::new(0.2, 0.3, 0.4), k: Vec3::new(3.0, 2.0, 1.0) }
+    );
+    assert_eq!(
+        (get("plain").conductor, get("plain").reflectivity, get("plain").roughness),
+        (Conductor::Mirror, 0.25, 0.0)
+    );
     assert!(!get("plain").coat);
 }
 
@@ -344,16 +364,20 @@ fn gltf_metallic_roughness_maps_onto_rough_conductors_plastics_and_glass() {
     let path = dir.join("materials.gltf");
     std::fs::write(&path, GLTF).unwrap();
     let scene = Scene::load(&path).unwrap();
-    let get = |name: &str| scene.materials.iter().find(|m| m.name.ends_with(name)).unwrap_or_else(|| panic!("no material {name}"));
+    let get = |name: &str| {
+        scene.materials.iter().find(|m| m.name.ends_with(name)).unwrap_or_else(|| panic!("no material {name}"))
+    };
     let metal = get(":metal");
-    assert_eq!((metal.reflectivity, metal.transparency, metal.roughness, metal.conductor), (1.0, 0.0, 0.4, Conductor::Albedo));
+    assert_eq!(
+        (metal.reflectivity, metal.transparency, metal.roughness, metal.conductor),
+        (1.0, 0.0, 0.4, Conductor::Albedo)
+    );
     assert_eq!(metal.albedo, Vec3::new(0.9, 0.6, 0.2), "the base colour is the metal's F0");
     let plastic = get(":plastic");
     assert_eq!((plastic.reflectivity, plastic.transparency, plastic.roughness, plastic.coat), (0.0, 0.0, 0.6, true));
     let glass = get(":glass");
     assert_eq!((glass.reflectivity, glass.transparency, glass.roughness, glass.ior), (0.0, 1.0, 0.2, 1.4));
 }
-
 
 /// A diffuse square (albedo 0.5, front side +z) filling the view under a white sky, seen from
 /// `z` on the axis (in front when positive, behind when negative).
@@ -385,11 +409,19 @@ fn square_in_the_furnace(material: &str, z: f32) -> caustica::image::RgbImage {
 fn a_one_sided_surface_is_black_from_behind() {
     let behind = square_in_the_furnace("one_sided = true", -1.0);
     assert!(behind.pixels.iter().all(|p| *p == [0.0; 3]), "a one-sided square seen from behind is not black");
-    for (material, z, what) in [("one_sided = true", 1.0, "one-sided, in front"), ("", -1.0, "two-sided, behind"), ("", 1.0, "two-sided, in front")] {
+    for (material, z, what) in [
+        ("one_sided = true", 1.0, "one-sided, in front"),
+        ("", -1.0, "two-sided, behind"),
+        ("", 1.0, "two-sided, in front"),
+    ] {
         let image = square_in_the_furnace(material, z);
         let values: Vec<f64> = image.pixels.iter().map(|&p| luminance(p)).collect();
         let (mean, stderr) = mean_and_stderr(&values);
-        assert!((mean - 0.5).abs() <= 5.0 * stderr + 1e-6, "{what}: the square shows {mean:.4}, expected 0.5 (five standard errors {:.4})", 5.0 * stderr);
+        assert!(
+            (mean - 0.5).abs() <= 5.0 * stderr + 1e-6,
+            "{what}: the square shows {mean:.4}, expected 0.5 (five standard errors {:.4})",
+            5.0 * stderr
+        );
     }
     assert!(error_of("one_sided = true\ntransparency = 0.5").contains("materials.m.one_sided"));
 }

@@ -15,7 +15,9 @@ fn every_mutation_applies_to_the_code_as_it_is() {
     // Every stale text is named at once, so one edit of the code costs one edit of the list.
     let mut stale = Vec::new();
     for m in mutations {
-        let field = |key: &str| m.get(key).and_then(|v| v.as_str()).unwrap_or_else(|| panic!("mutation {m:?} lacks '{key}'")).to_owned();
+        let field = |key: &str| {
+            m.get(key).and_then(|v| v.as_str()).unwrap_or_else(|| panic!("mutation {m:?} lacks '{key}'")).to_owned()
+        };
         let (id, file, find, replace) = (field("id"), field("file"), field("find"), field("replace"));
         field("bug");
         assert!(m.get("tests").and_then(|t| t.as_array()).is_some_and(|t| !t.is_empty()), "{id}: no tests named");

@@ -42,7 +42,11 @@ fn mirror_sphere_invisible_in_furnace() {
 #[test]
 fn mixed_rt_material_is_invisible_in_furnace() {
     // R = 0.3 mirror, T = 0.4 glass, 0.3 diffuse with albedo 1: every event preserves energy.
-    furnace_check("albedo = [1.0, 1.0, 1.0]\nreflectivity = 0.3\ntransparency = 0.4", 1.0, "R/T material in a white furnace");
+    furnace_check(
+        "albedo = [1.0, 1.0, 1.0]\nreflectivity = 0.3\ntransparency = 0.4",
+        1.0,
+        "R/T material in a white furnace",
+    );
 }
 
 fn cornell(size: u32, spp: u32) -> Scene {

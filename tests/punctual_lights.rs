@@ -66,7 +66,8 @@ fn expected_image(radiance: &dyn Fn(DVec3) -> f64) -> Vec<(f64, f64)> {
                 })
                 .collect();
             let mean = values.iter().sum::<f64>() / values.len() as f64;
-            let spread = values.iter().cloned().fold(f64::MIN, f64::max) - values.iter().cloned().fold(f64::MAX, f64::min);
+            let spread =
+                values.iter().cloned().fold(f64::MIN, f64::max) - values.iter().cloned().fold(f64::MAX, f64::min);
             out.push((mean, spread));
         }
     }
@@ -85,16 +86,32 @@ fn assert_image_is(image: &RgbImage, expected: &[(f64, f64)], what: &str) {
         let measured = luminance(p);
         let tolerance = 5.0 * spread / (2.0 * (SPP as f64).sqrt()) + floor;
         let (x, y) = (i as u32 % SIZE, i as u32 / SIZE);
-        assert!((measured - value).abs() <= tolerance, "{what}: pixel ({x}, {y}) is {measured:.6}, expected {value:.6} (tolerance {tolerance:.6})");
+        assert!(
+            (measured - value).abs() <= tolerance,
+            "{what}: pixel ({x}, {y}) is {measured:.6}, expected {value:.6} (tolerance {tolerance:.6})"
+        );
         residuals.push(measured - value);
     }
     let n = residuals.len() as f64;
     let mean = residuals.iter().sum::<f64>() / n;
     let stderr = (residuals.iter().map(|r| r * r).sum::<f64>() / n / n).sqrt();
     let tolerance = 5.0 * stderr + floor;
-    eprintln!("{what}: mean residual {:+.4} % of the mean {mean_expected:.5}, tolerance {:.4} %", mean / mean_expected * 100.0, tolerance / mean_expected * 100.0);
-    assert!(tolerance <= 1e-3 * mean_expected, "{what}: the tolerance {:.3} % no longer resolves a 0.1 % bias", tolerance / mean_expected * 100.0);
-    assert!(mean.abs() <= tolerance, "{what}: the image is {:+.3} % off its closed form (tolerance {:.3} %)", mean / mean_expected * 100.0, tolerance / mean_expected * 100.0);
+    eprintln!(
+        "{what}: mean residual {:+.4} % of the mean {mean_expected:.5}, tolerance {:.4} %",
+        mean / mean_expected * 100.0,
+        tolerance / mean_expected * 100.0
+    );
+    assert!(
+        tolerance <= 1e-3 * mean_expected,
+        "{what}: the tolerance {:.3} % no longer resolves a 0.1 % bias",
+        tolerance / mean_expected * 100.0
+    );
+    assert!(
+        mean.abs() <= tolerance,
+        "{what}: the image is {:+.3} % off its closed form (tolerance {:.3} %)",
+        mean / mean_expected * 100.0,
+        tolerance / mean_expected * 100.0
+    );
 }
 
 /// albedo / pi x I cos(theta) / d^2 at a floor point lit by a point of intensity I at `light`.
@@ -109,7 +126,8 @@ fn point_lit(light: DVec3, intensity: f64, p: DVec3) -> f64 {
 fn point_light_over_a_diffuse_plane_is_intensity_cosine_over_distance_squared() {
     let (_lock, ctx) = gpu();
     let light = DVec3::new(0.3, 1.0, -0.2);
-    let scene = floor_scene("[[lights]]\ntype = \"point\"\nposition = [0.3, 1.0, -0.2]\nintensity = [2.0, 2.0, 2.0]", SPP);
+    let scene =
+        floor_scene("[[lights]]\ntype = \"point\"\nposition = [0.3, 1.0, -0.2]\nintensity = [2.0, 2.0, 2.0]", SPP);
     let image = render(&ctx, &scene, 1);
     assert_image_is(&image, &expected_image(&|p| point_lit(light, 2.0, p)), "point light over a plane");
 }
@@ -119,7 +137,10 @@ fn point_light_over_a_diffuse_plane_is_intensity_cosine_over_distance_squared() 
 fn directional_light_is_irradiance_times_cosine() {
     let (_lock, ctx) = gpu();
     let travel = DVec3::new(0.4, -1.0, 0.3).normalize();
-    let scene = floor_scene("[[lights]]\ntype = \"directional\"\ndirection = [0.4, -1.0, 0.3]\nirradiance = [3.0, 3.0, 3.0]", SPP);
+    let scene = floor_scene(
+        "[[lights]]\ntype = \"directional\"\ndirection = [0.4, -1.0, 0.3]\nirradiance = [3.0, 3.0, 3.0]",
+        SPP,
+    );
     let image = render(&ctx, &scene, 2);
     assert_image_is(&image, &expected_image(&|_| ALBEDO / PI * 3.0 * -travel.y), "directional light over a plane");
 }
@@ -135,7 +156,15 @@ fn spot_light_is_the_point_light_inside_its_falloff_zero_outside_and_linear_betw
     let lights = "[[lights]]\ntype = \"spot\"\nposition = [0.0, 1.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nintensity = [2.0, 2.0, 2.0]\ncone_angle = 40.0\nfalloff_start = 20.0";
     let image = render(&ctx, &floor_scene(lights, SPP), 3);
     let angle = |p: DVec3| (light - p).angle_between(DVec3::Y);
-    let factor = |t: f64| if t <= falloff { 1.0 } else if t >= cone { 0.0 } else { (cone - t) / (cone - falloff) };
+    let factor = |t: f64| {
+        if t <= falloff {
+            1.0
+        } else if t >= cone {
+            0.0
+        } else {
+            (cone - t) / (cone - falloff)
+        }
+    };
     let expected = expected_image(&|p| point_lit(light, 2.0, p) * factor(angle(p)));
     assert_image_is(&image, &expected, "spot light over a plane");
     // The zones, by pixels whose footprint lies wholly in one (the spread is 0 only outside).
@@ -168,7 +197,13 @@ fn assert_four_lights_add_up(selection: LightSelection, seed: u32) {
     let (cone, falloff) = (30f64.to_radians(), 10f64.to_radians());
     let spot_factor = |p: DVec3| {
         let t = (spot - p).angle_between(DVec3::Y);
-        if t <= falloff { 1.0 } else if t >= cone { 0.0 } else { (cone - t) / (cone - falloff) }
+        if t <= falloff {
+            1.0
+        } else if t >= cone {
+            0.0
+        } else {
+            (cone - t) / (cone - falloff)
+        }
     };
     let travel = DVec3::new(0.4, -1.0, 0.3).normalize();
     // A sphere wholly above the horizon: E = pi L (r / d)^2 cos(theta) towards its centre.
@@ -176,15 +211,32 @@ fn assert_four_lights_add_up(selection: LightSelection, seed: u32) {
         let to_centre = DVec3::new(0.9, 1.2, 0.5) - p;
         PI * 4.0 * (0.15 / to_centre.length()).powi(2) * to_centre.normalize().y
     };
-    let expected = expected_image(&|p| point_lit(DVec3::new(0.3, 1.0, -0.2), 2.0, p) + point_lit(spot, 20.0, p) * spot_factor(p) + ALBEDO / PI * (0.5 * -travel.y + sphere(p)));
+    let expected = expected_image(&|p| {
+        point_lit(DVec3::new(0.3, 1.0, -0.2), 2.0, p)
+            + point_lit(spot, 20.0, p) * spot_factor(p)
+            + ALBEDO / PI * (0.5 * -travel.y + sphere(p))
+    });
     // Picking one of four lights per sample adds noise (by power, most: the second number of the
     // alias table's pick is not stratified with the first): compare the mean, with its own scatter.
-    let (mean, stderr) = mean_and_stderr(&image.pixels.iter().zip(&expected).map(|(p, e)| luminance(*p) - e.0).collect::<Vec<_>>());
+    let (mean, stderr) =
+        mean_and_stderr(&image.pixels.iter().zip(&expected).map(|(p, e)| luminance(*p) - e.0).collect::<Vec<_>>());
     let level = expected.iter().map(|e| e.0).sum::<f64>() / expected.len() as f64;
     let tolerance = 5.0 * stderr + 2e-4 * level;
-    eprintln!("four lights picked by {selection:?}: mean residual {:+.4} %, tolerance {:.4} %", mean / level * 100.0, tolerance / level * 100.0);
-    assert!(tolerance <= 0.02 * level, "the tolerance {:.3} % no longer resolves a 2 % bias", tolerance / level * 100.0);
-    assert!(mean.abs() <= tolerance, "four lights picked by {selection:?}: {:+.3} % off the sum of their closed forms", mean / level * 100.0);
+    eprintln!(
+        "four lights picked by {selection:?}: mean residual {:+.4} %, tolerance {:.4} %",
+        mean / level * 100.0,
+        tolerance / level * 100.0
+    );
+    assert!(
+        tolerance <= 0.02 * level,
+        "the tolerance {:.3} % no longer resolves a 2 % bias",
+        tolerance / level * 100.0
+    );
+    assert!(
+        mean.abs() <= tolerance,
+        "four lights picked by {selection:?}: {:+.3} % off the sum of their closed forms",
+        mean / level * 100.0
+    );
 }
 
 #[test]
@@ -202,9 +254,22 @@ fn point_spot_and_directional_lights_picked_uniformly_add_up() {
 fn assert_mean_is(image: &RgbImage, expected: f64, bias: f64, what: &str) {
     let (mean, stderr) = mean_and_stderr(&image.pixels.iter().map(|&p| luminance(p)).collect::<Vec<_>>());
     let tolerance = 5.0 * stderr + 2e-4 * expected;
-    eprintln!("{what}: mean {mean:.6}, expected {expected:.6}, difference {:+.4} %, tolerance {:.4} %", (mean / expected - 1.0) * 100.0, tolerance / expected * 100.0);
-    assert!(tolerance <= bias * expected, "{what}: the tolerance {:.3} % no longer resolves a {:.2} % bias", tolerance / expected * 100.0, bias * 100.0);
-    assert!((mean - expected).abs() <= tolerance, "{what}: mean {mean:.6}, expected {expected:.6} ({:+.3} %)", (mean / expected - 1.0) * 100.0);
+    eprintln!(
+        "{what}: mean {mean:.6}, expected {expected:.6}, difference {:+.4} %, tolerance {:.4} %",
+        (mean / expected - 1.0) * 100.0,
+        tolerance / expected * 100.0
+    );
+    assert!(
+        tolerance <= bias * expected,
+        "{what}: the tolerance {:.3} % no longer resolves a {:.2} % bias",
+        tolerance / expected * 100.0,
+        bias * 100.0
+    );
+    assert!(
+        (mean - expected).abs() <= tolerance,
+        "{what}: mean {mean:.6}, expected {expected:.6} ({:+.3} %)",
+        (mean / expected - 1.0) * 100.0
+    );
 }
 
 /// A sun disk (20 degrees across, tilted 25 degrees from the zenith) gives `irradiance` on a
@@ -300,20 +365,29 @@ fn sun_disk_casts_a_penumbra_of_the_right_width() {
         let values: Vec<f64> = (0..height).map(|r| luminance(image.get(c, r))).collect();
         let (mean, stderr) = mean_and_stderr(&values);
         // The column's footprint, 4 points across.
-        let e = (0..4).map(|k| floor_irradiance(column_x(c as f64 + (k as f64 + 0.5) / 4.0))).sum::<f64>() / 4.0 * 0.5 / PI;
-        assert!((mean - e).abs() <= 6.0 * stderr + 1e-3 * e.max(0.1), "column {c} (x = {:.4}): {mean:.5}, expected {e:.5} (standard error {stderr:.5})", column_x(c as f64 + 0.5));
+        let e =
+            (0..4).map(|k| floor_irradiance(column_x(c as f64 + (k as f64 + 0.5) / 4.0))).sum::<f64>() / 4.0 * 0.5 / PI;
+        assert!(
+            (mean - e).abs() <= 6.0 * stderr + 1e-3 * e.max(0.1),
+            "column {c} (x = {:.4}): {mean:.5}, expected {e:.5} (standard error {stderr:.5})",
+            column_x(c as f64 + 0.5)
+        );
         measured.push(mean);
         expected.push(e);
     }
     // Where a column profile crosses `level` of the full value, in columns (linear between centres).
     let crossing = |profile: &[f64], level: f64| {
         let target = level * 0.5 / PI * irradiance;
-        let c = profile.windows(2).position(|w| w[0] < target && w[1] >= target).expect("the profile crosses the level");
+        let c =
+            profile.windows(2).position(|w| w[0] < target && w[1] >= target).expect("the profile crosses the level");
         c as f64 + (target - profile[c]) / (profile[c + 1] - profile[c])
     };
     let measured_width = crossing(&measured, 0.9) - crossing(&measured, 0.1);
     let expected_width = crossing(&expected, 0.9) - crossing(&expected, 0.1);
     eprintln!("penumbra from 10 % to 90 %: {measured_width:.2} columns, expected {expected_width:.2}");
     assert!(expected_width > 12.0, "the penumbra no longer spans enough columns to measure");
-    assert!((measured_width - expected_width).abs() <= 1.0, "penumbra {measured_width:.2} columns wide, expected {expected_width:.2}");
+    assert!(
+        (measured_width - expected_width).abs() <= 1.0,
+        "penumbra {measured_width:.2} columns wide, expected {expected_width:.2}"
+    );
 }

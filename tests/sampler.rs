@@ -53,7 +53,10 @@ fn draws(ctx: &GpuContext, kind: u32, pixels: u32, samples: u32, sample_base: u3
     kernel.destroy(ctx);
     out.destroy(ctx);
     ctx.check_validation().expect("no validation messages");
-    values.chunks(VALUES * samples as usize).map(|p| p.chunks(VALUES).map(|s| s.try_into().unwrap()).collect()).collect()
+    values
+        .chunks(VALUES * samples as usize)
+        .map(|p| p.chunks(VALUES).map(|s| s.try_into().unwrap()).collect())
+        .collect()
 }
 
 /// Whether the points are a (0,m,2)-net for n = 2^m points: every elementary rectangle of area 1/n
@@ -108,7 +111,10 @@ fn independent_numbers_are_not_nets() {
     let sobol = draws(&ctx, SAMPLER_SOBOL, 8, 16, 0);
     for pixel in 0..8 {
         assert!(!is_net(&independent[pixel].iter().map(|s| (s[1], s[2])).collect::<Vec<_>>()), "pixel {pixel}");
-        assert!(!is_stratified(&sobol[pixel].iter().map(|s| s[5]).collect::<Vec<_>>()), "pixel {pixel}: draw past the window");
+        assert!(
+            !is_stratified(&sobol[pixel].iter().map(|s| s[5]).collect::<Vec<_>>()),
+            "pixel {pixel}: draw past the window"
+        );
     }
 }
 
@@ -185,10 +191,20 @@ fn sobol_lowers_the_error_at_equal_samples() {
     let (_lock, ctx) = gpu();
     let reference = render(&ctx, &diffuse_cornell(16, 1024, Sampler::Independent), 99);
     let error = |sampler: Sampler| {
-        (1..=3).map(|seed| compare(&render(&ctx, &diffuse_cornell(16, 32, sampler), seed), &reference, ("render", "reference")).unwrap().relative_mse).sum::<f64>() / 3.0
+        (1..=3)
+            .map(|seed| {
+                compare(&render(&ctx, &diffuse_cornell(16, 32, sampler), seed), &reference, ("render", "reference"))
+                    .unwrap()
+                    .relative_mse
+            })
+            .sum::<f64>()
+            / 3.0
     };
     let (sobol, independent) = (error(Sampler::Sobol), error(Sampler::Independent));
-    eprintln!("relative MSE at 32 spp: Sobol {sobol:.4e}, independent {independent:.4e}, ratio {:.3}", sobol / independent);
+    eprintln!(
+        "relative MSE at 32 spp: Sobol {sobol:.4e}, independent {independent:.4e}, ratio {:.3}",
+        sobol / independent
+    );
     assert!(sobol < 0.7 * independent, "relative MSE at 32 spp: Sobol {sobol:.4e}, independent {independent:.4e}");
 }
 
@@ -230,7 +246,8 @@ void main() { values[gl_GlobalInvocationID.x] = sobol_dimension1(params.first + 
     let (_lock, ctx) = gpu();
     let spirv = compile_compute(&assemble_with_kernel_files(KERNEL).unwrap()).expect("test kernel compiles");
     const COUNT: u32 = 1 << 20;
-    let out = Buffer::with_data(&ctx, "sobol dimension 1", BufferKind::HostStorage, &vec![0u8; COUNT as usize * 4]).unwrap();
+    let out =
+        Buffer::with_data(&ctx, "sobol dimension 1", BufferKind::HostStorage, &vec![0u8; COUNT as usize * 4]).unwrap();
     let kernel = ComputeKernel::new(&ctx, &spirv, &[Binding::whole(0, &out)], 4).unwrap();
     for first in [0u32, u32::MAX - COUNT + 1] {
         kernel.dispatch(&ctx, &first.to_le_bytes(), [COUNT / 64, 1, 1]).unwrap();

@@ -25,7 +25,11 @@ fn every_scene_in_scenes_dir_loads() {
         if path.extension().is_some_and(|e| e == "toml") {
             let text = std::fs::read_to_string(&path).unwrap();
             if text.contains("$CAUSTICA_DATA") && !caustica::scene::data_dir().exists() {
-                eprintln!("SKIPPED: {} needs the shared data folder ({} is missing)", path.display(), caustica::scene::data_dir().display());
+                eprintln!(
+                    "SKIPPED: {} needs the shared data folder ({} is missing)",
+                    path.display(),
+                    caustica::scene::data_dir().display()
+                );
                 continue;
             }
             let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
@@ -136,7 +140,12 @@ fn every_array_key_refuses_a_wrong_number_of_elements() {
         let text = EVERY_ARRAY.replace(original, wrong);
         let line = EVERY_ARRAY[..EVERY_ARRAY.find(original).unwrap()].matches('\n').count() + 1;
         let e = format!("{:#}", Scene::parse(&text, "test.toml", &dir).expect_err(wrong));
-        for needle in ["test.toml: ", &format!("line {line}, "), &format!("invalid length {length}, expected an array of exactly 3 elements"), key] {
+        for needle in [
+            "test.toml: ",
+            &format!("line {line}, "),
+            &format!("invalid length {length}, expected an array of exactly 3 elements"),
+            key,
+        ] {
             assert!(e.contains(needle), "{wrong}: '{needle}' missing from: {e}");
         }
     }
@@ -169,23 +178,40 @@ fn nesting_beyond_the_parser_limit_is_an_error_with_its_line() {
 #[test]
 fn attenuation_keys_are_checked_naming_the_key() {
     let glass = |keys: &str| format!("{MINIMAL}[materials.g]\ntransparency = 1.0\n{keys}\n");
-    let scene = parse_result(&glass("attenuation_color = [0.5, 0.25, 1.0]\nattenuation_distance = 2.0")).expect("valid attenuation");
+    let scene = parse_result(&glass("attenuation_color = [0.5, 0.25, 1.0]\nattenuation_distance = 2.0"))
+        .expect("valid attenuation");
     let attenuation = scene.materials[0].attenuation.expect("parsed");
     let sigma_a = attenuation.sigma_a();
     assert!((sigma_a - glam::Vec3::new(2f32.ln() / 2.0, 4f32.ln() / 2.0, 0.0)).abs().max_element() < 1e-6, "{sigma_a}");
     for (keys, error) in [
-        ("attenuation_color = [0.0, 0.5, 0.5]\nattenuation_distance = 1.0", "materials.g.attenuation_color must be in (0, 1] per channel"),
-        ("attenuation_color = [1.5, 0.5, 0.5]\nattenuation_distance = 1.0", "materials.g.attenuation_color must be in (0, 1] per channel"),
-        ("attenuation_color = [nan, 0.5, 0.5]\nattenuation_distance = 1.0", "materials.g.attenuation_color must be finite"),
-        ("attenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = 0.0", "materials.g.attenuation_distance must be > 0"),
-        ("attenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = inf", "materials.g.attenuation_distance must be finite"),
+        (
+            "attenuation_color = [0.0, 0.5, 0.5]\nattenuation_distance = 1.0",
+            "materials.g.attenuation_color must be in (0, 1] per channel",
+        ),
+        (
+            "attenuation_color = [1.5, 0.5, 0.5]\nattenuation_distance = 1.0",
+            "materials.g.attenuation_color must be in (0, 1] per channel",
+        ),
+        (
+            "attenuation_color = [nan, 0.5, 0.5]\nattenuation_distance = 1.0",
+            "materials.g.attenuation_color must be finite",
+        ),
+        (
+            "attenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = 0.0",
+            "materials.g.attenuation_distance must be > 0",
+        ),
+        (
+            "attenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = inf",
+            "materials.g.attenuation_distance must be finite",
+        ),
         ("attenuation_color = [0.5, 0.5, 0.5]", "materials.g.attenuation_color needs materials.g.attenuation_distance"),
         ("attenuation_distance = 1.0", "materials.g.attenuation_distance needs materials.g.attenuation_color"),
     ] {
         let e = error_of(&glass(keys));
         assert!(e.contains(error), "{keys}: expected '{error}', got: {e}");
     }
-    let e = error_of(&format!("{MINIMAL}[materials.g]\nattenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = 1.0\n"));
+    let e =
+        error_of(&format!("{MINIMAL}[materials.g]\nattenuation_color = [0.5, 0.5, 0.5]\nattenuation_distance = 1.0\n"));
     assert!(e.contains("materials.g.attenuation_color needs materials.g.transparency > 0"), "{e}");
 }
 
@@ -198,7 +224,10 @@ fn unknown_material_is_named() {
 #[test]
 fn out_of_range_values_are_errors_naming_the_key() {
     let cases = [
-        (format!("{MINIMAL}[materials.m]\n[[spheres]]\ncenter = [0.0, 0.0, 0.0]\nradius = -1.0\nmaterial = \"m\"\n"), "spheres[0].radius"),
+        (
+            format!("{MINIMAL}[materials.m]\n[[spheres]]\ncenter = [0.0, 0.0, 0.0]\nradius = -1.0\nmaterial = \"m\"\n"),
+            "spheres[0].radius",
+        ),
         (format!("{MINIMAL}[materials.m]\nreflectivity = 0.6\ntransparency = 0.6\n"), "R + T <= 1"),
         (format!("{MINIMAL}[materials.m]\nior = 0.0\n"), "materials.m.ior"),
         (format!("{MINIMAL}[materials.m]\nalbedo = [nan, 0.0, 0.0]\n"), "materials.m.albedo"),
@@ -229,7 +258,10 @@ fn lens_filter_and_clamp_default_to_a_pinhole_box_filter_and_no_clamp() {
     assert_eq!((scene.camera.aperture, scene.camera.focus_distance), (0.0, 3.0), "focused on look_at");
     assert_eq!(scene.film.filter, Filter::Box);
     assert_eq!(scene.integrator.clamp, None);
-    let scene = parse_result(&format!("{MINIMAL}aperture = 0.05\nfocus_distance = 2.5\n[film]\nfilter = \"gaussian\"\n[integrator]\nclamp = 10.0\n")).unwrap();
+    let scene = parse_result(&format!(
+        "{MINIMAL}aperture = 0.05\nfocus_distance = 2.5\n[film]\nfilter = \"gaussian\"\n[integrator]\nclamp = 10.0\n"
+    ))
+    .unwrap();
     assert_eq!((scene.camera.aperture, scene.camera.focus_distance), (0.05, 2.5));
     assert_eq!((scene.film.filter, scene.integrator.clamp), (Filter::Gaussian, Some(10.0)));
 }
@@ -292,9 +324,19 @@ fn repeated_mesh_placements_share_one_mesh() {
     // -> rotated 90 degrees about z -> (0, 2, 0) -> translated -> (0, 5, 0).
     let p = scene.instances[1].transform.transform_point3(glam::Vec3::X);
     assert!((p - glam::Vec3::new(0.0, 5.0, 0.0)).length() < 1e-5, "{p:?}");
-    let e = error_of(&format!("{MINIMAL}[[meshes]]\nfile = \"tri.obj\"\ninstances = [{{ translate = [1, 0, 0], spin = 3 }}]\n"));
+    let e = error_of(&format!(
+        "{MINIMAL}[[meshes]]\nfile = \"tri.obj\"\ninstances = [{{ translate = [1, 0, 0], spin = 3 }}]\n"
+    ));
     assert!(e.contains("spin"), "{e}");
-    let e = format!("{:#}", Scene::parse(&format!("{MINIMAL}[[meshes]]\nfile = \"tri.obj\"\ninstances = [{{ scale = [1, 0, 1] }}]\n"), "zero.toml", &dir).unwrap_err());
+    let e = format!(
+        "{:#}",
+        Scene::parse(
+            &format!("{MINIMAL}[[meshes]]\nfile = \"tri.obj\"\ninstances = [{{ scale = [1, 0, 1] }}]\n"),
+            "zero.toml",
+            &dir
+        )
+        .unwrap_err()
+    );
     assert!(e.contains("meshes[0].instances[0].scale"), "{e}");
 }
 
@@ -319,9 +361,14 @@ fn malformed_obj_is_rejected_with_the_file_name() {
     std::fs::write(dir.join("bad.ply"), format!("{ply_header}0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")).unwrap();
     std::fs::write(dir.join("huge.ply"), ply_header.replace("vertex 3", "vertex 1000000000")).unwrap();
     std::fs::write(dir.join("broken.gltf"), "{ \"asset\": { \"version\": \"2.0\" }, \"nodes\": [").unwrap();
-    std::fs::write(dir.join("cyclic.gltf"), r#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"children": [1]}, {"children": [0]}]}"#).unwrap();
+    std::fs::write(
+        dir.join("cyclic.gltf"),
+        r#"{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"children": [1]}, {"children": [0]}]}"#,
+    )
+    .unwrap();
     std::fs::write(dir.join("shape.stl"), "solid x\nendsolid x\n").unwrap();
-    for file in ["bad.obj", "nan.obj", "missing.obj", "bad.ply", "huge.ply", "broken.gltf", "cyclic.gltf", "shape.stl"] {
+    for file in ["bad.obj", "nan.obj", "missing.obj", "bad.ply", "huge.ply", "broken.gltf", "cyclic.gltf", "shape.stl"]
+    {
         let text = format!("{MINIMAL}[materials.m]\n[[meshes]]\nfile = \"{file}\"\nmaterial = \"m\"\n");
         let e = format!("{:#}", Scene::parse(&text, "mesh.toml", &dir).expect_err("bad mesh rejected"));
         assert!(e.contains(file), "{file}: {e}");
@@ -340,8 +387,13 @@ fn anisotropic_mesh_materials_give_their_meshes_tangents_along_u() {
          [[meshes]]\nfile = \"square.obj\"\nmaterial = \"brushed\"\n[[meshes]]\nfile = \"square.obj\"\nmaterial = \"even\"\n"
     );
     let scene = Scene::parse(&text, "anisotropic.toml", &dir).unwrap();
-    let brushed = &scene.meshes[scene.meshes.iter().position(|m| scene.materials[m.triangle_materials[0] as usize].name == "brushed").unwrap()];
-    let even = &scene.meshes[scene.meshes.iter().position(|m| scene.materials[m.triangle_materials[0] as usize].name == "even").unwrap()];
+    let brushed = &scene.meshes[scene
+        .meshes
+        .iter()
+        .position(|m| scene.materials[m.triangle_materials[0] as usize].name == "brushed")
+        .unwrap()];
+    let even = &scene.meshes
+        [scene.meshes.iter().position(|m| scene.materials[m.triangle_materials[0] as usize].name == "even").unwrap()];
     assert_eq!(brushed.tangents.len(), brushed.positions.len(), "one tangent a vertex");
     assert!(brushed.tangents.iter().all(|t| (t.truncate() - glam::Vec3::X).length() < 1e-5), "{:?}", brushed.tangents);
     assert!(even.tangents.is_empty(), "an isotropic material needs no tangents");
@@ -353,7 +405,11 @@ fn anisotropic_mesh_materials_give_their_meshes_tangents_along_u() {
          [[meshes]]\nfile = \"square.obj\"\nmaterial = \"brushed\"\n"
     );
     let scene = Scene::parse(&textured, "anisotropic-textured.toml", &dir).unwrap();
-    assert!(scene.meshes[0].tangents.iter().all(|t| (t.truncate() - glam::Vec3::X).length() < 1e-5), "{:?}", scene.meshes[0].tangents);
+    assert!(
+        scene.meshes[0].tangents.iter().all(|t| (t.truncate() - glam::Vec3::X).length() < 1e-5),
+        "{:?}",
+        scene.meshes[0].tangents
+    );
     let e = error_of(&format!("{MINIMAL}[materials.m]\nroughness_v = 1.5\n"));
     assert!(e.contains("materials.m.roughness_v must be in [0, 1], got 1.5"), "{e}");
 }

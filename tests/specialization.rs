@@ -7,7 +7,9 @@
 mod common;
 
 use caustica::bench::{suite_entries, SuiteEntry};
-use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, Workgroup, FEW_PRIMITIVES, WORKGROUP_VAR};
+use caustica::render::{
+    AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, Workgroup, FEW_PRIMITIVES, WORKGROUP_VAR,
+};
 use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Shape, Texture};
 use common::{floor_point_scene, gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -19,7 +21,12 @@ fn sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice) ->
 }
 
 /// [`sums`] of a renderer that `configure` has set up.
-fn sums_with(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice, configure: impl FnOnce(&mut Renderer)) -> (Vec<[u32; 4]>, SceneFeatures) {
+fn sums_with(
+    ctx: &caustica::gpu::GpuContext,
+    scene: &Scene,
+    choice: KernelChoice,
+    configure: impl FnOnce(&mut Renderer),
+) -> (Vec<[u32; 4]>, SceneFeatures) {
     let mut renderer = Renderer::with_kernel(ctx, scene, 3, AovSet::default(), choice).expect("scene uploads");
     configure(&mut renderer);
     renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
@@ -34,7 +41,14 @@ fn assert_specialized_kernel_agrees(ctx: &caustica::gpu::GpuContext, mut scene: 
     let (general, all) = sums(ctx, &scene, KernelChoice::General);
     assert_eq!(all, SceneFeatures::ALL);
     let differing = specialized.iter().zip(&general).filter(|(a, b)| a != b).count();
-    assert_eq!(differing, 0, "{}: {differing} of {} pixels differ between the kernel compiled for {:?} and the general kernel", scene.name, general.len(), features.names());
+    assert_eq!(
+        differing,
+        0,
+        "{}: {differing} of {} pixels differ between the kernel compiled for {:?} and the general kernel",
+        scene.name,
+        general.len(),
+        features.names()
+    );
     features
 }
 
@@ -159,26 +173,46 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         angular_diameter = 5.0
         "#,
     );
-    let texels: Vec<[u8; 4]> = (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
-    scene.textures = vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true, wrap: Default::default() }];
+    let texels: Vec<[u8; 4]> =
+        (0..16u32).map(|i| [(i * 53 % 256) as u8, (i * 101 % 256) as u8, (255 - i * 16) as u8, 255]).collect();
+    scene.textures =
+        vec![Texture { name: "test".into(), width: 4, height: 4, texels, srgb: true, wrap: Default::default() }];
     scene.materials[0].albedo_texture = Some(0);
     // A bumpy normal map: each texel tilts the normal its own way.
-    let bumps: Vec<[u8; 4]> = (0..16u32).map(|i| [(96 + i * 37 % 64) as u8, (96 + i * 23 % 64) as u8, 230, 255]).collect();
-    scene.textures.push(Texture { name: "bumps".into(), width: 4, height: 4, texels: bumps, srgb: false, wrap: Default::default() });
+    let bumps: Vec<[u8; 4]> =
+        (0..16u32).map(|i| [(96 + i * 37 % 64) as u8, (96 + i * 23 % 64) as u8, 230, 255]).collect();
+    scene.textures.push(Texture {
+        name: "bumps".into(),
+        width: 4,
+        height: 4,
+        texels: bumps,
+        srgb: false,
+        wrap: Default::default(),
+    });
     scene.materials[0].maps.normal = Some(NormalMap { texture: 1, scale: 0.8 });
     let glow = scene.materials.iter().position(|m| m.name == "glow").unwrap() as u32;
     scene.materials[glow as usize].maps.emission = Some(0);
     // Opacity varying over the texture, read blended (lace) and cut at 0.5 (stencil).
     let holes: Vec<[u8; 4]> = (0..16u32).map(|i| [200, 200, 200, (i * 67 % 256) as u8]).collect();
-    scene.textures.push(Texture { name: "holes".into(), width: 4, height: 4, texels: holes, srgb: true, wrap: Default::default() });
+    scene.textures.push(Texture {
+        name: "holes".into(),
+        width: 4,
+        height: 4,
+        texels: holes,
+        srgb: true,
+        wrap: Default::default(),
+    });
     let lace = scene.materials.iter().position(|m| m.name == "lace").unwrap() as u32;
     scene.materials[lace as usize].maps.alpha = Some(Alpha { factor: 0.9, texture: Some(2), mode: AlphaMode::Blend });
     // A rough glTF clear coat over the plastic, its factor from the texture's R.
     let plastic = scene.materials.iter().position(|m| m.name == "plastic").unwrap();
-    scene.materials[plastic].clearcoat = Some(Clearcoat { factor: 0.8, roughness: 0.3, texture: Some(0), roughness_texture: None });
+    scene.materials[plastic].clearcoat =
+        Some(Clearcoat { factor: 0.8, roughness: 0.3, texture: Some(0), roughness_texture: None });
     let stencil = scene.materials.iter().position(|m| m.name == "stencil").unwrap() as u32;
-    scene.materials[stencil as usize].maps.alpha = Some(Alpha { factor: 1.0, texture: Some(2), mode: AlphaMode::Mask { cutoff: 0.5 } });
-    let corners = [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)];
+    scene.materials[stencil as usize].maps.alpha =
+        Some(Alpha { factor: 1.0, texture: Some(2), mode: AlphaMode::Mask { cutoff: 0.5 } });
+    let corners =
+        [Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0), Vec3::new(-1.0, 0.0, 1.0)];
     let quad = |material: u32, triangles: [[u32; 3]; 2]| Mesh {
         name: "quad".into(),
         positions: corners.to_vec(),
@@ -189,17 +223,35 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         tangents: vec![Vec4::new(1.0, 0.0, 0.0, 1.0); 4],
     };
     // The floor faces up; the lamp above it faces down.
-    scene.meshes = vec![quad(0, [[0, 2, 1], [0, 3, 2]]), quad(glow, [[0, 1, 2], [0, 2, 3]]), quad(lace, [[0, 2, 1], [0, 3, 2]]), quad(stencil, [[0, 2, 1], [0, 3, 2]])];
+    scene.meshes = vec![
+        quad(0, [[0, 2, 1], [0, 3, 2]]),
+        quad(glow, [[0, 1, 2], [0, 2, 3]]),
+        quad(lace, [[0, 2, 1], [0, 3, 2]]),
+        quad(stencil, [[0, 2, 1], [0, 3, 2]]),
+    ];
     scene.instances = vec![
         Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, 0.0)) },
         Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(0.0, -0.2, -2.0)) },
-        Instance { mesh: 1, transform: Mat4::from_translation(Vec3::new(0.0, 1.5, 0.0)) * Mat4::from_scale(Vec3::splat(0.3)) },
-        Instance { mesh: 2, transform: Mat4::from_translation(Vec3::new(-0.3, 0.6, 0.3)) * Mat4::from_scale(Vec3::splat(0.5)) },
-        Instance { mesh: 3, transform: Mat4::from_translation(Vec3::new(0.4, 0.9, 0.2)) * Mat4::from_scale(Vec3::splat(0.4)) },
+        Instance {
+            mesh: 1,
+            transform: Mat4::from_translation(Vec3::new(0.0, 1.5, 0.0)) * Mat4::from_scale(Vec3::splat(0.3)),
+        },
+        Instance {
+            mesh: 2,
+            transform: Mat4::from_translation(Vec3::new(-0.3, 0.6, 0.3)) * Mat4::from_scale(Vec3::splat(0.5)),
+        },
+        Instance {
+            mesh: 3,
+            transform: Mat4::from_translation(Vec3::new(0.4, 0.9, 0.2)) * Mat4::from_scale(Vec3::splat(0.4)),
+        },
     ];
     let (_lock, ctx) = gpu();
     let features = assert_specialized_kernel_agrees(&ctx, scene.clone());
-    assert_eq!((features.few_shapes.len(), features.walked_shapes()), (scene.shapes.len(), false), "its few shapes are tested before the walk of its meshes");
+    assert_eq!(
+        (features.few_shapes.len(), features.walked_shapes()),
+        (scene.shapes.len(), false),
+        "its few shapes are tested before the walk of its meshes"
+    );
     // With more shapes than are tested apart, the walk meets them among the meshes: the general
     // kernel's every feature.
     let far_below = Shape::Sphere { center: Vec3::new(0.0, -50.0, 0.0), radius: 0.01, material: 0 };
@@ -240,7 +292,8 @@ fn coats_without_mirrors_render_the_same_with_their_own_kernel() {
         "#,
     );
     let lacquered = scene.materials.iter().position(|m| m.name == "lacquered").unwrap();
-    scene.materials[lacquered].clearcoat = Some(Clearcoat { factor: 1.0, roughness: 0.0, texture: None, roughness_texture: None });
+    scene.materials[lacquered].clearcoat =
+        Some(Clearcoat { factor: 1.0, roughness: 0.0, texture: None, roughness_texture: None });
     let (_lock, ctx) = gpu();
     let features = assert_specialized_kernel_agrees(&ctx, scene);
     assert!(features.reflectors && !features.dielectrics, "{:?}", features.names());
@@ -307,11 +360,15 @@ fn every_workgroup_shape_renders_the_same_sums() {
             Some(shape) => std::env::set_var(WORKGROUP_VAR, shape),
             None => std::env::remove_var(WORKGROUP_VAR),
         }
-        let mut renderer = Renderer::with_kernel(&ctx, &scene, 3, AovSet::default(), KernelChoice::ForScene).expect("scene uploads");
+        let mut renderer =
+            Renderer::with_kernel(&ctx, &scene, 3, AovSet::default(), KernelChoice::ForScene).expect("scene uploads");
         std::env::remove_var(WORKGROUP_VAR);
         renderer.fix_samples_per_dispatch(1);
         renderer.render(scene.film.spp, |_| {}).expect("render succeeds without validation messages");
-        (renderer.workgroup, renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>())
+        (
+            renderer.workgroup,
+            renderer.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>(),
+        )
     };
     let (default_shape, reference) = render(None);
     assert_eq!(default_shape, Workgroup::EIGHT_BY_EIGHT, "lavapipe's shape");

@@ -55,7 +55,11 @@ impl Wrap {
             Wrap::Clamp => i.clamp(0, n - 1),
             Wrap::Mirror => {
                 let m = i.rem_euclid(2 * n);
-                if m < n { m } else { 2 * n - 1 - m }
+                if m < n {
+                    m
+                } else {
+                    2 * n - 1 - m
+                }
             }
         }
     }
@@ -72,7 +76,14 @@ struct Mapping {
     wrap: [Wrap; 2],
 }
 
-const PLAIN: Mapping = Mapping { tex_coord: 0, offset: [0.0, 0.0], rotation: 0.0, scale: [1.0, 1.0], override_set: None, wrap: [Wrap::Repeat, Wrap::Repeat] };
+const PLAIN: Mapping = Mapping {
+    tex_coord: 0,
+    offset: [0.0, 0.0],
+    rotation: 0.0,
+    scale: [1.0, 1.0],
+    override_set: None,
+    wrap: [Wrap::Repeat, Wrap::Repeat],
+};
 
 impl Mapping {
     /// The texture coordinates read at TEXCOORD_0 = (u, v): the set the mapping names (set 1 swaps
@@ -118,7 +129,9 @@ impl Mapping {
 /// v = (y + 0.5) / 16 of TEXCOORD_0.
 fn render_square(ctx: &caustica::gpu::GpuContext, dir: &Path, mapping: &Mapping) -> RgbImage {
     let (info, resources) = mapping.json();
-    let material = format!(r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 1}}, "emissiveFactor": [1, 1, 1], "emissiveTexture": {info}}}"#);
+    let material = format!(
+        r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 1}}, "emissiveFactor": [1, 1, 1], "emissiveTexture": {info}}}"#
+    );
     write_gltf_square(dir, "square.gltf", 0.0, 0.5, &material, &resources);
     let scene: Scene = Scene::parse(
         &format!(
@@ -143,9 +156,16 @@ fn assert_reads_as_mapped(image: &RgbImage, mapping: &Mapping, least: usize, wha
     let mut checked = 0;
     for y in 0..SIZE {
         for x in 0..SIZE {
-            let uv = |dx: f64, dy: f64| (1.0 - (x as f64 + 0.5 + dx) / SIZE as f64, (y as f64 + 0.5 + dy) / SIZE as f64);
+            let uv =
+                |dx: f64, dy: f64| (1.0 - (x as f64 + 0.5 + dx) / SIZE as f64, (y as f64 + 0.5 + dy) / SIZE as f64);
             let offsets = [(0.0, 0.0), (-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)];
-            let blocks: Vec<Option<usize>> = offsets.iter().map(|&(dx, dy)| { let (u, v) = uv(dx, dy); mapping.block(u, v) }).collect();
+            let blocks: Vec<Option<usize>> = offsets
+                .iter()
+                .map(|&(dx, dy)| {
+                    let (u, v) = uv(dx, dy);
+                    mapping.block(u, v)
+                })
+                .collect();
             let Some(block) = blocks[0] else { continue };
             if blocks.iter().any(|&b| b != Some(block)) {
                 continue;
@@ -154,7 +174,11 @@ fn assert_reads_as_mapped(image: &RgbImage, mapping: &Mapping, least: usize, wha
             let p = image.get(x, y);
             for c in 0..3 {
                 let expected = srgb_to_linear(BLOCKS[block][c]);
-                assert!((p[c] - expected).abs() <= 1e-4 * expected + 1e-6, "{what}: pixel ({x}, {y}) channel {c} is {}, expected block {block}'s {expected}", p[c]);
+                assert!(
+                    (p[c] - expected).abs() <= 1e-4 * expected + 1e-6,
+                    "{what}: pixel ({x}, {y}) channel {c} is {}, expected block {block}'s {expected}",
+                    p[c]
+                );
             }
         }
     }
@@ -174,11 +198,23 @@ fn textures_are_read_through_their_transform_texcoord_and_wrap_modes() {
         (Mapping { offset: [0.5, 0.25], ..PLAIN }, "offset (0.5, 0.25)"),
         (Mapping { scale: [2.0, 2.0], ..PLAIN }, "scale 2, repeat"),
         (Mapping { scale: [2.0, 1.5], wrap: [Wrap::Clamp, Wrap::Clamp], ..PLAIN }, "scale (2, 1.5), clamp to edge"),
-        (Mapping { scale: [2.0, 2.0], wrap: [Wrap::Mirror, Wrap::Clamp], ..PLAIN }, "scale 2, mirrored repeat in u, clamp in v"),
-        (Mapping { rotation: 0.5, scale: [1.5, 1.0], offset: [0.1, 0.2], ..PLAIN }, "rotation 0.5 after scale (1.5, 1), offset (0.1, 0.2)"),
-        (Mapping { rotation: std::f64::consts::FRAC_PI_2, wrap: [Wrap::Repeat, Wrap::Mirror], ..PLAIN }, "rotation 90 degrees, mirrored in v"),
+        (
+            Mapping { scale: [2.0, 2.0], wrap: [Wrap::Mirror, Wrap::Clamp], ..PLAIN },
+            "scale 2, mirrored repeat in u, clamp in v",
+        ),
+        (
+            Mapping { rotation: 0.5, scale: [1.5, 1.0], offset: [0.1, 0.2], ..PLAIN },
+            "rotation 0.5 after scale (1.5, 1), offset (0.1, 0.2)",
+        ),
+        (
+            Mapping { rotation: std::f64::consts::FRAC_PI_2, wrap: [Wrap::Repeat, Wrap::Mirror], ..PLAIN },
+            "rotation 90 degrees, mirrored in v",
+        ),
         (Mapping { tex_coord: 1, ..PLAIN }, "texCoord 1"),
-        (Mapping { override_set: Some(1), offset: [0.25, 0.0], ..PLAIN }, "KHR_texture_transform's texCoord 1 override"),
+        (
+            Mapping { override_set: Some(1), offset: [0.25, 0.0], ..PLAIN },
+            "KHR_texture_transform's texCoord 1 override",
+        ),
     ];
     for (mapping, what) in &cases {
         let image = render_square(&ctx, &dir, mapping);

@@ -24,7 +24,11 @@ fn png(width: u32, height: u32, texels: &[[u8; 3]]) -> Vec<u8> {
 /// at z = -0.5) and vertex normals, using material `lamp` of `quad.mtl` (`mtl`), which may name
 /// `tex.png` (`texture`). `flip_v`: v = 0.5 - z instead, the texture upside down.
 fn write_square(dir: &Path, y: f32, up: bool, flip_v: bool, mtl: &str, texture: &[u8]) {
-    let (normal, faces) = if up { (1, "f 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/4/1 3/3/1") } else { (-1, "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1") };
+    let (normal, faces) = if up {
+        (1, "f 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/4/1 3/3/1")
+    } else {
+        (-1, "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1")
+    };
     // OBJ's v runs up the image; the loader turns it into glTF's 1 - v.
     let vt = if flip_v { "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1" } else { "vt 0 1\nvt 1 1\nvt 1 0\nvt 0 0" };
     let obj = format!(
@@ -80,7 +84,12 @@ fn an_emission_texture_seen_directly_is_texel_times_factor() {
             for x in bx + 2..bx + 6 {
                 let p = image.get(x, y);
                 for c in 0..3 {
-                    assert!((p[c] - expected[c]).abs() <= 1e-4 * expected[c] + 1e-6, "pixel ({x}, {y}) channel {c}: {} vs texel x Ke {}", p[c], expected[c]);
+                    assert!(
+                        (p[c] - expected[c]).abs() <= 1e-4 * expected[c] + 1e-6,
+                        "pixel ({x}, {y}) channel {c}: {} vs texel x Ke {}",
+                        p[c],
+                        expected[c]
+                    );
                 }
             }
         }
@@ -156,7 +165,14 @@ fn a_textured_emitter_lights_like_an_untextured_one_over_its_bright_texels() {
 /// A diffuse floor (albedo 0.5) whose normal map holds one texel, `texel`, seen from above under a
 /// directional light of irradiance 2 arriving from `from` (towards the light), `bm` the map's scale,
 /// the map upside down when `flip_v`.
-fn normal_mapped_floor(ctx: &caustica::gpu::GpuContext, dir: &Path, texel: [u8; 3], from: glam::DVec3, bm: f32, flip_v: bool) -> RgbImage {
+fn normal_mapped_floor(
+    ctx: &caustica::gpu::GpuContext,
+    dir: &Path,
+    texel: [u8; 3],
+    from: glam::DVec3,
+    bm: f32,
+    flip_v: bool,
+) -> RgbImage {
     write_square(dir, 0.0, true, flip_v, &format!("Kd 0.5 0.5 0.5\nnorm -bm {bm} tex.png"), &png(1, 1, &[texel]));
     let travel = -from;
     let scene = parse_in(
@@ -209,14 +225,24 @@ fn a_normal_map_changes_a_diffuse_plane_s_brightness_by_the_cosine_of_its_tilt()
         (towards_tangent, leaning(1.0, 0.0), 1.0, false, "towards the tangent, light from the side it leans to"),
         (towards_tangent, DVec3::Y, 0.5, false, "towards the tangent, light from above, map scale 0.5"),
         (towards_bitangent, leaning(0.0, -1.0), 1.0, false, "towards the bitangent, light from the side it leans to"),
-        (towards_bitangent, leaning(0.0, 1.0), 1.0, true, "towards the bitangent of the upside-down map, light from the side it leans to"),
+        (
+            towards_bitangent,
+            leaning(0.0, 1.0),
+            1.0,
+            true,
+            "towards the bitangent of the upside-down map, light from the side it leans to",
+        ),
     ] {
         let image = normal_mapped_floor(&ctx, &dir, texel, from, scale as f32, flip_v);
         let expected = 0.5 / std::f64::consts::PI * 2.0 * bent(texel, scale, flip_v).dot(from);
         for (i, p) in image.pixels.iter().enumerate() {
             for (c, &value) in p.iter().enumerate() {
                 let value = value as f64;
-                assert!((value - expected).abs() <= 1e-4 * expected, "{what}: pixel {i} channel {c} is {value:.6}, expected {expected:.6} (a flat floor: {:.6})", 0.5 / std::f64::consts::PI * 2.0 * from.y);
+                assert!(
+                    (value - expected).abs() <= 1e-4 * expected,
+                    "{what}: pixel {i} channel {c} is {value:.6}, expected {expected:.6} (a flat floor: {:.6})",
+                    0.5 / std::f64::consts::PI * 2.0 * from.y
+                );
             }
         }
     }

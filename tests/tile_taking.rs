@@ -45,5 +45,8 @@ fn subgroups_taking_tiles_render_the_same_sums_as_workgroups_rendering_their_own
     let mut banded = renderer("1");
     banded.set_dispatch_target(1e-9);
     let (in_bands, in_bands_aovs) = rendered_sums(&mut banded, &[spp]);
-    assert!(in_bands == reference && in_bands_aovs == reference_aovs, "the sums differ when subgroups take the tiles of bands");
+    assert!(
+        in_bands == reference && in_bands_aovs == reference_aovs,
+        "the sums differ when subgroups take the tiles of bands"
+    );
 }

@@ -20,7 +20,11 @@ use std::time::{Duration, Instant};
 const PATIENCE: Duration = Duration::from_secs(90);
 
 fn installed(program: &str) -> bool {
-    Command::new("sh").args(["-c", &format!("command -v {program}")]).stdout(Stdio::null()).status().is_ok_and(|s| s.success())
+    Command::new("sh")
+        .args(["-c", &format!("command -v {program}")])
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
 }
 
 /// An X display for one test: the session's own when DISPLAY is set, else an Xvfb server of this
@@ -70,12 +74,17 @@ fn x_display_with(test: &str, window_manager: bool) -> Option<XDisplay> {
     }
     let missing: Vec<&str> = tools.into_iter().filter(|p| !installed(p)).collect();
     if !missing.is_empty() {
-        eprintln!("SKIPPED: {test}: {} not installed (apt-get install xdotool x11-utils openbox)", missing.join(" and "));
+        eprintln!(
+            "SKIPPED: {test}: {} not installed (apt-get install xdotool x11-utils openbox)",
+            missing.join(" and ")
+        );
         return None;
     }
     if let Some(name) = session {
         if window_manager && !has_window_manager(&name) {
-            eprintln!("SKIPPED: {test}: DISPLAY {name} has no window manager (none announces itself on the root window)");
+            eprintln!(
+                "SKIPPED: {test}: DISPLAY {name} has no window manager (none announces itself on the root window)"
+            );
             return None;
         }
         return Some(XDisplay { name, xvfb: None, window_manager: None, _one_at_a_time: guard });
@@ -85,7 +94,8 @@ fn x_display_with(test: &str, window_manager: bool) -> Option<XDisplay> {
         return None;
     }
     let (xvfb, number) = start_xvfb();
-    let mut display = XDisplay { name: format!(":{number}"), xvfb: Some(xvfb), window_manager: None, _one_at_a_time: guard };
+    let mut display =
+        XDisplay { name: format!(":{number}"), xvfb: Some(xvfb), window_manager: None, _one_at_a_time: guard };
     if window_manager {
         display.window_manager = Some(start_openbox(&display.name));
     }
@@ -121,7 +131,9 @@ fn start_xvfb() -> (Child, u32) {
     let mut cmd = Command::new("Xvfb");
     // -noreset: by default the server resets whenever its last client leaves (an xdotool call), and a
     // viewer connecting meanwhile is refused.
-    cmd.args(["-displayfd", &write_end.to_string(), "-noreset", "-screen", "0", "800x600x24", "-nolisten", "tcp"]).stdout(Stdio::null()).stderr(Stdio::null());
+    cmd.args(["-displayfd", &write_end.to_string(), "-noreset", "-screen", "0", "800x600x24", "-nolisten", "tcp"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
     stop_with_this_process(&mut cmd);
     let spawned = cmd.spawn();
     unsafe { libc::close(write_end) };
@@ -190,7 +202,11 @@ impl Viewer {
     /// runs (the title shows the sample count).
     fn start(display: &XDisplay, dir: &Path, args: &[&str]) -> Viewer {
         let mut cmd = caustica_command(&[&["view", "--validation"], args].concat());
-        cmd.current_dir(dir).env("DISPLAY", &display.name).env_remove("WAYLAND_DISPLAY").stdout(Stdio::piped()).stderr(Stdio::piped());
+        cmd.current_dir(dir)
+            .env("DISPLAY", &display.name)
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
         let mut child = cmd.spawn().expect("start caustica view");
         let (stdout, stderr) = (collect(child.stdout.take().unwrap()), collect(child.stderr.take().unwrap()));
         let mut viewer = Viewer { child, stdout, stderr, display: display.name.clone(), window: String::new() };
@@ -215,7 +231,11 @@ impl Viewer {
     }
 
     fn tool(&self, program: &str, args: &[&str]) -> String {
-        let out = Command::new(program).args(args).env("DISPLAY", &self.display).output().unwrap_or_else(|e| panic!("{program}: {e}"));
+        let out = Command::new(program)
+            .args(args)
+            .env("DISPLAY", &self.display)
+            .output()
+            .unwrap_or_else(|e| panic!("{program}: {e}"));
         String::from_utf8_lossy(&out.stdout).into_owned()
     }
 
@@ -230,7 +250,10 @@ impl Viewer {
     /// The samples per pixel the title shows ("... - 12/100 spp - ...").
     fn samples_shown(&self) -> u32 {
         let title = self.title();
-        let count = title.split(" - ").find_map(|part| part.strip_suffix(" spp")).and_then(|s| s.split('/').next()?.parse().ok());
+        let count = title
+            .split(" - ")
+            .find_map(|part| part.strip_suffix(" spp"))
+            .and_then(|s| s.split('/').next()?.parse().ok());
         count.unwrap_or_else(|| panic!("no sample count in the title: {title}"))
     }
 
@@ -241,7 +264,8 @@ impl Viewer {
         wait_until("the camera printed by P", || {
             self.check_alive();
             let lines = self.stdout.lock().unwrap();
-            let starts: Vec<usize> = lines.iter().enumerate().filter(|(_, l)| l.as_str() == "[camera]").map(|(i, _)| i).collect();
+            let starts: Vec<usize> =
+                lines.iter().enumerate().filter(|(_, l)| l.as_str() == "[camera]").map(|(i, _)| i).collect();
             let start = *starts.get(before)?;
             let block: Vec<&String> = lines[start..].iter().take_while(|l| !l.is_empty()).collect();
             (block.len() >= 7).then(|| Camera::parse(&block.iter().map(|l| l.as_str()).collect::<Vec<_>>().join("\n")))
@@ -321,7 +345,10 @@ fn png_pixels(path: &Path) -> (u32, u32, Vec<u8>) {
 }
 
 fn render_png(dir: &Path, scene: &Path, extra: &[&str], output: &str) -> PathBuf {
-    let out = caustica_command(&[&["render", scene.to_str().unwrap(), "-q", "-o", output], extra].concat()).current_dir(dir).output().unwrap();
+    let out = caustica_command(&[&["render", scene.to_str().unwrap(), "-q", "-o", output], extra].concat())
+        .current_dir(dir)
+        .output()
+        .unwrap();
     assert!(out.status.success(), "render: {}", String::from_utf8_lossy(&out.stderr));
     dir.join(output)
 }
@@ -330,7 +357,15 @@ fn assert_same_pixels(shown: &Path, rendered: &Path) {
     let (a, b) = (png_pixels(shown), png_pixels(rendered));
     assert_eq!((a.0, a.1), (b.0, b.1), "sizes of {} and {}", shown.display(), rendered.display());
     let differing = a.2.iter().zip(&b.2).filter(|(x, y)| x != y).count();
-    assert_eq!(differing, 0, "{} of {} samples of {} differ from {}", differing, a.2.len(), shown.display(), rendered.display());
+    assert_eq!(
+        differing,
+        0,
+        "{} of {} samples of {} differ from {}",
+        differing,
+        a.2.len(),
+        shown.display(),
+        rendered.display()
+    );
 }
 
 /// The EXR's sample count (caustica.samples).
@@ -344,13 +379,16 @@ fn screenshot_is_the_render_png_pixel_for_pixel() {
     let dir = temp_dir("view-screenshot");
     let scene = small_scene(&dir, "box.toml");
     // A fractional exposure and a curve: the GPU tonemap must not round one code differently.
-    let settings = ["--spp", "3", "--width", "40", "--height", "30", "--seed", "7", "--exposure", "0.7", "--tonemap", "aces"];
-    let out = caustica_command(&[&["view", "--validation", scene.to_str().unwrap(), "--screenshot", "shown.png"], &settings[..]].concat())
-        .current_dir(&dir)
-        .env("DISPLAY", &display.name)
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
+    let settings =
+        ["--spp", "3", "--width", "40", "--height", "30", "--seed", "7", "--exposure", "0.7", "--tonemap", "aces"];
+    let out = caustica_command(
+        &[&["view", "--validation", scene.to_str().unwrap(), "--screenshot", "shown.png"], &settings[..]].concat(),
+    )
+    .current_dir(&dir)
+    .env("DISPLAY", &display.name)
+    .env_remove("WAYLAND_DISPLAY")
+    .output()
+    .unwrap();
     assert!(out.status.success(), "view --screenshot: {}", String::from_utf8_lossy(&out.stderr));
     let rendered = render_png(&dir, &scene, &settings, "rendered.png");
     assert_same_pixels(&dir.join("shown.png"), &rendered);
@@ -364,7 +402,8 @@ fn window_has_the_size_and_title_and_input_moves_the_camera_and_restarts_accumul
     let dir = temp_dir("view-input");
     let scene = small_scene(&dir, "box.toml");
     // Wide enough that the input lands beside the overlay (at most 250 points wide, top left).
-    let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "400", "--height", "300", "--spp", "2"]);
+    let mut viewer =
+        Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "400", "--height", "300", "--spp", "2"]);
 
     let info = viewer.tool("xwininfo", &["-id", &viewer.window]);
     assert!(info.contains("Width: 400") && info.contains("Height: 300"), "{info}");
@@ -374,13 +413,39 @@ fn window_has_the_size_and_title_and_input_moves_the_camera_and_restarts_accumul
     let start = viewer.print_camera();
     let w = viewer.window.clone();
     // Left drag 40 pixels to the right: the camera orbits the pivot to the left, as far from it.
-    viewer.xdotool(&["mousemove", "--window", &w, "300", "150", "mousedown", "1", "mousemove", "--window", &w, "320", "150", "mousemove", "--window", &w, "340", "150", "mouseup", "1"]);
+    viewer.xdotool(&[
+        "mousemove",
+        "--window",
+        &w,
+        "300",
+        "150",
+        "mousedown",
+        "1",
+        "mousemove",
+        "--window",
+        &w,
+        "320",
+        "150",
+        "mousemove",
+        "--window",
+        &w,
+        "340",
+        "150",
+        "mouseup",
+        "1",
+    ]);
     let orbited = viewer.print_camera();
     assert_eq!(orbited.look_at, start.look_at, "orbiting keeps the pivot");
-    assert!((orbited.offset().length() - start.offset().length()).abs() < 1e-3 * start.offset().length(), "and the distance to it");
+    assert!(
+        (orbited.offset().length() - start.offset().length()).abs() < 1e-3 * start.offset().length(),
+        "and the distance to it"
+    );
     let right = glam::Vec3::from(start.look_at) - glam::Vec3::from(start.position);
     let right = right.cross(glam::Vec3::Y).normalize();
-    assert!((glam::Vec3::from(orbited.position) - glam::Vec3::from(start.position)).dot(right) < -1e-3, "dragging right moves the camera left: {start:?} -> {orbited:?}");
+    assert!(
+        (glam::Vec3::from(orbited.position) - glam::Vec3::from(start.position)).dot(right) < -1e-3,
+        "dragging right moves the camera left: {start:?} -> {orbited:?}"
+    );
 
     // A click of the wheel's up button: dolly towards the pivot, 0.85 of the distance per step. A
     // real wheel's notch is one step; xdotool's click is a press and a release of button 4,
@@ -406,7 +471,12 @@ fn window_has_the_size_and_title_and_input_moves_the_camera_and_restarts_accumul
     assert!(samples >= 1);
     let moved_scene = dir.join("moved.toml");
     std::fs::write(&moved_scene, with_camera(&std::fs::read_to_string(&scene).unwrap(), &flown.text)).unwrap();
-    let rendered = render_png(&dir, &moved_scene, &["--width", "400", "--height", "300", "--spp", &samples.to_string()], "moved.png");
+    let rendered = render_png(
+        &dir,
+        &moved_scene,
+        &["--width", "400", "--height", "300", "--spp", &samples.to_string()],
+        "moved.png",
+    );
     assert_same_pixels(&png, &rendered);
 
     // A resized window gets an image of its new size (once the size has held for a moment).
@@ -437,7 +507,8 @@ fn a_scene_rewritten_on_disk_is_reloaded_keeping_the_camera() {
     let dir = temp_dir("view-reload");
     let scene = small_scene(&dir, "box.toml");
     let original = std::fs::read_to_string(&scene).unwrap();
-    let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "2"]);
+    let mut viewer =
+        Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "2"]);
     let camera = viewer.print_camera();
 
     // The walls change colour and the file's camera moves: the viewer takes the walls, keeps its camera.
@@ -453,18 +524,29 @@ fn a_scene_rewritten_on_disk_is_reloaded_keeping_the_camera() {
     let (png, exr) = viewer.save(&dir);
     let expected_scene = dir.join("expected.toml");
     std::fs::write(&expected_scene, with_camera(&rewritten, &camera.text)).unwrap();
-    let rendered = render_png(&dir, &expected_scene, &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()], "expected.png");
+    let rendered = render_png(
+        &dir,
+        &expected_scene,
+        &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()],
+        "expected.png",
+    );
     assert_same_pixels(&png, &rendered);
     viewer.quit();
 }
 
 #[test]
 fn minimizing_pauses_accumulation_and_restoring_resumes_it() {
-    let Some(display) = x_display_with_window_manager("minimizing_pauses_accumulation_and_restoring_resumes_it") else { return };
+    let Some(display) = x_display_with_window_manager("minimizing_pauses_accumulation_and_restoring_resumes_it") else {
+        return;
+    };
     let dir = temp_dir("view-minimize");
     let scene = small_scene(&dir, "box.toml");
     // A limit the test does not reach: only the pause stops the samples.
-    let viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "1000000"]);
+    let viewer = Viewer::start(
+        &display,
+        &dir,
+        &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "1000000"],
+    );
     let w = viewer.window.clone();
     let first = viewer.samples_shown();
     wait_until("samples before minimizing", || (viewer.samples_shown() > first).then_some(()));
@@ -473,7 +555,9 @@ fn minimizing_pauses_accumulation_and_restoring_resumes_it() {
     // What winit asks (Window::is_minimized): the state the window manager gave the window. The
     // window manager sets it after the unmap `--sync` waits for (a clean-clone run once read it
     // empty), so wait for it.
-    wait_until("the window manager to mark the window hidden (_NET_WM_STATE_HIDDEN)", || viewer.tool("xprop", &["-id", &w, "_NET_WM_STATE"]).contains("_NET_WM_STATE_HIDDEN").then_some(()));
+    wait_until("the window manager to mark the window hidden (_NET_WM_STATE_HIDDEN)", || {
+        viewer.tool("xprop", &["-id", &w, "_NET_WM_STATE"]).contains("_NET_WM_STATE_HIDDEN").then_some(())
+    });
     // The dispatch in flight ends and the title (refreshed every 250 ms) catches up.
     std::thread::sleep(Duration::from_secs(1));
     let paused_at = viewer.samples_shown();
@@ -481,7 +565,11 @@ fn minimizing_pauses_accumulation_and_restoring_resumes_it() {
     let title = viewer.title();
     assert_eq!(viewer.samples_shown(), paused_at, "no samples are added while minimized: {title}");
     // The frame rate the title shows: an idle loop wakes about 30 times a second, a spinning one thousands.
-    let fps: f64 = title.split(" - ").find_map(|p| p.strip_suffix(" fps")).and_then(|f| f.parse().ok()).unwrap_or_else(|| panic!("no fps in the title: {title}"));
+    let fps: f64 = title
+        .split(" - ")
+        .find_map(|p| p.strip_suffix(" fps"))
+        .and_then(|f| f.parse().ok())
+        .unwrap_or_else(|| panic!("no fps in the title: {title}"));
     assert!(fps < 100.0, "the frame loop idles while minimized: {title}");
 
     viewer.xdotool(&["windowactivate", "--sync", &w]);
@@ -494,7 +582,11 @@ fn a_swapchain_made_out_of_date_by_quick_resizes_is_re_created() {
     let Some(display) = x_display("a_swapchain_made_out_of_date_by_quick_resizes_is_re_created") else { return };
     let dir = temp_dir("view-out-of-date");
     let scene = small_scene(&dir, "box.toml");
-    let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "200", "--height", "150", "--spp", "1000000"]);
+    let mut viewer = Viewer::start(
+        &display,
+        &dir,
+        &[scene.to_str().unwrap(), "--width", "200", "--height", "150", "--spp", "1000000"],
+    );
     let w = viewer.window.clone();
     // Sizes changing faster than frames: lavapipe's X11 surface then finds the swapchain out of
     // date at acquire or present before the viewer has seen the Resized event (17 times in 40
@@ -502,7 +594,14 @@ fn a_swapchain_made_out_of_date_by_quick_resizes_is_re_created() {
     // rather than fail.
     let mut resizes = vec!["sleep".to_owned(), "0".to_owned()];
     for i in 0..30 {
-        resizes.extend(["windowsize".into(), w.clone(), (150 + (i % 7) * 30).to_string(), (100 + (i % 5) * 25).to_string(), "sleep".into(), "0.03".into()]);
+        resizes.extend([
+            "windowsize".into(),
+            w.clone(),
+            (150 + (i % 7) * 30).to_string(),
+            (100 + (i % 5) * 25).to_string(),
+            "sleep".into(),
+            "0.03".into(),
+        ]);
     }
     resizes.extend(["windowsize".into(), w.clone(), "160".into(), "120".into()]);
     viewer.xdotool(&resizes.iter().map(String::as_str).collect::<Vec<_>>());
@@ -521,7 +620,9 @@ fn a_swapchain_made_out_of_date_by_quick_resizes_is_re_created() {
 /// A Python 3 that has python3-xlib: the one on PATH, else Debian's (where PATH leads to another,
 /// e.g. pyenv's, which does not see Debian's packages).
 fn python_with_xlib() -> Option<&'static str> {
-    ["python3", "/usr/bin/python3"].into_iter().find(|python| Command::new(python).args(["-c", "import Xlib"]).stderr(Stdio::null()).status().is_ok_and(|s| s.success()))
+    ["python3", "/usr/bin/python3"].into_iter().find(|python| {
+        Command::new(python).args(["-c", "import Xlib"]).stderr(Stdio::null()).status().is_ok_and(|s| s.success())
+    })
 }
 
 #[test]
@@ -536,11 +637,19 @@ fn a_file_dropped_on_the_window_is_opened_with_its_own_camera() {
     let scene = small_scene(&dir, "box.toml");
     // The dropped scene has other walls and another camera, so the picture tells the two apart.
     let dropped = dir.join("dropped.toml");
-    std::fs::write(&dropped, recoloured_scene(&std::fs::read_to_string(&scene).unwrap(), [0.9, 0.6, 0.2], 65.0)).unwrap();
-    let mut viewer = Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "2"]);
+    std::fs::write(&dropped, recoloured_scene(&std::fs::read_to_string(&scene).unwrap(), [0.9, 0.6, 0.2], 65.0))
+        .unwrap();
+    let mut viewer =
+        Viewer::start(&display, &dir, &[scene.to_str().unwrap(), "--width", "40", "--height", "30", "--spp", "2"]);
 
     let helper = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/support/xdnd_drop.py");
-    let out = Command::new(python).arg(&helper).arg(&viewer.window).arg(&dropped).env("DISPLAY", &viewer.display).output().unwrap();
+    let out = Command::new(python)
+        .arg(&helper)
+        .arg(&viewer.window)
+        .arg(&dropped)
+        .env("DISPLAY", &viewer.display)
+        .output()
+        .unwrap();
     assert!(out.status.success(), "the drop: {}", String::from_utf8_lossy(&out.stderr));
     wait_until("the dropped scene in the title", || {
         viewer.check_alive();
@@ -550,14 +659,20 @@ fn a_file_dropped_on_the_window_is_opened_with_its_own_camera() {
     // What is shown is the dropped scene, from its own camera, and S names the files after it.
     let (png, exr) = viewer.save(&dir);
     assert!(png.file_name().unwrap().to_string_lossy().starts_with("dropped-view-"), "{}", png.display());
-    let rendered = render_png(&dir, &dropped, &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()], "expected.png");
+    let rendered = render_png(
+        &dir,
+        &dropped,
+        &["--width", "40", "--height", "30", "--spp", &samples_in(&exr).to_string()],
+        "expected.png",
+    );
     assert_same_pixels(&png, &rendered);
     viewer.quit();
 }
 
 #[test]
 fn no_display_is_a_clear_error() {
-    let out = caustica_command(&["view", "--spp", "1"]).env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY").output().unwrap();
+    let out =
+        caustica_command(&["view", "--spp", "1"]).env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY").output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("DISPLAY") && err.contains("WAYLAND_DISPLAY") && err.contains("needs a display"), "{err}");
@@ -631,7 +746,11 @@ mod viewer_renderer {
 
         let mut fresh = Renderer::new(&ctx, &moved_scene, 5).unwrap();
         fresh.render(2, |_| {}).unwrap();
-        assert_eq!(viewer.accumulation().unwrap(), fresh.accumulation().unwrap(), "no sample of the first camera is left");
+        assert_eq!(
+            viewer.accumulation().unwrap(),
+            fresh.accumulation().unwrap(),
+            "no sample of the first camera is left"
+        );
         assert_eq!(viewer.scene_hash, fresh.scene_hash, "the hash a render from that camera has");
 
         viewer.set_camera(&scene.camera).unwrap();

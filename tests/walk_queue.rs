@@ -9,8 +9,8 @@
 mod common;
 
 use caustica::render::{KernelChoice, WALK_QUEUE_VAR, WORKGROUP_VAR};
-use common::{gpu, loops_end_early};
 use common::two_meshes::{sums, two_meshes_in_a_room};
+use common::{gpu, loops_end_early};
 
 #[test]
 fn the_walk_queue_renders_the_plain_kernels_sums_bit_for_bit() {
@@ -20,18 +20,30 @@ fn the_walk_queue_renders_the_plain_kernels_sums_bit_for_bit() {
     let (queued, queued_aovs, queue, _) = sums(&ctx, &scene, KernelChoice::ForScene, &[spp]);
     if queue.is_none() {
         // The queue is compiled for lavapipe whose loops run to their end (Mesa 24 and newer).
-        assert!(ctx.loop_limit().expect("probe").is_some(), "{}: the scene's kernel did not walk from the queue", ctx.info.driver_info);
+        assert!(
+            ctx.loop_limit().expect("probe").is_some(),
+            "{}: the scene's kernel did not walk from the queue",
+            ctx.info.driver_info
+        );
         eprintln!("SKIPPED: {} ends loops early, so it has no walk queue", ctx.info.driver_info);
         return;
     }
     let (plain, plain_aovs, general_queue, _) = sums(&ctx, &scene, KernelChoice::General, &[spp]);
     assert!(general_queue.is_none(), "the general kernel walks each lane's rays itself");
     let differing = queued.iter().zip(&plain).filter(|(a, b)| a != b).count();
-    assert_eq!(differing, 0, "{differing} of {} pixels differ between the queue's kernel and the plain one", plain.len());
+    assert_eq!(
+        differing,
+        0,
+        "{differing} of {} pixels differ between the queue's kernel and the plain one",
+        plain.len()
+    );
     assert!(queued_aovs == plain_aovs, "the AOV sums differ between the queue's kernel and the plain one");
     // Passes of 2, then 3, then 2 samples: the pixels resume with either path.
     let (split, split_aovs, _, _) = sums(&ctx, &scene, KernelChoice::ForScene, &[2, 3, spp - 5]);
-    assert!(split == queued && split_aovs == queued_aovs, "the queue's sums depend on how the render is split into passes");
+    assert!(
+        split == queued && split_aovs == queued_aovs,
+        "the queue's sums depend on how the render is split into passes"
+    );
 }
 
 /// The queue's kernel with the subgroup barriers a GPU's lanes need (walk_queue.glsl's
@@ -56,9 +68,20 @@ fn the_walk_queue_with_subgroup_barriers_renders_the_same_sums() {
     let (with_barriers, aovs_with_barriers, queue, _) = sums(&ctx, &scene, KernelChoice::ForScene, &[2, spp - 2]);
     std::env::remove_var(WALK_QUEUE_VAR);
     std::env::remove_var(WORKGROUP_VAR);
-    assert!(queue.is_some_and(|q| q.subgroup_barriers), "the scene's kernel walked from the queue, with barriers: {queue:?}");
+    assert!(
+        queue.is_some_and(|q| q.subgroup_barriers),
+        "the scene's kernel walked from the queue, with barriers: {queue:?}"
+    );
     let (plain, plain_aovs, _, _) = sums(&ctx, &scene, KernelChoice::General, &[spp]);
     let differing = with_barriers.iter().zip(&plain).filter(|(a, b)| a != b).count();
-    assert_eq!(differing, 0, "{differing} of {} pixels differ between the queue's kernel with barriers and the plain one", plain.len());
-    assert!(aovs_with_barriers == plain_aovs, "the AOV sums differ between the queue's kernel with barriers and the plain one");
+    assert_eq!(
+        differing,
+        0,
+        "{differing} of {} pixels differ between the queue's kernel with barriers and the plain one",
+        plain.len()
+    );
+    assert!(
+        aovs_with_barriers == plain_aovs,
+        "the AOV sums differ between the queue's kernel with barriers and the plain one"
+    );
 }

@@ -8,13 +8,18 @@ mod common;
 
 use caustica::render::{AovSet, KernelChoice, Renderer, WalkRecords, WALK_QUEUE_VAR, WALK_RECORDS_VAR};
 use caustica::scene::Scene;
-use common::two_meshes::{rendered_sums, two_meshes_in_a_room};
 use common::gpu_with_storage_limit;
+use common::two_meshes::{rendered_sums, two_meshes_in_a_room};
 
 /// The sums of `scene` with the records read as `records`, the queue as `queue` says (`None`: the
 /// device's choice), on a device whose bindings see `limit` bytes where given; and the windows the
 /// mesh triangles span.
-fn sums(scene: &Scene, records: &str, queue: Option<&str>, limit: Option<u64>) -> (Vec<[u32; 4]>, caustica::render::AovSums, u32) {
+fn sums(
+    scene: &Scene,
+    records: &str,
+    queue: Option<&str>,
+    limit: Option<u64>,
+) -> (Vec<[u32; 4]>, caustica::render::AovSums, u32) {
     let (_lock, ctx) = gpu_with_storage_limit(limit);
     // Read when a renderer is made; the lock keeps other tests of this binary from making one.
     std::env::set_var(WALK_RECORDS_VAR, records);
@@ -27,7 +32,8 @@ fn sums(scene: &Scene, records: &str, queue: Option<&str>, limit: Option<u64>) -
     let mut renderer = made.expect("scene uploads");
     let expected = if records == "storage" { WalkRecords::Storage } else { WalkRecords::Texels };
     assert_eq!(renderer.walk_records, expected, "{WALK_RECORDS_VAR}={records}");
-    let windows = renderer.geometry.split_arrays.iter().find(|(name, _)| *name == "mesh triangles").map_or(1, |&(_, w)| w);
+    let windows =
+        renderer.geometry.split_arrays.iter().find(|(name, _)| *name == "mesh triangles").map_or(1, |&(_, w)| w);
     let (bits, aovs) = rendered_sums(&mut renderer, &[2, 3]);
     (bits, aovs, windows)
 }
@@ -41,8 +47,16 @@ fn records_from_storage_buffers_render_the_sums_of_texels() {
         let (storage, storage_aovs, _) = sums(&scene, "storage", queue, None);
         assert!(texels.iter().any(|p| p[3] != 0), "nothing rendered");
         let differing = storage.iter().zip(&texels).filter(|(a, b)| a != b).count();
-        assert_eq!(differing, 0, "{differing} of {} pixels differ with the records from storage buffers ({WALK_QUEUE_VAR}: {queue:?})", texels.len());
-        assert!(storage_aovs == texel_aovs, "the AOV sums differ with the records from storage buffers ({WALK_QUEUE_VAR}: {queue:?})");
+        assert_eq!(
+            differing,
+            0,
+            "{differing} of {} pixels differ with the records from storage buffers ({WALK_QUEUE_VAR}: {queue:?})",
+            texels.len()
+        );
+        assert!(
+            storage_aovs == texel_aovs,
+            "the AOV sums differ with the records from storage buffers ({WALK_QUEUE_VAR}: {queue:?})"
+        );
     }
 }
 

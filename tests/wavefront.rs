@@ -10,12 +10,16 @@ mod common;
 
 use caustica::render::{KernelChoice, Renderer, WAVEFRONT_VAR};
 use caustica::scene::Scene;
-use common::{gpu, loops_end_early};
 use common::two_meshes::{sums, two_meshes_in_a_room};
+use common::{gpu, loops_end_early};
 
 /// Sums of `scene` with the wavefront (`CAUSTICA_WAVEFRONT=1`, read when a renderer is made; the
 /// lock `gpu()` holds keeps this binary's other tests from making one meanwhile).
-fn wavefront_sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, steps: &[u32]) -> (Vec<[u32; 4]>, caustica::render::AovSums) {
+fn wavefront_sums(
+    ctx: &caustica::gpu::GpuContext,
+    scene: &Scene,
+    steps: &[u32],
+) -> (Vec<[u32; 4]>, caustica::render::AovSums) {
     std::env::set_var(WAVEFRONT_VAR, "1");
     let (bits, aovs, queue, wavefront) = sums(ctx, scene, KernelChoice::ForScene, steps);
     std::env::remove_var(WAVEFRONT_VAR);
@@ -34,7 +38,8 @@ fn the_wavefront_renders_the_megakernels_sums_bit_for_bit() {
     // can fail after the light was sampled, so that a path ends with its shadow ray still to trace.
     let mut cornell = Scene::default_scene();
     (cornell.film.width, cornell.film.height, cornell.film.spp) = (40, 24, 6);
-    let mut materials = Scene::load(std::path::Path::new("scenes/materials.toml")).expect("scenes/materials.toml loads");
+    let mut materials =
+        Scene::load(std::path::Path::new("scenes/materials.toml")).expect("scenes/materials.toml loads");
     (materials.film.width, materials.film.height, materials.film.spp) = (48, 32, 6);
     for scene in [two_meshes_in_a_room(), cornell, materials] {
         let spp = scene.film.spp;
@@ -43,7 +48,13 @@ fn the_wavefront_renders_the_megakernels_sums_bit_for_bit() {
         // Passes of 2, then 3, then the rest: a pixel's next pass starts from the sums it holds.
         let (wave, wave_aovs) = wavefront_sums(&ctx, &scene, &[2, 3, spp - 5]);
         let differing = wave.iter().zip(&mega).filter(|(a, b)| a != b).count();
-        assert_eq!(differing, 0, "{}: {differing} of {} pixels differ between the wavefront and the megakernel", scene.name, mega.len());
+        assert_eq!(
+            differing,
+            0,
+            "{}: {differing} of {} pixels differ between the wavefront and the megakernel",
+            scene.name,
+            mega.len()
+        );
         assert!(wave_aovs == mega_aovs, "{}: the AOV sums differ between the wavefront and the megakernel", scene.name);
     }
 }
@@ -66,7 +77,8 @@ fn the_wavefront_renders_in_bands_as_in_one_dispatch() {
     banded.set_dispatch_target(1e-9);
     banded.render(scene.film.spp, |_| {}).expect("render succeeds");
     assert!(whole.runs_wavefront() && banded.runs_wavefront());
-    let bits = |r: &Renderer| r.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+    let bits =
+        |r: &Renderer| r.accumulation().expect("readback").iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
     let (a, b) = (bits(&whole), bits(&banded));
     assert!(a.iter().all(|p| f32::from_bits(p[3]) == 3.0), "every pixel holds its 3 samples");
     let differing = a.iter().zip(&b).filter(|(x, y)| x != y).count();

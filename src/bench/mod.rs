@@ -15,7 +15,9 @@ pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcom
 use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic};
 use crate::process_time::cpu_seconds;
-use crate::render::{AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, WalkRecords, Workgroup};
+use crate::render::{
+    AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, WalkRecords, Workgroup,
+};
 use crate::scene::Scene;
 use anyhow::Result;
 use serde_json::{json, Value};

@@ -42,7 +42,12 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         WalkRecords::Storage => "; nodes and triangles from storage buffers",
     };
     let wavefront = if m.wavefront { "; the wavefront's three kernels (CAUSTICA_WAVEFRONT)" } else { "" };
-    println!("kernel:       {kernel}: {}; workgroups {}, rows {}{tiles}{records}{walks}{wavefront}", m.features.names().join(", "), m.workgroup.label(), m.group_order.label());
+    println!(
+        "kernel:       {kernel}: {}; workgroups {}, rows {}{tiles}{records}{walks}{wavefront}",
+        m.features.names().join(", "),
+        m.workgroup.label(),
+        m.group_order.label()
+    );
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.
         let figures: Vec<String> = m.kernel_statistics.iter().map(|s| format!("{} {}", s.name, s.value)).collect();
@@ -50,7 +55,9 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
     }
     print_geometry(&m.geometry);
     println!("setup:        {:.3} s (load excluded: BVH, upload, kernel compile)", m.setup_seconds);
-    let shown = |value: Option<f64>, scale: f64, digits: usize| value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale));
+    let shown = |value: Option<f64>, scale: f64, digits: usize| {
+        value.map_or("none measured".to_owned(), |v| format!("{:.digits$}", v / scale))
+    };
     println!("render:       {:.3} s", m.seconds);
     if let Some(gpu) = m.gpu_seconds {
         // The device's own timestamps around each dispatch: no submission or fence costs.
@@ -85,8 +92,17 @@ fn print_geometry(g: &GeometryReport) {
     if let Some(t) = &a.top {
         println!("top level:    {} nodes, depth {}, SAH cost {:.2}", t.nodes, t.max_depth, t.sah_cost);
     }
-    let per_triangle = if a.mesh_triangles > 0 { format!(", {:.1} B/triangle", a.bytes_per_triangle(g.geometry_bytes)) } else { String::new() };
-    println!("GPU memory:   {:.1} MiB geometry + BVH{per_triangle}, {:.1} MiB textures, {:.1} MiB in all", mib(g.geometry_bytes), mib(g.texture_bytes), mib(g.gpu_bytes));
+    let per_triangle = if a.mesh_triangles > 0 {
+        format!(", {:.1} B/triangle", a.bytes_per_triangle(g.geometry_bytes))
+    } else {
+        String::new()
+    };
+    println!(
+        "GPU memory:   {:.1} MiB geometry + BVH{per_triangle}, {:.1} MiB textures, {:.1} MiB in all",
+        mib(g.geometry_bytes),
+        mib(g.texture_bytes),
+        mib(g.gpu_bytes)
+    );
     if !g.split_arrays.is_empty() {
         let split: Vec<String> = g.split_arrays.iter().map(|(name, windows)| format!("{name} x{windows}")).collect();
         println!("split:        {} (larger than one storage binding of this device)", split.join(", "));
@@ -148,7 +164,9 @@ pub fn print_left_out(outcome: &SuiteOutcome) {
 /// `bench --suite --json`: one document with the device and driver, a row per scene (the keys of
 /// `bench SCENE --json`, less the device's), and the scenes skipped or failed with the reason.
 pub fn suite_json(outcome: &SuiteOutcome, device: &DeviceInfo) -> Value {
-    let reasons = |list: &[(String, String)], key: &str| -> Vec<Value> { list.iter().map(|(name, why)| json!({ "scene": name, key: why })).collect() };
+    let reasons = |list: &[(String, String)], key: &str| -> Vec<Value> {
+        list.iter().map(|(name, why)| json!({ "scene": name, key: why })).collect()
+    };
     let mut document = device_json(device);
     if let Value::Object(fields) = &mut document {
         fields.insert("rows".into(), outcome.rows.iter().map(Measurement::json).collect());

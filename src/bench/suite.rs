@@ -5,12 +5,12 @@
 //! (`$CAUSTICA_DATA/...` paths) run only when that folder exists; otherwise they are skipped with
 //! the reason, so a clone without the data still gets a table of what it can run.
 
+use super::KernelSetup;
 use super::{measure, Measurement};
 use crate::gpu::GpuContext;
-use super::KernelSetup;
+use crate::input_file::{InputFiles, InputKind};
 use crate::render::AovSet;
 use crate::scene::{check_film, Scene, DEFAULT_SCENE_TOML};
-use crate::input_file::{InputFiles, InputKind};
 use anyhow::{Context as _, Result};
 use std::path::{Path, PathBuf};
 
@@ -33,7 +33,11 @@ pub struct FilmOverrides {
 
 impl FilmOverrides {
     pub fn applied_to(self, size: SuiteSize) -> SuiteSize {
-        SuiteSize { width: self.width.unwrap_or(size.width), height: self.height.unwrap_or(size.height), spp: self.spp.unwrap_or(size.spp) }
+        SuiteSize {
+            width: self.width.unwrap_or(size.width),
+            height: self.height.unwrap_or(size.height),
+            spp: self.spp.unwrap_or(size.spp),
+        }
     }
 }
 
@@ -70,17 +74,28 @@ pub fn default_size(file_name: &str) -> SuiteSize {
 #[derive(Clone, Debug, PartialEq)]
 pub enum SuiteEntry {
     /// `path` is None for the built-in Cornell box.
-    Run { name: String, path: Option<PathBuf>, size: SuiteSize },
-    Skip { name: String, reason: String },
+    Run {
+        name: String,
+        path: Option<PathBuf>,
+        size: SuiteSize,
+    },
+    Skip {
+        name: String,
+        reason: String,
+    },
 }
 
 /// The suite's scenes in the order they run: the built-in Cornell box, then `scenes_dir/*.toml` by
 /// name (`cornell.toml` only if it differs from the built-in copy). Scenes naming
 /// `$CAUSTICA_DATA/` files are skipped when `data_dir` is not a folder.
 pub fn suite_entries(scenes_dir: &Path, data_dir: &Path) -> Result<Vec<SuiteEntry>> {
-    let mut entries = vec![SuiteEntry::Run { name: BUILT_IN.to_owned(), path: None, size: default_size("cornell.toml") }];
+    let mut entries =
+        vec![SuiteEntry::Run { name: BUILT_IN.to_owned(), path: None, size: default_size("cornell.toml") }];
     if !scenes_dir.is_dir() {
-        let reason = format!("the scenes folder {} does not exist (run from the repository, or give --scenes DIR)", scenes_dir.display());
+        let reason = format!(
+            "the scenes folder {} does not exist (run from the repository, or give --scenes DIR)",
+            scenes_dir.display()
+        );
         entries.push(SuiteEntry::Skip { name: format!("{}/*.toml", scenes_dir.display()), reason });
         return Ok(entries);
     }
@@ -101,7 +116,8 @@ pub fn suite_entries(scenes_dir: &Path, data_dir: &Path) -> Result<Vec<SuiteEntr
         // The test of the command line decides the same way (tests/cli.rs): the shared data is
         // named only through this prefix.
         if data_missing && text.contains("$CAUSTICA_DATA/") {
-            let reason = format!("needs the shared data folder, and {} is not one (set CAUSTICA_DATA)", data_dir.display());
+            let reason =
+                format!("needs the shared data folder, and {} is not one (set CAUSTICA_DATA)", data_dir.display());
             entries.push(SuiteEntry::Skip { name, reason });
             continue;
         }
@@ -191,7 +207,11 @@ mod tests {
         std::fs::write(scenes.join("notes.txt"), "not a scene").unwrap();
 
         let without = suite_entries(&scenes, &data).unwrap();
-        assert_eq!(names(&without), [(BUILT_IN, true), ("a_shared.toml", false), ("b_local.toml", true)], "the built-in box once, files by name");
+        assert_eq!(
+            names(&without),
+            [(BUILT_IN, true), ("a_shared.toml", false), ("b_local.toml", true)],
+            "the built-in box once, files by name"
+        );
         let SuiteEntry::Skip { reason, .. } = &without[1] else { unreachable!() };
         assert!(reason.contains("shared data") && reason.contains(&data.display().to_string()), "{reason}");
 

@@ -9,10 +9,7 @@ pub struct Aabb {
 
 impl Aabb {
     /// The identity of `union` and `grow`: contains nothing, so growing it by a point gives that point.
-    pub const EMPTY: Aabb = Aabb {
-        min: Vec3::INFINITY,
-        max: Vec3::NEG_INFINITY,
-    };
+    pub const EMPTY: Aabb = Aabb { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
 
     pub fn new(min: Vec3, max: Vec3) -> Aabb {
         Aabb { min, max }
@@ -24,10 +21,7 @@ impl Aabb {
     }
 
     pub fn union(&self, o: &Aabb) -> Aabb {
-        Aabb {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
 
     /// Edge lengths; negative on an empty box.

@@ -29,27 +29,19 @@ impl Binning {
                 0.0
             }
         }));
-        Binning {
-            min: centroids.lo,
-            scale,
-            last: Vec3A::splat((bin_count - 1) as f32),
-        }
+        Binning { min: centroids.lo, scale, last: Vec3A::splat((bin_count - 1) as f32) }
     }
 
     /// Clamping in SIMD first leaves the conversions nothing to saturate. `max` comes first and
     /// returns its operand 0 for a NaN lane, so even non-finite centroids land in a valid bin.
     fn bins(&self, centroid2: Vec3A) -> [usize; 3] {
-        let f = ((centroid2 - self.min) * self.scale)
-            .max(Vec3A::ZERO)
-            .min(self.last);
+        let f = ((centroid2 - self.min) * self.scale).max(Vec3A::ZERO).min(self.last);
         std::array::from_fn(|axis| f[axis] as u32 as usize)
     }
 
     /// `bins(centroid2)[axis]`, bit for bit: the partition must agree with the bins it was planned on.
     pub fn bin(&self, centroid2: Vec3A, axis: usize) -> usize {
-        let f = ((centroid2[axis] - self.min[axis]) * self.scale[axis])
-            .max(0.0)
-            .min(self.last[axis]);
+        let f = ((centroid2[axis] - self.min[axis]) * self.scale[axis]).max(0.0).min(self.last[axis]);
         f as u32 as usize
     }
 }
@@ -65,10 +57,7 @@ pub(super) struct Bins {
 
 impl Bins {
     pub fn new() -> Bins {
-        Bins {
-            boxes: [[BoxA::EMPTY; BINS]; 3],
-            counts: [[0; BINS]; 3],
-        }
+        Bins { boxes: [[BoxA::EMPTY; BINS]; 3], counts: [[0; BINS]; 3] }
     }
 
     fn reset(&mut self, bin_count: usize) {
@@ -163,9 +152,6 @@ pub(super) fn best_split(prims: &[BoxA], centroids: &BoxA, bins: &mut Bins) -> O
         binning,
         last_left_bin,
         cost,
-        bounds: [
-            side(&boxes[..=last_left_bin]),
-            side(&boxes[last_left_bin + 1..]),
-        ],
+        bounds: [side(&boxes[..=last_left_bin]), side(&boxes[last_left_bin + 1..])],
     })
 }

@@ -12,10 +12,7 @@ pub(super) struct BoxA {
 
 impl BoxA {
     /// The identity of `union` and `grow`, like `Aabb::EMPTY`.
-    pub const EMPTY: BoxA = BoxA {
-        lo: Vec3A::INFINITY,
-        hi: Vec3A::NEG_INFINITY,
-    };
+    pub const EMPTY: BoxA = BoxA { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
 
     pub fn grow(&mut self, p: Vec3A) {
         self.lo = self.lo.min(p);
@@ -23,10 +20,7 @@ impl BoxA {
     }
 
     pub fn union(&self, o: &BoxA) -> BoxA {
-        BoxA {
-            lo: self.lo.min(o.lo),
-            hi: self.hi.max(o.hi),
-        }
+        BoxA { lo: self.lo.min(o.lo), hi: self.hi.max(o.hi) }
     }
 
     /// Twice the centroid: binning only needs positions relative to each other, and this saves the halving.
@@ -43,10 +37,7 @@ impl BoxA {
 
 impl From<&Aabb> for BoxA {
     fn from(b: &Aabb) -> BoxA {
-        BoxA {
-            lo: b.min.into(),
-            hi: b.max.into(),
-        }
+        BoxA { lo: b.min.into(), hi: b.max.into() }
     }
 }
 

@@ -9,21 +9,13 @@ pub(super) enum Subtree {
     /// A complete subtree laid out depth-first; interior offsets count from the block's start.
     Block(Vec<BvhNode>),
     /// An interior node (offset not yet set) over two subtrees built in parallel.
-    Split {
-        node: BvhNode,
-        children: Box<(Subtree, Subtree)>,
-        len: usize,
-    },
+    Split { node: BvhNode, children: Box<(Subtree, Subtree)>, len: usize },
 }
 
 impl Subtree {
     pub fn split(node: BvhNode, children: (Subtree, Subtree)) -> Subtree {
         let len = 1 + children.0.len() + children.1.len();
-        Subtree::Split {
-            node,
-            children: Box::new(children),
-            len,
-        }
+        Subtree::Split { node, children: Box::new(children), len }
     }
 
     /// Number of nodes.
@@ -55,15 +47,9 @@ fn write(subtree: &Subtree, out: &mut [BvhNode], base: u32) {
         }
         Subtree::Split { node, children, .. } => {
             let second_child = 1 + children.0.len();
-            out[0] = BvhNode {
-                offset: base + second_child as u32,
-                ..*node
-            };
+            out[0] = BvhNode { offset: base + second_child as u32, ..*node };
             let (left, right) = out[1..].split_at_mut(second_child - 1);
-            join(
-                || write(&children.0, left, base + 1),
-                || write(&children.1, right, base + second_child as u32),
-            );
+            join(|| write(&children.0, left, base + 1), || write(&children.1, right, base + second_child as u32));
         }
     }
 }
@@ -91,14 +77,8 @@ mod tests {
         let tree = Subtree::split(interior(1, 0), (inner, Subtree::Block(vec![leaf(3, 2)])));
         let nodes = flatten(&tree);
         assert_eq!(nodes.len(), 5);
-        assert_eq!(
-            (nodes[0].is_leaf(), nodes[0].axis(), nodes[0].offset),
-            (false, 1, 4)
-        );
-        assert_eq!(
-            (nodes[1].is_leaf(), nodes[1].axis(), nodes[1].offset),
-            (false, 2, 3)
-        );
+        assert_eq!((nodes[0].is_leaf(), nodes[0].axis(), nodes[0].offset), (false, 1, 4));
+        assert_eq!((nodes[1].is_leaf(), nodes[1].axis(), nodes[1].offset), (false, 2, 3));
         assert_eq!((nodes[2].offset, nodes[2].prim_count()), (0, 2));
         assert_eq!((nodes[3].offset, nodes[3].prim_count()), (2, 1));
         assert_eq!((nodes[4].offset, nodes[4].prim_count()), (3, 2));

@@ -78,21 +78,11 @@ fn build_with_depth(prim_bounds: &[Aabb], max_depth: usize) -> Bvh {
 fn build_with_limits(prim_bounds: &[Aabb], max_depth: usize, max_leaf_size: usize) -> Bvh {
     debug_assert!((1..=MAX_LEAF_SIZE).contains(&max_leaf_size));
     if prim_bounds.is_empty() {
-        return Bvh {
-            nodes: vec![BvhNode::EMPTY_ROOT],
-            prim_order: Vec::new(),
-        };
+        return Bvh { nodes: vec![BvhNode::EMPTY_ROOT], prim_order: Vec::new() };
     }
-    assert!(
-        u32::try_from(prim_bounds.len()).is_ok(),
-        "{} primitives exceed u32 indices",
-        prim_bounds.len()
-    );
+    assert!(u32::try_from(prim_bounds.len()).is_ok(), "{} primitives exceed u32 indices", prim_bounds.len());
     let mut prims: Vec<BoxA> = prim_bounds.par_iter().map(BoxA::from).collect();
     let mut prim_order: Vec<u32> = (0..prim_bounds.len() as u32).collect();
     let tree = sah::build_tree(&mut prims, &mut prim_order, max_depth, max_leaf_size);
-    Bvh {
-        nodes: flatten::flatten(&tree),
-        prim_order,
-    }
+    Bvh { nodes: flatten::flatten(&tree), prim_order }
 }

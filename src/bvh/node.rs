@@ -19,31 +19,16 @@ impl BvhNode {
     /// Root of a BVH over no primitives: an inverted box with finite, huge planes. The sign-ordered
     /// slab test in `ray_box` (the CPU traversal's) gets entry > exit on every axis for any finite
     /// ray, so traversal never looks at its (meaningless) interior encoding.
-    pub const EMPTY_ROOT: BvhNode = BvhNode {
-        min: [f32::MAX; 3],
-        offset: 0,
-        max: [-f32::MAX; 3],
-        meta: 0,
-    };
+    pub const EMPTY_ROOT: BvhNode = BvhNode { min: [f32::MAX; 3], offset: 0, max: [-f32::MAX; 3], meta: 0 };
 
     pub fn leaf(bounds: &Aabb, first_prim: u32, prim_count: u32) -> BvhNode {
         debug_assert!(prim_count > 0 && prim_count < 1 << 30);
-        BvhNode {
-            min: bounds.min.into(),
-            offset: first_prim,
-            max: bounds.max.into(),
-            meta: prim_count << 2,
-        }
+        BvhNode { min: bounds.min.into(), offset: first_prim, max: bounds.max.into(), meta: prim_count << 2 }
     }
 
     pub fn interior(bounds: &Aabb, axis: usize, second_child: u32) -> BvhNode {
         debug_assert!(axis < 3);
-        BvhNode {
-            min: bounds.min.into(),
-            offset: second_child,
-            max: bounds.max.into(),
-            meta: axis as u32,
-        }
+        BvhNode { min: bounds.min.into(), offset: second_child, max: bounds.max.into(), meta: axis as u32 }
     }
 
     pub fn prim_count(&self) -> u32 {
@@ -83,15 +68,9 @@ mod tests {
     fn meta_packs_count_and_axis() {
         let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
         let leaf = BvhNode::leaf(&b, 7, 5);
-        assert_eq!(
-            (leaf.is_leaf(), leaf.prim_count(), leaf.offset, leaf.meta),
-            (true, 5, 7, 20)
-        );
+        assert_eq!((leaf.is_leaf(), leaf.prim_count(), leaf.offset, leaf.meta), (true, 5, 7, 20));
         let inner = BvhNode::interior(&b, 2, 9);
-        assert_eq!(
-            (inner.is_leaf(), inner.axis(), inner.offset, inner.meta),
-            (false, 2, 9, 2)
-        );
+        assert_eq!((inner.is_leaf(), inner.axis(), inner.offset, inner.meta), (false, 2, 9, 2));
         assert_eq!(inner.bounds(), b);
         let bytes: &[u8] = bytemuck::bytes_of(&leaf);
         assert_eq!(&bytes[12..16], &7u32.to_ne_bytes());

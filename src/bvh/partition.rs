@@ -12,10 +12,7 @@ pub(super) struct SetBounds {
 
 impl SetBounds {
     pub fn of(prims: &[BoxA]) -> SetBounds {
-        let mut set = SetBounds {
-            bounds: BoxA::EMPTY,
-            centroids: BoxA::EMPTY,
-        };
+        let mut set = SetBounds { bounds: BoxA::EMPTY, centroids: BoxA::EMPTY };
         for p in prims {
             set.bounds = set.bounds.union(p);
             set.centroids.grow(p.centroid2());

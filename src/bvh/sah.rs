@@ -25,14 +25,7 @@ const PARALLEL_THRESHOLD: usize = 8 * 1024;
 pub(super) fn build_tree(prims: &mut [BoxA], indices: &mut [u32], max_depth: usize, max_leaf_size: usize) -> Subtree {
     debug_assert!(ceil_log2(prims.len()) <= max_depth);
     let set = super::blocks::map_merge(prims, SetBounds::of, SetBounds::merge);
-    build_parallel(Range {
-        prims,
-        indices,
-        set,
-        first: 0,
-        levels_left: max_depth,
-        max_leaf_size,
-    })
+    build_parallel(Range { prims, indices, set, first: 0, levels_left: max_depth, max_leaf_size })
 }
 
 /// A range of the primitive arrays being built: `first` is its position in the whole array and
@@ -56,8 +49,7 @@ fn build_parallel(range: Range) -> Subtree {
         return Subtree::Block(nodes);
     }
     let bounds = Aabb::from(&range.set.bounds);
-    let (axis, [left, right]) =
-        split(range, &mut Bins::new()).expect("large sets are always split");
+    let (axis, [left, right]) = split(range, &mut Bins::new()).expect("large sets are always split");
     let children = rayon::join(|| build_parallel(left), || build_parallel(right));
     Subtree::split(BvhNode::interior(&bounds, axis, 0), children)
 }
@@ -81,14 +73,7 @@ fn build_sequential(range: Range, bins: &mut Bins, nodes: &mut Vec<BvhNode>) {
 
 /// Decides between a leaf (None) and a split, and performs the split.
 fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
-    let Range {
-        prims,
-        indices,
-        set,
-        first,
-        levels_left,
-        max_leaf_size,
-    } = range;
+    let Range { prims, indices, set, first, levels_left, max_leaf_size } = range;
     let count = prims.len();
     // A split costs at least TRAVERSAL_COST * A, so it cannot beat a leaf of that many primitives.
     if count <= 1 || (count <= max_leaf_size && count as f32 <= TRAVERSAL_COST) {
@@ -98,30 +83,16 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
     // Median splits halve the count, so a subtree of `count` prims needs ceil(log2(count)) more levels.
     // Once the depth budget is down to that, only median splits keep every leaf within it.
     let sah_allowed = ceil_log2(count) < levels_left;
-    let best = if sah_allowed {
-        binning::best_split(prims, &set.centroids, bins)
-    } else {
-        None
-    };
+    let best = if sah_allowed { binning::best_split(prims, &set.centroids, bins) } else { None };
 
     let area = set.bounds.surface_area();
     let (axis, mid, [left_set, right_set]) = match best {
-        Some(s)
-            if count > max_leaf_size || TRAVERSAL_COST * area + s.cost < area * count as f32 =>
-        {
+        Some(s) if count > max_leaf_size || TRAVERSAL_COST * area + s.cost < area * count as f32 => {
             let (mid, [left_centroids, right_centroids]) =
-                partition::partition(prims, indices, |p| {
-                    s.binning.bin(p.centroid2(), s.axis) <= s.last_left_bin
-                });
+                partition::partition(prims, indices, |p| s.binning.bin(p.centroid2(), s.axis) <= s.last_left_bin);
             let sets = [
-                SetBounds {
-                    bounds: s.bounds[0],
-                    centroids: left_centroids,
-                },
-                SetBounds {
-                    bounds: s.bounds[1],
-                    centroids: right_centroids,
-                },
+                SetBounds { bounds: s.bounds[0], centroids: left_centroids },
+                SetBounds { bounds: s.bounds[1], centroids: right_centroids },
             ];
             (s.axis, mid, sets)
         }
@@ -135,14 +106,7 @@ fn split<'a>(range: Range<'a>, bins: &mut Bins) -> Option<Children<'a>> {
     Some((
         axis,
         [
-            Range {
-                prims: left_prims,
-                indices: left_indices,
-                set: left_set,
-                first,
-                levels_left,
-                max_leaf_size,
-            },
+            Range { prims: left_prims, indices: left_indices, set: left_set, first, levels_left, max_leaf_size },
             Range {
                 prims: right_prims,
                 indices: right_indices,
@@ -182,11 +146,7 @@ mod tests {
             let boxes = random_boxes(&mut rng, count, 0.05);
             let bvh = build(&boxes);
             assert_well_formed(&bvh, &boxes);
-            assert!(
-                bvh.stats().leaves > count / 8,
-                "{count} prims in {} leaves",
-                bvh.stats().leaves
-            );
+            assert!(bvh.stats().leaves > count / 8, "{count} prims in {} leaves", bvh.stats().leaves);
         }
     }
 
@@ -196,14 +156,7 @@ mod tests {
         let bvh = build(&[b]);
         assert_eq!(bvh.prim_order, vec![0]);
         assert_eq!(bvh.nodes.len(), 1);
-        assert_eq!(
-            (
-                bvh.nodes[0].prim_count(),
-                bvh.nodes[0].offset,
-                bvh.nodes[0].bounds()
-            ),
-            (1, 0, b)
-        );
+        assert_eq!((bvh.nodes[0].prim_count(), bvh.nodes[0].offset, bvh.nodes[0].bounds()), (1, 0, b));
     }
 
     #[test]
@@ -213,10 +166,7 @@ mod tests {
         assert_well_formed(&bvh, &boxes);
         let stats = bvh.stats();
         // Median splits halve 10000 until a set fits a leaf: 11 levels, 2^11 leaves of 4 or 5.
-        assert_eq!(
-            (stats.max_depth, stats.leaves, stats.max_leaf_size),
-            (11, 2048, 5)
-        );
+        assert_eq!((stats.max_depth, stats.leaves, stats.max_leaf_size), (11, 2048, 5));
     }
 
     #[test]
@@ -257,10 +207,7 @@ mod tests {
         order.sort_unstable();
         assert!(order.iter().copied().eq(0..boxes.len() as u32));
         let stats = bvh.stats();
-        assert!(
-            stats.max_depth <= MAX_DEPTH && stats.max_leaf_size <= 8,
-            "{stats:?}"
-        );
+        assert!(stats.max_depth <= MAX_DEPTH && stats.max_leaf_size <= 8, "{stats:?}");
     }
 
     #[test]
@@ -268,10 +215,7 @@ mod tests {
         let mut rng = Rng::new(9);
         let boxes = random_boxes(&mut rng, 50_000, 0.02);
         let build_on = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| build(&boxes))
         };
         let single = build_on(1);

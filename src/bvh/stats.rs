@@ -17,13 +17,8 @@ pub struct BuildStats {
 impl Bvh {
     /// Walks the tree; an empty BVH reports one node, no leaves and zero cost.
     pub fn stats(&self) -> BuildStats {
-        let mut stats = BuildStats {
-            nodes: self.nodes.len(),
-            leaves: 0,
-            max_depth: 0,
-            sah_cost: 0.0,
-            max_leaf_size: 0,
-        };
+        let mut stats =
+            BuildStats { nodes: self.nodes.len(), leaves: 0, max_depth: 0, sah_cost: 0.0, max_leaf_size: 0 };
         if self.is_empty() {
             return stats;
         }
@@ -59,15 +54,7 @@ mod tests {
         let unit_box_at = |x: f32| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0));
         let boxes = [0.0, 100.0, 200.0, 300.0].map(unit_box_at);
         let stats = build(&boxes).stats();
-        assert_eq!(
-            (
-                stats.nodes,
-                stats.leaves,
-                stats.max_depth,
-                stats.max_leaf_size
-            ),
-            (7, 4, 2, 1)
-        );
+        assert_eq!((stats.nodes, stats.leaves, stats.max_depth, stats.max_leaf_size), (7, 4, 2, 1));
         // root 1 + two interior nodes over a pair, each of area 2 * (101 + 1 + 101) = 406, + four
         // leaves of one unit box (area 6), over the root's area 2 * (301 + 1 + 301) = 1206
         assert!(
@@ -79,20 +66,9 @@ mod tests {
 
     #[test]
     fn overlapping_pair_stays_one_leaf() {
-        let boxes = [
-            Aabb::new(Vec3::ZERO, Vec3::ONE),
-            Aabb::new(Vec3::splat(0.1), Vec3::splat(0.9)),
-        ];
+        let boxes = [Aabb::new(Vec3::ZERO, Vec3::ONE), Aabb::new(Vec3::splat(0.1), Vec3::splat(0.9))];
         let stats = build(&boxes).stats();
-        assert_eq!(
-            (
-                stats.nodes,
-                stats.leaves,
-                stats.max_depth,
-                stats.max_leaf_size
-            ),
-            (1, 1, 0, 2)
-        );
+        assert_eq!((stats.nodes, stats.leaves, stats.max_depth, stats.max_leaf_size), (1, 1, 0, 2));
         assert_eq!(stats.sah_cost, 2.0);
     }
 
@@ -100,13 +76,7 @@ mod tests {
     fn empty_bvh_stats() {
         let stats = build(&[]).stats();
         assert_eq!(
-            (
-                stats.nodes,
-                stats.leaves,
-                stats.max_depth,
-                stats.sah_cost,
-                stats.max_leaf_size
-            ),
+            (stats.nodes, stats.leaves, stats.max_depth, stats.sah_cost, stats.max_leaf_size),
             (1, 0, 0, 0.0, 0)
         );
     }

@@ -96,9 +96,7 @@ impl Sphere {
             return None;
         }
         let root = discriminant.sqrt();
-        [(-half_b - root) / a, (-half_b + root) / a]
-            .into_iter()
-            .find(|&t| t > t_min && t < t_max)
+        [(-half_b - root) / a, (-half_b + root) / a].into_iter().find(|&t| t > t_min && t < t_max)
     }
 }
 
@@ -113,12 +111,7 @@ pub fn random_triangles(rng: &mut Rng, count: usize) -> Vec<Triangle> {
 }
 
 pub fn random_spheres(rng: &mut Rng, count: usize) -> Vec<Sphere> {
-    (0..count)
-        .map(|_| Sphere {
-            center: rng.vec3(0.0, 1.0),
-            radius: rng.range(0.005, 0.05),
-        })
-        .collect()
+    (0..count).map(|_| Sphere { center: rng.vec3(0.0, 1.0), radius: rng.range(0.005, 0.05) }).collect()
 }
 
 /// Rays from inside and around the unit cube; every eighth runs along a coordinate axis
@@ -145,64 +138,35 @@ pub fn random_rays(rng: &mut Rng, count: usize) -> Vec<Ray> {
 pub fn assert_well_formed(bvh: &Bvh, prim_bounds: &[Aabb]) {
     let mut seen = vec![false; prim_bounds.len()];
     for &p in &bvh.prim_order {
-        assert!(
-            !std::mem::replace(&mut seen[p as usize], true),
-            "primitive {p} appears twice"
-        );
+        assert!(!std::mem::replace(&mut seen[p as usize], true), "primitive {p} appears twice");
     }
-    assert_eq!(
-        bvh.prim_order.len(),
-        prim_bounds.len(),
-        "prim_order is not a permutation"
-    );
+    assert_eq!(bvh.prim_order.len(), prim_bounds.len(), "prim_order is not a permutation");
 
     let mut next_prim = 0;
     let end = check_subtree(bvh, prim_bounds, 0, 0, &mut next_prim);
     assert_eq!(end, bvh.nodes.len(), "nodes unreachable from the root");
-    assert_eq!(
-        next_prim,
-        prim_bounds.len(),
-        "leaves do not cover all primitives"
-    );
+    assert_eq!(next_prim, prim_bounds.len(), "leaves do not cover all primitives");
 }
 
 /// Returns the index one past the subtree rooted at `index`.
-fn check_subtree(
-    bvh: &Bvh,
-    prim_bounds: &[Aabb],
-    index: usize,
-    depth: usize,
-    next_prim: &mut usize,
-) -> usize {
+fn check_subtree(bvh: &Bvh, prim_bounds: &[Aabb], index: usize, depth: usize, next_prim: &mut usize) -> usize {
     assert!(depth <= MAX_DEPTH, "node {index} at depth {depth}");
     let node = &bvh.nodes[index];
     let bounds = node.bounds();
     if node.is_leaf() {
         let (first, count) = (node.offset as usize, node.prim_count() as usize);
         assert!(count <= MAX_LEAF_SIZE, "leaf {index} holds {count}");
-        assert_eq!(
-            first, *next_prim,
-            "leaf {index} does not continue leaf order"
-        );
+        assert_eq!(first, *next_prim, "leaf {index} does not continue leaf order");
         *next_prim += count;
         for &p in &bvh.prim_order[first..first + count] {
-            assert!(
-                bounds.contains(&prim_bounds[p as usize]),
-                "leaf {index} misses primitive {p}"
-            );
+            assert!(bounds.contains(&prim_bounds[p as usize]), "leaf {index} misses primitive {p}");
         }
         return index + 1;
     }
     let second = check_subtree(bvh, prim_bounds, index + 1, depth + 1, next_prim);
-    assert_eq!(
-        node.offset as usize, second,
-        "node {index}: second child is not after the first subtree"
-    );
+    assert_eq!(node.offset as usize, second, "node {index}: second child is not after the first subtree");
     for child in [index + 1, second] {
-        assert!(
-            bounds.contains(&bvh.nodes[child].bounds()),
-            "node {index} misses child {child}"
-        );
+        assert!(bounds.contains(&bvh.nodes[child].bounds()), "node {index} misses child {child}");
     }
     check_subtree(bvh, prim_bounds, second, depth + 1, next_prim)
 }

@@ -24,14 +24,7 @@ const EXIT_SLACK: f32 = {
 /// Ray/box slab test over (t_min, t_max). Entry and exit planes are chosen by the direction's sign,
 /// not by min/max of the two plane hits, so an inverted box (like `BvhNode::EMPTY_ROOT`) always has
 /// entry > exit and is never hit. Zero direction components work through the infinite inverse.
-pub fn ray_box(
-    bmin: Vec3,
-    bmax: Vec3,
-    origin: Vec3,
-    inv_dir: Vec3,
-    t_min: f32,
-    t_max: f32,
-) -> bool {
+pub fn ray_box(bmin: Vec3, bmax: Vec3, origin: Vec3, inv_dir: Vec3, t_min: f32, t_max: f32) -> bool {
     let negative = inv_dir.cmplt(Vec3::ZERO);
     let near = (Vec3::select(negative, bmax, bmin) - origin) * inv_dir;
     let far = (Vec3::select(negative, bmin, bmax) - origin) * inv_dir;
@@ -100,25 +93,15 @@ fn walk(
     let mut index = 0u32;
     loop {
         let node = &bvh.nodes[index as usize];
-        if ray_box(
-            node.min.into(),
-            node.max.into(),
-            ray.origin,
-            inv_dir,
-            t_min,
-            t_max,
-        ) {
+        if ray_box(node.min.into(), node.max.into(), ray.origin, inv_dir, t_min, t_max) {
             if node.is_leaf() {
                 match visit_leaf(node.offset..node.offset + node.prim_count(), t_max) {
                     ControlFlow::Continue(t) => t_max = t,
                     ControlFlow::Break(()) => return,
                 }
             } else {
-                let (near, far) = if ray.dir[node.axis()] < 0.0 {
-                    (node.offset, index + 1)
-                } else {
-                    (index + 1, node.offset)
-                };
+                let (near, far) =
+                    if ray.dir[node.axis()] < 0.0 { (node.offset, index + 1) } else { (index + 1, node.offset) };
                 stack[stack_len] = far;
                 stack_len += 1;
                 index = near;
@@ -135,9 +118,7 @@ fn walk(
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_scenes::{
-        random_rays, random_spheres, random_triangles, Rng, Sphere, Triangle,
-    };
+    use super::super::test_scenes::{random_rays, random_spheres, random_triangles, Rng, Sphere, Triangle};
     use super::super::{build, Aabb, BvhNode};
     use super::*;
 
@@ -170,9 +151,8 @@ mod tests {
         let bvh = build(prim_bounds);
         let (mut hits, mut misses) = (0, 0);
         for (r, ray) in rays.iter().enumerate() {
-            let in_leaf_order = |prim: u32, ray: &Ray, t_max: f32| {
-                intersect(bvh.prim_order[prim as usize] as usize, ray, t_max)
-            };
+            let in_leaf_order =
+                |prim: u32, ray: &Ray, t_max: f32| intersect(bvh.prim_order[prim as usize] as usize, ray, t_max);
             let expected = brute_closest(ray, prim_bounds.len(), &intersect);
             let got = closest_hit(&bvh, ray, T_MIN, f32::INFINITY, in_leaf_order)
                 .map(|(t, prim)| (t, bvh.prim_order[prim as usize]));
@@ -188,11 +168,7 @@ mod tests {
 
             let shadow_t_max = rng.range(0.05, 1.5);
             let blocked = (0..prim_bounds.len()).any(|i| intersect(i, ray, shadow_t_max).is_some());
-            assert_eq!(
-                any_hit(&bvh, ray, T_MIN, shadow_t_max, in_leaf_order),
-                blocked,
-                "ray {r}: any_hit"
-            );
+            assert_eq!(any_hit(&bvh, ray, T_MIN, shadow_t_max, in_leaf_order), blocked, "ray {r}: any_hit");
         }
         (hits, misses)
     }
@@ -215,9 +191,8 @@ mod tests {
         let spheres: Vec<Sphere> = random_spheres(&mut rng, 3000);
         let bounds: Vec<Aabb> = spheres.iter().map(Sphere::bounds).collect();
         let rays = random_rays(&mut rng, 2000);
-        let (hits, misses) = agrees_with_brute_force(&bounds, &rays, &mut rng, |i, ray, t_max| {
-            spheres[i].intersect(ray, T_MIN, t_max)
-        });
+        let (hits, misses) =
+            agrees_with_brute_force(&bounds, &rays, &mut rng, |i, ray, t_max| spheres[i].intersect(ray, T_MIN, t_max));
         assert!(hits > 400 && misses > 100, "hits {hits}, misses {misses}");
     }
 
@@ -228,80 +203,40 @@ mod tests {
         let mut rng = Rng::new(3);
         let mut rays = random_rays(&mut rng, 500);
         // Origins far out and on the root's planes, directions with zero and negative-zero components.
-        rays.push(Ray {
-            origin: Vec3::splat(1e30),
-            dir: Vec3::new(-1.0, 0.0, -0.0),
-        });
-        rays.push(Ray {
-            origin: Vec3::splat(f32::MAX),
-            dir: Vec3::new(0.0, -0.0, 1.0),
-        });
-        rays.push(Ray {
-            origin: Vec3::splat(-f32::MAX),
-            dir: Vec3::new(-0.0, 0.0, -1.0),
-        });
+        rays.push(Ray { origin: Vec3::splat(1e30), dir: Vec3::new(-1.0, 0.0, -0.0) });
+        rays.push(Ray { origin: Vec3::splat(f32::MAX), dir: Vec3::new(0.0, -0.0, 1.0) });
+        rays.push(Ray { origin: Vec3::splat(-f32::MAX), dir: Vec3::new(-0.0, 0.0, -1.0) });
         for ray in &rays {
             let root = &bvh.nodes[0];
             assert!(
-                !ray_box(
-                    root.min.into(),
-                    root.max.into(),
-                    ray.origin,
-                    ray.dir.recip(),
-                    0.0,
-                    f32::INFINITY
-                ),
+                !ray_box(root.min.into(), root.max.into(), ray.origin, ray.dir.recip(), 0.0, f32::INFINITY),
                 "{ray:?}"
             );
-            assert_eq!(
-                closest_hit(&bvh, ray, 0.0, f32::INFINITY, |_, _, _| panic!(
-                    "intersect called"
-                )),
-                None
-            );
-            assert!(!any_hit(&bvh, ray, 0.0, f32::INFINITY, |_, _, _| panic!(
-                "intersect called"
-            )));
+            assert_eq!(closest_hit(&bvh, ray, 0.0, f32::INFINITY, |_, _, _| panic!("intersect called")), None);
+            assert!(!any_hit(&bvh, ray, 0.0, f32::INFINITY, |_, _, _| panic!("intersect called")));
         }
     }
 
     #[test]
     fn ray_box_slabs() {
         let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
-        let hits =
-            |origin: Vec3, dir: Vec3, t_max: f32| ray_box(lo, hi, origin, dir.recip(), 0.0, t_max);
+        let hits = |origin: Vec3, dir: Vec3, t_max: f32| ray_box(lo, hi, origin, dir.recip(), 0.0, t_max);
         assert!(hits(Vec3::new(-1.0, 0.5, 0.5), Vec3::X, f32::INFINITY));
         assert!(hits(Vec3::new(2.0, 0.5, 0.5), -Vec3::X, f32::INFINITY));
-        assert!(
-            !hits(Vec3::new(-1.0, 0.5, 0.5), -Vec3::X, f32::INFINITY),
-            "box behind the ray"
-        );
-        assert!(
-            !hits(Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 0.5),
-            "box beyond t_max"
-        );
-        assert!(
-            !hits(Vec3::new(-1.0, 1.5, 0.5), Vec3::X, f32::INFINITY),
-            "parallel outside the y slab"
-        );
-        assert!(
-            hits(Vec3::splat(0.5), Vec3::new(0.3, -0.2, 0.9), f32::INFINITY),
-            "origin inside"
-        );
+        assert!(!hits(Vec3::new(-1.0, 0.5, 0.5), -Vec3::X, f32::INFINITY), "box behind the ray");
+        assert!(!hits(Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 0.5), "box beyond t_max");
+        assert!(!hits(Vec3::new(-1.0, 1.5, 0.5), Vec3::X, f32::INFINITY), "parallel outside the y slab");
+        assert!(hits(Vec3::splat(0.5), Vec3::new(0.3, -0.2, 0.9), f32::INFINITY), "origin inside");
     }
 
     #[test]
     fn nearer_child_first_culls_the_farther_box() {
         // Two pairs of boxes far apart along x (one leaf each); a ray along -x must test the right
         // leaf first and skip the left one.
-        let boxes = [0.0, 1.0, 40.0, 41.0]
-            .map(|x| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0)));
+        let boxes = [0.0, 1.0, 40.0, 41.0].map(|x| Aabb::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0)));
         let bvh = build(&boxes);
         assert_eq!((bvh.nodes.len(), bvh.nodes[0].axis()), (3, 0));
-        let ray = Ray {
-            origin: Vec3::new(50.0, 0.5, 0.5),
-            dir: -Vec3::X,
-        };
+        let ray = Ray { origin: Vec3::new(50.0, 0.5, 0.5), dir: -Vec3::X };
         let mut tested = Vec::new();
         let hit = closest_hit(&bvh, &ray, 0.0, f32::INFINITY, |prim, ray, t_max| {
             let original = bvh.prim_order[prim as usize];
@@ -311,9 +246,6 @@ mod tests {
         });
         tested.sort_unstable();
         assert_eq!(tested, vec![2, 3]);
-        assert_eq!(
-            hit.map(|(t, prim)| (t, bvh.prim_order[prim as usize])),
-            Some((8.0, 3))
-        );
+        assert_eq!(hit.map(|(t, prim)| (t, bvh.prim_order[prim as usize])), Some((8.0, 3)));
     }
 }

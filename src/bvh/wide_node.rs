@@ -70,7 +70,8 @@ impl WideChild {
 
 impl WideNode {
     /// A node of no children: the root of an empty BVH, which no ray enters.
-    pub const EMPTY: WideNode = WideNode { origin: [0.0; 3], exponents: 0, quantized: [0; 6], kinds: u32::MAX, unused: 0, links: [0; WIDTH] };
+    pub const EMPTY: WideNode =
+        WideNode { origin: [0.0; 3], exponents: 0, quantized: [0; 6], kinds: u32::MAX, unused: 0, links: [0; WIDTH] };
 
     /// Packs up to [`WIDTH`] children, quantizing their boxes against their union; the slots
     /// after them stay empty.
@@ -121,7 +122,8 @@ impl WideNode {
     /// Child `k`'s box as stored: the origin plus a whole number of quanta per bound, rounded once
     /// to f32 (the kernel tests these planes, `wide_child_entries` in shaders/bvh.glsl).
     pub fn child_bounds(&self, k: usize) -> Aabb {
-        let decode = |word: u32, axis: usize| self.origin[axis] + byte(word, k) as f32 * self.quantum_along(axis) as f32;
+        let decode =
+            |word: u32, axis: usize| self.origin[axis] + byte(word, k) as f32 * self.quantum_along(axis) as f32;
         let q = &self.quantized;
         Aabb::new(
             glam::Vec3::new(decode(q[0], 0), decode(q[2], 1), decode(q[4], 2)),
@@ -211,7 +213,8 @@ struct Plan {
 }
 
 impl Plan {
-    const UNSET: Plan = Plan { first: 0, count: 0, cost: [f32::INFINITY; WIDTH + 1], layout: [Layout::Fewer; WIDTH + 1] };
+    const UNSET: Plan =
+        Plan { first: 0, count: 0, cost: [f32::INFINITY; WIDTH + 1], layout: [Layout::Fewer; WIDTH + 1] };
 }
 
 /// Fills `plans` for the subtree at binary node `index`, children before parents.
@@ -234,8 +237,11 @@ fn plan_subtree(nodes: &[BvhNode], index: usize, max_leaf_size: u32, plans: &mut
         (plan.cost[1], plan.layout[1]) = if leaf <= node { (leaf, Layout::Leaf) } else { (node, Layout::Node) };
         for slots in 2..=WIDTH {
             let (cost, k) = opened(&pa, &pb, slots);
-            (plan.cost[slots], plan.layout[slots]) =
-                if plan.cost[slots - 1] <= cost { (plan.cost[slots - 1], Layout::Fewer) } else { (cost, Layout::Opened(k)) };
+            (plan.cost[slots], plan.layout[slots]) = if plan.cost[slots - 1] <= cost {
+                (plan.cost[slots - 1], Layout::Fewer)
+            } else {
+                (cost, Layout::Opened(k))
+            };
         }
     }
     plans[index] = plan;
@@ -243,7 +249,10 @@ fn plan_subtree(nodes: &[BvhNode], index: usize, max_leaf_size: u32, plans: &mut
 
 /// The cheapest split of `slots` between two binary children's plans: (cost, the first's slots).
 fn opened(a: &Plan, b: &Plan, slots: usize) -> (f32, usize) {
-    (1..slots).map(|k| (a.cost[k] + b.cost[slots - k], k)).min_by(|x, y| x.0.total_cmp(&y.0)).expect("two slots or more")
+    (1..slots)
+        .map(|k| (a.cost[k] + b.cost[slots - k], k))
+        .min_by(|x, y| x.0.total_cmp(&y.0))
+        .expect("two slots or more")
 }
 
 /// The binary nodes that become the children of a subtree laid out in `slots`, in order.
@@ -318,7 +327,8 @@ impl WideCost {
                 CHILD_INTERIOR => (self.add_children(wide, node.links[k], bvh, prim_bounds), NODE_COST),
                 count => {
                     let prims = node.links[k] as usize..(node.links[k] + count) as usize;
-                    let exact = bvh.prim_order[prims].iter().fold(Aabb::EMPTY, |b, &p| b.union(&prim_bounds[p as usize]));
+                    let exact =
+                        bvh.prim_order[prims].iter().fold(Aabb::EMPTY, |b, &p| b.union(&prim_bounds[p as usize]));
                     (exact, count as f32)
                 }
             };
@@ -366,7 +376,13 @@ mod tests {
     /// Walks the wide tree below `index`: counts each primitive reached in `seen`, checks that
     /// every decoded child box holds the primitives below it and is at most one quantum (plus
     /// rounding) larger per side, and returns the exact bounds of everything below and the depth.
-    fn check_subtree(wide: &[WideNode], index: u32, bvh: &crate::bvh::Bvh, bounds: &[Aabb], seen: &mut [u32]) -> (Aabb, usize) {
+    fn check_subtree(
+        wide: &[WideNode],
+        index: u32,
+        bvh: &crate::bvh::Bvh,
+        bounds: &[Aabb],
+        seen: &mut [u32],
+    ) -> (Aabb, usize) {
         let node = &wide[index as usize];
         let (mut below, mut depth) = (Aabb::EMPTY, 1);
         for k in 0..WIDTH {
@@ -393,13 +409,19 @@ mod tests {
                 let q = node.quantum_along(a);
                 let (low, high) = (byte(node.quantized[2 * a], k) as f64, byte(node.quantized[2 * a + 1], k) as f64);
                 let origin = node.origin[a] as f64;
-                assert!(low == 0.0 || exact.min[a] as f64 - (origin + low * q) >= MARGIN * q, "min {a} within the margin");
+                assert!(
+                    low == 0.0 || exact.min[a] as f64 - (origin + low * q) >= MARGIN * q,
+                    "min {a} within the margin"
+                );
                 assert!(origin + high * q - exact.max[a] as f64 >= MARGIN * q, "max {a} within the margin");
             }
             let quanta = Vec3::from_array(std::array::from_fn(|a| node.quantum_along(a) as f32));
             let slack = (exact.min - decoded.min).max(decoded.max - exact.max);
             let rounding = exact.max.abs().max(exact.min.abs()) * 1e-6;
-            assert!(slack.cmple(quanta * (1.0 + MARGIN as f32) + rounding).all(), "slack {slack:?} over quanta {quanta:?}");
+            assert!(
+                slack.cmple(quanta * (1.0 + MARGIN as f32) + rounding).all(),
+                "slack {slack:?} over quanta {quanta:?}"
+            );
             below = below.union(&exact);
         }
         (below, depth)
@@ -446,7 +468,10 @@ mod tests {
         assert_eq!((wide[0].kind(0), wide[0].links[0]), (1, 0));
         assert!((1..WIDTH).all(|k| wide[0].kind(k) == CHILD_NONE));
         let stored = wide[0].child_bounds(0);
-        assert!(stored.contains(&Aabb::new(Vec3::ZERO, Vec3::ONE)) && stored.max.cmplt(Vec3::splat(1.01)).all(), "{stored:?}");
+        assert!(
+            stored.contains(&Aabb::new(Vec3::ZERO, Vec3::ONE)) && stored.max.cmplt(Vec3::splat(1.01)).all(),
+            "{stored:?}"
+        );
         assert_eq!(wide_nodes(&build(&[]).nodes, crate::bvh::MAX_LEAF_SIZE), vec![WideNode::EMPTY]);
         assert!((0..WIDTH).all(|k| WideNode::EMPTY.kind(k) == CHILD_NONE));
     }

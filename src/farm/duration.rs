@@ -12,7 +12,9 @@ pub fn parse_duration(text: &str) -> Result<Duration> {
         let number_len = rest.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(rest.len());
         let unit_len = rest[number_len..].find(|c: char| !c.is_ascii_alphabetic()).unwrap_or(rest.len() - number_len);
         let (number, unit) = (&rest[..number_len], &rest[number_len..number_len + unit_len]);
-        let Ok(value) = number.parse::<f64>() else { bail!("'{text}' is not a duration: expected e.g. 90s, 10m, 1h30m or 2.5h") };
+        let Ok(value) = number.parse::<f64>() else {
+            bail!("'{text}' is not a duration: expected e.g. 90s, 10m, 1h30m or 2.5h")
+        };
         let scale = match unit {
             "ms" => 1e-3,
             "s" => 1.0,

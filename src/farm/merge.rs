@@ -8,10 +8,8 @@ use std::path::{Path, PathBuf};
 /// Reads `inputs` and adds their accumulations. Fails, naming the file, on a different scene, seed
 /// or size, and on overlapping sample ranges (those samples would count twice).
 pub fn merge_files(inputs: &[PathBuf]) -> Result<PartialRender> {
-    let partials = inputs
-        .iter()
-        .map(|path| Ok((path.as_path(), PartialRender::read(path)?)))
-        .collect::<Result<Vec<_>>>()?;
+    let partials =
+        inputs.iter().map(|path| Ok((path.as_path(), PartialRender::read(path)?))).collect::<Result<Vec<_>>>()?;
     merge(partials)
 }
 
@@ -20,11 +18,14 @@ pub fn merge_files(inputs: &[PathBuf]) -> Result<PartialRender> {
 pub fn merge(mut partials: Vec<(&Path, PartialRender)>) -> Result<PartialRender> {
     let Some(((first_path, first), rest)) = partials.split_first() else { bail!("nothing to merge") };
     for (path, partial) in rest {
-        first.check_same_render(partial).with_context(|| format!("{}: cannot merge with {}", path.display(), first_path.display()))?;
+        first
+            .check_same_render(partial)
+            .with_context(|| format!("{}: cannot merge with {}", path.display(), first_path.display()))?;
     }
     partials.sort_by_key(|(_, p)| p.ranges[0].start);
     let first = &partials[0].1;
-    let mut ranges: Vec<_> = partials.iter().flat_map(|(path, p)| p.ranges.iter().map(move |r| (*path, r.clone()))).collect();
+    let mut ranges: Vec<_> =
+        partials.iter().flat_map(|(path, p)| p.ranges.iter().map(move |r| (*path, r.clone()))).collect();
     ranges.sort_by_key(|(_, r)| r.start);
     for pair in ranges.windows(2) {
         let ((a_path, a), (b_path, b)) = (&pair[0], &pair[1]);
@@ -77,19 +78,35 @@ mod tests {
 
     fn partial(ranges: Vec<std::ops::Range<u32>>, value: f32) -> PartialRender {
         let n: u32 = ranges.iter().map(|r| r.end - r.start).sum();
-        PartialRender { scene_hash: "h".into(), seed: 1, width: 1, height: 1, ranges, accumulation: vec![[value, 0.0, 0.0, n as f32]], aovs: Default::default(), aov_sums: None }
+        PartialRender {
+            scene_hash: "h".into(),
+            seed: 1,
+            width: 1,
+            height: 1,
+            ranges,
+            accumulation: vec![[value, 0.0, 0.0, n as f32]],
+            aovs: Default::default(),
+            aov_sums: None,
+        }
     }
 
     #[test]
     fn sums_accumulations_and_joins_ranges() {
-        let merged = merge(vec![(Path::new("b"), partial(vec![2..4], 2.0)), (Path::new("a"), partial(vec![0..2], 1.0)), (Path::new("c"), partial(vec![6..8], 4.0))]).unwrap();
+        let merged = merge(vec![
+            (Path::new("b"), partial(vec![2..4], 2.0)),
+            (Path::new("a"), partial(vec![0..2], 1.0)),
+            (Path::new("c"), partial(vec![6..8], 4.0)),
+        ])
+        .unwrap();
         assert_eq!(merged.ranges, vec![0..4, 6..8]);
         assert_eq!(merged.accumulation, vec![[7.0, 0.0, 0.0, 6.0]]);
     }
 
     #[test]
     fn refuses_overlap_and_other_renders() {
-        let err = merge(vec![(Path::new("a.exr"), partial(vec![0..4], 1.0)), (Path::new("b.exr"), partial(vec![2..6], 1.0))]).unwrap_err();
+        let err =
+            merge(vec![(Path::new("a.exr"), partial(vec![0..4], 1.0)), (Path::new("b.exr"), partial(vec![2..6], 1.0))])
+                .unwrap_err();
         assert_eq!(format!("{err:#}"), "b.exr: samples 2..6 overlap samples 0..4 of a.exr");
         let mut other = partial(vec![4..6], 1.0);
         other.seed = 2;

@@ -13,7 +13,9 @@ mod session;
 
 pub use duration::parse_duration;
 pub use merge::{merge, merge_files};
-pub use partial::{format_ranges, parse_ranges, PartialRender, HEIGHT, SAMPLES, SAMPLE_RANGES, SCENE_HASH, SEED, WIDTH};
 pub use outputs::{check_render_files, is_exr, remove_leftovers, same_file};
+pub use partial::{
+    format_ranges, parse_ranges, PartialRender, HEIGHT, SAMPLES, SAMPLE_RANGES, SCENE_HASH, SEED, WIDTH,
+};
 pub use rate::per_second;
 pub use session::{check_sample_range, resumable_range, resume, run, snapshot, Outcome, RenderJob, SAMPLE_INDEX_END};

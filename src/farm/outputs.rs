@@ -66,7 +66,10 @@ mod tests {
         assert!(same_file(&dir.join("out.png"), &dir.join("sub/../out.png")));
         assert!(same_file(&dir.join("out.png"), &dir.join("./out.png")));
         assert!(!same_file(&dir.join("out.png"), &dir.join("sub/out.png")));
-        assert!(!same_file(&dir.join("missing/out.png"), &dir.join("missing/out.png")), "no directory: nothing to compare");
+        assert!(
+            !same_file(&dir.join("missing/out.png"), &dir.join("missing/out.png")),
+            "no directory: nothing to compare"
+        );
         #[cfg(unix)]
         {
             std::fs::write(dir.join("real.exr"), b"x").unwrap();

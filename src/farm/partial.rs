@@ -13,8 +13,8 @@
 //! "accumulation.depth.Z/hits", so AOVs resume and merge exactly like the beauty.
 
 use crate::image::{read_exr_document, write_exr_document, ExrDocument, ExrLayer, ImageError, RgbImage};
-use crate::render::{mean_image, AovSet, AovSums};
 use crate::input_file::{InputFiles, InputKind};
+use crate::render::{mean_image, AovSet, AovSums};
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -41,7 +41,11 @@ const ACCUMULATION_DEPTH: &str = "accumulation.depth";
 
 /// A layer of per-pixel values, one array element a channel.
 fn layer<const N: usize>(name: &str, channels: &[&str; N], pixels: impl IntoIterator<Item = [f32; N]>) -> ExrLayer {
-    ExrLayer { name: name.to_owned(), channels: channels.map(String::from).to_vec(), data: pixels.into_iter().flatten().collect() }
+    ExrLayer {
+        name: name.to_owned(),
+        channels: channels.map(String::from).to_vec(),
+        data: pixels.into_iter().flatten().collect(),
+    }
 }
 
 /// Per pixel, the values of `channels` of `layer` in that order.
@@ -49,7 +53,11 @@ fn read_channels<const N: usize>(doc: &ExrDocument, layer: &str, channels: [&str
     let found = doc.layer(layer).ok_or_else(|| anyhow!("layer '{layer}' is missing"))?;
     let mut order = [0; N];
     for (slot, name) in order.iter_mut().zip(channels) {
-        *slot = found.channels.iter().position(|c| c == name).ok_or_else(|| anyhow!("channel {layer}.{name} is missing"))?;
+        *slot = found
+            .channels
+            .iter()
+            .position(|c| c == name)
+            .ok_or_else(|| anyhow!("channel {layer}.{name} is missing"))?;
     }
     Ok(found.data.chunks_exact(found.channels.len()).map(|px| order.map(|c| px[c])).collect())
 }
@@ -126,20 +134,29 @@ impl PartialRender {
         }
         layers.push(layer(ACCUMULATION_ALBEDO, &["R", "G", "B"], sums.albedo_depth.iter().map(|a| [a[0], a[1], a[2]])));
         layers.push(layer(ACCUMULATION_NORMAL, &["X", "Y", "Z"], sums.normal_hits.iter().map(|a| [a[0], a[1], a[2]])));
-        layers.push(layer(ACCUMULATION_DEPTH, &["Z", "hits"], sums.albedo_depth.iter().zip(&sums.normal_hits).map(|(a, n)| [a[3], n[3]])));
+        layers.push(layer(
+            ACCUMULATION_DEPTH,
+            &["Z", "hits"],
+            sums.albedo_depth.iter().zip(&sums.normal_hits).map(|(a, n)| [a[3], n[3]]),
+        ));
         layers
     }
 
     /// Reads a file written by [`Self::write`], checking that it is consistent; names the file and
     /// what is wrong otherwise.
     pub fn read(path: &Path) -> Result<Self> {
-        let not_ours = |reason: String| anyhow!("{} is not a caustica EXR checkpoint/partial ({reason})", path.display());
+        let not_ours =
+            |reason: String| anyhow!("{} is not a caustica EXR checkpoint/partial ({reason})", path.display());
         if !starts_like_exr(path)? {
-            return Err(not_ours("not an OpenEXR file; checkpoints and partial renders are the .exr files caustica writes".to_owned()));
+            return Err(not_ours(
+                "not an OpenEXR file; checkpoints and partial renders are the .exr files caustica writes".to_owned(),
+            ));
         }
         // A failure to read is the file system's to report; anything else is the file's content.
         let doc = read_exr_document(path).map_err(|e| match e {
-            e @ (ImageError::Io { .. } | ImageError::Exr { cause: ::exr::error::Error::Io(_), .. }) => anyhow::Error::from(e),
+            e @ (ImageError::Io { .. } | ImageError::Exr { cause: ::exr::error::Error::Io(_), .. }) => {
+                anyhow::Error::from(e)
+            }
             e => not_ours(without_file_name(&e.to_string(), path)),
         })?;
         let partial = Self::from_document(doc).map_err(|e| not_ours(format!("{e:#}")))?;
@@ -331,14 +348,25 @@ mod tests {
         let not_ours = format!("{} is not a caustica EXR checkpoint/partial (", path.display());
         assert_eq!(refusal(&good, None), None);
         let samples = refusal(&good, Some((SAMPLES, "5"))).expect("samples 5 with ranges of 4");
-        assert!(samples.starts_with(&not_ours) && samples.contains("caustica.samples says 5 samples per pixel, but caustica.sample_ranges 0..2,4..6 hold 4"), "{samples}");
+        assert!(
+            samples.starts_with(&not_ours)
+                && samples
+                    .contains("caustica.samples says 5 samples per pixel, but caustica.sample_ranges 0..2,4..6 hold 4"),
+            "{samples}"
+        );
         let ranges = refusal(&good, Some((SAMPLE_RANGES, "0..5"))).expect("ranges of 5 with samples 4");
         assert!(ranges.contains("caustica.samples says 4"), "{ranges}");
         let mut counts = good.clone();
         counts.accumulation[3][3] = 3.0;
         counts.accumulation[1][3] = 5.0;
         let counts = refusal(&counts, None).expect("pixels with 3 and 5 samples of 4");
-        assert!(counts.starts_with(&not_ours) && counts.contains("pixel (1, 0) holds 5 samples (and 1 more pixels disagree), but its sample ranges 0..2,4..6 hold 4"), "{counts}");
+        assert!(
+            counts.starts_with(&not_ours)
+                && counts.contains(
+                    "pixel (1, 0) holds 5 samples (and 1 more pixels disagree), but its sample ranges 0..2,4..6 hold 4"
+                ),
+            "{counts}"
+        );
         std::fs::write(&path, b"PF\n1 1\n-1.0\n\0\0\0\0\0\0\0\0\0\0\0\0").unwrap();
         let pfm = PartialRender::read(&path).unwrap_err().to_string();
         assert!(pfm.starts_with(&not_ours) && pfm.contains("not an OpenEXR file"), "{pfm}");
@@ -361,7 +389,10 @@ mod tests {
 
     #[test]
     fn aov_sums_round_trip_bit_exact_and_means_are_written() {
-        let sums = AovSums { albedo_depth: vec![[0.5, 0.25, 1e-30, 7.0], [0.0, 1.0, 2.0, 0.0]], normal_hits: vec![[-1.0, 0.5, 1.0 / 3.0, 2.0], [0.0; 4]] };
+        let sums = AovSums {
+            albedo_depth: vec![[0.5, 0.25, 1e-30, 7.0], [0.0, 1.0, 2.0, 0.0]],
+            normal_hits: vec![[-1.0, 0.5, 1.0 / 3.0, 2.0], [0.0; 4]],
+        };
         let partial = PartialRender {
             scene_hash: "ab12".into(),
             seed: 7,

@@ -42,7 +42,10 @@ pub fn snapshot(renderer: &Renderer) -> Result<Option<PartialRender>> {
         return Ok(None);
     }
     // Empty after a camera change until recomputed: a file must never carry a hash of another view.
-    anyhow::ensure!(!renderer.scene_hash.is_empty(), "the scene hash is unknown after a camera change (Renderer::refresh_scene_hash)");
+    anyhow::ensure!(
+        !renderer.scene_hash.is_empty(),
+        "the scene hash is unknown after a camera change (Renderer::refresh_scene_hash)"
+    );
     let (width, height) = renderer.size();
     let start = renderer.sample_offset();
     Ok(Some(PartialRender {
@@ -61,7 +64,10 @@ pub fn snapshot(renderer: &Renderer) -> Result<Option<PartialRender>> {
 /// ranges. `path` is the checkpoint's file, for messages.
 pub fn resumable_range(checkpoint: &PartialRender, path: &Path) -> Result<Range<u32>> {
     let [range] = &checkpoint.ranges[..] else {
-        bail!("{}: cannot resume: it holds separate sample ranges (a merge); render more as another partial", path.display());
+        bail!(
+            "{}: cannot resume: it holds separate sample ranges (a merge); render more as another partial",
+            path.display()
+        );
     };
     Ok(range.clone())
 }
@@ -71,7 +77,16 @@ pub fn resumable_range(checkpoint: &PartialRender, path: &Path) -> Result<Range<
 /// ranges.
 pub fn resume(renderer: &mut Renderer, checkpoint: &PartialRender, path: &Path) -> Result<()> {
     let (width, height) = renderer.size();
-    let this = PartialRender { scene_hash: renderer.scene_hash.clone(), seed: renderer.seed(), width, height, ranges: vec![], accumulation: vec![], aovs: renderer.aovs(), aov_sums: None };
+    let this = PartialRender {
+        scene_hash: renderer.scene_hash.clone(),
+        seed: renderer.seed(),
+        width,
+        height,
+        ranges: vec![],
+        accumulation: vec![],
+        aovs: renderer.aovs(),
+        aov_sums: None,
+    };
     this.check_same_render(checkpoint).with_context(|| format!("{}: cannot resume", path.display()))?;
     let range = resumable_range(checkpoint, path)?;
     renderer.set_sample_offset(range.start);

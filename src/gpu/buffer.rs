@@ -27,7 +27,14 @@ pub struct Buffer {
 const MIN_SIZE: u64 = 16;
 
 impl Buffer {
-    pub(super) fn create(ctx: &GpuContext, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation, kind: BufferKind) -> Result<Self> {
+    pub(super) fn create(
+        ctx: &GpuContext,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+        kind: BufferKind,
+    ) -> Result<Self> {
         let size = size.max(MIN_SIZE);
         let device = &ctx.device;
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
@@ -44,7 +51,11 @@ impl Buffer {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_buffer(buffer, None) };
-                return Err(anyhow!("allocating {:.1} MiB for {name} on {}: {e}", size as f64 / 1048576.0, ctx.info.name));
+                return Err(anyhow!(
+                    "allocating {:.1} MiB for {name} on {}: {e}",
+                    size as f64 / 1048576.0,
+                    ctx.info.name
+                ));
             }
         };
         unsafe { device.bind_buffer_memory(buffer, allocation.memory(), allocation.offset()) }?;
@@ -56,7 +67,9 @@ impl Buffer {
         let usage = match kind {
             BufferKind::Uniform => vk::BufferUsageFlags::UNIFORM_BUFFER,
             // Any of the kernel's arrays may be bound as texels (src/render/bindings.rs).
-            BufferKind::Storage | BufferKind::HostStorage => vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+            BufferKind::Storage | BufferKind::HostStorage => {
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            }
         };
         if kind == BufferKind::HostStorage {
             let mut buffer = Self::create(ctx, name, bytes.len() as u64, usage, MemoryLocation::GpuToCpu, kind)?;
@@ -74,17 +87,33 @@ impl Buffer {
         if bytes.is_empty() {
             return Ok(());
         }
-        let mut staging = Self::create(ctx, "staging upload", bytes.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu, BufferKind::HostStorage)?;
+        let mut staging = Self::create(
+            ctx,
+            "staging upload",
+            bytes.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+            BufferKind::HostStorage,
+        )?;
         staging.write(bytes)?;
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len() as u64 };
-        let result = ctx.submit_and_wait(|device, cb| unsafe { device.cmd_copy_buffer(cb, staging.buffer, self.buffer, &[region]) });
+        let result = ctx.submit_and_wait(|device, cb| unsafe {
+            device.cmd_copy_buffer(cb, staging.buffer, self.buffer, &[region])
+        });
         staging.destroy(ctx);
         result
     }
 
     /// Copies the first `len` bytes of a device-local buffer back to the host.
     pub fn download(&self, ctx: &GpuContext, len: u64) -> Result<Vec<u8>> {
-        let staging = Self::create(ctx, "staging readback", len, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu, BufferKind::HostStorage)?;
+        let staging = Self::create(
+            ctx,
+            "staging readback",
+            len,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+            BufferKind::HostStorage,
+        )?;
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: len };
         let result = ctx
             .submit_and_wait(|device, cb| unsafe { device.cmd_copy_buffer(cb, self.buffer, staging.buffer, &[region]) })

@@ -90,9 +90,13 @@ impl ComputeKernel {
             })
             .collect();
         let set_layout = unsafe {
-            device.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings), None)
+            device.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+                None,
+            )
         }?;
-        let push_ranges = [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).offset(0).size(push_size)];
+        let push_ranges =
+            [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).offset(0).size(push_size)];
         let set_layouts = [set_layout];
         let layout = unsafe {
             device.create_pipeline_layout(
@@ -106,7 +110,11 @@ impl ComputeKernel {
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
-        let capture = if ctx.pipeline_statistics.is_some() { vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR } else { vk::PipelineCreateFlags::empty() };
+        let capture = if ctx.pipeline_statistics.is_some() {
+            vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR
+        } else {
+            vk::PipelineCreateFlags::empty()
+        };
         let created = unsafe {
             device.create_compute_pipelines(
                 vk::PipelineCache::null(),
@@ -116,18 +124,34 @@ impl ComputeKernel {
         };
         unsafe { device.destroy_shader_module(module, None) };
         let pipeline = created.map_err(|(_, e)| anyhow!("creating the compute pipeline: {e}"))?[0];
-        let statistics = ctx.pipeline_statistics.as_ref().map(|loader| pipeline_statistics::read(loader, pipeline)).unwrap_or_default();
+        let statistics = ctx
+            .pipeline_statistics
+            .as_ref()
+            .map(|loader| pipeline_statistics::read(loader, pipeline))
+            .unwrap_or_default();
 
-        let pool_sizes: Vec<_> = [vk::DescriptorType::UNIFORM_BUFFER, vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_TEXEL_BUFFER]
-            .into_iter()
-            .map(|ty| vk::DescriptorPoolSize { ty, descriptor_count: bindings.iter().filter(|b| b.descriptor_type() == ty).count() as u32 })
-            .filter(|size| size.descriptor_count > 0)
-            .collect();
+        let pool_sizes: Vec<_> = [
+            vk::DescriptorType::UNIFORM_BUFFER,
+            vk::DescriptorType::STORAGE_BUFFER,
+            vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+        ]
+        .into_iter()
+        .map(|ty| vk::DescriptorPoolSize {
+            ty,
+            descriptor_count: bindings.iter().filter(|b| b.descriptor_type() == ty).count() as u32,
+        })
+        .filter(|size| size.descriptor_count > 0)
+        .collect();
         let pool = unsafe {
-            device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes), None)
+            device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes),
+                None,
+            )
         }?;
         let set = unsafe {
-            device.allocate_descriptor_sets(&vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&set_layouts))
+            device.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&set_layouts),
+            )
         }?[0];
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
             .iter()
@@ -138,8 +162,14 @@ impl ComputeKernel {
             .iter()
             .map(|b| match b.as_texels {
                 Some(words) => {
-                    let info = vk::BufferViewCreateInfo::default().buffer(b.buffer.buffer).format(words.format()).offset(b.offset).range(b.range);
-                    unsafe { device.create_buffer_view(&info, None) }.map(|view| [view]).context("creating a texel view of a buffer")
+                    let info = vk::BufferViewCreateInfo::default()
+                        .buffer(b.buffer.buffer)
+                        .format(words.format())
+                        .offset(b.offset)
+                        .range(b.range);
+                    unsafe { device.create_buffer_view(&info, None) }
+                        .map(|view| [view])
+                        .context("creating a texel view of a buffer")
                 }
                 None => Ok([vk::BufferView::null()]),
             })
@@ -149,7 +179,10 @@ impl ComputeKernel {
             .iter()
             .zip(infos.iter().zip(&views))
             .map(|(b, (info, view))| {
-                let write = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(b.binding).descriptor_type(b.descriptor_type());
+                let write = vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(b.binding)
+                    .descriptor_type(b.descriptor_type());
                 match b.as_texels {
                     Some(_) => write.texel_buffer_view(view),
                     None => write.buffer_info(info),
@@ -158,7 +191,12 @@ impl ComputeKernel {
             .collect();
         unsafe { device.update_descriptor_sets(&writes, &[]) };
         let timestamps = match ctx.timestamp_period_ns {
-            Some(_) => Some(unsafe { device.create_query_pool(&vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2), None) }?),
+            Some(_) => Some(unsafe {
+                device.create_query_pool(
+                    &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2),
+                    None,
+                )
+            }?),
             None => None,
         };
         Ok(Self { set_layout, layout, pipeline, pool, set, texel_views, push_size, timestamps, statistics })
@@ -191,7 +229,10 @@ impl ComputeKernel {
     /// Runs `steps` (kernel, push constants, workgroups) in order in one submission, each
     /// dispatch's writes visible to the next, and waits for them; returns the seconds the device
     /// spent on them all by its timestamps (those of the first kernel's pool), where it has them.
-    pub fn dispatch_sequence_timed(ctx: &GpuContext, steps: &[(&ComputeKernel, &[u8], [u32; 3])]) -> Result<Option<f64>> {
+    pub fn dispatch_sequence_timed(
+        ctx: &GpuContext,
+        steps: &[(&ComputeKernel, &[u8], [u32; 3])],
+    ) -> Result<Option<f64>> {
         let Some(&(first, _, _)) = steps.first() else {
             return Ok(Some(0.0));
         };
@@ -204,13 +245,19 @@ impl ComputeKernel {
                 assert_eq!(push.len() as u32, kernel.push_size, "push-constant block size");
                 kernel.record(device, cb, push, groups);
                 // Each dispatch's writes reach the next, and the host's reads after the last.
-                let barrier = vk::MemoryBarrier::default()
-                    .src_access_mask(vk::AccessFlags::SHADER_WRITE)
-                    .dst_access_mask(vk::AccessFlags::TRANSFER_READ | vk::AccessFlags::HOST_READ | vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE);
+                let barrier =
+                    vk::MemoryBarrier::default().src_access_mask(vk::AccessFlags::SHADER_WRITE).dst_access_mask(
+                        vk::AccessFlags::TRANSFER_READ
+                            | vk::AccessFlags::HOST_READ
+                            | vk::AccessFlags::SHADER_READ
+                            | vk::AccessFlags::SHADER_WRITE,
+                    );
                 device.cmd_pipeline_barrier(
                     cb,
                     vk::PipelineStageFlags::COMPUTE_SHADER,
-                    vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST | vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::PipelineStageFlags::TRANSFER
+                        | vk::PipelineStageFlags::HOST
+                        | vk::PipelineStageFlags::COMPUTE_SHADER,
                     vk::DependencyFlags::empty(),
                     &[barrier],
                     &[],
@@ -225,7 +272,14 @@ impl ComputeKernel {
             return Ok(None);
         };
         let mut ticks = [0u64; 2];
-        unsafe { ctx.device.get_query_pool_results(pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }?;
+        unsafe {
+            ctx.device.get_query_pool_results(
+                pool,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }?;
         Ok(Some(ticks[1].wrapping_sub(ticks[0]) as f64 * period_ns * 1e-9))
     }
 

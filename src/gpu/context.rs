@@ -145,7 +145,11 @@ fn load_entry() -> Result<ash::Entry> {
     })
 }
 
-fn create_instance(entry: &ash::Entry, validation: bool, window_extensions: &[*const std::ffi::c_char]) -> Result<(ash::Instance, bool)> {
+fn create_instance(
+    entry: &ash::Entry,
+    validation: bool,
+    window_extensions: &[*const std::ffi::c_char],
+) -> Result<(ash::Instance, bool)> {
     let app = vk::ApplicationInfo::default()
         .application_name(c"caustica")
         .engine_name(c"caustica")
@@ -156,7 +160,10 @@ fn create_instance(entry: &ash::Entry, validation: bool, window_extensions: &[*c
             .iter()
             .any(|l| l.layer_name_as_c_str().ok() == Some(validation::LAYER_NAME));
     if validation && !layer_available {
-        eprintln!("caustica: validation requested but {:?} is not installed; running without it", validation::LAYER_NAME);
+        eprintln!(
+            "caustica: validation requested but {:?} is not installed; running without it",
+            validation::LAYER_NAME
+        );
     }
     let layers = if layer_available { vec![validation::LAYER_NAME.as_ptr()] } else { vec![] };
     let mut extensions = window_extensions.to_vec();
@@ -209,7 +216,11 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
 
 /// The driver's name, version text and identity; chained only where the device supports Vulkan
 /// 1.2, which made the structure core (the instance is created for 1.2).
-fn driver_properties(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> (String, String, Option<vk::DriverId>) {
+fn driver_properties(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    api_version: u32,
+) -> (String, String, Option<vk::DriverId>) {
     if api_version < vk::API_VERSION_1_2 {
         return (String::new(), String::new(), None);
     }
@@ -246,7 +257,10 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
 }
 
 /// The requested device, or the most preferred kind (discrete GPU first, CPU last).
-fn choose(devices: Vec<(vk::PhysicalDevice, DeviceInfo)>, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, DeviceInfo)> {
+fn choose(
+    devices: Vec<(vk::PhysicalDevice, DeviceInfo)>,
+    wanted: Option<&str>,
+) -> Result<(vk::PhysicalDevice, DeviceInfo)> {
     let names = devices.iter().map(|(_, d)| format!("{}: {}", d.index, d.name)).collect::<Vec<_>>().join(", ");
     let usable = devices.into_iter().filter(|(_, d)| d.has_compute_queue);
     match wanted {
@@ -264,11 +278,17 @@ fn choose(devices: Vec<(vk::PhysicalDevice, DeviceInfo)>, wanted: Option<&str>) 
 }
 
 /// A queue family of `pd` that can compute, draw (the viewer's overlay) and present to `surface`.
-fn presenting_family(instance: &ash::Instance, loader: &ash::khr::surface::Instance, pd: vk::PhysicalDevice, surface: vk::SurfaceKHR) -> Option<u32> {
+fn presenting_family(
+    instance: &ash::Instance,
+    loader: &ash::khr::surface::Instance,
+    pd: vk::PhysicalDevice,
+    surface: vk::SurfaceKHR,
+) -> Option<u32> {
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let wanted = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
     (0..families.len() as u32).find(|&f| {
-        families[f as usize].queue_flags.contains(wanted) && unsafe { loader.get_physical_device_surface_support(pd, f, surface) }.unwrap_or(false)
+        families[f as usize].queue_flags.contains(wanted)
+            && unsafe { loader.get_physical_device_surface_support(pd, f, surface) }.unwrap_or(false)
     })
 }
 
@@ -289,7 +309,9 @@ impl GpuContext {
     fn create(options: &ContextOptions, window: Option<WindowHandles>) -> Result<Self> {
         let entry = load_entry()?;
         let window_extensions = match window {
-            Some(w) => ash_window::enumerate_required_extensions(w.display).context("the Vulkan extensions this kind of window needs")?.to_vec(),
+            Some(w) => ash_window::enumerate_required_extensions(w.display)
+                .context("the Vulkan extensions this kind of window needs")?
+                .to_vec(),
             None => vec![],
         };
         let (instance, validating) = create_instance(&entry, options.validation, &window_extensions)?;
@@ -306,8 +328,9 @@ impl GpuContext {
         let validation_log = Box::<ValidationLog>::default();
         let debug = if validating {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let messenger = unsafe { loader.create_debug_utils_messenger(&validation::messenger_info(&validation_log), None) }
-                .context("creating the validation messenger")?;
+            let messenger =
+                unsafe { loader.create_debug_utils_messenger(&validation::messenger_info(&validation_log), None) }
+                    .context("creating the validation messenger")?;
             Some((loader, messenger))
         } else {
             None
@@ -327,23 +350,28 @@ impl GpuContext {
         }
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let family = match &surface {
-            Some((loader, surface)) => presenting_family(&instance, loader, physical, *surface).expect("devices that cannot present were left out"),
+            Some((loader, surface)) => presenting_family(&instance, loader, physical, *surface)
+                .expect("devices that cannot present were left out"),
             None => families
                 .iter()
                 .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
                 .ok_or_else(|| anyhow!("{} has no compute queue", info.name))? as u32,
         };
         let timestamp_period = unsafe { instance.get_physical_device_properties(physical) }.limits.timestamp_period;
-        let timestamp_period_ns = (families[family as usize].timestamp_valid_bits > 0 && timestamp_period > 0.0).then_some(timestamp_period as f64);
+        let timestamp_period_ns = (families[family as usize].timestamp_valid_bits > 0 && timestamp_period > 0.0)
+            .then_some(timestamp_period as f64);
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
         let mut device_extensions = if surface.is_some() { vec![ash::khr::swapchain::NAME.as_ptr()] } else { vec![] };
         let statistics = super::pipeline_statistics::supported(&instance, physical);
         if statistics {
             device_extensions.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
         }
-        let mut statistics_feature = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(statistics);
-        let mut device_info = vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
+        let mut statistics_feature =
+            vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(statistics);
+        let mut device_info =
+            vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
         if statistics {
             device_info = device_info.push_next(&mut statistics_feature);
         }
@@ -367,7 +395,8 @@ impl GpuContext {
             allocation_sizes: Default::default(),
         })
         .context("creating the GPU memory allocator")?;
-        let pipeline_statistics = statistics.then(|| ash::khr::pipeline_executable_properties::Device::new(&instance, &device));
+        let pipeline_statistics =
+            statistics.then(|| ash::khr::pipeline_executable_properties::Device::new(&instance, &device));
         let presentation = surface.map(|(surface_loader, surface)| Presentation {
             surface_loader,
             surface,
@@ -398,7 +427,8 @@ impl GpuContext {
         if let Some(&limit) = self.loop_limit.get() {
             return Ok(limit);
         }
-        let limit = super::loop_limit::probe_loop_limit(self).with_context(|| format!("probing {} for a loop limit", self.info.name))?;
+        let limit = super::loop_limit::probe_loop_limit(self)
+            .with_context(|| format!("probing {} for a loop limit", self.info.name))?;
         Ok(*self.loop_limit.get_or_init(|| limit))
     }
 
@@ -440,7 +470,10 @@ impl GpuContext {
         let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
         let result = (|| -> Result<()> {
             unsafe {
-                device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT))?;
+                device.begin_command_buffer(
+                    cb,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )?;
                 record(device, cb);
                 device.end_command_buffer(cb)?;
                 let cbs = [cb];

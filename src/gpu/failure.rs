@@ -10,7 +10,9 @@ pub struct VulkanError(pub(super) vk::Result);
 
 fn describe(e: vk::Result) -> String {
     match e {
-        vk::Result::ERROR_DEVICE_LOST => "the GPU was lost (VK_ERROR_DEVICE_LOST): the driver reset it, or a dispatch ran too long".into(),
+        vk::Result::ERROR_DEVICE_LOST => {
+            "the GPU was lost (VK_ERROR_DEVICE_LOST): the driver reset it, or a dispatch ran too long".into()
+        }
         vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => "the GPU ran out of memory (VK_ERROR_OUT_OF_DEVICE_MEMORY)".into(),
         vk::Result::ERROR_OUT_OF_HOST_MEMORY => "out of host memory (VK_ERROR_OUT_OF_HOST_MEMORY)".into(),
         other => format!("Vulkan error {other}"),
@@ -31,10 +33,15 @@ impl DeviceFailure {
     pub fn of(error: &anyhow::Error) -> Option<Self> {
         error.chain().find_map(|cause| {
             // Calls outside submit-and-wait pass the bare `vk::Result` up with `?`.
-            let code = cause.downcast_ref::<VulkanError>().map(|v| v.0).or_else(|| cause.downcast_ref::<vk::Result>().copied())?;
+            let code = cause
+                .downcast_ref::<VulkanError>()
+                .map(|v| v.0)
+                .or_else(|| cause.downcast_ref::<vk::Result>().copied())?;
             match code {
                 vk::Result::ERROR_DEVICE_LOST => Some(Self::Lost),
-                vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => Some(Self::OutOfMemory),
+                vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+                    Some(Self::OutOfMemory)
+                }
                 _ => None,
             }
         })
@@ -53,7 +60,10 @@ mod tests {
     #[test]
     fn lost_device_and_out_of_memory_are_recognised_through_context() {
         assert_eq!(DeviceFailure::of(&failed(vk::Result::ERROR_DEVICE_LOST)), Some(DeviceFailure::Lost));
-        assert_eq!(DeviceFailure::of(&failed(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY)), Some(DeviceFailure::OutOfMemory));
+        assert_eq!(
+            DeviceFailure::of(&failed(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY)),
+            Some(DeviceFailure::OutOfMemory)
+        );
         assert_eq!(DeviceFailure::of(&failed(vk::Result::ERROR_OUT_OF_HOST_MEMORY)), Some(DeviceFailure::OutOfMemory));
         let bare = anyhow::Error::new(vk::Result::ERROR_DEVICE_LOST).context("allocating a command buffer");
         assert_eq!(DeviceFailure::of(&bare), Some(DeviceFailure::Lost));
@@ -67,7 +77,11 @@ mod tests {
 
     #[test]
     fn messages_name_the_vulkan_error() {
-        assert!(format!("{:#}", failed(vk::Result::ERROR_DEVICE_LOST)).ends_with("(VK_ERROR_DEVICE_LOST): the driver reset it, or a dispatch ran too long"));
-        assert!(failed(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY).root_cause().to_string().contains("VK_ERROR_OUT_OF_DEVICE_MEMORY"));
+        assert!(format!("{:#}", failed(vk::Result::ERROR_DEVICE_LOST))
+            .ends_with("(VK_ERROR_DEVICE_LOST): the driver reset it, or a dispatch ran too long"));
+        assert!(failed(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY)
+            .root_cause()
+            .to_string()
+            .contains("VK_ERROR_OUT_OF_DEVICE_MEMORY"));
     }
 }

@@ -38,8 +38,11 @@ impl OverlayPass {
             .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
             .initial_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
             .final_layout(vk::ImageLayout::PRESENT_SRC_KHR)];
-        let color = [vk::AttachmentReference::default().attachment(0).layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)];
-        let subpass = [vk::SubpassDescription::default().pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS).color_attachments(&color)];
+        let color =
+            [vk::AttachmentReference::default().attachment(0).layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)];
+        let subpass = [vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&color)];
         // The copy of the picture must land before the pass loads the image.
         let dependency = [vk::SubpassDependency::default()
             .src_subpass(vk::SUBPASS_EXTERNAL)
@@ -48,10 +51,19 @@ impl OverlayPass {
             .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
             .dst_stage_mask(vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT)
             .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE)];
-        let info = vk::RenderPassCreateInfo::default().attachments(&attachment).subpasses(&subpass).dependencies(&dependency);
-        let render_pass = unsafe { ctx.device.create_render_pass(&info, None) }.context("creating the overlay's render pass")?;
-        let options = Options { in_flight_frames: 1, srgb_framebuffer: is_srgb(swapchain.format), ..Default::default() };
-        let renderer = Renderer::with_default_allocator(&ctx.instance, ctx.physical_device, ctx.device.clone(), RenderMode::RenderPass(render_pass), options);
+        let info =
+            vk::RenderPassCreateInfo::default().attachments(&attachment).subpasses(&subpass).dependencies(&dependency);
+        let render_pass =
+            unsafe { ctx.device.create_render_pass(&info, None) }.context("creating the overlay's render pass")?;
+        let options =
+            Options { in_flight_frames: 1, srgb_framebuffer: is_srgb(swapchain.format), ..Default::default() };
+        let renderer = Renderer::with_default_allocator(
+            &ctx.instance,
+            ctx.physical_device,
+            ctx.device.clone(),
+            RenderMode::RenderPass(render_pass),
+            options,
+        );
         let mut pass = Self { render_pass, format: swapchain.format, framebuffers: vec![], renderer: None };
         match renderer {
             Ok(r) => pass.renderer = Some(r),
@@ -76,7 +88,9 @@ impl OverlayPass {
                 .width(swapchain.extent.width)
                 .height(swapchain.extent.height)
                 .layers(1);
-            self.framebuffers.push(unsafe { ctx.device.create_framebuffer(&info, None) }.context("creating an overlay framebuffer")?);
+            self.framebuffers.push(
+                unsafe { ctx.device.create_framebuffer(&info, None) }.context("creating an overlay framebuffer")?,
+            );
         }
         Ok(())
     }
@@ -86,7 +100,9 @@ impl OverlayPass {
         let renderer = self.renderer.as_mut().expect("renderer lives until destroy");
         for (id, deltas) in &textures.set {
             for delta in deltas {
-                renderer.set_texture(ctx.queue, ctx.command_pool, *id, delta).map_err(|e| anyhow!("uploading an overlay texture: {e}"))?;
+                renderer
+                    .set_texture(ctx.queue, ctx.command_pool, *id, delta)
+                    .map_err(|e| anyhow!("uploading an overlay texture: {e}"))?;
             }
         }
         Ok(())
@@ -102,7 +118,14 @@ impl OverlayPass {
     }
 
     /// Records the pass over swapchain image `index` (in TRANSFER_DST_OPTIMAL; left PRESENT_SRC_KHR).
-    pub(super) fn record(&mut self, device: &ash::Device, cb: vk::CommandBuffer, index: usize, extent: vk::Extent2D, draw: &OverlayDraw) -> Result<()> {
+    pub(super) fn record(
+        &mut self,
+        device: &ash::Device,
+        cb: vk::CommandBuffer,
+        index: usize,
+        extent: vk::Extent2D,
+        draw: &OverlayDraw,
+    ) -> Result<()> {
         let begin = vk::RenderPassBeginInfo::default()
             .render_pass(self.render_pass)
             .framebuffer(self.framebuffers[index])

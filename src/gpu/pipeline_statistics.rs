@@ -8,7 +8,9 @@ use ash::vk;
 /// Whether `pd` offers the extension and its `pipelineExecutableInfo` feature.
 pub(super) fn supported(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
     let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    let named = extensions.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::khr::pipeline_executable_properties::NAME));
+    let named = extensions
+        .iter()
+        .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::khr::pipeline_executable_properties::NAME));
     if !named {
         return false;
     }
@@ -27,7 +29,10 @@ pub struct KernelStatistic {
 
 /// The statistics of every executable of `pipeline` (a compute pipeline has one; where a driver
 /// gives several, each name is prefixed by its executable's). Empty where the driver gives none.
-pub(super) fn read(loader: &ash::khr::pipeline_executable_properties::Device, pipeline: vk::Pipeline) -> Vec<KernelStatistic> {
+pub(super) fn read(
+    loader: &ash::khr::pipeline_executable_properties::Device,
+    pipeline: vk::Pipeline,
+) -> Vec<KernelStatistic> {
     let info = vk::PipelineInfoKHR::default().pipeline(pipeline);
     let Ok(executables) = (unsafe { loader.get_pipeline_executable_properties(&info) }) else {
         return Vec::new();
@@ -40,7 +45,10 @@ pub(super) fn read(loader: &ash::khr::pipeline_executable_properties::Device, pi
             continue;
         };
         let prefix = if several { format!("{}: ", text(executable.name_as_c_str())) } else { String::new() };
-        statistics.extend(figures.iter().map(|figure| KernelStatistic { name: format!("{prefix}{}", text(figure.name_as_c_str())), value: value_text(figure) }));
+        statistics.extend(figures.iter().map(|figure| KernelStatistic {
+            name: format!("{prefix}{}", text(figure.name_as_c_str())),
+            value: value_text(figure),
+        }));
     }
     statistics
 }

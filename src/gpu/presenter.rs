@@ -64,11 +64,23 @@ pub struct Presenter {
 impl Presenter {
     pub fn new(ctx: &GpuContext, size: [u32; 2]) -> Result<Self> {
         let device = &ctx.device;
-        let alloc = vk::CommandBufferAllocateInfo::default().command_pool(ctx.command_pool).level(vk::CommandBufferLevel::PRIMARY).command_buffer_count(1);
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(ctx.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
         let command_buffer = unsafe { device.allocate_command_buffers(&alloc) }?[0];
         let image_available = unsafe { device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }?;
         let frame_done = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
-        let mut presenter = Self { swapchain: None, overlay: None, size, stale: true, command_buffer, image_available, render_finished: vec![], frame_done };
+        let mut presenter = Self {
+            swapchain: None,
+            overlay: None,
+            size,
+            stale: true,
+            command_buffer,
+            image_available,
+            render_finished: vec![],
+            frame_done,
+        };
         if let Err(e) = presenter.recreate(ctx) {
             presenter.destroy(ctx);
             return Err(e);
@@ -113,7 +125,8 @@ impl Presenter {
             unsafe { ctx.device.destroy_semaphore(s, None) };
         }
         for _ in &swapchain.images {
-            self.render_finished.push(unsafe { ctx.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }?);
+            self.render_finished
+                .push(unsafe { ctx.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }?);
         }
         self.swapchain = Some(swapchain);
         Ok(())
@@ -127,26 +140,41 @@ impl Presenter {
         let Some(swapchain) = &self.swapchain else {
             return Ok(Presented::NotShown);
         };
-        let (handle, extent, order, readable) = (swapchain.handle, swapchain.extent, swapchain.order, swapchain.readable);
+        let (handle, extent, order, readable) =
+            (swapchain.handle, swapchain.extent, swapchain.order, swapchain.readable);
         let loader = &ctx.presentation.as_ref().expect("a swapchain implies a presentation").swapchain_loader;
-        let index = match unsafe { loader.acquire_next_image(handle, u64::MAX, self.image_available, vk::Fence::null()) } {
-            Ok((index, suboptimal)) => {
-                self.stale |= suboptimal;
-                index as usize
-            }
-            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
-                self.stale = true;
-                return Ok(Presented::NotShown);
-            }
-            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => bail!("the window's surface is lost (did another program destroy the window?)"),
-            Err(e) => return Err(anyhow!("acquiring a swapchain image: {e}")),
-        };
+        let index =
+            match unsafe { loader.acquire_next_image(handle, u64::MAX, self.image_available, vk::Fence::null()) } {
+                Ok((index, suboptimal)) => {
+                    self.stale |= suboptimal;
+                    index as usize
+                }
+                Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
+                    self.stale = true;
+                    return Ok(Presented::NotShown);
+                }
+                Err(vk::Result::ERROR_SURFACE_LOST_KHR) => {
+                    bail!("the window's surface is lost (did another program destroy the window?)")
+                }
+                Err(e) => return Err(anyhow!("acquiring a swapchain image: {e}")),
+            };
         if let Some(draw) = &frame.overlay {
             self.overlay.as_mut().expect("a swapchain has an overlay pass").update_textures(ctx, draw.textures)?;
         }
-        ensure!(!frame.read_back || readable, "{} cannot copy from the window's images, so the screen cannot be read back", ctx.info.name);
+        ensure!(
+            !frame.read_back || readable,
+            "{} cannot copy from the window's images, so the screen cannot be read back",
+            ctx.info.name
+        );
         let readback = match frame.read_back {
-            true => Some(Buffer::create(ctx, "screen readback", extent.width as u64 * extent.height as u64 * 4, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu, BufferKind::HostStorage)?),
+            true => Some(Buffer::create(
+                ctx,
+                "screen readback",
+                extent.width as u64 * extent.height as u64 * 4,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+                BufferKind::HostStorage,
+            )?),
             false => None,
         };
         let recorded = self.record(ctx, index, frame, readback.as_ref());
@@ -162,7 +190,8 @@ impl Presenter {
         let semaphores = [self.render_finished[index]];
         let swapchains = [handle];
         let indices = [index as u32];
-        let present = vk::PresentInfoKHR::default().wait_semaphores(&semaphores).swapchains(&swapchains).image_indices(&indices);
+        let present =
+            vk::PresentInfoKHR::default().wait_semaphores(&semaphores).swapchains(&swapchains).image_indices(&indices);
         match unsafe { loader.queue_present(ctx.queue, &present) } {
             Ok(suboptimal) => {
                 self.stale |= suboptimal;
@@ -172,7 +201,9 @@ impl Presenter {
                 self.stale = true;
                 Ok(Presented::NotShown)
             }
-            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => bail!("the window's surface is lost (did another program destroy the window?)"),
+            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => {
+                bail!("the window's surface is lost (did another program destroy the window?)")
+            }
             Err(e) => Err(anyhow!("presenting: {e}")),
         }
     }
@@ -184,7 +215,10 @@ impl Presenter {
         let (image, extent) = (swapchain.images[index], swapchain.extent);
         unsafe {
             device.reset_command_buffer(cb, vk::CommandBufferResetFlags::empty())?;
-            device.begin_command_buffer(cb, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT))?;
+            device.begin_command_buffer(
+                cb,
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )?;
             if let Some(p) = &frame.picture {
                 p.kernel.record(device, cb, p.push, p.groups);
                 let written = vk::BufferMemoryBarrier::default()
@@ -194,44 +228,127 @@ impl Presenter {
                     .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                     .buffer(p.pixels.buffer)
                     .size(vk::WHOLE_SIZE);
-                device.cmd_pipeline_barrier(cb, vk::PipelineStageFlags::COMPUTE_SHADER, vk::PipelineStageFlags::TRANSFER, vk::DependencyFlags::empty(), &[], &[written], &[]);
+                device.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[written],
+                    &[],
+                );
             }
             // The acquire semaphore is waited on at the transfer stage: this transition comes after it.
-            image_barrier(device, cb, image, (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL), (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::TRANSFER), (vk::AccessFlags::empty(), vk::AccessFlags::TRANSFER_WRITE));
+            image_barrier(
+                device,
+                cb,
+                image,
+                (vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+                (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::TRANSFER),
+                (vk::AccessFlags::empty(), vk::AccessFlags::TRANSFER_WRITE),
+            );
             let covered = frame.picture.as_ref().is_some_and(|p| p.size == [extent.width, extent.height]);
             if !covered {
                 let black = vk::ClearColorValue { float32: [0.0, 0.0, 0.0, 1.0] };
                 device.cmd_clear_color_image(cb, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &black, &[COLOR_RANGE]);
-                image_barrier(device, cb, image, (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::TRANSFER_DST_OPTIMAL), (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::TRANSFER), (vk::AccessFlags::TRANSFER_WRITE, vk::AccessFlags::TRANSFER_WRITE));
+                image_barrier(
+                    device,
+                    cb,
+                    image,
+                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::TRANSFER_DST_OPTIMAL),
+                    (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::TRANSFER),
+                    (vk::AccessFlags::TRANSFER_WRITE, vk::AccessFlags::TRANSFER_WRITE),
+                );
             }
             if let Some(p) = &frame.picture {
                 // A picture of another size (the window is being resized) shows its top-left part.
                 let region = vk::BufferImageCopy::default()
                     .buffer_row_length(p.size[0])
                     .buffer_image_height(p.size[1])
-                    .image_subresource(vk::ImageSubresourceLayers { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, base_array_layer: 0, layer_count: 1 })
-                    .image_extent(vk::Extent3D { width: p.size[0].min(extent.width), height: p.size[1].min(extent.height), depth: 1 });
-                device.cmd_copy_buffer_to_image(cb, p.pixels.buffer, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region]);
+                    .image_subresource(vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    })
+                    .image_extent(vk::Extent3D {
+                        width: p.size[0].min(extent.width),
+                        height: p.size[1].min(extent.height),
+                        depth: 1,
+                    });
+                device.cmd_copy_buffer_to_image(
+                    cb,
+                    p.pixels.buffer,
+                    image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                );
             }
         }
         match &frame.overlay {
-            Some(draw) => self.overlay.as_mut().expect("a swapchain has an overlay pass").record(device, cb, index, extent, draw)?,
+            Some(draw) => self
+                .overlay
+                .as_mut()
+                .expect("a swapchain has an overlay pass")
+                .record(device, cb, index, extent, draw)?,
             None => unsafe {
-                image_barrier(device, cb, image, (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR), (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::BOTTOM_OF_PIPE), (vk::AccessFlags::TRANSFER_WRITE, vk::AccessFlags::empty()));
+                image_barrier(
+                    device,
+                    cb,
+                    image,
+                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
+                    (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::BOTTOM_OF_PIPE),
+                    (vk::AccessFlags::TRANSFER_WRITE, vk::AccessFlags::empty()),
+                );
             },
         }
         if let Some(readback) = readback {
             let written = vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
             let write_access = vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_WRITE;
             unsafe {
-                image_barrier(device, cb, image, (vk::ImageLayout::PRESENT_SRC_KHR, vk::ImageLayout::TRANSFER_SRC_OPTIMAL), (written, vk::PipelineStageFlags::TRANSFER), (write_access, vk::AccessFlags::TRANSFER_READ));
+                image_barrier(
+                    device,
+                    cb,
+                    image,
+                    (vk::ImageLayout::PRESENT_SRC_KHR, vk::ImageLayout::TRANSFER_SRC_OPTIMAL),
+                    (written, vk::PipelineStageFlags::TRANSFER),
+                    (write_access, vk::AccessFlags::TRANSFER_READ),
+                );
                 let region = vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, base_array_layer: 0, layer_count: 1 })
+                    .image_subresource(vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    })
                     .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
-                device.cmd_copy_image_to_buffer(cb, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, readback.buffer, &[region]);
-                image_barrier(device, cb, image, (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR), (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::BOTTOM_OF_PIPE), (vk::AccessFlags::empty(), vk::AccessFlags::empty()));
-                let to_host = vk::MemoryBarrier::default().src_access_mask(vk::AccessFlags::TRANSFER_WRITE).dst_access_mask(vk::AccessFlags::HOST_READ);
-                device.cmd_pipeline_barrier(cb, vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::HOST, vk::DependencyFlags::empty(), &[to_host], &[], &[]);
+                device.cmd_copy_image_to_buffer(
+                    cb,
+                    image,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    readback.buffer,
+                    &[region],
+                );
+                image_barrier(
+                    device,
+                    cb,
+                    image,
+                    (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR),
+                    (vk::PipelineStageFlags::TRANSFER, vk::PipelineStageFlags::BOTTOM_OF_PIPE),
+                    (vk::AccessFlags::empty(), vk::AccessFlags::empty()),
+                );
+                let to_host = vk::MemoryBarrier::default()
+                    .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                    .dst_access_mask(vk::AccessFlags::HOST_READ);
+                device.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::HOST,
+                    vk::DependencyFlags::empty(),
+                    &[to_host],
+                    &[],
+                    &[],
+                );
             }
         }
         unsafe { device.end_command_buffer(cb) }?;
@@ -245,9 +362,16 @@ impl Presenter {
         let stages = [vk::PipelineStageFlags::TRANSFER];
         let cbs = [self.command_buffer];
         let signals = [self.render_finished[index]];
-        let submit = [vk::SubmitInfo::default().wait_semaphores(&waits).wait_dst_stage_mask(&stages).command_buffers(&cbs).signal_semaphores(&signals)];
+        let submit = [vk::SubmitInfo::default()
+            .wait_semaphores(&waits)
+            .wait_dst_stage_mask(&stages)
+            .command_buffers(&cbs)
+            .signal_semaphores(&signals)];
         unsafe {
-            ctx.device.queue_submit(ctx.queue, &submit, self.frame_done).map_err(VulkanError).context("submitting a frame")?;
+            ctx.device
+                .queue_submit(ctx.queue, &submit, self.frame_done)
+                .map_err(VulkanError)
+                .context("submitting a frame")?;
             ctx.device.wait_for_fences(&[self.frame_done], true, u64::MAX).map_err(VulkanError)?;
             ctx.device.reset_fences(&[self.frame_done])?;
         }
@@ -274,7 +398,14 @@ impl Presenter {
 }
 
 /// A layout transition of a whole swapchain image.
-unsafe fn image_barrier(device: &ash::Device, cb: vk::CommandBuffer, image: vk::Image, layouts: (vk::ImageLayout, vk::ImageLayout), stages: (vk::PipelineStageFlags, vk::PipelineStageFlags), access: (vk::AccessFlags, vk::AccessFlags)) {
+unsafe fn image_barrier(
+    device: &ash::Device,
+    cb: vk::CommandBuffer,
+    image: vk::Image,
+    layouts: (vk::ImageLayout, vk::ImageLayout),
+    stages: (vk::PipelineStageFlags, vk::PipelineStageFlags),
+    access: (vk::AccessFlags, vk::AccessFlags),
+) {
     let barrier = vk::ImageMemoryBarrier::default()
         .old_layout(layouts.0)
         .new_layout(layouts.1)

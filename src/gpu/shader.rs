@@ -2,7 +2,10 @@
 //! `#include "x.glsl"` lines are resolved here, each file once, so no file system is needed at run time.
 
 use anyhow::{anyhow, Result};
-use glslang::{Compiler, CompilerOptions, ShaderInput, ShaderSource, ShaderStage, SourceLanguage, SpirvVersion, Target, VulkanVersion};
+use glslang::{
+    Compiler, CompilerOptions, ShaderInput, ShaderSource, ShaderStage, SourceLanguage, SpirvVersion, Target,
+    VulkanVersion,
+};
 
 /// (file name, contents) of every shader file the kernel may include.
 pub type ShaderSources<'a> = &'a [(&'a str, &'a str)];

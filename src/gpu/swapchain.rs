@@ -39,14 +39,22 @@ impl Swapchain {
     pub(super) fn new(ctx: &GpuContext, size: [u32; 2], old: vk::SwapchainKHR) -> Result<Option<Self>> {
         let p = ctx.presentation.as_ref().ok_or_else(|| anyhow!("this GPU context was not made for a window"))?;
         let (pd, surface) = (ctx.physical_device, p.surface);
-        let caps = unsafe { p.surface_loader.get_physical_device_surface_capabilities(pd, surface) }.context("the window surface's capabilities")?;
-        let formats = unsafe { p.surface_loader.get_physical_device_surface_formats(pd, surface) }.context("the window surface's formats")?;
-        let modes = unsafe { p.surface_loader.get_physical_device_surface_present_modes(pd, surface) }.context("the window surface's present modes")?;
+        let caps = unsafe { p.surface_loader.get_physical_device_surface_capabilities(pd, surface) }
+            .context("the window surface's capabilities")?;
+        let formats = unsafe { p.surface_loader.get_physical_device_surface_formats(pd, surface) }
+            .context("the window surface's formats")?;
+        let modes = unsafe { p.surface_loader.get_physical_device_surface_present_modes(pd, surface) }
+            .context("the window surface's present modes")?;
         let (format, order) = FORMATS
             .iter()
             .copied()
             .find(|(f, _)| formats.iter().any(|s| s.format == *f && s.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR))
-            .ok_or_else(|| anyhow!("the window offers no 8-bit RGBA or BGRA format (it offers {:?})", formats.iter().map(|f| f.format).collect::<Vec<_>>()))?;
+            .ok_or_else(|| {
+                anyhow!(
+                    "the window offers no 8-bit RGBA or BGRA format (it offers {:?})",
+                    formats.iter().map(|f| f.format).collect::<Vec<_>>()
+                )
+            })?;
         // A surface whose current extent is u32::MAX lets the swapchain choose.
         let extent = if caps.current_extent.width == u32::MAX {
             vk::Extent2D {
@@ -61,7 +69,11 @@ impl Swapchain {
         }
         // Mailbox never blocks the render loop on the display's refresh and never tears; FIFO is
         // what every device offers.
-        let mode = if modes.contains(&vk::PresentModeKHR::MAILBOX) { vk::PresentModeKHR::MAILBOX } else { vk::PresentModeKHR::FIFO };
+        let mode = if modes.contains(&vk::PresentModeKHR::MAILBOX) {
+            vk::PresentModeKHR::MAILBOX
+        } else {
+            vk::PresentModeKHR::FIFO
+        };
         let readable = caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_SRC);
         let mut usage = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::COLOR_ATTACHMENT;
         if readable {

@@ -22,9 +22,7 @@ impl ValidationLog {
 
 pub fn messenger_info(log: &ValidationLog) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
-        .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-        )
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                 | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
@@ -43,9 +41,7 @@ unsafe extern "system" fn on_message(
     if data.is_null() || user.is_null() {
         return vk::FALSE;
     }
-    let text = unsafe { (*data).message_as_c_str() }
-        .map(|m| m.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let text = unsafe { (*data).message_as_c_str() }.map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
     let log = unsafe { &*(user as *const ValidationLog) };
     let line = format!("[{severity:?}] {text}");
     eprintln!("vulkan validation: {line}");

@@ -36,10 +36,7 @@ pub(crate) fn write_atomically(
 /// under the temporary name a real write would use. Run before the work
 /// whose result goes there, so that a bad path fails at once.
 pub fn check_writable(path: &Path) -> Result<(), ImageError> {
-    let unwritable = |reason: String| ImageError::Unwritable {
-        file: file_name(path),
-        reason,
-    };
+    let unwritable = |reason: String| ImageError::Unwritable { file: file_name(path), reason };
     if path.is_dir() {
         return Err(unwritable("it is a directory".to_owned()));
     }
@@ -68,10 +65,7 @@ fn finish(
 }
 
 fn io_error(path: &Path, source: std::io::Error) -> ImageError {
-    ImageError::Io {
-        file: file_name(path),
-        cause: source,
-    }
+    ImageError::Io { file: file_name(path), cause: source }
 }
 
 /// The temporary files this process is writing now.
@@ -145,18 +139,11 @@ pub fn remove_stale_temp_files(target: &Path) -> std::io::Result<Vec<PathBuf>> {
     for entry in std::fs::read_dir(dir)? {
         let entry = entry?;
         let file_name = entry.file_name().to_string_lossy().into_owned();
-        let Some(pid) = file_name
-            .strip_prefix(&prefix)
-            .and_then(parse_pid_and_counter)
-        else {
+        let Some(pid) = file_name.strip_prefix(&prefix).and_then(parse_pid_and_counter) else {
             continue;
         };
         let path = entry.path();
-        let writer_gone = if pid == std::process::id() {
-            !in_flight().contains(&path)
-        } else {
-            !process_runs(pid)
-        };
+        let writer_gone = if pid == std::process::id() { !in_flight().contains(&path) } else { !process_runs(pid) };
         let untouched = entry
             .metadata()
             .and_then(|m| m.modified())
@@ -194,12 +181,9 @@ fn process_runs(pid: u32) -> bool {
 /// so that concurrent writers of one target do not share a temporary file.
 fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path.file_name().ok_or_else(|| {
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "path does not name a file",
-        )
-    })?;
+    let name = path
+        .file_name()
+        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "path does not name a file"))?;
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     let mut temp = OsString::from(".");
     temp.push(name);
@@ -236,11 +220,7 @@ mod tests {
         std::fs::write(&path, b"old").unwrap();
         let err = write_atomically(&path, |w| {
             w.write_all(b"partial").unwrap();
-            Err(ImageError::Truncated {
-                file: file_name(&path),
-                expected: 1,
-                found: 0,
-            })
+            Err(ImageError::Truncated { file: file_name(&path), expected: 1, found: 0 })
         })
         .unwrap_err();
         let contents = std::fs::read(&path).unwrap();

@@ -76,13 +76,20 @@ mod tests {
         assert!((c.relative_mse - expected_rel).abs() < 1e-6, "{c:?}");
         assert!((c.mean_absolute_error - 0.1).abs() < 1e-6);
         assert!((c.mean_ratio.unwrap() - 1.0).abs() < 1e-6);
-        assert_eq!(compare(&image(&[1.0]), &image(&[0.0]), ("a", "b")).unwrap().mean_ratio, None, "no ratio to a black reference");
+        assert_eq!(
+            compare(&image(&[1.0]), &image(&[0.0]), ("a", "b")).unwrap().mean_ratio,
+            None,
+            "no ratio to a black reference"
+        );
         assert_eq!(compare(&image(&[2.0]), &image(&[2.0]), ("a", "b")).unwrap().relative_mse, 0.0);
     }
 
     #[test]
     fn non_finite_pixels_are_an_error_naming_the_image_and_counting_them() {
-        let e = compare(&image(&[1.0, f32::NAN, f32::INFINITY]), &image(&[1.0, 1.0, 1.0]), ("render.pfm", "reference.exr")).unwrap_err().to_string();
+        let e =
+            compare(&image(&[1.0, f32::NAN, f32::INFINITY]), &image(&[1.0, 1.0, 1.0]), ("render.pfm", "reference.exr"))
+                .unwrap_err()
+                .to_string();
         assert!(e.starts_with("render.pfm holds 2 non-finite pixels") && e.contains("(1, 0)"), "{e}");
         let e = compare(&image(&[1.0]), &image(&[f32::NAN]), ("render.pfm", "reference.exr")).unwrap_err().to_string();
         assert!(e.starts_with("reference.exr holds 1 non-finite pixel "), "{e}");

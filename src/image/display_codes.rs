@@ -90,19 +90,43 @@ mod tests {
             bits.extend([t.saturating_sub(1), t, t + 1]);
         }
         let mut sums: Vec<f32> = bits.into_iter().filter(|&b| b <= INFINITY_BITS).map(f32::from_bits).collect();
-        sums.extend([f32::NAN, -f32::NAN, -0.0, -1.0, f32::NEG_INFINITY, f32::INFINITY, f32::MAX, f32::MIN_POSITIVE, 1e-45]);
+        sums.extend([
+            f32::NAN,
+            -f32::NAN,
+            -0.0,
+            -1.0,
+            f32::NEG_INFINITY,
+            f32::INFINITY,
+            f32::MAX,
+            f32::MIN_POSITIVE,
+            1e-45,
+        ]);
         sums
     }
 
     #[test]
     fn tables_give_png_output_codes_exactly() {
         for tonemap in CURVES {
-            for (count, exposure) in [(1.0, 0.0), (7.0, 0.0), (64.0, 1.5), (3.0, -2.25), (1000.0, 0.3), (0.0, 0.0), (5.0, 126.0), (2.0, -126.0)] {
+            for (count, exposure) in [
+                (1.0, 0.0),
+                (7.0, 0.0),
+                (64.0, 1.5),
+                (3.0, -2.25),
+                (1000.0, 0.3),
+                (0.0, 0.0),
+                (5.0, 126.0),
+                (2.0, -126.0),
+            ] {
                 let table = code_thresholds(count, exposure, tonemap);
                 let sums = probe_sums(&table);
                 let expected = png_codes(&sums, count, exposure, tonemap);
                 for (&sum, &want) in sums.iter().zip(&expected) {
-                    assert_eq!(code_from_table(&table, sum), want, "{tonemap} count {count} exposure {exposure}: sum {sum:e} ({:#x})", sum.to_bits());
+                    assert_eq!(
+                        code_from_table(&table, sum),
+                        want,
+                        "{tonemap} count {count} exposure {exposure}: sum {sum:e} ({:#x})",
+                        sum.to_bits()
+                    );
                 }
             }
         }

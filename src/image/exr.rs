@@ -19,12 +19,7 @@ pub fn write(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
         (r, g, b)
     });
     let image = Image::from_channels((img.width as usize, img.height as usize), channels);
-    write_atomically(path, |out| {
-        image
-            .write()
-            .to_buffered(out)
-            .map_err(|e| exr_error(path, e))
-    })
+    write_atomically(path, |out| image.write().to_buffered(out).map_err(|e| exr_error(path, e)))
 }
 
 /// Reads the first layer that has R, G and B channels; alpha is dropped and
@@ -66,10 +61,7 @@ pub(crate) fn check_header_sizes(files: &InputFiles, path: &Path, kind: InputKin
 }
 
 pub(crate) fn exr_error(path: &Path, cause: ::exr::error::Error) -> ImageError {
-    ImageError::Exr {
-        file: file_name(path),
-        cause,
-    }
+    ImageError::Exr { file: file_name(path), cause }
 }
 
 #[cfg(test)]
@@ -97,9 +89,6 @@ mod tests {
     fn garbage_is_rejected_with_file_name() {
         let path = crate::test_files::write_file("exr-garbage", "garbage.exr", b"not an exr file at all");
         let err = read(&InputFiles::anywhere(), &path).unwrap_err().to_string();
-        assert!(
-            err.starts_with(&format!("{}: EXR: ", path.display())),
-            "{err}"
-        );
+        assert!(err.starts_with(&format!("{}: EXR: ", path.display())), "{err}");
     }
 }

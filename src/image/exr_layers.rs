@@ -14,8 +14,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use ::exr::prelude::{
-    read, AnyChannel, ReadChannels as _, ReadLayers as _, AnyChannels, AttributeValue, Encoding, FlatImage,
-    FlatSamples, Image, Layer, LayerAttributes, Text, Vec2, WritableImage,
+    read, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatImage, FlatSamples, Image, Layer, LayerAttributes,
+    ReadChannels as _, ReadLayers as _, Text, Vec2, WritableImage,
 };
 
 use super::atomic::write_atomically;
@@ -72,17 +72,9 @@ impl ExrDocument {
 /// document is inconsistent (data length, empty or duplicate channel names).
 pub fn write_exr_document(path: &Path, doc: &ExrDocument) -> Result<(), ImageError> {
     check_size(&file_name(path), doc.width.into(), doc.height.into())?;
-    let layer = encode(doc).map_err(|reason| ImageError::ExrLayout {
-        file: file_name(path),
-        reason,
-    })?;
+    let layer = encode(doc).map_err(|reason| ImageError::ExrLayout { file: file_name(path), reason })?;
     let image = Image::from_layer(layer);
-    write_atomically(path, |out| {
-        image
-            .write()
-            .to_buffered(out)
-            .map_err(|e| exr_error(path, e))
-    })
+    write_atomically(path, |out| image.write().to_buffered(out).map_err(|e| exr_error(path, e)))
 }
 
 /// Reads every channel of every layer (half and u32 samples converted to
@@ -102,10 +94,7 @@ pub fn read_exr_document(path: &Path) -> Result<ExrDocument, ImageError> {
         .all_attributes()
         .from_buffered(file)
         .map_err(|e| exr_error(path, e))?;
-    decode(&image).map_err(|reason| ImageError::ExrLayout {
-        file: file_name(path),
-        reason,
-    })
+    decode(&image).map_err(|reason| ImageError::ExrLayout { file: file_name(path), reason })
 }
 
 fn encode(doc: &ExrDocument) -> Result<Layer<AnyChannels<FlatSamples>>, String> {
@@ -140,11 +129,7 @@ fn encode(doc: &ExrDocument) -> Result<Layer<AnyChannels<FlatSamples>>, String> 
                     layer.name
                 ));
             }
-            let full = if layer.name.is_empty() {
-                channel.clone()
-            } else {
-                format!("{}.{channel}", layer.name)
-            };
+            let full = if layer.name.is_empty() { channel.clone() } else { format!("{}.{channel}", layer.name) };
             let name = name_text(&full)?;
             if !full_names.insert(full) {
                 return Err(format!("channel '{name}' appears twice"));
@@ -162,22 +147,14 @@ fn encode(doc: &ExrDocument) -> Result<Layer<AnyChannels<FlatSamples>>, String> 
         attributes.other.insert(name_text(name)?, value);
     }
     let encoding = Encoding::SMALL_LOSSLESS;
-    Ok(Layer::new(
-        Vec2(width, height),
-        attributes,
-        encoding,
-        AnyChannels::sort(channels.into()),
-    ))
+    Ok(Layer::new(Vec2(width, height), attributes, encoding, AnyChannels::sort(channels.into())))
 }
 
 /// Channel and attribute names are NUL-terminated in the file, and the
 /// format limits them to 255 bytes.
 fn name_text(name: &str) -> Result<Text, String> {
     if name.is_empty() || name.len() > 255 || name.contains('\0') {
-        return Err(format!(
-            "name '{}' must be 1 to 255 bytes without NUL",
-            name.escape_debug()
-        ));
+        return Err(format!("name '{}' must be 1 to 255 bytes without NUL", name.escape_debug()));
     }
     Ok(Text::from_slice_unchecked(name.as_bytes()))
 }
@@ -202,9 +179,7 @@ fn decode(image: &FlatImage) -> Result<ExrDocument, String> {
         }
         for (name, value) in &part.attributes.other {
             if let AttributeValue::Text(value) = value {
-                attributes
-                    .entry(text_string(name))
-                    .or_insert_with(|| text_string(value));
+                attributes.entry(text_string(name)).or_insert_with(|| text_string(value));
             }
         }
         let prefix = part.attributes.layer_name.as_ref().map(text_string);
@@ -221,10 +196,7 @@ fn decode(image: &FlatImage) -> Result<ExrDocument, String> {
             // Subsampled channels have fewer samples; they would need
             // upsampling, which nothing here wants.
             if samples.len() != pixels {
-                return Err(format!(
-                    "channel '{full}' has {} samples for {pixels} pixels",
-                    samples.len()
-                ));
+                return Err(format!("channel '{full}' has {} samples for {pixels} pixels", samples.len()));
             }
             let (layer, name) = match full.rsplit_once('.') {
                 Some((layer, name)) => (layer.to_owned(), name.to_owned()),
@@ -242,11 +214,7 @@ fn decode(image: &FlatImage) -> Result<ExrDocument, String> {
             for i in 0..pixels {
                 data.extend(channels.iter().map(|(_, samples)| samples[i]));
             }
-            ExrLayer {
-                name,
-                channels: channels.into_iter().map(|(name, _)| name).collect(),
-                data,
-            }
+            ExrLayer { name, channels: channels.into_iter().map(|(name, _)| name).collect(), data }
         })
         .collect();
     Ok(ExrDocument {
@@ -260,10 +228,7 @@ fn decode(image: &FlatImage) -> Result<ExrDocument, String> {
 
 /// R, G, B, A in that order, before any other channel.
 fn rgba_rank(channel: &str) -> usize {
-    ["R", "G", "B", "A"]
-        .iter()
-        .position(|&c| c == channel)
-        .unwrap_or(4)
+    ["R", "G", "B", "A"].iter().position(|&c| c == channel).unwrap_or(4)
 }
 
 #[cfg(test)]
@@ -314,10 +279,7 @@ mod tests {
                 layer("normal", &["X", "Y", "Z"], -3.0),
                 layer("variance", &["Y"], 4.0),
             ],
-            attributes: attributes
-                .iter()
-                .map(|&(k, v)| (k.to_owned(), v.to_owned()))
-                .collect(),
+            attributes: attributes.iter().map(|&(k, v)| (k.to_owned(), v.to_owned())).collect(),
         }
     }
 
@@ -371,10 +333,7 @@ mod tests {
         let back = read_exr_document(&path);
         assert_eq!(read.unwrap(), beauty);
         let back = back.unwrap();
-        assert_eq!(
-            back.layer("albedo"),
-            Some(&ExrLayer::rgb("albedo", &albedo))
-        );
+        assert_eq!(back.layer("albedo"), Some(&ExrLayer::rgb("albedo", &albedo)));
         assert_eq!(back.layers[0], ExrLayer::rgb("", &beauty));
     }
 
@@ -386,11 +345,7 @@ mod tests {
             width: 1,
             height: 1,
             layers: vec![
-                ExrLayer {
-                    name: "normal".to_owned(),
-                    channels: strings(&["Z", "Y", "X"]),
-                    data: vec![3.0, 2.0, 1.0],
-                },
+                ExrLayer { name: "normal".to_owned(), channels: strings(&["Z", "Y", "X"]), data: vec![3.0, 2.0, 1.0] },
                 ExrLayer {
                     name: String::new(),
                     channels: strings(&["A", "B", "G", "R"]),
@@ -451,13 +406,8 @@ mod tests {
     #[test]
     fn missing_directory_is_an_error_naming_the_path() {
         let path = Path::new("/nonexistent/caustica/render.exr");
-        let err = write_exr_document(path, &document())
-            .unwrap_err()
-            .to_string();
-        assert!(
-            err.starts_with("/nonexistent/caustica/render.exr: "),
-            "{err}"
-        );
+        let err = write_exr_document(path, &document()).unwrap_err().to_string();
+        assert!(err.starts_with("/nonexistent/caustica/render.exr: "), "{err}");
     }
 
     #[test]
@@ -474,9 +424,7 @@ mod tests {
             std::fs::write(&path, &bytes[..len]).unwrap();
             match read_exr_document(&path) {
                 Ok(_) => failures.push(format!("prefix of {len} bytes was accepted")),
-                Err(e) if !e.to_string().starts_with(&format!("{}: ", path.display())) => {
-                    failures.push(format!("{e}"))
-                }
+                Err(e) if !e.to_string().starts_with(&format!("{}: ", path.display())) => failures.push(format!("{e}")),
                 Err(_) => {}
             }
         }
@@ -508,10 +456,8 @@ mod tests {
         std::fs::write(&path, &bytes).unwrap();
         let err = read_exr_document(&path).unwrap_err().to_string();
         let plain = crate::image::read_image(&path).unwrap_err().to_string();
-        let expected = format!(
-            "{}: image of 1000000 x 1000000 pixels is too large (limit 2^28 pixels)",
-            path.display()
-        );
+        let expected =
+            format!("{}: image of 1000000 x 1000000 pixels is too large (limit 2^28 pixels)", path.display());
         assert_eq!(err, expected);
         assert_eq!(plain, expected);
     }

@@ -38,11 +38,7 @@ pub struct RgbImage {
 impl RgbImage {
     /// A black image.
     pub fn new(width: u32, height: u32) -> Self {
-        Self {
-            width,
-            height,
-            pixels: vec![[0.0; 3]; width as usize * height as usize],
-        }
+        Self { width, height, pixels: vec![[0.0; 3]; width as usize * height as usize] }
     }
 
     /// Pixel at column `x`, row `y` (row 0 is the top). Panics out of bounds.
@@ -57,12 +53,7 @@ impl RgbImage {
     }
 
     fn index(&self, x: u32, y: u32) -> usize {
-        assert!(
-            x < self.width && y < self.height,
-            "pixel ({x}, {y}) outside {} x {} image",
-            self.width,
-            self.height
-        );
+        assert!(x < self.width && y < self.height, "pixel ({x}, {y}) outside {} x {} image", self.width, self.height);
         y as usize * self.width as usize + x as usize
     }
 }
@@ -84,56 +75,30 @@ pub enum ImageError {
     #[error("{file}: cannot be written: {reason}")]
     Unwritable { file: String, reason: String },
     #[error("{file}: unsupported image format: expected extension {expected}")]
-    UnsupportedExtension {
-        file: String,
-        expected: &'static str,
-    },
+    UnsupportedExtension { file: String, expected: &'static str },
     #[error("{file}: bad PFM header: {reason}")]
     PfmHeader { file: String, reason: String },
     #[error("{file}: truncated: expected {expected} bytes of pixel data, found {found}")]
-    Truncated {
-        file: String,
-        expected: usize,
-        found: usize,
-    },
+    Truncated { file: String, expected: usize, found: usize },
     #[error("{file}: image of {width} x {height} pixels is too large (limit 2^28 pixels)")]
-    TooLarge {
-        file: String,
-        width: u64,
-        height: u64,
-    },
+    TooLarge { file: String, width: u64, height: u64 },
     #[error("{file}: pixel ({x}, {y}) is not finite: {value:?}")]
-    NonFinite {
-        file: String,
-        x: u32,
-        y: u32,
-        value: [f32; 3],
-    },
+    NonFinite { file: String, x: u32, y: u32, value: [f32; 3] },
     #[error("{file}: EXR: {cause}")]
-    Exr {
-        file: String,
-        cause: ::exr::error::Error,
-    },
+    Exr { file: String, cause: ::exr::error::Error },
     #[error("{file}: invalid EXR layers: {reason}")]
     ExrLayout { file: String, reason: String },
     #[error("{file} {reason}")]
     Incomparable { file: String, reason: String },
     #[error("{file}: PNG: {cause}")]
-    Png {
-        file: String,
-        cause: ::png::EncodingError,
-    },
+    Png { file: String, cause: ::png::EncodingError },
 }
 
 /// Rejects images whose pixel count overflows or exceeds [`MAX_PIXELS`].
 pub(crate) fn check_size(file: &str, width: u64, height: u64) -> Result<(), ImageError> {
     match width.checked_mul(height) {
         Some(n) if n <= MAX_PIXELS => Ok(()),
-        _ => Err(ImageError::TooLarge {
-            file: file.to_owned(),
-            width,
-            height,
-        }),
+        _ => Err(ImageError::TooLarge { file: file.to_owned(), width, height }),
     }
 }
 
@@ -143,9 +108,7 @@ pub(crate) fn file_name(path: &Path) -> String {
 }
 
 fn extension(path: &Path) -> Option<String> {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
+    path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase)
 }
 
 /// Reads a radiance image from anywhere (the command line's images), choosing the format by
@@ -160,10 +123,7 @@ pub fn read_image_from(files: &InputFiles, path: &Path) -> Result<RgbImage, Imag
     match extension(path).as_deref() {
         Some("pfm") => pfm::read(files, path),
         Some("exr") => exr::read(files, path),
-        _ => Err(ImageError::UnsupportedExtension {
-            file: file_name(path),
-            expected: ".pfm or .exr",
-        }),
+        _ => Err(ImageError::UnsupportedExtension { file: file_name(path), expected: ".pfm or .exr" }),
     }
 }
 
@@ -177,7 +137,10 @@ pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if !dir.is_dir() {
         let problem = if dir.exists() { "is not a directory" } else { "does not exist" };
-        return Err(ImageError::Unwritable { file: file_name(path), reason: format!("directory {} {problem}", dir.display()) });
+        return Err(ImageError::Unwritable {
+            file: file_name(path),
+            reason: format!("directory {} {problem}", dir.display()),
+        });
     }
     check_writable(path)
 }
@@ -195,28 +158,18 @@ pub struct OutputOptions {
 
 /// Writes an image with default [`OutputOptions`] except `exposure`.
 pub fn write_image(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), ImageError> {
-    let options = OutputOptions {
-        exposure,
-        ..OutputOptions::default()
-    };
+    let options = OutputOptions { exposure, ..OutputOptions::default() };
     write_image_with(path, img, &options)
 }
 
 /// Writes an image atomically, choosing the format by extension
 /// (case-insensitive).
-pub fn write_image_with(
-    path: &Path,
-    img: &RgbImage,
-    options: &OutputOptions,
-) -> Result<(), ImageError> {
+pub fn write_image_with(path: &Path, img: &RgbImage, options: &OutputOptions) -> Result<(), ImageError> {
     match extension(path).as_deref() {
         Some("pfm") => pfm::write(path, img),
         Some("exr") => exr::write(path, img),
         Some("png") => png::write(path, img, options),
-        _ => Err(ImageError::UnsupportedExtension {
-            file: file_name(path),
-            expected: ".pfm, .exr or .png",
-        }),
+        _ => Err(ImageError::UnsupportedExtension { file: file_name(path), expected: ".pfm, .exr or .png" }),
     }
 }
 
@@ -243,15 +196,9 @@ mod tests {
     fn unknown_extension_is_rejected_with_file_name() {
         let img = RgbImage::new(1, 1);
         let err = write_image(Path::new("out.tga"), &img, 0.0).unwrap_err();
-        assert_eq!(
-            err.to_string(),
-            "out.tga: unsupported image format: expected extension .pfm, .exr or .png"
-        );
+        assert_eq!(err.to_string(), "out.tga: unsupported image format: expected extension .pfm, .exr or .png");
         let err = read_image(Path::new("probe.png")).unwrap_err();
-        assert!(
-            err.to_string().starts_with("probe.png: unsupported"),
-            "{err}"
-        );
+        assert!(err.to_string().starts_with("probe.png: unsupported"), "{err}");
     }
 
     #[test]
@@ -270,18 +217,12 @@ mod tests {
         let dir = crate::test_files::temp_dir("formats");
         let mut img = RgbImage::new(2, 1);
         img.set(0, 0, [0.5, 1.5, 2.5]);
-        let options = OutputOptions {
-            exposure: -1.0,
-            tonemap: Tonemap::AcesFilmic,
-            png_depth: PngDepth::Sixteen,
-        };
+        let options = OutputOptions { exposure: -1.0, tonemap: Tonemap::AcesFilmic, png_depth: PngDepth::Sixteen };
         for name in ["a.pfm", "b.exr", "c.png"] {
             write_image_with(&dir.join(name), &img, &options).unwrap();
         }
-        let mut names: Vec<String> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
+        let mut names: Vec<String> =
+            std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         names.sort();
         let exr = read_image(&dir.join("b.exr"));
         assert_eq!(names, ["a.pfm", "b.exr", "c.png"]);
@@ -301,10 +242,6 @@ mod tests {
     #[test]
     fn missing_file_error_names_the_file() {
         let err = read_image(Path::new("/nonexistent/caustica/probe.exr")).unwrap_err();
-        assert!(
-            err.to_string()
-                .starts_with("/nonexistent/caustica/probe.exr: "),
-            "{err}"
-        );
+        assert!(err.to_string().starts_with("/nonexistent/caustica/probe.exr: "), "{err}");
     }
 }

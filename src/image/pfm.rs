@@ -18,11 +18,7 @@ pub fn read(files: &InputFiles, path: &Path) -> Result<RgbImage, ImageError> {
 /// Writes a little-endian RGB PFM file, atomically.
 pub fn write(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     write_atomically(path, |out| {
-        out.write_all(&encode(img))
-            .map_err(|cause| ImageError::Io {
-                file: file_name(path),
-                cause,
-            })
+        out.write_all(&encode(img)).map_err(|cause| ImageError::Io { file: file_name(path), cause })
     })
 }
 
@@ -50,21 +46,13 @@ pub fn encode(img: &RgbImage) -> Vec<u8> {
 /// to multiply by it, so the stored floats are taken as the radiance.
 /// Bytes after the pixel data are tolerated, since some writers pad files.
 pub fn decode(bytes: &[u8], file: &str) -> Result<RgbImage, ImageError> {
-    let bad = |reason: String| ImageError::PfmHeader {
-        file: file.to_owned(),
-        reason,
-    };
+    let bad = |reason: String| ImageError::PfmHeader { file: file.to_owned(), reason };
     let mut header = Header { bytes, pos: 0 };
 
     let channels = match header.token() {
         Some(b"PF") => 3,
         Some(b"Pf") => 1,
-        found => {
-            return Err(bad(format!(
-                "expected 'PF' or 'Pf', found {}",
-                describe(found)
-            )))
-        }
+        found => return Err(bad(format!("expected 'PF' or 'Pf', found {}", describe(found)))),
     };
     let width = header.dimension("width").map_err(bad)?;
     let height = header.dimension("height").map_err(bad)?;
@@ -76,12 +64,7 @@ pub fn decode(bytes: &[u8], file: &str) -> Result<RgbImage, ImageError> {
         .and_then(|t| std::str::from_utf8(t).ok())
         .and_then(|t| t.parse::<f32>().ok())
         .filter(|s| s.is_finite() && *s != 0.0)
-        .ok_or_else(|| {
-            bad(format!(
-                "expected a non-zero finite scale, found {}",
-                describe(scale_token)
-            ))
-        })?;
+        .ok_or_else(|| bad(format!("expected a non-zero finite scale, found {}", describe(scale_token))))?;
     let little_endian = scale < 0.0;
     header.skip_separator();
 
@@ -92,11 +75,7 @@ pub fn decode(bytes: &[u8], file: &str) -> Result<RgbImage, ImageError> {
     let expected = pixel_count * channels * 4;
     let data = &bytes[header.pos..];
     if data.len() < expected {
-        return Err(ImageError::Truncated {
-            file: file.to_owned(),
-            expected,
-            found: data.len(),
-        });
+        return Err(ImageError::Truncated { file: file.to_owned(), expected, found: data.len() });
     }
 
     let sample = |b: &[u8]| {
@@ -108,10 +87,7 @@ pub fn decode(bytes: &[u8], file: &str) -> Result<RgbImage, ImageError> {
         }
     };
     let mut pixels = Vec::with_capacity(pixel_count);
-    for row in data[..expected]
-        .chunks_exact(width as usize * channels * 4)
-        .rev()
-    {
+    for row in data[..expected].chunks_exact(width as usize * channels * 4).rev() {
         for px in row.chunks_exact(channels * 4) {
             pixels.push(if channels == 3 {
                 [sample(&px[0..4]), sample(&px[4..8]), sample(&px[8..12])]
@@ -120,22 +96,14 @@ pub fn decode(bytes: &[u8], file: &str) -> Result<RgbImage, ImageError> {
             });
         }
     }
-    Ok(RgbImage {
-        width,
-        height,
-        pixels,
-    })
+    Ok(RgbImage { width, height, pixels })
 }
 
 /// Fails on the first NaN or infinite pixel (scanning rows top to bottom), so
 /// light-probe loaders can reject files that would poison importance sampling.
 pub fn check_finite(img: &RgbImage, file: &str) -> Result<(), ImageError> {
     let width = img.width as usize;
-    match img
-        .pixels
-        .iter()
-        .position(|p| p.iter().any(|c| !c.is_finite()))
-    {
+    match img.pixels.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
         None => Ok(()),
         Some(i) => Err(ImageError::NonFinite {
             file: file.to_owned(),
@@ -173,12 +141,7 @@ impl<'a> Header<'a> {
             .filter(|t| t.iter().all(u8::is_ascii_digit))
             .and_then(|t| std::str::from_utf8(t).ok()?.parse::<u64>().ok())
             .filter(|&n| n > 0)
-            .ok_or_else(|| {
-                format!(
-                    "expected a positive integer {what}, found {}",
-                    describe(token)
-                )
-            })
+            .ok_or_else(|| format!("expected a positive integer {what}, found {}", describe(token)))
     }
 
     /// Skips the single whitespace character that ends the header. "\r\n"
@@ -237,8 +200,7 @@ mod tests {
         let back = decode(&encode(&img), "t.pfm").unwrap();
         assert_eq!((back.width, back.height), (3, 2));
         // Compare bits: NaN != NaN but must survive unchanged.
-        let bits =
-            |i: &RgbImage| -> Vec<u32> { i.pixels.iter().flatten().map(|v| v.to_bits()).collect() };
+        let bits = |i: &RgbImage| -> Vec<u32> { i.pixels.iter().flatten().map(|v| v.to_bits()).collect() };
         assert_eq!(bits(&back), bits(&img));
     }
 
@@ -283,10 +245,7 @@ mod tests {
     fn scale_magnitude_is_not_applied() {
         let mut bytes = b"PF\n1 1\n-4.0\n".to_vec();
         bytes.extend(le(&[1.0, 2.0, 3.0]));
-        assert_eq!(
-            decode(&bytes, "s.pfm").unwrap().pixels,
-            vec![[1.0, 2.0, 3.0]]
-        );
+        assert_eq!(decode(&bytes, "s.pfm").unwrap().pixels, vec![[1.0, 2.0, 3.0]]);
     }
 
     #[test]
@@ -302,10 +261,7 @@ mod tests {
         let mut bytes = b"PF\r\n1\t1\r\n-1.0\r\n".to_vec();
         bytes.extend(le(&[1.0, 2.0, 3.0]));
         bytes.extend_from_slice(b"trailing");
-        assert_eq!(
-            decode(&bytes, "w.pfm").unwrap().pixels,
-            vec![[1.0, 2.0, 3.0]]
-        );
+        assert_eq!(decode(&bytes, "w.pfm").unwrap().pixels, vec![[1.0, 2.0, 3.0]]);
 
         // A single whitespace ends the header even if data starts with a
         // whitespace byte (0x20 is the low byte of this value).
@@ -317,26 +273,17 @@ mod tests {
 
     #[test]
     fn rejects_empty_file() {
-        assert_eq!(
-            err(b""),
-            "probe.pfm: bad PFM header: expected 'PF' or 'Pf', found end of file"
-        );
+        assert_eq!(err(b""), "probe.pfm: bad PFM header: expected 'PF' or 'Pf', found end of file");
     }
 
     #[test]
     fn rejects_bad_magic() {
-        assert_eq!(
-            err(b"P6\n1 1\n255\n"),
-            "probe.pfm: bad PFM header: expected 'PF' or 'Pf', found 'P6'"
-        );
+        assert_eq!(err(b"P6\n1 1\n255\n"), "probe.pfm: bad PFM header: expected 'PF' or 'Pf', found 'P6'");
     }
 
     #[test]
     fn rejects_missing_height() {
-        assert_eq!(
-            err(b"PF\n4"),
-            "probe.pfm: bad PFM header: expected a positive integer height, found end of file"
-        );
+        assert_eq!(err(b"PF\n4"), "probe.pfm: bad PFM header: expected a positive integer height, found end of file");
     }
 
     #[test]
@@ -368,18 +315,12 @@ mod tests {
     fn rejects_truncated_data() {
         let mut bytes = b"PF\n256 256\n-1.0\n".to_vec();
         bytes.extend(vec![0u8; 1000]);
-        assert_eq!(
-            err(&bytes),
-            "probe.pfm: truncated: expected 786432 bytes of pixel data, found 1000"
-        );
+        assert_eq!(err(&bytes), "probe.pfm: truncated: expected 786432 bytes of pixel data, found 1000");
     }
 
     #[test]
     fn rejects_bad_scale() {
-        assert_eq!(
-            err(b"PF\n1 1\n0\n"),
-            "probe.pfm: bad PFM header: expected a non-zero finite scale, found '0'"
-        );
+        assert_eq!(err(b"PF\n1 1\n0\n"), "probe.pfm: bad PFM header: expected a non-zero finite scale, found '0'");
         assert!(err(b"PF\n1 1\n-0.0\n").contains("scale, found '-0.0'"));
         assert!(err(b"PF\n1 1\nnan\n").contains("scale, found 'nan'"));
         assert!(err(b"PF\n1 1\ninf\n").contains("scale, found 'inf'"));
@@ -393,9 +334,6 @@ mod tests {
         img.set(2, 1, [0.0, f32::INFINITY, 0.0]);
         img.set(1, 0, [f32::NAN, 0.0, 0.0]);
         let msg = check_finite(&img, "p.pfm").unwrap_err().to_string();
-        assert!(
-            msg.starts_with("p.pfm: pixel (1, 0) is not finite: [NaN"),
-            "{msg}"
-        );
+        assert!(msg.starts_with("p.pfm: pixel (1, 0) is not finite: [NaN"), "{msg}");
     }
 }

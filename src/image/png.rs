@@ -42,33 +42,19 @@ impl FromStr for PngDepth {
 /// Writes `img` tonemapped as `options` say, atomically.
 pub fn write(path: &Path, img: &RgbImage, options: &OutputOptions) -> Result<(), ImageError> {
     write_atomically(path, |out| {
-        encode(out, img, options).map_err(|cause| ImageError::Png {
-            file: file_name(path),
-            cause,
-        })
+        encode(out, img, options).map_err(|cause| ImageError::Png { file: file_name(path), cause })
     })
 }
 
 /// Encodes into any writer. The sRGB chunk tells viewers the samples are
 /// already sRGB-encoded so they do not apply another gamma.
-pub fn encode(
-    out: impl Write,
-    img: &RgbImage,
-    options: &OutputOptions,
-) -> Result<(), ::png::EncodingError> {
-    let OutputOptions {
-        exposure,
-        tonemap,
-        png_depth,
-    } = *options;
+pub fn encode(out: impl Write, img: &RgbImage, options: &OutputOptions) -> Result<(), ::png::EncodingError> {
+    let OutputOptions { exposure, tonemap, png_depth } = *options;
     let data = match png_depth {
         PngDepth::Eight => tonemap_srgb8(img, exposure, tonemap),
         // PNG stores 16-bit samples big-endian, and the png crate takes
         // them as they are stored.
-        PngDepth::Sixteen => tonemap_srgb16(img, exposure, tonemap)
-            .into_iter()
-            .flat_map(u16::to_be_bytes)
-            .collect(),
+        PngDepth::Sixteen => tonemap_srgb16(img, exposure, tonemap).into_iter().flat_map(u16::to_be_bytes).collect(),
     };
     encode_srgb(out, img.width, img.height, png_depth, &data)
 }
@@ -100,10 +86,8 @@ fn encode_srgb(
 pub fn write_srgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
     assert_eq!(rgb.len(), width as usize * height as usize * 3, "RGB samples of {width}x{height}");
     write_atomically(path, |out| {
-        encode_srgb(out, width, height, PngDepth::Eight, rgb).map_err(|cause| ImageError::Png {
-            file: file_name(path),
-            cause,
-        })
+        encode_srgb(out, width, height, PngDepth::Eight, rgb)
+            .map_err(|cause| ImageError::Png { file: file_name(path), cause })
     })
 }
 
@@ -115,14 +99,7 @@ mod tests {
 
     /// Decodes without transformations: (color type, bit depth, sRGB intent,
     /// raw sample bytes).
-    fn decode(
-        bytes: Vec<u8>,
-    ) -> (
-        ::png::ColorType,
-        ::png::BitDepth,
-        Option<::png::SrgbRenderingIntent>,
-        Vec<u8>,
-    ) {
+    fn decode(bytes: Vec<u8>) -> (::png::ColorType, ::png::BitDepth, Option<::png::SrgbRenderingIntent>, Vec<u8>) {
         let mut decoder = ::png::Decoder::new(Cursor::new(bytes));
         decoder.set_transformations(::png::Transformations::IDENTITY);
         let mut reader = decoder.read_info().unwrap();
@@ -140,17 +117,11 @@ mod tests {
         img.set(1, 0, [0.25, 0.25, 0.25]);
         img.set(0, 1, [f32::NAN, 2.0, 0.003_130_8]);
         let mut bytes = Vec::new();
-        let options = OutputOptions {
-            exposure: 1.0,
-            ..OutputOptions::default()
-        };
+        let options = OutputOptions { exposure: 1.0, ..OutputOptions::default() };
         encode(&mut bytes, &img, &options).unwrap();
 
         let (color, depth, srgb, samples) = decode(bytes);
-        assert_eq!(
-            (color, depth),
-            (::png::ColorType::Rgb, ::png::BitDepth::Eight)
-        );
+        assert_eq!((color, depth), (::png::ColorType::Rgb, ::png::BitDepth::Eight));
         assert_eq!(srgb, Some(::png::SrgbRenderingIntent::Perceptual));
         // Exposure +1 doubles: 0.25 -> 0.5 -> 188, 2 * 0.0031308 is on the
         // power segment (0.0724 -> 18), NaN -> 0, the unset pixel stays 0.
@@ -162,24 +133,14 @@ mod tests {
         let mut img = RgbImage::new(2, 1);
         img.set(0, 0, [0.5, 1.0, 0.0]);
         img.set(1, 0, [3.0, 0.001, 0.18]);
-        let options = OutputOptions {
-            exposure: 0.0,
-            tonemap: Tonemap::Reinhard,
-            png_depth: PngDepth::Sixteen,
-        };
+        let options = OutputOptions { exposure: 0.0, tonemap: Tonemap::Reinhard, png_depth: PngDepth::Sixteen };
         let mut bytes = Vec::new();
         encode(&mut bytes, &img, &options).unwrap();
 
         let (color, depth, srgb, samples) = decode(bytes);
-        assert_eq!(
-            (color, depth),
-            (::png::ColorType::Rgb, ::png::BitDepth::Sixteen)
-        );
+        assert_eq!((color, depth), (::png::ColorType::Rgb, ::png::BitDepth::Sixteen));
         assert_eq!(srgb, Some(::png::SrgbRenderingIntent::Perceptual));
-        let values: Vec<u16> = samples
-            .chunks_exact(2)
-            .map(|b| u16::from_be_bytes([b[0], b[1]]))
-            .collect();
+        let values: Vec<u16> = samples.chunks_exact(2).map(|b| u16::from_be_bytes([b[0], b[1]])).collect();
         let expected: Vec<u16> = [0.5f32, 1.0, 0.0, 3.0, 0.001, 0.18]
             .iter()
             .map(|&v| (srgb_oetf(v / (1.0 + v)) * 65535.0).round() as u16)
@@ -198,17 +159,9 @@ mod tests {
         let bytes = std::fs::read(&path).unwrap();
         assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"));
 
-        let err = write(
-            Path::new("/nonexistent/caustica/out.png"),
-            &RgbImage::new(1, 1),
-            &OutputOptions::default(),
-        )
-        .unwrap_err();
-        assert!(
-            err.to_string()
-                .starts_with("/nonexistent/caustica/out.png: "),
-            "{err}"
-        );
+        let err = write(Path::new("/nonexistent/caustica/out.png"), &RgbImage::new(1, 1), &OutputOptions::default())
+            .unwrap_err();
+        assert!(err.to_string().starts_with("/nonexistent/caustica/out.png: "), "{err}");
     }
 
     #[test]

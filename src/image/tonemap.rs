@@ -38,11 +38,7 @@ impl Tonemap {
         // `clamp` alone would pass NaN through. Bounding by f32::MAX keeps
         // the curves finite for +inf (inf / inf is NaN); f64 keeps the ACES
         // squares from overflowing near f32::MAX.
-        let x = if linear.is_nan() {
-            0.0
-        } else {
-            linear.clamp(0.0, f32::MAX)
-        };
+        let x = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, f32::MAX) };
         match self {
             Self::Clamp => x.min(1.0),
             Self::Reinhard => {
@@ -86,30 +82,19 @@ pub fn srgb_oetf(linear: f32) -> f32 {
 
 /// Scales by 2^`exposure`, applies `tonemap` and sRGB-encodes: values in
 /// [0, 1], channel by channel, rows top to bottom.
-fn display_values(
-    img: &RgbImage,
-    exposure: f32,
-    tonemap: Tonemap,
-) -> impl Iterator<Item = f32> + '_ {
+fn display_values(img: &RgbImage, exposure: f32, tonemap: Tonemap) -> impl Iterator<Item = f32> + '_ {
     let scale = exposure.exp2();
-    img.pixels
-        .iter()
-        .flatten()
-        .map(move |&v| srgb_oetf(tonemap.apply(v * scale)))
+    img.pixels.iter().flatten().map(move |&v| srgb_oetf(tonemap.apply(v * scale)))
 }
 
 /// Display values rounded to 8 bits: tightly packed RGB rows, top to bottom.
 pub fn tonemap_srgb8(img: &RgbImage, exposure: f32, tonemap: Tonemap) -> Vec<u8> {
-    display_values(img, exposure, tonemap)
-        .map(|v| (v * 255.0).round() as u8)
-        .collect()
+    display_values(img, exposure, tonemap).map(|v| (v * 255.0).round() as u8).collect()
 }
 
 /// Display values rounded to 16 bits: tightly packed RGB rows, top to bottom.
 pub fn tonemap_srgb16(img: &RgbImage, exposure: f32, tonemap: Tonemap) -> Vec<u16> {
-    display_values(img, exposure, tonemap)
-        .map(|v| (v * 65535.0).round() as u16)
-        .collect()
+    display_values(img, exposure, tonemap).map(|v| (v * 65535.0).round() as u16).collect()
 }
 
 #[cfg(test)]
@@ -161,10 +146,7 @@ mod tests {
         let mut img = RgbImage::new(2, 1);
         img.set(0, 0, [0.0, 0.5, 1.0]);
         img.set(1, 0, [1.0, 0.0, 0.5]);
-        assert_eq!(
-            tonemap_srgb8(&img, 0.0, Tonemap::Clamp),
-            vec![0, 188, 255, 255, 0, 188]
-        );
+        assert_eq!(tonemap_srgb8(&img, 0.0, Tonemap::Clamp), vec![0, 188, 255, 255, 0, 188]);
     }
 
     #[test]
@@ -230,10 +212,7 @@ mod tests {
         img.set(0, 0, [0.0, 1.0, 0.5]);
         img.set(1, 0, [0.001, 2.0, f32::NAN]);
         let expected_half = (srgb_oetf(0.5) * 65535.0).round() as u16;
-        assert_eq!(
-            tonemap_srgb16(&img, 0.0, Tonemap::Clamp),
-            vec![0, 65535, expected_half, 847, 65535, 0]
-        );
+        assert_eq!(tonemap_srgb16(&img, 0.0, Tonemap::Clamp), vec![0, 65535, expected_half, 847, 65535, 0]);
     }
 
     #[test]

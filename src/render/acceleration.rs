@@ -74,7 +74,9 @@ fn points_bounds(points: impl IntoIterator<Item = Vec3>) -> Aabb {
 
 fn shape_bounds(shape: &Shape) -> Aabb {
     match *shape {
-        Shape::Sphere { center, radius, .. } => Aabb { min: center - Vec3::splat(radius), max: center + Vec3::splat(radius) },
+        Shape::Sphere { center, radius, .. } => {
+            Aabb { min: center - Vec3::splat(radius), max: center + Vec3::splat(radius) }
+        }
         Shape::Quad { origin, u, v, .. } => points_bounds([origin, origin + u, origin + v, origin + u + v]),
         Shape::Triangle { v, .. } => points_bounds(v),
     }
@@ -105,11 +107,8 @@ pub fn triangle_primitive(v: [Vec3; 3], material: u32) -> GpuPrimitive {
 }
 
 fn mesh_bottom_level(mesh: &Mesh) -> BottomLevel {
-    let bounds: Vec<Aabb> = mesh
-        .triangles
-        .par_iter()
-        .map(|t| points_bounds(t.map(|i| mesh.positions[i as usize])))
-        .collect();
+    let bounds: Vec<Aabb> =
+        mesh.triangles.par_iter().map(|t| points_bounds(t.map(|i| mesh.positions[i as usize]))).collect();
     let bvh = bvh::build(&bounds);
     BottomLevel { root_bounds: bvh.nodes[0].bounds(), bvh }
 }
@@ -126,11 +125,8 @@ fn mesh_triangle(mesh: &Mesh, t: usize, vertex_base: u32) -> GpuMeshTriangle {
 /// Octahedral encoding into snorm16x2, x in the low half (GLSL unpackSnorm2x16; Cigolle et al. 2014).
 pub fn pack_normal(n: Vec3) -> u32 {
     let n = n / (n.x.abs() + n.y.abs() + n.z.abs());
-    let (x, y) = if n.z >= 0.0 {
-        (n.x, n.y)
-    } else {
-        ((1.0 - n.y.abs()) * n.x.signum(), (1.0 - n.x.abs()) * n.y.signum())
-    };
+    let (x, y) =
+        if n.z >= 0.0 { (n.x, n.y) } else { ((1.0 - n.y.abs()) * n.x.signum(), (1.0 - n.x.abs()) * n.y.signum()) };
     let snorm = |v: f32| ((v.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16 as u32;
     snorm(x) | snorm(y) << 16
 }
@@ -187,7 +183,11 @@ impl Acceleration {
         }
         for inst in &scene.instances {
             let mesh = inst.mesh as usize;
-            placements.push((Some(mesh), inst.transform, transformed_bounds(&meshes[mesh].root_bounds, inst.transform)));
+            placements.push((
+                Some(mesh),
+                inst.transform,
+                transformed_bounds(&meshes[mesh].root_bounds, inst.transform),
+            ));
         }
         let top = bvh::build_single_leaves(&placements.iter().map(|p| p.2).collect::<Vec<_>>());
         // One instance a leaf, as the top level's walk reads them.
@@ -249,7 +249,11 @@ impl Acceleration {
                     None => [INSTANCE_PRIMITIVES, group_root, 0, 0],
                     Some(m) => [INSTANCE_MESH, mesh_roots[m], mesh_flags[m], 0],
                 };
-                GpuInstance { world_to_object: affine_rows(transform.inverse()), object_to_world: affine_rows(transform), info }
+                GpuInstance {
+                    world_to_object: affine_rows(transform.inverse()),
+                    object_to_world: affine_rows(transform),
+                    info,
+                }
             })
             .collect::<Vec<_>>();
 
@@ -264,7 +268,19 @@ impl Acceleration {
             largest_mesh: meshes.iter().max_by_key(|m| m.bvh.prim_order.len()).map(|m| m.bvh.stats()),
         };
         let bounds = if instances.is_empty() { Aabb::EMPTY } else { top.nodes[0].bounds() };
-        Acceleration { nodes, instances, primitives, triangles, triangle_materials, triangle_slots, normals, uvs, tangents, bounds, stats }
+        Acceleration {
+            nodes,
+            instances,
+            primitives,
+            triangles,
+            triangle_materials,
+            triangle_slots,
+            normals,
+            uvs,
+            tangents,
+            bounds,
+            stats,
+        }
     }
 
     pub fn gpu_bytes(&self) -> u64 {
@@ -315,7 +331,11 @@ mod tests {
 
     #[test]
     fn affine_rows_apply_like_the_matrix() {
-        let m = Mat4::from_scale_rotation_translation(Vec3::new(2.0, 3.0, 0.5), glam::Quat::from_rotation_y(0.7), Vec3::new(1.0, -2.0, 4.0));
+        let m = Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, 3.0, 0.5),
+            glam::Quat::from_rotation_y(0.7),
+            Vec3::new(1.0, -2.0, 4.0),
+        );
         let rows = affine_rows(m);
         let p = Vec3::new(0.3, -1.2, 2.5);
         let by_rows = Vec3::from_array(std::array::from_fn(|i| Vec3::from_slice(&rows[i][..3]).dot(p) + rows[i][3]));

@@ -34,7 +34,10 @@ impl AovSet {
                 "normal" => set.normal = true,
                 "depth" => set.depth = true,
                 "samples" => set.samples = true,
-                other => bail!("unknown AOV '{other}': expected a comma-separated list of {}, or all", Self::NAMES.join(", ")),
+                other => bail!(
+                    "unknown AOV '{other}': expected a comma-separated list of {}, or all",
+                    Self::NAMES.join(", ")
+                ),
             }
         }
         Ok(set)
@@ -86,7 +89,11 @@ impl AovSums {
 
     /// Adds `other`'s sums (a partial render of other samples of the same image).
     pub fn add(&mut self, other: &AovSums) {
-        let pairs = self.albedo_depth.iter_mut().zip(&other.albedo_depth).chain(self.normal_hits.iter_mut().zip(&other.normal_hits));
+        let pairs = self
+            .albedo_depth
+            .iter_mut()
+            .zip(&other.albedo_depth)
+            .chain(self.normal_hits.iter_mut().zip(&other.normal_hits));
         for (sum, add) in pairs {
             for c in 0..4 {
                 sum[c] += add[c];
@@ -107,7 +114,11 @@ impl AovSums {
 
     /// Mean distance to the first hit over the samples that hit; +infinity where none did.
     pub fn depth(&self) -> Vec<f32> {
-        self.albedo_depth.iter().zip(&self.normal_hits).map(|(a, h)| if h[3] > 0.0 { a[3] / h[3] } else { f32::INFINITY }).collect()
+        self.albedo_depth
+            .iter()
+            .zip(&self.normal_hits)
+            .map(|(a, h)| if h[3] > 0.0 { a[3] / h[3] } else { f32::INFINITY })
+            .collect()
     }
 }
 
@@ -136,7 +147,10 @@ mod tests {
 
     #[test]
     fn means_divide_by_samples_and_depth_by_hits() {
-        let sums = AovSums { albedo_depth: vec![[1.0, 2.0, 3.0, 6.0], [0.5, 0.5, 0.5, 0.0]], normal_hits: vec![[0.0, 4.0, 0.0, 3.0], [0.0; 4]] };
+        let sums = AovSums {
+            albedo_depth: vec![[1.0, 2.0, 3.0, 6.0], [0.5, 0.5, 0.5, 0.0]],
+            normal_hits: vec![[0.0, 4.0, 0.0, 3.0], [0.0; 4]],
+        };
         let counts = [4.0, 2.0];
         assert_eq!(sums.albedo(&counts), vec![[0.25, 0.5, 0.75], [0.25, 0.25, 0.25]]);
         assert_eq!(sums.normal(&counts), vec![[0.0, 1.0, 0.0], [0.0; 3]]);

@@ -117,7 +117,10 @@ pub fn glsl(array: &BufferBinding, element: Element, plan: ChunkPlan) -> String 
     }
     out += &format!("{ty} load_{name}(uint i) {{\n{}}}\n", window_switch(plan, &|c| format!("return {name}_{c}[j];")));
     if writable {
-        out += &format!("void store_{name}(uint i, {ty} v) {{\n{}}}\n", window_switch(plan, &|c| format!("{name}_{c}[j] = v; break;")));
+        out += &format!(
+            "void store_{name}(uint i, {ty} v) {{\n{}}}\n",
+            window_switch(plan, &|c| format!("{name}_{c}[j] = v; break;"))
+        );
     }
     out
 }
@@ -156,19 +159,26 @@ pub fn glsl_texels(array: &BufferBinding, element: Element, texels: &[Texel], pl
                 Texel::Float => format!("uintBitsToFloat({}.x)", fetch(first)),
                 Texel::Uint => format!("{}.x", fetch(first)),
                 Texel::Vec4Array(n) => {
-                    let rows: Vec<String> = (first..first + n).map(|row| format!("uintBitsToFloat({})", fetch(row))).collect();
+                    let rows: Vec<String> =
+                        (first..first + n).map(|row| format!("uintBitsToFloat({})", fetch(row))).collect();
                     format!("vec4[{n}]({})", rows.join(", "))
                 }
             });
             first += texel.count();
         }
-        out += &format!("{ty} {name}_{c}_record(uint j) {{\n    int t = int(j * {first}u);\n    return {ty}({});\n}}\n", members.join(", "));
+        out += &format!(
+            "{ty} {name}_{c}_record(uint j) {{\n    int t = int(j * {first}u);\n    return {ty}({});\n}}\n",
+            members.join(", ")
+        );
     }
     if plan.chunks == 1 {
         out += &format!("{ty} load_{name}(uint i) {{ return {name}_0_record(i); }}\n");
         return out;
     }
-    out += &format!("{ty} load_{name}(uint i) {{\n{}}}\n", window_switch(plan, &|c| format!("return {name}_{c}_record(j);")));
+    out += &format!(
+        "{ty} load_{name}(uint i) {{\n{}}}\n",
+        window_switch(plan, &|c| format!("return {name}_{c}_record(j);"))
+    );
     out
 }
 
@@ -238,8 +248,14 @@ mod tests {
         assert!(src.contains("    int t = int(j * 4u);\n    return WideNode(uintBitsToFloat(texelFetch(nodes_0, t + 0)), texelFetch(nodes_0, t + 1), texelFetch(nodes_0, t + 2), texelFetch(nodes_0, t + 3));"), "{src}");
         assert!(src.contains("WideNode load_nodes(uint i) { return nodes_0_record(i); }"), "{src}");
         let src = glsl_texels(nodes, element, texels, ChunkPlan { shift: 4, chunks: 2 });
-        assert!(src.contains(&format!("binding = {}) uniform utextureBuffer nodes_1;", window_binding(nodes, 1))), "{src}");
-        assert!(src.contains("    case 0u: return nodes_0_record(j);\n    default: return nodes_1_record(j);"), "{src}");
+        assert!(
+            src.contains(&format!("binding = {}) uniform utextureBuffer nodes_1;", window_binding(nodes, 1))),
+            "{src}"
+        );
+        assert!(
+            src.contains("    case 0u: return nodes_0_record(j);\n    default: return nodes_1_record(j);"),
+            "{src}"
+        );
     }
 
     #[test]
@@ -250,7 +266,9 @@ mod tests {
         let src = glsl_texels(cdf, element, texels, ChunkPlan::WHOLE);
         assert!(src.contains("float env_cdf_0_record(uint j) {\n    int t = int(j * 1u);\n    return float(uintBitsToFloat(texelFetch(env_cdf_0, t + 0).x));"), "{src}");
         let uvs = KernelBuffer::VertexUvs.entry();
-        let Shape::TexelBuffer { element, texels } = uvs.shape else { panic!("the texture coordinates are read as texels") };
+        let Shape::TexelBuffer { element, texels } = uvs.shape else {
+            panic!("the texture coordinates are read as texels")
+        };
         assert_eq!(uvs.texel_words(), Some(crate::gpu::TexelWords::Two));
         let src = glsl_texels(uvs, element, texels, ChunkPlan::WHOLE);
         assert!(src.contains("return vec2(uintBitsToFloat(texelFetch(vertex_uvs_0, t + 0).xy));"), "{src}");

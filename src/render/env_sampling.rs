@@ -56,7 +56,11 @@ impl EnvDistribution {
         let lum = |x: i64, y: i64| -> f64 {
             // The kernel filters bilinearly, so a cell shows its neighbours' radiance too: weight
             // it by the brightest of them, so no direction with radiance gets zero probability.
-            let x = if map.projection == MapProjection::LatLong { x.rem_euclid(w as i64) } else { x.clamp(0, w as i64 - 1) };
+            let x = if map.projection == MapProjection::LatLong {
+                x.rem_euclid(w as i64)
+            } else {
+                x.clamp(0, w as i64 - 1)
+            };
             luminance(&map.image.pixels[(y.clamp(0, h as i64 - 1) * w as i64 + x) as usize])
         };
         let mut rows = Vec::with_capacity(h as usize);
@@ -64,7 +68,10 @@ impl EnvDistribution {
         for y in 0..h {
             let weights: Vec<f64> = (0..w)
                 .map(|x| {
-                    let brightest = (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (dx, dy))).map(|(dx, dy)| lum(x as i64 + dx, y as i64 + dy)).fold(0.0, f64::max);
+                    let brightest = (-1..=1)
+                        .flat_map(|dy| (-1..=1).map(move |dx| (dx, dy)))
+                        .map(|(dx, dy)| lum(x as i64 + dx, y as i64 + dy))
+                        .fold(0.0, f64::max);
                     brightest * cell_solid_angle(map.projection, x, y, w, h)
                 })
                 .collect();
@@ -96,7 +103,9 @@ mod tests {
     #[test]
     fn cells_cover_the_sphere() {
         // Lat-long bands are exact; the angular map's midpoint rule converges as cells shrink.
-        let total = |p: MapProjection, w: u32, h: u32| (0..h).flat_map(|y| (0..w).map(move |x| cell_solid_angle(p, x, y, w, h))).sum::<f64>();
+        let total = |p: MapProjection, w: u32, h: u32| {
+            (0..h).flat_map(|y| (0..w).map(move |x| cell_solid_angle(p, x, y, w, h))).sum::<f64>()
+        };
         assert!((total(MapProjection::LatLong, 64, 32) - 4.0 * PI).abs() < 1e-9);
         assert!((total(MapProjection::Angular, 512, 512) / (4.0 * PI) - 1.0).abs() < 0.01);
     }

@@ -10,9 +10,12 @@
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
-use super::layout::{GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL, MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
-use super::scene_data::SceneData;
 use super::layout::ENV_CONSTANT;
+use super::layout::{
+    GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL,
+    MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
+};
+use super::scene_data::SceneData;
 use crate::bvh::{CHILD_INTERIOR, WIDTH};
 
 /// Most shapes a scene may have for its rays to test each in turn rather than walk them in its BVH
@@ -70,7 +73,14 @@ impl FewShapes {
     /// `SCENE_FEW_SHAPES`: one `FEW_SHAPE(index, kind)` a shape, in order.
     fn define(&self) -> String {
         let kinds = &self.kinds[..self.count as usize];
-        kinds.iter().enumerate().map(|(i, &kind)| format!("FEW_SHAPE({i}u, {})", kind_name(kind.into()).expect("FewShapes holds known kinds"))).collect::<Vec<_>>().join(" ")
+        kinds
+            .iter()
+            .enumerate()
+            .map(|(i, &kind)| {
+                format!("FEW_SHAPE({i}u, {})", kind_name(kind.into()).expect("FewShapes holds known kinds"))
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
     }
 }
 
@@ -169,7 +179,37 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Every feature: the general kernel, which renders any scene (and is what specialization is
     /// measured against: `caustica bench --general-kernel`).
-    pub const ALL: Self = Self { few_shapes: FewShapes::NONE, top_level: true, top_level_tree: true, meshes: true, primitives: true, textures: true, emissive_textures: true, normal_maps: true, alpha: true, environment_map: true, rough_lobes: true, coated: true, beckmann: true, anisotropic: true, thin_dielectrics: true, one_sided: true, clearcoat: true, absorption: true, reflectors: true, dielectrics: true, complex_conductors: true, sphere_shapes: true, quad_shapes: true, triangle_shapes: true, sphere_lights: true, triangle_lights: true, punctual_lights: true, light_pick: true, light_disks: true };
+    pub const ALL: Self = Self {
+        few_shapes: FewShapes::NONE,
+        top_level: true,
+        top_level_tree: true,
+        meshes: true,
+        primitives: true,
+        textures: true,
+        emissive_textures: true,
+        normal_maps: true,
+        alpha: true,
+        environment_map: true,
+        rough_lobes: true,
+        coated: true,
+        beckmann: true,
+        anisotropic: true,
+        thin_dielectrics: true,
+        one_sided: true,
+        clearcoat: true,
+        absorption: true,
+        reflectors: true,
+        dielectrics: true,
+        complex_conductors: true,
+        sphere_shapes: true,
+        quad_shapes: true,
+        triangle_shapes: true,
+        sphere_lights: true,
+        triangle_lights: true,
+        punctual_lights: true,
+        light_pick: true,
+        light_disks: true,
+    };
 
     /// What `data` uses.
     pub fn of(data: &SceneData) -> Self {
@@ -192,15 +232,27 @@ impl SceneFeatures {
             // At most FEW_PRIMITIVES shapes, each of a kind the kernel knows; else the walk meets them.
             few_shapes: FewShapes::new(data.acceleration.primitives.iter().map(kind)).unwrap_or(FewShapes::NONE),
             top_level: instances.len() > 1,
-            top_level_tree: instances.len() > 1 && data.acceleration.nodes.first().is_some_and(|root| (0..WIDTH).any(|k| root.kind(k) == CHILD_INTERIOR)),
+            top_level_tree: instances.len() > 1
+                && data
+                    .acceleration
+                    .nodes
+                    .first()
+                    .is_some_and(|root| (0..WIDTH).any(|k| root.kind(k) == CHILD_INTERIOR)),
             meshes: has_instance(INSTANCE_MESH),
             primitives: has_instance(INSTANCE_PRIMITIVES),
             textures: !data.textures.is_empty(),
-            emissive_textures: data.materials.iter().any(|m| m.maps[0].to_bits() != NO_TEXTURE && m.emission_t[..3].iter().any(|&e| e > 0.0)),
-            normal_maps: !data.acceleration.tangents.is_empty() && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
+            emissive_textures: data
+                .materials
+                .iter()
+                .any(|m| m.maps[0].to_bits() != NO_TEXTURE && m.emission_t[..3].iter().any(|&e| e > 0.0)),
+            normal_maps: !data.acceleration.tangents.is_empty()
+                && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
             alpha: has_instance(INSTANCE_MESH) && data.materials.iter().any(|m| m.alpha[3].to_bits() != ALPHA_OPAQUE),
             environment_map: data.env_kind != ENV_CONSTANT,
-            rough_lobes: data.materials.iter().any(|m| rough(m) || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
+            rough_lobes: data
+                .materials
+                .iter()
+                .any(|m| rough(m) || (m.coat[0] > 0.0 && m.coat[1] * m.coat[1] >= ALPHA_DELTA)),
             coated,
             beckmann: data.materials.iter().any(|m| flags(m) & MATERIAL_BECKMANN != 0 && rough(m)),
             anisotropic: data.materials.iter().any(|m| m.volume[3] > 0.0 && rough(m)),
@@ -208,8 +260,13 @@ impl SceneFeatures {
             one_sided: data.materials.iter().any(|m| flags(m) & MATERIAL_ONE_SIDED != 0),
             clearcoat,
             absorption: data.materials.iter().any(|m| m.volume[..3].iter().any(|&s| s > 0.0)),
-            reflectors: coated || clearcoat || data.materials.iter().any(|m| m.albedo_r[3] > 0.0 || (textured(m) && m.metallic_roughness[1] > 0.0)),
-            dielectrics: data.materials.iter().any(|m| m.emission_t[3] > 0.0 || (textured(m) && m.metallic_roughness[3] > 0.0)),
+            reflectors: coated
+                || clearcoat
+                || data.materials.iter().any(|m| m.albedo_r[3] > 0.0 || (textured(m) && m.metallic_roughness[1] > 0.0)),
+            dielectrics: data
+                .materials
+                .iter()
+                .any(|m| m.emission_t[3] > 0.0 || (textured(m) && m.metallic_roughness[3] > 0.0)),
             complex_conductors: data.materials.iter().any(|m| m.conductor_eta[3].to_bits() == CONDUCTOR_COMPLEX),
             sphere_shapes: shapes_of(PRIM_SPHERE),
             quad_shapes: shapes_of(PRIM_QUAD),
@@ -218,7 +275,10 @@ impl SceneFeatures {
             triangle_lights: lights_of(PRIM_TRIANGLE),
             punctual_lights: !data.punctual_lights.is_empty(),
             light_pick: data.lights.len() + data.punctual_lights.len() != 1,
-            light_disks: data.punctual_lights.iter().any(|l| l.position_kind[3].to_bits() == LIGHT_DIRECTIONAL && l.shape[2] > 0.0),
+            light_disks: data
+                .punctual_lights
+                .iter()
+                .any(|l| l.position_kind[3].to_bits() == LIGHT_DIRECTIONAL && l.shape[2] > 0.0),
         }
     }
 
@@ -273,7 +333,8 @@ impl SceneFeatures {
 
     /// The `#define`s that compile the kernel for these features.
     pub fn defines(&self) -> Vec<(&'static str, String)> {
-        let mut defines: Vec<_> = self.table().into_iter().map(|(_, define, on)| (define, u32::from(on).to_string())).collect();
+        let mut defines: Vec<_> =
+            self.table().into_iter().map(|(_, define, on)| (define, u32::from(on).to_string())).collect();
         defines.push(("SCENE_FEW_SHAPES", self.few_shapes.define()));
         let selects = !self.few_shapes.is_empty() && self.few_shapes.len() <= FEW_SHAPE_SELECTS;
         defines.push(("SCENE_FEW_SHAPE_SELECTS", u32::from(selects).to_string()));
@@ -299,7 +360,10 @@ mod tests {
     #[test]
     fn alpha_delta_matches_glsl() {
         let glsl = include_str!("../../shaders/microfacet.glsl");
-        assert!(glsl.contains(&format!("const float ALPHA_DELTA = {ALPHA_DELTA:e};")), "ALPHA_DELTA = {ALPHA_DELTA:e} not found in microfacet.glsl");
+        assert!(
+            glsl.contains(&format!("const float ALPHA_DELTA = {ALPHA_DELTA:e};")),
+            "ALPHA_DELTA = {ALPHA_DELTA:e} not found in microfacet.glsl"
+        );
     }
 
     fn features_of(scene: &crate::scene::Scene) -> SceneFeatures {
@@ -318,21 +382,30 @@ mod tests {
         assert_eq!(shape(features_of(&scene)), (false, FEW_PRIMITIVES, false), "{FEW_PRIMITIVES} shapes");
         scene.shapes.push(sphere);
         assert_eq!(shape(features_of(&scene)), (true, 0, true), "{} shapes are walked", FEW_PRIMITIVES + 1);
-        let mut meshes = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml")).expect("a checked-in scene loads");
+        let mut meshes = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml"))
+            .expect("a checked-in scene loads");
         assert_eq!(shape(features_of(&meshes)), (true, 0, false), "a scene of meshes alone walks them");
         meshes.shapes.push(sphere);
-        assert_eq!(shape(features_of(&meshes)), (true, 1, false), "a mesh scene's one sphere is tested before the walk");
+        assert_eq!(
+            shape(features_of(&meshes)),
+            (true, 1, false),
+            "a mesh scene's one sphere is tested before the walk"
+        );
     }
 
     #[test]
     fn a_top_level_of_up_to_four_instances_is_its_root_alone() {
         // (top level, top level deeper than its root)
         let top = |f: SceneFeatures| (f.top_level, f.top_level_tree);
-        let mut scene = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml")).expect("a checked-in scene loads");
+        let mut scene = crate::scene::Scene::load(std::path::Path::new("scenes/cornell_original.toml"))
+            .expect("a checked-in scene loads");
         assert_eq!(scene.instances.len(), 1);
         assert_eq!(top(features_of(&scene)), (false, false), "one instance: no top level");
         let placed = scene.instances[0];
-        let shifted = |i: usize| crate::scene::Instance { transform: glam::Mat4::from_translation(glam::Vec3::new(3.0 * i as f32, 0.0, 0.0)) * placed.transform, ..placed };
+        let shifted = |i: usize| crate::scene::Instance {
+            transform: glam::Mat4::from_translation(glam::Vec3::new(3.0 * i as f32, 0.0, 0.0)) * placed.transform,
+            ..placed
+        };
         for count in 2..=WIDTH {
             scene.instances = (0..count).map(shifted).collect();
             assert_eq!(top(features_of(&scene)), (true, false), "{count} instances are the root's children");

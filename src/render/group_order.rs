@@ -94,7 +94,10 @@ mod tests {
             "    if (r < longer * (per_stripe + 1u)) return (r % (per_stripe + 1u)) * stripes + r / (per_stripe + 1u);",
             "    return (rest % per_stripe) * stripes + longer + rest / per_stripe;",
         ] {
-            assert!(kernel.contains(line), "pathtrace.comp's group_row_of changed: update the transcription in group_order.rs");
+            assert!(
+                kernel.contains(line),
+                "pathtrace.comp's group_row_of changed: update the transcription in group_order.rs"
+            );
         }
     }
 }

@@ -49,11 +49,17 @@ pub const SHADERS: ShaderSources<'static> = &[
 /// The text of the kernel's shader file `name`: from `$CAUSTICA_SHADER_DIR` when it is set, else as
 /// embedded in the binary.
 pub fn shader_file(name: &str) -> Result<Cow<'static, str>> {
-    let embedded = SHADERS.iter().find(|(n, _)| *n == name).map(|(_, text)| *text).ok_or_else(|| anyhow!("no shader file named {name}"))?;
+    let embedded = SHADERS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, text)| *text)
+        .ok_or_else(|| anyhow!("no shader file named {name}"))?;
     match std::env::var_os(SHADER_DIR_VAR) {
         Some(dir) => {
             let path = Path::new(&dir).join(name);
-            let text = InputFiles::anywhere().read_to_string(&path, InputKind::Shader).with_context(|| format!("{SHADER_DIR_VAR} is set"))?;
+            let text = InputFiles::anywhere()
+                .read_to_string(&path, InputKind::Shader)
+                .with_context(|| format!("{SHADER_DIR_VAR} is set"))?;
             Ok(Cow::Owned(text))
         }
         None => Ok(Cow::Borrowed(embedded)),
@@ -64,7 +70,8 @@ pub fn shader_file(name: &str) -> Result<Cow<'static, str>> {
 /// [`shader_file`] reads them, with `defines`.
 fn assemble_with(extra: &[(&str, &str)], main: &str, defines: &[(&str, String)]) -> Result<String> {
     let files = SHADERS.iter().map(|&(name, _)| Ok((name, shader_file(name)?))).collect::<Result<Vec<_>>>()?;
-    let sources: Vec<(&str, &str)> = extra.iter().copied().chain(files.iter().map(|(name, text)| (*name, text.as_ref()))).collect();
+    let sources: Vec<(&str, &str)> =
+        extra.iter().copied().chain(files.iter().map(|(name, text)| (*name, text.as_ref()))).collect();
     assemble_source(&sources, main, defines)
 }
 
@@ -78,7 +85,14 @@ const INTERFACE_FILE: &str = "interface.glsl";
 /// Its code is the general kernel's: every scene feature compiled in.
 pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
     let interface = bindings::glsl(&UNSPLIT, KernelVariant::default());
-    let defines: Vec<_> = SceneFeatures::ALL.defines().into_iter().chain(WalkQueue::defines(None)).chain(tile_taking::defines(false)).chain(WavefrontStage::defines(None)).chain(Workgroup::default().defines()).collect();
+    let defines: Vec<_> = SceneFeatures::ALL
+        .defines()
+        .into_iter()
+        .chain(WalkQueue::defines(None))
+        .chain(tile_taking::defines(false))
+        .chain(WavefrontStage::defines(None))
+        .chain(Workgroup::default().defines())
+        .collect();
     assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
 }
 
@@ -157,8 +171,11 @@ mod tests {
 
     #[test]
     fn kernel_compiles_with_every_array_split() {
-        let split = SplitPlans([ChunkPlan { shift: 10, chunks: MAX_CHUNKS }; crate::render::bindings::KernelBuffer::COUNT]);
-        let spirv = kernel_spirv(&split, KernelVariant { aovs: true, count_loop_iterations: true, ..Default::default() }).expect("pathtrace.comp compiles split");
+        let split =
+            SplitPlans([ChunkPlan { shift: 10, chunks: MAX_CHUNKS }; crate::render::bindings::KernelBuffer::COUNT]);
+        let spirv =
+            kernel_spirv(&split, KernelVariant { aovs: true, count_loop_iterations: true, ..Default::default() })
+                .expect("pathtrace.comp compiles split");
         assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
     }
 }

@@ -448,7 +448,10 @@ mod tests {
         let kinds = ["PRIM_SPHERE", "PRIM_QUAD", "PRIM_TRIANGLE"];
         assert_eq!([PRIM_SPHERE, PRIM_QUAD, PRIM_TRIANGLE], [0, 1, 2], "a kind was added: list it above");
         let mut switches = 0;
-        for (file, glsl) in [("intersect.glsl", include_str!("../../shaders/intersect.glsl")), ("lights.glsl", include_str!("../../shaders/lights.glsl"))] {
+        for (file, glsl) in [
+            ("intersect.glsl", include_str!("../../shaders/intersect.glsl")),
+            ("lights.glsl", include_str!("../../shaders/lights.glsl")),
+        ] {
             assert!(!glsl.contains("prim_kind(p) =="), "{file} compares a kind outside a switch");
             let starts = glsl.match_indices("switch (prim_kind(p)) {").chain(glsl.match_indices("switch (kind) {"));
             for (start, _) in starts {
@@ -456,12 +459,19 @@ mod tests {
                 let body = &glsl[start..];
                 let mut depth = 0;
                 let end = body.char_indices().find_map(|(i, c)| {
-                    depth += match c { '{' => 1, '}' => -1, _ => 0 };
+                    depth += match c {
+                        '{' => 1,
+                        '}' => -1,
+                        _ => 0,
+                    };
                     (c == '}' && depth == 0).then_some(i)
                 });
                 let body = &body[..end.expect("the switch closes")];
                 for kind in kinds {
-                    assert!(body.contains(&format!("case {kind}:")), "{file}: a switch at byte {start} has no case {kind}");
+                    assert!(
+                        body.contains(&format!("case {kind}:")),
+                        "{file}: a switch at byte {start} has no case {kind}"
+                    );
                 }
                 assert!(body.contains("default:"), "{file}: a switch at byte {start} has no default");
                 switches += 1;
@@ -508,7 +518,10 @@ mod tests {
             ("WIDE_CHILD_NONE", crate::bvh::CHILD_NONE),
         ] {
             let literal = if value >= 1 << 31 { format!("{value:#x}u") } else { format!("{value}u") };
-            assert!(glsl.contains(&format!("const uint {name} = {literal};")), "{name} = {literal} not found in layout.glsl or rng.glsl");
+            assert!(
+                glsl.contains(&format!("const uint {name} = {literal};")),
+                "{name} = {literal} not found in layout.glsl or rng.glsl"
+            );
         }
     }
 }

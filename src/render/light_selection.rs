@@ -39,7 +39,9 @@ pub fn area_light_power(shape: &Shape, material: &Material, luminance: f64) -> f
     let (area, sides) = match *shape {
         Shape::Sphere { radius, .. } => (4.0 * PI * (radius as f64).powi(2), 1.0),
         Shape::Quad { u, v, .. } => (u.as_dvec3().cross(v.as_dvec3()).length(), two_sided(material)),
-        Shape::Triangle { v, .. } => (0.5 * (v[1] - v[0]).as_dvec3().cross((v[2] - v[0]).as_dvec3()).length(), two_sided(material)),
+        Shape::Triangle { v, .. } => {
+            (0.5 * (v[1] - v[0]).as_dvec3().cross((v[2] - v[0]).as_dvec3()).length(), two_sided(material))
+        }
     };
     area * PI * luminance * sides
 }
@@ -112,7 +114,11 @@ pub fn alias_table(weights: &[f64]) -> Vec<GpuAliasEntry> {
     // zero weight, which rounding must not make pickable: it hands its entry to the heaviest.
     let heaviest = (0..n).max_by(|&a, &b| weights[a].total_cmp(&weights[b])).unwrap_or(0);
     for i in small.into_iter().chain(large) {
-        table[i] = if weights[i] > 0.0 { GpuAliasEntry { threshold: 1.0, alias: i as u32 } } else { GpuAliasEntry { threshold: 0.0, alias: heaviest as u32 } };
+        table[i] = if weights[i] > 0.0 {
+            GpuAliasEntry { threshold: 1.0, alias: i as u32 }
+        } else {
+            GpuAliasEntry { threshold: 0.0, alias: heaviest as u32 }
+        };
     }
     table
 }
@@ -141,7 +147,10 @@ mod tests {
         for (i, (p, w)) in table_pmf(&table).iter().zip(weights).enumerate() {
             // f32 thresholds: each entry's share is exact to 2^-24 of 1/n.
             let expected = w / total;
-            assert!((p - expected).abs() <= 1e-7 * (1.0 + expected * weights.len() as f64), "index {i}: table gives {p:e}, weights {expected:e}");
+            assert!(
+                (p - expected).abs() <= 1e-7 * (1.0 + expected * weights.len() as f64),
+                "index {i}: table gives {p:e}, weights {expected:e}"
+            );
             if *w == 0.0 {
                 assert_eq!(*p, 0.0, "index {i} has no weight but can be picked");
             }
@@ -213,8 +222,10 @@ mod tests {
     fn power_is_area_times_pi_times_luminance() {
         let (one_sided, two_sided) = (material([1.0, 1.0, 1.0], false), material([0.0, 2.0, 0.0], true));
         let sphere = Shape::Sphere { center: Vec3::ZERO, radius: 0.5, material: 0 };
-        let quad = Shape::Quad { origin: Vec3::ZERO, u: Vec3::new(2.0, 0.0, 0.0), v: Vec3::new(0.0, 0.0, 3.0), material: 0 };
-        let triangle = Shape::Triangle { v: [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 3.0)], material: 1 };
+        let quad =
+            Shape::Quad { origin: Vec3::ZERO, u: Vec3::new(2.0, 0.0, 0.0), v: Vec3::new(0.0, 0.0, 3.0), material: 0 };
+        let triangle =
+            Shape::Triangle { v: [Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 3.0)], material: 1 };
         let close = |a: f64, b: f64| (a - b).abs() < 1e-9 * b;
         let power = |shape: &Shape, m: &Material| area_light_power(shape, m, emission_luminance(m));
         assert!(close(power(&sphere, &one_sided), PI * PI));
@@ -232,13 +243,31 @@ mod tests {
     fn spot_power_is_its_intensity_integrated_over_the_sphere() {
         for (cone_deg, falloff_deg) in [(30.0f64, 20.0f64), (60.0, 0.0), (45.0, 45.0), (170.0, 100.0)] {
             let (c, f) = (cone_deg.to_radians(), falloff_deg.to_radians());
-            let intensity = |t: f64| if t <= f { 1.0 } else if t >= c { 0.0 } else { (c - t) / (c - f) };
+            let intensity = |t: f64| {
+                if t <= f {
+                    1.0
+                } else if t >= c {
+                    0.0
+                } else {
+                    (c - t) / (c - f)
+                }
+            };
             let steps = 200_000;
             let dt = PI / steps as f64;
-            let numeric: f64 = (0..steps).map(|i| (i as f64 + 0.5) * dt).map(|t| 2.0 * PI * intensity(t) * t.sin() * dt).sum();
-            let spot = Light::Spot { position: Vec3::ZERO, axis: Vec3::Y, intensity: Vec3::ONE, cone_angle: c as f32, falloff_start: f as f32 };
+            let numeric: f64 =
+                (0..steps).map(|i| (i as f64 + 0.5) * dt).map(|t| 2.0 * PI * intensity(t) * t.sin() * dt).sum();
+            let spot = Light::Spot {
+                position: Vec3::ZERO,
+                axis: Vec3::Y,
+                intensity: Vec3::ONE,
+                cone_angle: c as f32,
+                falloff_start: f as f32,
+            };
             let closed = punctual_light_power(&spot, 0.0);
-            assert!((closed / numeric - 1.0).abs() < 1e-5, "cone {cone_deg}, falloff {falloff_deg}: {closed} against {numeric}");
+            assert!(
+                (closed / numeric - 1.0).abs() < 1e-5,
+                "cone {cone_deg}, falloff {falloff_deg}: {closed} against {numeric}"
+            );
         }
         let point = Light::Point { position: Vec3::ZERO, intensity: Vec3::ONE };
         assert!((punctual_light_power(&point, 0.0) - 4.0 * PI).abs() < 1e-9);

@@ -23,14 +23,16 @@ mod walk_records;
 mod wavefront;
 mod workgroup;
 
-pub use chunks::UNSPLIT;
-pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
-pub use renderer::{frame_params, mean_image, GeometryReport, KernelChoice, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};
-pub use scene_data::SceneData;
+pub use chunks::UNSPLIT;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use group_order::GroupOrder;
+pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, KernelVariant, SHADER_DIR_VAR};
+pub use renderer::{
+    frame_params, mean_image, GeometryReport, KernelChoice, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES,
+};
+pub use scene_data::SceneData;
 pub use tile_taking::TAKE_TILES_VAR;
 pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
 pub use walk_records::{WalkRecords, WALK_RECORDS_VAR};

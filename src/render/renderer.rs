@@ -6,14 +6,17 @@
 //! dispatches are also sized from the loop iterations the kernel counts, and a band cut short is
 //! repeated in smaller steps, which gives the same sums bit for bit.
 
-use super::bindings::{self, BufferBinding, KernelBuffer, Shape};
-use super::chunks::{self, SplitPlans, UNSPLIT};
-use super::kernel::{kernel_spirv, KernelVariant};
-use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
+use super::bindings::{self, BufferBinding, KernelBuffer, Shape};
+use super::chunks::{self, SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
+use super::kernel::{kernel_spirv, KernelVariant};
+use super::layout::{
+    FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES,
+    LOOP_CHECK_ITERATIONS, SAMPLER_INDEPENDENT, SAMPLER_SOBOL,
+};
 use super::scene_data::SceneData;
 use super::tile_taking;
 use super::walk_queue::WalkQueue;
@@ -165,7 +168,16 @@ pub struct GeometryReport {
 pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
 
 /// The statistics buffer's contents at the start of every dispatch.
-const CLEARED_STATS: GpuStats = GpuStats { ray_count: 0, nonfinite_samples: 0, pixels_complete: 0, samples_added: 0, max_loop_iterations: 0, paths_in_flight_even: 0, paths_in_flight_odd: 0, tiles_taken: 0 };
+const CLEARED_STATS: GpuStats = GpuStats {
+    ray_count: 0,
+    nonfinite_samples: 0,
+    pixels_complete: 0,
+    samples_added: 0,
+    max_loop_iterations: 0,
+    paths_in_flight_even: 0,
+    paths_in_flight_odd: 0,
+    tiles_taken: 0,
+};
 
 pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
     let mut params = frame_params_without_camera(scene, data, seed);
@@ -224,7 +236,12 @@ fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> Fr
         sampler_kind: sampler,
         light_total_power: data.light_distribution.total_power,
         punctual_light_count: data.punctual_lights.len() as u32,
-        shape_instance: data.acceleration.instances.iter().position(|i| i.info[0] == INSTANCE_PRIMITIVES).map_or(u32::MAX, |i| i as u32),
+        shape_instance: data
+            .acceleration
+            .instances
+            .iter()
+            .position(|i| i.info[0] == INSTANCE_PRIMITIVES)
+            .map_or(u32::MAX, |i| i as u32),
         ..FrameParams::zeroed()
     }
 }
@@ -245,7 +262,12 @@ impl Initial<'_> {
 }
 
 /// What `buffer` starts as in a render of `data` with these parameters and image size.
-fn initial_contents<'d>(buffer: KernelBuffer, params: &'d FrameParams, data: &'d SceneData, image_bytes: u64) -> Initial<'d> {
+fn initial_contents<'d>(
+    buffer: KernelBuffer,
+    params: &'d FrameParams,
+    data: &'d SceneData,
+    image_bytes: u64,
+) -> Initial<'d> {
     use KernelBuffer::*;
     let a = &data.acceleration;
     Initial::Data(match buffer {
@@ -309,7 +331,11 @@ fn binding_range(device: &DeviceInfo, binding: &BufferBinding) -> u64 {
 /// device: an array larger than its bindings can see, more storage bindings than the kernel may
 /// have, or more bytes than the device's memory. Checked before any upload; the message says how
 /// much is needed and how much there is.
-fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = (&'b BufferBinding, u64)> + Clone) -> Result<SplitPlans> {
+fn plan_bindings<'b>(
+    ctx: &GpuContext,
+    scene: &str,
+    sizes: impl Iterator<Item = (&'b BufferBinding, u64)> + Clone,
+) -> Result<SplitPlans> {
     let mib = |b: u64| b as f64 / 1048576.0;
     let device = &ctx.info;
     let range = device.max_storage_buffer_range;
@@ -355,7 +381,12 @@ fn plan_bindings<'b>(ctx: &GpuContext, scene: &str, sizes: impl Iterator<Item = 
     }
     let total: u64 = sizes.map(|(_, b)| b).sum();
     if device.device_local_bytes > 0 && total > device.device_local_bytes {
-        anyhow::bail!("{scene}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB", mib(total), device.name, mib(device.device_local_bytes));
+        anyhow::bail!(
+            "{scene}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB",
+            mib(total),
+            device.name,
+            mib(device.device_local_bytes)
+        );
     }
     Ok(plans)
 }
@@ -374,11 +405,18 @@ impl<'a> Renderer<'a> {
 
     /// A renderer whose kernel is compiled as `choice` says. The image is the same bit for bit
     /// either way (tests/specialization.rs); only the speed differs.
-    pub fn with_kernel(ctx: &'a GpuContext, scene: &Scene, seed: u32, aovs: AovSet, choice: KernelChoice) -> Result<Self> {
+    pub fn with_kernel(
+        ctx: &'a GpuContext,
+        scene: &Scene,
+        seed: u32,
+        aovs: AovSet,
+        choice: KernelChoice,
+    ) -> Result<Self> {
         // One texel buffer holds every texture: it must fit the bindings it can be split across.
         let texels = KernelBuffer::Texels.entry();
         let texel_bytes = texels.chunked_element().expect("texels may be split").bytes;
-        let texture_budget = TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texel_bytes, binding_range(&ctx.info, texels)));
+        let texture_budget =
+            TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texel_bytes, binding_range(&ctx.info, texels)));
         let data = SceneData::new(scene, texture_budget);
         if data.texture_bytes() < data.texture_bytes_requested {
             eprintln!(
@@ -399,20 +437,41 @@ impl<'a> Renderer<'a> {
         let workgroup = Workgroup::chosen()?;
         let use_wavefront = wavefront::requested()?;
         if use_wavefront && loop_limit.is_some() {
-            anyhow::bail!("{}=1: {} ends shader loops early, and the wavefront runs only where loops run to their end", wavefront::WAVEFRONT_VAR, ctx.info.name);
+            anyhow::bail!(
+                "{}=1: {} ends shader loops early, and the wavefront runs only where loops run to their end",
+                wavefront::WAVEFRONT_VAR,
+                ctx.info.name
+            );
         }
         let walk_queue = match use_wavefront {
             true => None,
-            false => WalkQueue::for_scene(&ctx.info, loop_limit.is_some(), workgroup.invocations(), &features, data.acceleration.nodes.first(), &data.acceleration.instances)?,
+            false => WalkQueue::for_scene(
+                &ctx.info,
+                loop_limit.is_some(),
+                workgroup.invocations(),
+                &features,
+                data.acceleration.nodes.first(),
+                &data.acceleration.instances,
+            )?,
         };
         let take_tiles = tile_taking::takes_tiles(&ctx.info, loop_limit.is_some(), use_wavefront, workgroup)?;
         // The wavefront's three kernels bind the same buffers: the first stands for them here.
         let walk_records = WalkRecords::for_device(&ctx.info)?;
-        let variant = KernelVariant { aovs: aovs.needs_kernel(), count_loop_iterations: loop_limit.is_some(), features, walk_queue, workgroup, take_tiles, wavefront: use_wavefront.then_some(WavefrontStage::Extend), walk_records };
+        let variant = KernelVariant {
+            aovs: aovs.needs_kernel(),
+            count_loop_iterations: loop_limit.is_some(),
+            features,
+            walk_queue,
+            workgroup,
+            take_tiles,
+            wavefront: use_wavefront.then_some(WavefrontStage::Extend),
+            walk_records,
+        };
         // Every buffer this kernel variant binds, in binding order, as it declares them, with what
         // it starts as.
         let bound: Vec<BufferBinding> = bindings::bound_in(variant).collect();
-        let contents: Vec<(&BufferBinding, Initial)> = bound.iter().map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes))).collect();
+        let contents: Vec<(&BufferBinding, Initial)> =
+            bound.iter().map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes))).collect();
         let plans = plan_bindings(ctx, &scene.name, contents.iter().map(|(b, c)| (*b, c.bytes())))?;
         let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
         let mut buffers = Vec::new();
@@ -431,7 +490,8 @@ impl<'a> Renderer<'a> {
                     &zeroes[..]
                 }
             };
-            let buffer = Buffer::with_data(ctx, binding.what, kind, bytes).with_context(|| format!("uploading {}", scene.name))?;
+            let buffer = Buffer::with_data(ctx, binding.what, kind, bytes)
+                .with_context(|| format!("uploading {}", scene.name))?;
             buffers.push((binding.buffer, buffer));
         }
         let mut descriptors = Vec::new();
@@ -440,22 +500,42 @@ impl<'a> Renderer<'a> {
             match binding.chunked_element() {
                 Some(element) if plan.chunks > 1 => {
                     for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
-                        descriptors.push(Binding { binding: chunks::window_binding(binding, c as u32), buffer, offset, range, as_texels: binding.texel_words() });
+                        descriptors.push(Binding {
+                            binding: chunks::window_binding(binding, c as u32),
+                            buffer,
+                            offset,
+                            range,
+                            as_texels: binding.texel_words(),
+                        });
                     }
                 }
                 // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => descriptors.push(Binding { as_texels: binding.texel_words(), ..Binding::whole(binding.binding, buffer) }),
+                _ => descriptors
+                    .push(Binding { as_texels: binding.texel_words(), ..Binding::whole(binding.binding, buffer) }),
             }
         }
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
-        let split_arrays = contents.iter().map(|(b, _)| (b.what, plans[b.buffer].chunks)).filter(|&(_, windows)| windows > 1).collect();
+        let split_arrays = contents
+            .iter()
+            .map(|(b, _)| (b.what, plans[b.buffer].chunks))
+            .filter(|&(_, windows)| windows > 1)
+            .collect();
         let push_size = std::mem::size_of::<PassParams>() as u32;
         let (kernels, statistics) = if use_wavefront {
             let mut kernels = Vec::new();
             let mut statistics = Vec::new();
             for stage in WavefrontStage::ALL {
-                let k = ComputeKernel::new(ctx, kernel_spirv(&plans, KernelVariant { wavefront: Some(stage), ..variant })?, &descriptors, push_size)?;
-                statistics.extend(k.statistics.iter().map(|s| KernelStatistic { name: format!("{stage:?}: {}", s.name), value: s.value.clone() }));
+                let k = ComputeKernel::new(
+                    ctx,
+                    kernel_spirv(&plans, KernelVariant { wavefront: Some(stage), ..variant })?,
+                    &descriptors,
+                    push_size,
+                )?;
+                statistics.extend(
+                    k.statistics
+                        .iter()
+                        .map(|s| KernelStatistic { name: format!("{stage:?}: {}", s.name), value: s.value.clone() }),
+                );
                 kernels.push(k);
             }
             (Kernels::Wavefront(WavefrontKernels { kernels }), statistics)
@@ -464,15 +544,49 @@ impl<'a> Renderer<'a> {
             let statistics = k.statistics.clone();
             (Kernels::Megakernel(k), statistics)
         };
-        Ok(Self { ctx, kernels: Some(kernels), statistics, features, walk_queue, take_tiles, walk_records, workgroup, buffers, aovs, width, height, seed, samples_done: 0, sample_offset: 0, scene_hash, rays_traced: 0, nonfinite_samples: 0, seconds: 0.0, gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0), geometry: GeometryReport {
-            acceleration: data.acceleration.stats.clone(),
-            geometry_bytes: data.acceleration.gpu_bytes(),
-            texture_bytes: data.texture_bytes(),
-            texture_bytes_requested: data.texture_bytes_requested,
-            lights: data.lights.len(),
-            gpu_bytes: data.gpu_bytes(),
-            split_arrays,
-        }, cost_per_row_sample: None, loop_limit, loop_iterations_per_sample: 0.0, fixed_samples_per_dispatch: None, samples_per_dispatch_after_repeat: u32::MAX, plan_for_loop_limit: true, repeated_dispatches: 0, dispatch_target_s: dispatch_target_for(ctx.info.kind), params, hashed_bytes, pass_in_progress: None, group_order: GroupOrder::for_device(ctx.info.kind) })
+        Ok(Self {
+            ctx,
+            kernels: Some(kernels),
+            statistics,
+            features,
+            walk_queue,
+            take_tiles,
+            walk_records,
+            workgroup,
+            buffers,
+            aovs,
+            width,
+            height,
+            seed,
+            samples_done: 0,
+            sample_offset: 0,
+            scene_hash,
+            rays_traced: 0,
+            nonfinite_samples: 0,
+            seconds: 0.0,
+            gpu_seconds: ctx.timestamp_period_ns.map(|_| 0.0),
+            geometry: GeometryReport {
+                acceleration: data.acceleration.stats.clone(),
+                geometry_bytes: data.acceleration.gpu_bytes(),
+                texture_bytes: data.texture_bytes(),
+                texture_bytes_requested: data.texture_bytes_requested,
+                lights: data.lights.len(),
+                gpu_bytes: data.gpu_bytes(),
+                split_arrays,
+            },
+            cost_per_row_sample: None,
+            loop_limit,
+            loop_iterations_per_sample: 0.0,
+            fixed_samples_per_dispatch: None,
+            samples_per_dispatch_after_repeat: u32::MAX,
+            plan_for_loop_limit: true,
+            repeated_dispatches: 0,
+            dispatch_target_s: dispatch_target_for(ctx.info.kind),
+            params,
+            hashed_bytes,
+            pass_in_progress: None,
+            group_order: GroupOrder::for_device(ctx.info.kind),
+        })
     }
 
     /// Dispatches `samples` samples per pixel over the whole image at a time (at least 1; fewer
@@ -519,7 +633,9 @@ impl<'a> Renderer<'a> {
     /// Samples per pixel this render can still add: its stream ends at sample index `u32::MAX`,
     /// and a pixel holds at most [`MAX_SAMPLES_PER_PIXEL`].
     pub fn samples_left(&self) -> u32 {
-        MAX_SAMPLES_PER_PIXEL.saturating_sub(self.samples_done).min((u32::MAX - self.sample_offset).saturating_sub(self.samples_done))
+        MAX_SAMPLES_PER_PIXEL
+            .saturating_sub(self.samples_done)
+            .min((u32::MAX - self.sample_offset).saturating_sub(self.samples_done))
     }
 
     /// Starts this render's sample stream at `first_sample` instead of 0 (farm renders: one range
@@ -551,7 +667,10 @@ impl<'a> Renderer<'a> {
     /// of this render's stream, so that rendering on adds the samples that follow them: the result
     /// is bit for bit that of an uninterrupted render.
     pub fn restore(&mut self, accumulation: &[[f32; 4]], samples: u32) -> Result<()> {
-        anyhow::ensure!(samples <= MAX_SAMPLES_PER_PIXEL, "the accumulation holds {samples} samples per pixel; a render holds at most {MAX_SAMPLES_PER_PIXEL}");
+        anyhow::ensure!(
+            samples <= MAX_SAMPLES_PER_PIXEL,
+            "the accumulation holds {samples} samples per pixel; a render holds at most {MAX_SAMPLES_PER_PIXEL}"
+        );
         anyhow::ensure!(
             accumulation.iter().all(|a| a[3] == samples as f32),
             "the accumulation's per-pixel sample counts are not all {samples}"
@@ -563,18 +682,28 @@ impl<'a> Renderer<'a> {
             self.width,
             self.height
         );
-        self.buffer(KernelBuffer::Accum).expect("every kernel binds the accumulation").upload(self.ctx, bytemuck::cast_slice(accumulation))?;
+        self.buffer(KernelBuffer::Accum)
+            .expect("every kernel binds the accumulation")
+            .upload(self.ctx, bytemuck::cast_slice(accumulation))?;
         self.samples_done = samples;
         Ok(())
     }
 
     /// Takes over AOV sums (as from [`Self::aov_sums`]) of the samples given to [`Self::restore`].
     pub fn restore_aovs(&mut self, sums: &AovSums) -> Result<()> {
-        let (Some(albedo_depth), Some(normal_hits)) = (self.buffer(KernelBuffer::AovAlbedoDepth), self.buffer(KernelBuffer::AovNormalHits)) else {
+        let (Some(albedo_depth), Some(normal_hits)) =
+            (self.buffer(KernelBuffer::AovAlbedoDepth), self.buffer(KernelBuffer::AovNormalHits))
+        else {
             anyhow::bail!("this render has no albedo, normal or depth AOVs to restore");
         };
         let pixels = self.width as usize * self.height as usize;
-        anyhow::ensure!(sums.pixels() == pixels, "the AOV sums have {} pixels, the image {}x{}", sums.pixels(), self.width, self.height);
+        anyhow::ensure!(
+            sums.pixels() == pixels,
+            "the AOV sums have {} pixels, the image {}x{}",
+            sums.pixels(),
+            self.width,
+            self.height
+        );
         albedo_depth.upload(self.ctx, bytemuck::cast_slice(&sums.albedo_depth))?;
         normal_hits.upload(self.ctx, bytemuck::cast_slice(&sums.normal_hits))?;
         Ok(())
@@ -665,7 +794,9 @@ impl<'a> Renderer<'a> {
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         set_camera_params(&mut self.params, camera);
         let params = self.params;
-        self.buffer(KernelBuffer::Frame).expect("every kernel binds the frame parameters").upload(self.ctx, bytemuck::bytes_of(&params))?;
+        self.buffer(KernelBuffer::Frame)
+            .expect("every kernel binds the frame parameters")
+            .upload(self.ctx, bytemuck::bytes_of(&params))?;
         let zeroes = vec![0u8; self.width as usize * self.height as usize * 16];
         for which in [KernelBuffer::Accum, KernelBuffer::AovAlbedoDepth, KernelBuffer::AovNormalHits] {
             if let Some(buffer) = self.buffer(which) {
@@ -697,7 +828,8 @@ impl<'a> Renderer<'a> {
                 None => continue,
             });
         }
-        let contents: Vec<(&BufferBinding, Initial)> = contents.iter().map(|(b, bytes)| (*b, Initial::Data(bytes))).collect();
+        let contents: Vec<(&BufferBinding, Initial)> =
+            contents.iter().map(|(b, bytes)| (*b, Initial::Data(bytes))).collect();
         self.scene_hash = scene_hash(&FrameParams { seed: 0, ..self.params }, &contents);
         Ok(())
     }
@@ -721,7 +853,11 @@ impl<'a> Renderer<'a> {
         let budget_row_samples = (self.dispatch_target_s / cost.max(1e-12)).max(1.0);
         let max_samples = (MAX_PIXEL_SAMPLES_PER_DISPATCH / (self.width as u64 * self.height as u64)).max(1) as f64;
         if budget_row_samples >= self.height as f64 {
-            let samples = (budget_row_samples / self.height as f64).min(max_samples).min(self.loop_safe_samples() as f64).min(remaining as f64).max(1.0);
+            let samples = (budget_row_samples / self.height as f64)
+                .min(max_samples)
+                .min(self.loop_safe_samples() as f64)
+                .min(remaining as f64)
+                .max(1.0);
             (samples as u32, self.height)
         } else {
             // Bands of about equal height, in whole workgroup rows: a budget of 104 of 120 rows
@@ -791,9 +927,19 @@ impl<'a> Renderer<'a> {
     /// One dispatch: rows `row..row + rows` up to `target` samples per pixel, `samples` of them new
     /// for the pixels furthest behind. Returns the kernel's counters.
     fn dispatch(&mut self, row: u32, rows: u32, target: u32, samples: u32) -> Result<GpuStats> {
-        self.buffer_mut(KernelBuffer::Stats).expect("every kernel binds the statistics").write(bytemuck::bytes_of(&CLEARED_STATS))?;
+        self.buffer_mut(KernelBuffer::Stats)
+            .expect("every kernel binds the statistics")
+            .write(bytemuck::bytes_of(&CLEARED_STATS))?;
         let groups = [self.width.div_ceil(self.workgroup.width), rows.div_ceil(self.workgroup.height), 1];
-        let pass = PassParams { stream_offset: self.sample_offset, target_samples: target, row_offset: row, row_count: rows, loop_check_iterations: LOOP_CHECK_ITERATIONS, group_row_stripes: self.group_order.stripes(groups[1]), wavefront_round: 0 };
+        let pass = PassParams {
+            stream_offset: self.sample_offset,
+            target_samples: target,
+            row_offset: row,
+            row_count: rows,
+            loop_check_iterations: LOOP_CHECK_ITERATIONS,
+            group_row_stripes: self.group_order.stripes(groups[1]),
+            wavefront_round: 0,
+        };
         let start = Instant::now();
         let device_seconds = match self.kernels.as_ref().expect("kernels live until drop") {
             Kernels::Megakernel(kernel) => kernel.dispatch_timed(self.ctx, bytemuck::bytes_of(&pass), groups)?,
@@ -801,7 +947,13 @@ impl<'a> Renderer<'a> {
                 // Each round takes every path at least one vertex or shadow ray on, and a sample
                 // has at most max_bounces vertices, each with one shadow ray: a bound with room.
                 let max_rounds = (samples as u64 + 1) * 2 * (self.params.max_bounces as u64 + 2);
-                wavefront.run(self.ctx, groups, max_rounds, |round| bytemuck::bytes_of(&PassParams { wavefront_round: round, ..pass }).to_vec(), || self.read_stats())?
+                wavefront.run(
+                    self.ctx,
+                    groups,
+                    max_rounds,
+                    |round| bytemuck::bytes_of(&PassParams { wavefront_round: round, ..pass }).to_vec(),
+                    || self.read_stats(),
+                )?
             }
         };
         let elapsed = start.elapsed().as_secs_f64();
@@ -810,7 +962,8 @@ impl<'a> Renderer<'a> {
         let stats = self.read_stats()?;
         self.rays_traced += stats.ray_count as u64;
         self.nonfinite_samples += stats.nonfinite_samples as u64;
-        self.loop_iterations_per_sample = self.loop_iterations_per_sample.max(stats.max_loop_iterations as f64 / samples as f64);
+        self.loop_iterations_per_sample =
+            self.loop_iterations_per_sample.max(stats.max_loop_iterations as f64 / samples as f64);
         let cost = elapsed / (rows as f64 * samples as f64);
         // Smooth, but follow quickly: scenes differ in cost across the image.
         self.cost_per_row_sample = Some(match self.cost_per_row_sample {
@@ -835,11 +988,14 @@ impl<'a> Renderer<'a> {
 
     /// Raw AOV sums (`None` without albedo, normal or depth AOVs), top row first.
     pub fn aov_sums(&self) -> Result<Option<AovSums>> {
-        let (Some(albedo_depth), Some(normal_hits)) = (self.buffer(KernelBuffer::AovAlbedoDepth), self.buffer(KernelBuffer::AovNormalHits)) else {
+        let (Some(albedo_depth), Some(normal_hits)) =
+            (self.buffer(KernelBuffer::AovAlbedoDepth), self.buffer(KernelBuffer::AovNormalHits))
+        else {
             return Ok(None);
         };
         let bytes = self.width as u64 * self.height as u64 * 16;
-        let read = |b: &Buffer| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&b.download(self.ctx, bytes)?)) };
+        let read =
+            |b: &Buffer| -> Result<Vec<[f32; 4]>> { Ok(bytemuck::pod_collect_to_vec(&b.download(self.ctx, bytes)?)) };
         Ok(Some(AovSums { albedo_depth: read(albedo_depth)?, normal_hits: read(normal_hits)? }))
     }
 

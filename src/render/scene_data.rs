@@ -2,11 +2,14 @@
 //! materials, textures, the emitter list and the environment texels.
 
 use super::acceleration::{gpu_primitive, Acceleration};
-use super::textured_emission::mean_triangle_luminance;
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
 use super::light_selection::{area_light_power, emission_luminance, punctual_light_power, LightDistribution};
-use crate::scene::{average_fresnel, Alpha, AlphaMode, Wrap, downsample_to_fit, Conductor, Environment, Light, LightSelection, MapProjection, Material, Microfacet, Scene, Shape, Texture};
+use super::textured_emission::mean_triangle_luminance;
+use crate::scene::{
+    average_fresnel, downsample_to_fit, Alpha, AlphaMode, Conductor, Environment, Light, LightSelection, MapProjection,
+    Material, Microfacet, Scene, Shape, Texture, Wrap,
+};
 use glam::Vec3;
 
 pub struct SceneData {
@@ -68,14 +71,20 @@ fn world_lights(scene: &Scene, acceleration: &Acceleration, triangle_emission: &
         .shapes
         .iter()
         .filter(|s| emissive(s.material()))
-        .map(|&shape| AreaLight { shape, luminance: emission_luminance(&scene.materials[shape.material() as usize]), mesh_triangle: None })
+        .map(|&shape| AreaLight {
+            shape,
+            luminance: emission_luminance(&scene.materials[shape.material() as usize]),
+            mesh_triangle: None,
+        })
         .collect();
     for inst in &scene.instances {
         let mesh = &scene.meshes[inst.mesh as usize];
         let slots = &acceleration.triangle_slots[inst.mesh as usize];
         // A mirroring placement flips the winding; swap two vertices to keep the front side.
         let mirrored = inst.transform.determinant() < 0.0;
-        for (t, (triangle, &m)) in mesh.triangles.iter().zip(&mesh.triangle_materials).enumerate().filter(|(_, (_, &m))| emissive(m)) {
+        for (t, (triangle, &m)) in
+            mesh.triangles.iter().zip(&mesh.triangle_materials).enumerate().filter(|(_, (_, &m))| emissive(m))
+        {
             let mut v = triangle.map(|i| inst.transform.transform_point3(mesh.positions[i as usize]));
             if mirrored {
                 v.swap(1, 2);
@@ -163,11 +172,21 @@ fn gpu_material(m: &Material) -> GpuMaterial {
     GpuMaterial {
         albedo_r: m.albedo.extend(m.reflectivity).into(),
         emission_t: m.emission.extend(m.transparency).into(),
-        params: [m.ior, if m.two_sided { 1.0 } else { 0.0 }, f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)), alpha_u],
+        params: [
+            m.ior,
+            if m.two_sided { 1.0 } else { 0.0 },
+            f32::from_bits(m.albedo_texture.unwrap_or(NO_TEXTURE)),
+            alpha_u,
+        ],
         conductor_eta: eta.extend(f32::from_bits(kind)).into(),
         conductor_k: k.extend(coat_norm).into(),
         metallic_roughness,
-        maps: [texture_bits(m.maps.emission), texture_bits(m.maps.normal.map(|n| n.texture)), m.maps.normal.map_or(0.0, |n| n.scale), f32::from_bits(material_flags(m))],
+        maps: [
+            texture_bits(m.maps.emission),
+            texture_bits(m.maps.normal.map(|n| n.texture)),
+            m.maps.normal.map_or(0.0, |n| n.scale),
+            f32::from_bits(material_flags(m)),
+        ],
         alpha: gpu_alpha(m.maps.alpha),
         coat: match m.clearcoat {
             Some(c) => [c.factor, c.roughness, texture_bits(c.texture), texture_bits(c.roughness_texture)],
@@ -191,8 +210,12 @@ fn gpu_alpha(alpha: Option<Alpha>) -> [f32; 4] {
     let texture_bits = |t: Option<u32>| f32::from_bits(t.unwrap_or(NO_TEXTURE));
     match alpha {
         None => [texture_bits(None), 1.0, 0.0, f32::from_bits(ALPHA_OPAQUE)],
-        Some(Alpha { factor, texture, mode: AlphaMode::Mask { cutoff } }) => [texture_bits(texture), factor, cutoff, f32::from_bits(ALPHA_MASK)],
-        Some(Alpha { factor, texture, mode: AlphaMode::Blend }) => [texture_bits(texture), factor, 0.0, f32::from_bits(ALPHA_BLEND)],
+        Some(Alpha { factor, texture, mode: AlphaMode::Mask { cutoff } }) => {
+            [texture_bits(texture), factor, cutoff, f32::from_bits(ALPHA_MASK)]
+        }
+        Some(Alpha { factor, texture, mode: AlphaMode::Blend }) => {
+            [texture_bits(texture), factor, 0.0, f32::from_bits(ALPHA_BLEND)]
+        }
     }
 }
 
@@ -200,11 +223,7 @@ impl SceneData {
     /// `texture_budget`: most bytes of texels to upload; larger texture sets are downsampled.
     pub fn new(scene: &Scene, texture_budget: u64) -> SceneData {
         let acceleration = Acceleration::build(scene);
-        let materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .map(gpu_material)
-            .collect();
+        let materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
         let texture_bytes_requested = scene.textures.iter().map(|t| t.width as u64 * t.height as u64 * 4).sum();
         let mut textures = Vec::new();
         let mut texels = Vec::new();
@@ -217,7 +236,8 @@ impl SceneData {
                 Wrap::MirroredRepeat => TEXTURE_WRAP_MIRROR,
             };
             let srgb = if t.srgb { TEXTURE_SRGB } else { 0 };
-            let flags = srgb | wrap_bits(t.wrap[0]) << TEXTURE_WRAP_U_SHIFT | wrap_bits(t.wrap[1]) << TEXTURE_WRAP_V_SHIFT;
+            let flags =
+                srgb | wrap_bits(t.wrap[0]) << TEXTURE_WRAP_U_SHIFT | wrap_bits(t.wrap[1]) << TEXTURE_WRAP_V_SHIFT;
             textures.push(GpuTexture { offset: texels.len() as u32, width: t.width, height: t.height, flags });
             texels.extend(t.texels.iter().map(|&p| u32::from_le_bytes(p)));
         }
@@ -240,15 +260,20 @@ impl SceneData {
         };
         let triangle_emission = triangle_emission(scene, &acceleration, &fitted);
         let area_lights = world_lights(scene, &acceleration, &triangle_emission);
-        let mut powers: Vec<f64> = area_lights.iter().map(|l| area_light_power(&l.shape, &scene.materials[l.shape.material() as usize], l.luminance)).collect();
+        let mut powers: Vec<f64> = area_lights
+            .iter()
+            .map(|l| area_light_power(&l.shape, &scene.materials[l.shape.material() as usize], l.luminance))
+            .collect();
         let bounds = acceleration.bounds;
         let scene_radius = 0.5 * (bounds.max - bounds.min).as_dvec3().length();
         // An empty scene has empty (infinite) bounds.
         let scene_radius = if scene_radius.is_finite() { scene_radius } else { 0.0 };
         let punctual_powers: Vec<f64> = scene.lights.iter().map(|l| punctual_light_power(l, scene_radius)).collect();
-        let punctual_lights = scene.lights.iter().zip(&punctual_powers).map(|(l, &p)| gpu_punctual_light(l, p)).collect();
+        let punctual_lights =
+            scene.lights.iter().zip(&punctual_powers).map(|(l, &p)| gpu_punctual_light(l, p)).collect();
         powers.extend(&punctual_powers);
-        let light_distribution = LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
+        let light_distribution =
+            LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
         let lights = area_lights.iter().map(AreaLight::gpu).collect();
         SceneData {
             env_cdf,
@@ -274,12 +299,12 @@ impl SceneData {
         self.acceleration.gpu_bytes()
             + self.texture_bytes()
             + (std::mem::size_of_val(&self.materials[..])
-            + std::mem::size_of_val(&self.lights[..])
-            + std::mem::size_of_val(&self.punctual_lights[..])
-            + std::mem::size_of_val(&self.light_distribution.table[..])
-            + std::mem::size_of_val(&self.triangle_emission[..])
-            + std::mem::size_of_val(&self.env_texels[..])
-            + std::mem::size_of_val(&self.env_cdf[..])) as u64
+                + std::mem::size_of_val(&self.lights[..])
+                + std::mem::size_of_val(&self.punctual_lights[..])
+                + std::mem::size_of_val(&self.light_distribution.table[..])
+                + std::mem::size_of_val(&self.triangle_emission[..])
+                + std::mem::size_of_val(&self.env_texels[..])
+                + std::mem::size_of_val(&self.env_cdf[..])) as u64
     }
 
     /// Probability that next-event estimation samples the environment map rather than an emitter:

@@ -132,7 +132,8 @@ pub fn block_variables(spirv: &[u32]) -> Vec<BlockVariable> {
                 decorations.insert((operands[0], operands[1]), operands.get(2).copied().unwrap_or(0));
             }
             OP_MEMBER_DECORATE => {
-                member_decorations.insert((operands[0], operands[1], operands[2]), operands.get(3).copied().unwrap_or(0));
+                member_decorations
+                    .insert((operands[0], operands[1], operands[2]), operands.get(3).copied().unwrap_or(0));
             }
             _ => {}
         }
@@ -186,7 +187,10 @@ pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
             // help, as a uniform texel buffer; 2: a storage image), ...
             OP_TYPE_IMAGE if operands[2] == DIM_BUFFER && operands[6] == 1 => buffer_images.push(operands[0]),
             OP_TYPE_SAMPLED_IMAGE if buffer_images.contains(&operands[1]) => sampled_buffers.push(operands[0]),
-            OP_TYPE_POINTER if operands[1] == UNIFORM_CONSTANT && (buffer_images.contains(&operands[2]) || sampled_buffers.contains(&operands[2])) => {
+            OP_TYPE_POINTER
+                if operands[1] == UNIFORM_CONSTANT
+                    && (buffer_images.contains(&operands[2]) || sampled_buffers.contains(&operands[2])) =>
+            {
                 pointers.push(operands[0])
             }
             OP_VARIABLE if pointers.contains(&operands[0]) => variables.push(operands[1]),
@@ -223,13 +227,20 @@ mod tests {
         )
         .unwrap();
         let vars = block_variables(&spirv);
-        let find = |block: &str| vars.iter().find(|v| v.block == block).unwrap_or_else(|| panic!("{block} in {vars:?}"));
+        let find =
+            |block: &str| vars.iter().find(|v| v.block == block).unwrap_or_else(|| panic!("{block} in {vars:?}"));
         let params = find("Params");
-        assert_eq!((params.name.as_str(), params.storage_class, params.set, params.binding), ("params", StorageClass::Uniform, Some(0), Some(3)));
+        assert_eq!(
+            (params.name.as_str(), params.storage_class, params.set, params.binding),
+            ("params", StorageClass::Uniform, Some(0), Some(3))
+        );
         let offsets: Vec<_> = params.members.iter().map(|m| (m.name.as_str(), m.offset)).collect();
         assert_eq!(offsets, [("v", Some(0)), ("f", Some(12))]);
         let input = find("Input");
-        assert_eq!((input.storage_class, input.binding, input.members[0].name.as_str(), input.is_readonly()), (StorageClass::StorageBuffer, Some(5), "values", true));
+        assert_eq!(
+            (input.storage_class, input.binding, input.members[0].name.as_str(), input.is_readonly()),
+            (StorageClass::StorageBuffer, Some(5), "values", true)
+        );
         assert_eq!(input.members[0].array_stride, Some(4));
         assert!(!find("Output").is_readonly());
         assert_eq!((find("Push").storage_class, find("Push").binding), (StorageClass::PushConstant, None));
@@ -245,7 +256,10 @@ mod tests {
              void main() { out_values[0] = texelFetch(records, 3) + uvec4(texelFetch(picture, ivec2(0), 0)); }\n",
         )
         .unwrap();
-        assert_eq!(texel_buffer_variables(&spirv), [TexelBufferVariable { name: "records".into(), set: Some(0), binding: Some(2) }]);
+        assert_eq!(
+            texel_buffer_variables(&spirv),
+            [TexelBufferVariable { name: "records".into(), set: Some(0), binding: Some(2) }]
+        );
         assert!(block_variables(&spirv).iter().all(|v| v.binding == Some(6)), "a texel buffer or image is no block");
     }
 }

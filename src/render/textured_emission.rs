@@ -51,7 +51,11 @@ fn wrapped(i: i64, n: i64, wrap: Wrap) -> i64 {
         Wrap::ClampToEdge => i.clamp(0, n - 1),
         Wrap::MirroredRepeat => {
             let m = i.rem_euclid(2 * n);
-            if m < n { m } else { 2 * n - 1 - m }
+            if m < n {
+                m
+            } else {
+                2 * n - 1 - m
+            }
         }
     }
 }

@@ -36,7 +36,12 @@ pub fn takes_tiles(device: &DeviceInfo, loop_limit: bool, wavefront: bool, workg
     let whole_subgroups = device.subgroup_size > 0 && workgroup.invocations().is_multiple_of(device.subgroup_size);
     let possible = !loop_limit && !wavefront && whole_subgroups;
     decide(std::env::var(TAKE_TILES_VAR).ok().as_deref(), device.kind, possible).map_err(|why| {
-        anyhow::anyhow!("{why} ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations a workgroup, subgroups of {})", device.name, workgroup.invocations(), device.subgroup_size)
+        anyhow::anyhow!(
+            "{why} ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations a workgroup, subgroups of {})",
+            device.name,
+            workgroup.invocations(),
+            device.subgroup_size
+        )
     })
 }
 

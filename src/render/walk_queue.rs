@@ -88,7 +88,14 @@ impl WalkQueue {
     /// `instances`, on `device` (whose loops are cut short where `loop_limit`) in workgroups of
     /// `lanes` invocations; `None` where the kernel walks each lane's rays itself (see the
     /// module's conditions). An error where [`WALK_QUEUE_VAR`] asks for what cannot run.
-    pub fn for_scene(device: &DeviceInfo, loop_limit: bool, lanes: u32, features: &SceneFeatures, root: Option<&WideNode>, instances: &[GpuInstance]) -> Result<Option<WalkQueue>> {
+    pub fn for_scene(
+        device: &DeviceInfo,
+        loop_limit: bool,
+        lanes: u32,
+        features: &SceneFeatures,
+        root: Option<&WideNode>,
+        instances: &[GpuInstance],
+    ) -> Result<Option<WalkQueue>> {
         let request = Request::from_env()?;
         let lavapipe = device.driver_id == Some(vk::DriverId::MESA_LLVMPIPE);
         if request == Request::Off || (request == Request::Default && !lavapipe) {
@@ -106,7 +113,9 @@ impl WalkQueue {
         // As walk_queue.glsl's instance_walked: a group of shapes is walked only where its shapes
         // are not tested before the walk.
         let walked = |instance: &GpuInstance| instance.info[0] != INSTANCE_PRIMITIVES || features.walked_shapes();
-        let walks_per_ray = (0..WIDTH).filter(|&k| root.kind(k) != CHILD_NONE && instances.get(root.links[k] as usize).is_some_and(walked)).count() as u32;
+        let walks_per_ray = (0..WIDTH)
+            .filter(|&k| root.kind(k) != CHILD_NONE && instances.get(root.links[k] as usize).is_some_and(walked))
+            .count() as u32;
         let queue = WalkQueue { walks_per_ray, subgroup_barriers };
         Ok((walks_per_ray > 0 && queue.shared_bytes(lanes) <= device.max_compute_shared_memory_size).then_some(queue))
     }

@@ -60,7 +60,9 @@ fn decide(request: Option<&str>, storage_faster: bool) -> Result<WalkRecords> {
         None => Ok(WalkRecords::Texels),
         Some("texels") => Ok(WalkRecords::Texels),
         Some("storage") => Ok(WalkRecords::Storage),
-        Some(other) => bail!("{WALK_RECORDS_VAR}={other}: expected texels (uniform texel buffers) or storage (storage buffers)"),
+        Some(other) => {
+            bail!("{WALK_RECORDS_VAR}={other}: expected texels (uniform texel buffers) or storage (storage buffers)")
+        }
     }
 }
 

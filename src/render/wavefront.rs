@@ -68,15 +68,26 @@ impl WavefrontKernels {
     /// constants from its number, `read_stats` reads the counters after a submission. Returns the
     /// device's seconds by its timestamps, where it has them. A band still in flight after
     /// `max_rounds` (more than its paths' vertices and shadow rays can take) is an error.
-    pub fn run(&self, ctx: &GpuContext, groups: [u32; 3], max_rounds: u64, push: impl Fn(u32) -> Vec<u8>, read_stats: impl Fn() -> Result<GpuStats>) -> Result<Option<f64>> {
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        groups: [u32; 3],
+        max_rounds: u64,
+        push: impl Fn(u32) -> Vec<u8>,
+        read_stats: impl Fn() -> Result<GpuStats>,
+    ) -> Result<Option<f64>> {
         let mut device_seconds = Some(0.0);
         let mut round = 0u32;
         loop {
             if round as u64 > max_rounds {
-                bail!("{}: the wavefront's paths were still in flight after {round} rounds, more than they can take", ctx.info.name);
+                bail!(
+                    "{}: the wavefront's paths were still in flight after {round} rounds, more than they can take",
+                    ctx.info.name
+                );
             }
             let pushes: Vec<Vec<u8>> = (round..round + ROUNDS_PER_SUBMISSION).map(&push).collect();
-            let steps: Vec<(&ComputeKernel, &[u8], [u32; 3])> = pushes.iter().flat_map(|p| self.kernels.iter().map(move |k| (k, &p[..], groups))).collect();
+            let steps: Vec<(&ComputeKernel, &[u8], [u32; 3])> =
+                pushes.iter().flat_map(|p| self.kernels.iter().map(move |k| (k, &p[..], groups))).collect();
             let seconds = ComputeKernel::dispatch_sequence_timed(ctx, &steps)?;
             device_seconds = device_seconds.zip(seconds).map(|(sum, s)| sum + s);
             let last = round + ROUNDS_PER_SUBMISSION - 1;
@@ -103,7 +114,10 @@ mod tests {
     #[test]
     fn the_state_count_is_the_one_the_kernel_lays_out() {
         let glsl = include_str!("../../shaders/wavefront.glsl");
-        assert!(glsl.contains(&format!("const uint WAVEFRONT_STATE_LAYOUT_VEC4S = {STATE_VEC4S}u;")), "wavefront.glsl lays out another count");
+        assert!(
+            glsl.contains(&format!("const uint WAVEFRONT_STATE_LAYOUT_VEC4S = {STATE_VEC4S}u;")),
+            "wavefront.glsl lays out another count"
+        );
         for (stage, number) in [(WavefrontStage::Extend, 1), (WavefrontStage::Shadow, 2), (WavefrontStage::Shade, 3)] {
             assert_eq!(stage as u32, number);
             let define = format!("#define WAVEFRONT_{} {number}", format!("{stage:?}").to_uppercase());

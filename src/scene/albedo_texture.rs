@@ -19,9 +19,14 @@ pub fn load(t: &AlbedoTextureFile, key: &str, base: &Path, files: &InputFiles) -
     let texture = match (&t.file, &t.checkerboard) {
         (Some(file), None) => load_texture(files, &super::resolve(base, file))?,
         (None, Some(Array([a, b]))) => {
-            let colors = [super::non_negative3(&format!("{key}.checkerboard"), *a)?, super::non_negative3(&format!("{key}.checkerboard"), *b)?];
+            let colors = [
+                super::non_negative3(&format!("{key}.checkerboard"), *a)?,
+                super::non_negative3(&format!("{key}.checkerboard"), *b)?,
+            ];
             if colors.iter().any(|c| c.max_element() > 1.0) {
-                bail!("{key}.checkerboard: colours must be at most 1 per channel (energy conservation), got {colors:?}");
+                bail!(
+                    "{key}.checkerboard: colours must be at most 1 per channel (energy conservation), got {colors:?}"
+                );
             }
             checkerboard(colors)
         }

@@ -53,7 +53,10 @@ mod tests {
         for (a, b) in [(read.position, camera.position), (read.look_at, camera.look_at), (read.up, camera.up)] {
             assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits), "{text}");
         }
-        assert_eq!([read.fov_deg, read.aperture, read.focus_distance].map(f32::to_bits), [camera.fov_deg, camera.aperture, camera.focus_distance].map(f32::to_bits));
+        assert_eq!(
+            [read.fov_deg, read.aperture, read.focus_distance].map(f32::to_bits),
+            [camera.fov_deg, camera.aperture, camera.focus_distance].map(f32::to_bits)
+        );
     }
 
     #[test]

@@ -37,7 +37,11 @@ pub enum Environment {
 
 pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) -> Result<Environment> {
     // An equal-area map is resampled to a lat-long one once read.
-    let maps = [(e.probe.as_ref(), MapProjection::Angular), (e.latlong.as_ref(), MapProjection::LatLong), (e.octahedral.as_ref(), MapProjection::LatLong)];
+    let maps = [
+        (e.probe.as_ref(), MapProjection::Angular),
+        (e.latlong.as_ref(), MapProjection::LatLong),
+        (e.octahedral.as_ref(), MapProjection::LatLong),
+    ];
     let given: Vec<_> = maps.iter().filter_map(|(f, p)| f.map(|f| (f, *p))).collect();
     if given.len() + usize::from(e.color.is_some()) > 1 {
         bail!("environment: give only one of color, probe, latlong and octahedral");
@@ -74,7 +78,11 @@ pub(super) fn from_file(e: &EnvironmentFile, base: &Path, files: &InputFiles) ->
         bail!("{name}: the environment map has negative radiance");
     }
     if (projection == MapProjection::Angular || e.octahedral.is_some()) && image.width != image.height {
-        bail!("{name}: an angular light probe or an equal-area octahedral map must be square, got {} x {}", image.width, image.height);
+        bail!(
+            "{name}: an angular light probe or an equal-area octahedral map must be square, got {} x {}",
+            image.width,
+            image.height
+        );
     }
     if projection == MapProjection::Angular {
         fill_outside_disk(&mut image);

@@ -92,7 +92,9 @@ mod tests {
         // The fraction of square cells whose centres map into the cap z > 0.5 is the cap's share
         // of the sphere, (1 - 0.5) / 2.
         let n = 400;
-        let inside = (0..n * n).filter(|k| square_to_sphere(DVec2::new((k % n) as f64 + 0.5, (k / n) as f64 + 0.5) / n as f64).z > 0.5).count();
+        let inside = (0..n * n)
+            .filter(|k| square_to_sphere(DVec2::new((k % n) as f64 + 0.5, (k / n) as f64 + 0.5) / n as f64).z > 0.5)
+            .count();
         assert!((inside as f64 / (n * n) as f64 - 0.25).abs() < 2e-3, "{inside}");
     }
 

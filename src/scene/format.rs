@@ -107,7 +107,19 @@ impl SceneFile {
     /// A scene with this camera, film and integrator and nothing in it yet: what the importers
     /// fill.
     pub fn empty(camera: CameraFile, film: FilmFile, integrator: IntegratorFile) -> Self {
-        Self { camera, film, integrator, materials: Default::default(), spheres: vec![], quads: vec![], triangles: vec![], meshes: vec![], environment: None, lights: vec![], inline_meshes: vec![] }
+        Self {
+            camera,
+            film,
+            integrator,
+            materials: Default::default(),
+            spheres: vec![],
+            quads: vec![],
+            triangles: vec![],
+            meshes: vec![],
+            environment: None,
+            lights: vec![],
+            inline_meshes: vec![],
+        }
     }
 }
 
@@ -196,7 +208,16 @@ pub struct IntegratorFile {
 
 impl Default for IntegratorFile {
     fn default() -> Self {
-        Self { rr_start: 4, absorption: None, nee: true, max_bounces: 1024, sample_environment: true, clamp: None, sampler: Sampler::Sobol, light_selection: LightSelection::Power }
+        Self {
+            rr_start: 4,
+            absorption: None,
+            nee: true,
+            max_bounces: 1024,
+            sample_environment: true,
+            clamp: None,
+            sampler: Sampler::Sobol,
+            light_selection: LightSelection::Power,
+        }
     }
 }
 

@@ -41,10 +41,16 @@ impl Light {
         let direction = |d: Vec3| Some(m.transform_vector3(d).normalize_or_zero()).filter(|d| *d != Vec3::ZERO);
         Some(match *self {
             Light::Point { position, intensity } => Light::Point { position: m.transform_point3(position), intensity },
-            Light::Spot { position, axis, intensity, cone_angle, falloff_start } => {
-                Light::Spot { position: m.transform_point3(position), axis: direction(axis)?, intensity, cone_angle, falloff_start }
+            Light::Spot { position, axis, intensity, cone_angle, falloff_start } => Light::Spot {
+                position: m.transform_point3(position),
+                axis: direction(axis)?,
+                intensity,
+                cone_angle,
+                falloff_start,
+            },
+            Light::Directional { direction: d, irradiance, angular_diameter } => {
+                Light::Directional { direction: direction(d)?, irradiance, angular_diameter }
             }
-            Light::Directional { direction: d, irradiance, angular_diameter } => Light::Directional { direction: direction(d)?, irradiance, angular_diameter },
         })
     }
 }
@@ -66,7 +72,10 @@ pub(super) fn lights_from(lights: &[LightFile]) -> Result<Vec<Light>> {
 }
 
 fn point_from(p: &PointLightFile, key: &dyn Fn(&str) -> String) -> Result<Light> {
-    Ok(Light::Point { position: vec3(&key("position"), p.position)?, intensity: non_negative3(&key("intensity"), p.intensity)? })
+    Ok(Light::Point {
+        position: vec3(&key("position"), p.position)?,
+        intensity: non_negative3(&key("intensity"), p.intensity)?,
+    })
 }
 
 fn spot_from(s: &SpotLightFile, key: &dyn Fn(&str) -> String) -> Result<Light> {
@@ -115,7 +124,11 @@ mod tests {
     use std::path::Path;
 
     fn scene_with(lights: &str) -> anyhow::Result<Scene> {
-        Scene::parse(&format!("camera = {{ position = [0, 0, 3], look_at = [0, 0, 0] }}\n{lights}"), "lights.toml", Path::new("."))
+        Scene::parse(
+            &format!("camera = {{ position = [0, 0, 3], look_at = [0, 0, 0] }}\n{lights}"),
+            "lights.toml",
+            Path::new("."),
+        )
     }
 
     fn error(lights: &str) -> String {
@@ -130,9 +143,23 @@ mod tests {
              [[lights]]\ntype = \"directional\"\ndirection = [0, -2, 0]\nirradiance = [3, 3, 3]\nangular_diameter = 0.53",
         )
         .unwrap();
-        assert_eq!(scene.lights[0], Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(4.0, 5.0, 6.0) });
-        assert_eq!(scene.lights[1], Light::Spot { position: Vec3::Y * 2.0, axis: -Vec3::Y, intensity: Vec3::ONE, cone_angle: 30f32.to_radians(), falloff_start: 20f32.to_radians() });
-        let Light::Directional { direction, angular_diameter, .. } = scene.lights[2] else { panic!("a directional light") };
+        assert_eq!(
+            scene.lights[0],
+            Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(4.0, 5.0, 6.0) }
+        );
+        assert_eq!(
+            scene.lights[1],
+            Light::Spot {
+                position: Vec3::Y * 2.0,
+                axis: -Vec3::Y,
+                intensity: Vec3::ONE,
+                cone_angle: 30f32.to_radians(),
+                falloff_start: 20f32.to_radians()
+            }
+        );
+        let Light::Directional { direction, angular_diameter, .. } = scene.lights[2] else {
+            panic!("a directional light")
+        };
         assert_eq!((direction, angular_diameter), (-Vec3::Y, 0.53f32.to_radians()));
         // irradiance / (pi sin^2(diameter / 2)).
         let radiance = scene.lights[2].disk_radiance().unwrap().x as f64;
@@ -143,11 +170,18 @@ mod tests {
 
     #[test]
     fn negative_or_non_finite_values_are_errors_naming_the_key() {
-        let point = |intensity: &str| format!("[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = {intensity}");
-        assert!(error(&point("[1, -1, 1]")).contains("lights[0].intensity must not be negative"), "{}", error(&point("[1, -1, 1]")));
+        let point =
+            |intensity: &str| format!("[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = {intensity}");
+        assert!(
+            error(&point("[1, -1, 1]")).contains("lights[0].intensity must not be negative"),
+            "{}",
+            error(&point("[1, -1, 1]"))
+        );
         assert!(error(&point("[1, nan, 1]")).contains("lights[0].intensity must be finite"));
         assert!(error(&point("[1, inf, 1]")).contains("lights[0].intensity must be finite"));
-        let sun = |irradiance: &str, diameter: &str| format!("[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = {irradiance}\nangular_diameter = {diameter}");
+        let sun = |irradiance: &str, diameter: &str| {
+            format!("[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = {irradiance}\nangular_diameter = {diameter}")
+        };
         assert!(error(&sun("[-1, 1, 1]", "0")).contains("lights[0].irradiance must not be negative"));
         assert!(error(&sun("[1, 1, 1]", "-0.5")).contains("lights[0].angular_diameter must be in [0, 180)"));
         assert!(error(&sun("[1, 1, 1]", "nan")).contains("lights[0].angular_diameter must be finite"));

@@ -14,7 +14,14 @@ use std::path::Path;
 
 /// Loads `m`'s textures (albedo, opacity, normals) into `textures`, points `material` at them and
 /// sets its opacity; the texture-coordinate map they share, if it has any texture.
-pub fn attach(mname: &str, m: &MaterialFile, material: &mut Material, textures: &mut Vec<Texture>, base: &Path, files: &InputFiles) -> Result<Option<Affine2>> {
+pub fn attach(
+    mname: &str,
+    m: &MaterialFile,
+    material: &mut Material,
+    textures: &mut Vec<Texture>,
+    base: &Path,
+    files: &InputFiles,
+) -> Result<Option<Affine2>> {
     let key = |field: &str| format!("materials.{mname}.{field}");
     let mut shared = SharedMap::default();
     if let Some(t) = &m.albedo_texture {

@@ -79,16 +79,38 @@ impl<'a> MeshImporter<'a> {
 
     /// Places the meshes of `path` with `transform` applied after the file's own node transforms.
     /// `material` replaces every material of the file. Returns the file's camera, if it has one.
-    pub fn place(&mut self, scene: &mut Scene, path: &Path, material: Option<u32>, transform: Mat4) -> Result<Option<AssetCamera>> {
+    pub fn place(
+        &mut self,
+        scene: &mut Scene,
+        path: &Path,
+        material: Option<u32>,
+        transform: Mat4,
+    ) -> Result<Option<AssetCamera>> {
         self.place_part(scene, path, None, material, Sides::default(), transform)
     }
 
     /// As [`MeshImporter::place`], for mesh `shape_index` of a file that holds several (Mitsuba's
     /// `.serialized`; `asset::load_asset_part`).
-    pub fn place_part(&mut self, scene: &mut Scene, path: &Path, shape_index: Option<u32>, material: Option<u32>, sides: Sides, transform: Mat4) -> Result<Option<AssetCamera>> {
+    pub fn place_part(
+        &mut self,
+        scene: &mut Scene,
+        path: &Path,
+        shape_index: Option<u32>,
+        material: Option<u32>,
+        sides: Sides,
+        transform: Mat4,
+    ) -> Result<Option<AssetCamera>> {
         let key = (path.canonicalize().unwrap_or_else(|_| path.to_path_buf()), shape_index, material, sides);
         let files = self.files;
-        self.place_loaded(scene, key, path, || Ok(asset::load_asset_part(files, path, shape_index)?), material, sides, transform)
+        self.place_loaded(
+            scene,
+            key,
+            path,
+            || Ok(asset::load_asset_part(files, path, shape_index)?),
+            material,
+            sides,
+            transform,
+        )
     }
 
     /// Places a mesh written in the scene (an importer's, as PLY text: [`InlineMesh`]) as
@@ -96,14 +118,31 @@ impl<'a> MeshImporter<'a> {
     pub fn place_inline(&mut self, scene: &mut Scene, mesh: &InlineMesh, material: u32) -> Result<()> {
         let name = Path::new(&mesh.name);
         let key = (name.to_path_buf(), None, Some(material), Sides::default());
-        self.place_loaded(scene, key, name, || Ok(asset::load_ply_bytes(mesh.ply.as_bytes(), name)?), Some(material), Sides::default(), Mat4::IDENTITY)?;
+        self.place_loaded(
+            scene,
+            key,
+            name,
+            || Ok(asset::load_ply_bytes(mesh.ply.as_bytes(), name)?),
+            Some(material),
+            Sides::default(),
+            Mat4::IDENTITY,
+        )?;
         Ok(())
     }
 
     /// Places the meshes `load` gives (loaded once per `key`) as [`MeshImporter::place_part`]
     /// describes; `path` names them in messages.
     #[allow(clippy::too_many_arguments)]
-    fn place_loaded(&mut self, scene: &mut Scene, key: LoadKey, path: &Path, load: impl FnOnce() -> Result<Asset>, material: Option<u32>, sides: Sides, transform: Mat4) -> Result<Option<AssetCamera>> {
+    fn place_loaded(
+        &mut self,
+        scene: &mut Scene,
+        key: LoadKey,
+        path: &Path,
+        load: impl FnOnce() -> Result<Asset>,
+        material: Option<u32>,
+        sides: Sides,
+        transform: Mat4,
+    ) -> Result<Option<AssetCamera>> {
         if !self.loaded.contains_key(&key) {
             let mut asset = load()?;
             if asset.dropped_triangles > 0 {
@@ -134,7 +173,9 @@ impl<'a> MeshImporter<'a> {
             scene.instances.push(Instance { mesh, transform: world });
         }
         for (k, light) in file.lights.iter().enumerate() {
-            let placed = light.transformed(transform).with_context(|| format!("{}: a placement of its light {k} collapses its direction (zero scale?)", path.display()))?;
+            let placed = light.transformed(transform).with_context(|| {
+                format!("{}: a placement of its light {k} collapses its direction (zero scale?)", path.display())
+            })?;
             scene.lights.push(placed);
         }
         Ok(file.camera)
@@ -173,7 +214,11 @@ impl Sides {
 fn map_uvs(scene: &Scene, path: &Path, asset: &mut Asset, material: u32, to_uv: Affine2) -> Result<()> {
     for (k, mesh) in asset.meshes.iter_mut().enumerate() {
         if mesh.uvs.is_empty() {
-            bail!("{}: mesh {k} has no texture coordinates, which material '{}' needs for its textures", path.display(), scene.materials[material as usize].name);
+            bail!(
+                "{}: mesh {k} has no texture coordinates, which material '{}' needs for its textures",
+                path.display(),
+                scene.materials[material as usize].name
+            );
         }
         mesh.uvs.iter_mut().for_each(|uv| *uv = to_uv.transform_point2(*uv));
     }
@@ -187,7 +232,11 @@ fn map_uvs(scene: &Scene, path: &Path, asset: &mut Asset, material: u32, to_uv: 
 fn cross_bitangent_frames(scene: &Scene, path: &Path, asset: &mut Asset, material: u32) -> Result<()> {
     for (k, mesh) in asset.meshes.iter_mut().enumerate() {
         if let Err(missing) = asset::ensure_tangents(mesh) {
-            bail!("{}: mesh {k} has no {missing}, which material '{}' needs for its normal_texture", path.display(), scene.materials[material as usize].name);
+            bail!(
+                "{}: mesh {k} has no {missing}, which material '{}' needs for its normal_texture",
+                path.display(),
+                scene.materials[material as usize].name
+            );
         }
         mesh.tangents.iter_mut().for_each(|t| t.w = 1.0);
     }
@@ -224,7 +273,10 @@ fn add_asset(scene: &mut Scene, path: &Path, asset: Asset, material: Option<u32>
 /// no surface creates energy.
 fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base: u32) -> Result<Material> {
     let values = [m.albedo.to_array(), m.emission.to_array()].concat();
-    if values.iter().chain([m.reflectivity, m.transparency, m.ior, m.roughness].iter()).any(|v| !v.is_finite()) || m.albedo.min_element() < 0.0 || m.emission.min_element() < 0.0 {
+    if values.iter().chain([m.reflectivity, m.transparency, m.ior, m.roughness].iter()).any(|v| !v.is_finite())
+        || m.albedo.min_element() < 0.0
+        || m.emission.min_element() < 0.0
+    {
         bail!("{}: material '{}' has a negative or non-finite value", path.display(), m.name);
     }
     Ok(Material {
@@ -244,7 +296,9 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
         microfacet: Microfacet::Ggx,
         thin: false,
         one_sided: false,
-        metallic_roughness: m.metallic_roughness.map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
+        metallic_roughness: m
+            .metallic_roughness
+            .map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
         maps: m.maps.rebased(texture_base),
         clearcoat: m.clearcoat.map(|c| c.rebased(texture_base)),
         attenuation: m.attenuation,

@@ -13,9 +13,11 @@ mod mesh;
 mod optics;
 mod toml_error;
 
-pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
-pub use asset::{downsample_to_fit, srgb_to_linear, load_asset, load_asset_from, load_asset_part, Asset, AssetError, Wrap};
+pub use asset::{
+    downsample_to_fit, load_asset, load_asset_from, load_asset_part, srgb_to_linear, Asset, AssetError, Wrap,
+};
 pub use camera_toml::camera_toml;
+pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use format::{Filter, LightSelection, Microfacet, Sampler};
 pub use light::Light;
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Sides, Texture};
@@ -24,7 +26,9 @@ pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 use crate::input_file::{InputFiles, InputKind};
 use crate::render::ALPHA_DELTA;
 use anyhow::{bail, Context as _, Result};
-use format::{Array, CameraFile, FilmFile, IntegratorFile, MaterialFile, MeshFile, Placement, Scale, SceneFile, Triple};
+use format::{
+    Array, CameraFile, FilmFile, IntegratorFile, MaterialFile, MeshFile, Placement, Scale, SceneFile, Triple,
+};
 use glam::{Mat4, Quat, Vec3};
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -207,7 +211,11 @@ impl TextureMaps {
 impl Clearcoat {
     /// The same coat with its texture indices moved up by `base` (as [`TextureMaps::rebased`]).
     pub fn rebased(self, base: u32) -> Clearcoat {
-        Clearcoat { texture: self.texture.map(|t| t + base), roughness_texture: self.roughness_texture.map(|t| t + base), ..self }
+        Clearcoat {
+            texture: self.texture.map(|t| t + base),
+            roughness_texture: self.roughness_texture.map(|t| t + base),
+            ..self
+        }
     }
 }
 
@@ -267,17 +275,31 @@ impl Material {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
-    Sphere { center: Vec3, radius: f32, material: u32 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        material: u32,
+    },
     /// Parallelogram origin + s u + t v, s and t in [0, 1]; front side faces u x v.
-    Quad { origin: Vec3, u: Vec3, v: Vec3, material: u32 },
+    Quad {
+        origin: Vec3,
+        u: Vec3,
+        v: Vec3,
+        material: u32,
+    },
     /// Front side faces (v1 - v0) x (v2 - v0).
-    Triangle { v: [Vec3; 3], material: u32 },
+    Triangle {
+        v: [Vec3; 3],
+        material: u32,
+    },
 }
 
 impl Shape {
     pub fn material(&self) -> u32 {
         match *self {
-            Shape::Sphere { material, .. } | Shape::Quad { material, .. } | Shape::Triangle { material, .. } => material,
+            Shape::Sphere { material, .. } | Shape::Quad { material, .. } | Shape::Triangle { material, .. } => {
+                material
+            }
         }
     }
 }
@@ -383,7 +405,8 @@ impl Scene {
     /// Parses scene text; `name` appears in messages, `base` resolves relative file paths and the
     /// files they name are read through `files`.
     pub fn parse_from(files: &InputFiles, text: &str, name: &str, base: &Path) -> Result<Scene> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| anyhow::anyhow!("{name}: {}", toml_error::describe(&e, text)))?;
+        let file: SceneFile =
+            toml::from_str(text).map_err(|e| anyhow::anyhow!("{name}: {}", toml_error::describe(&e, text)))?;
         build(file, name, base, files).with_context(|| name.to_string())
     }
 
@@ -401,7 +424,9 @@ impl Scene {
                     add(center - Vec3::splat(radius.abs()));
                     add(center + Vec3::splat(radius.abs()));
                 }
-                Shape::Quad { origin, u, v, .. } => [origin, origin + u, origin + v, origin + u + v].into_iter().for_each(&mut add),
+                Shape::Quad { origin, u, v, .. } => {
+                    [origin, origin + u, origin + v, origin + u + v].into_iter().for_each(&mut add)
+                }
                 Shape::Triangle { v, .. } => v.into_iter().for_each(&mut add),
             }
         }
@@ -416,8 +441,10 @@ impl Scene {
     /// Emissive shapes plus emissive mesh triangles, each instance counted.
     pub fn light_count(&self) -> usize {
         let emissive = |m: u32| self.materials[m as usize].is_emissive();
-        let mesh_lights: Vec<usize> = self.meshes.iter().map(|m| m.triangle_materials.iter().filter(|&&t| emissive(t)).count()).collect();
-        self.shapes.iter().filter(|s| emissive(s.material())).count() + self.instances.iter().map(|i| mesh_lights[i.mesh as usize]).sum::<usize>()
+        let mesh_lights: Vec<usize> =
+            self.meshes.iter().map(|m| m.triangle_materials.iter().filter(|&&t| emissive(t)).count()).collect();
+        self.shapes.iter().filter(|s| emissive(s.material())).count()
+            + self.instances.iter().map(|i| mesh_lights[i.mesh as usize]).sum::<usize>()
     }
 }
 
@@ -468,7 +495,8 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
         }
     }
     // Materials are numbered in name order, as materials_from lists them.
-    let by_name: HashMap<&str, u32> = file.materials.keys().enumerate().map(|(i, name)| (name.as_str(), i as u32)).collect();
+    let by_name: HashMap<&str, u32> =
+        file.materials.keys().enumerate().map(|(i, name)| (name.as_str(), i as u32)).collect();
     let material = |key: String, mname: &str| -> Result<u32> {
         by_name.get(mname).copied().with_context(|| {
             let known: Vec<_> = file.materials.keys().map(String::as_str).collect();
@@ -487,7 +515,19 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
         Some(e) => environment::from_file(e, base, files)?,
     };
     let lights = light::lights_from(&file.lights)?;
-    let mut scene = Scene { name: name.to_string(), camera, film, integrator, materials, shapes, meshes: vec![], instances: vec![], textures, environment, lights };
+    let mut scene = Scene {
+        name: name.to_string(),
+        camera,
+        film,
+        integrator,
+        materials,
+        shapes,
+        meshes: vec![],
+        instances: vec![],
+        textures,
+        environment,
+        lights,
+    };
     let mut importer = MeshImporter::new(files).with_uv_maps(uv_maps);
     place_meshes(&mut scene, &file.meshes, &material, base, &mut importer)?;
     for m in &file.inline_meshes {
@@ -567,7 +607,10 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
     if material.albedo.max_element() > 1.0 {
         bail!("{} must be at most 1 per channel (energy conservation), got {:?}", key("albedo"), material.albedo);
     }
-    if material.reflectivity < 0.0 || material.transparency < 0.0 || material.reflectivity + material.transparency > 1.0 + 1e-6 {
+    if material.reflectivity < 0.0
+        || material.transparency < 0.0
+        || material.reflectivity + material.transparency > 1.0 + 1e-6
+    {
         bail!(
             "materials.{mname}: reflectivity and transparency must be >= 0 with R + T <= 1, got R = {}, T = {}",
             material.reflectivity,
@@ -592,7 +635,9 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
 fn attenuation_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Option<Attenuation>> {
     let (color, distance) = match (m.attenuation_color, m.attenuation_distance) {
         (None, None) => return Ok(None),
-        (Some(color), Some(distance)) => (vec3(&key("attenuation_color"), color)?, finite(&key("attenuation_distance"), distance)?),
+        (Some(color), Some(distance)) => {
+            (vec3(&key("attenuation_color"), color)?, finite(&key("attenuation_distance"), distance)?)
+        }
         (Some(_), None) => bail!("{} needs {}", key("attenuation_color"), key("attenuation_distance")),
         (None, Some(_)) => bail!("{} needs {}", key("attenuation_distance"), key("attenuation_color")),
     };
@@ -657,10 +702,17 @@ fn shapes_from(file: &SceneFile, material: &MaterialLookup) -> Result<Vec<Shape>
 }
 
 /// Loads every `[[meshes]]` file and places it once, or at each of its instances.
-fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLookup, base: &Path, importer: &mut MeshImporter) -> Result<()> {
+fn place_meshes(
+    scene: &mut Scene,
+    meshes: &[MeshFile],
+    material: &MaterialLookup,
+    base: &Path,
+    importer: &mut MeshImporter,
+) -> Result<()> {
     for (k, m) in meshes.iter().enumerate() {
         let key = format!("meshes[{k}]");
-        let override_material = m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;
+        let override_material =
+            m.material.as_ref().map(|name| material(format!("{key}.material"), name)).transpose()?;
         let outer = placement(&key, &m.placement())?;
         let path = resolve(base, &m.file);
         let sides = Sides { flip_normals: m.flip_normals, face_normals: m.face_normals };
@@ -668,7 +720,14 @@ fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLooku
             importer.place_part(scene, &path, m.shape_index, override_material, sides, outer)?;
         }
         for (j, p) in m.instances.iter().enumerate() {
-            importer.place_part(scene, &path, m.shape_index, override_material, sides, placement(&format!("{key}.instances[{j}]"), p)? * outer)?;
+            importer.place_part(
+                scene,
+                &path,
+                m.shape_index,
+                override_material,
+                sides,
+                placement(&format!("{key}.instances[{j}]"), p)? * outer,
+            )?;
         }
     }
     Ok(())
@@ -678,7 +737,9 @@ fn place_meshes(scene: &mut Scene, meshes: &[MeshFile], material: &MaterialLooku
 fn conductor_from(m: &MaterialFile, key: &dyn Fn(&str) -> String) -> Result<Conductor> {
     match (&m.metal, m.eta, m.k) {
         (None, None, None) => Ok(Conductor::Mirror),
-        (Some(_), Some(_), _) | (Some(_), _, Some(_)) => bail!("{} and eta/k both set the conductor's IOR: give one", key("metal")),
+        (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+            bail!("{} and eta/k both set the conductor's IOR: give one", key("metal"))
+        }
         (Some(name), None, None) if name == "albedo" => Ok(Conductor::Albedo),
         (Some(name), None, None) => {
             let (eta, k) = metal(name).with_context(|| {

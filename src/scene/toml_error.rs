@@ -94,9 +94,7 @@ fn key_path(error: &toml::de::Error) -> Option<String> {
 fn locate(message: &str, text: &str) -> Option<usize> {
     let ends: Vec<usize> = text.match_indices('\n').map(|(i, _)| i).chain([text.len()]).collect();
     let fails_by = |line: usize| {
-        text[..ends[line]]
-            .parse::<toml::Table>()
-            .is_err_and(|e| e.span().is_none() && e.message() == message)
+        text[..ends[line]].parse::<toml::Table>().is_err_and(|e| e.span().is_none() && e.message() == message)
     };
     let last = ends.len() - 1;
     if !fails_by(last) {

@@ -78,7 +78,9 @@ impl Speed {
     /// progress, or accumulation done).
     fn per_second(&self) -> f64 {
         match self.history.front() {
-            Some(&(since, total)) if since.elapsed() > Duration::ZERO => (self.total - total) / since.elapsed().as_secs_f64(),
+            Some(&(since, total)) if since.elapsed() > Duration::ZERO => {
+                (self.total - total) / since.elapsed().as_secs_f64()
+            }
             _ => 0.0,
         }
     }
@@ -145,7 +147,14 @@ impl<'a> Viewer<'a> {
         let size = window.inner_size();
         let presenter = Presenter::new(ctx, [size.width, size.height])?;
         let egui = egui::Context::default();
-        let egui_input = egui_winit::State::new(egui.clone(), egui::ViewportId::ROOT, window, Some(window.scale_factor() as f32), None, None);
+        let egui_input = egui_winit::State::new(
+            egui.clone(),
+            egui::ViewportId::ROOT,
+            window,
+            Some(window.scale_factor() as f32),
+            None,
+            None,
+        );
         let mut viewer = Self {
             ctx,
             window,
@@ -226,7 +235,11 @@ impl<'a> Viewer<'a> {
         scene.camera = self.camera.clone();
         scene.film.width = size.width.clamp(1, 16384);
         scene.film.height = size.height.clamp(1, 16384);
-        let aovs = if self.aovs { AovSet { albedo: true, normal: true, depth: true, samples: false } } else { AovSet::default() };
+        let aovs = if self.aovs {
+            AovSet { albedo: true, normal: true, depth: true, samples: false }
+        } else {
+            AovSet::default()
+        };
         let mut renderer = Renderer::with_aovs(self.ctx, &scene, self.seed, aovs)?;
         renderer.set_dispatch_target(DISPATCH_TARGET_S);
         let display = Display::new(self.ctx, &self.display_spirv, &renderer)?;
@@ -358,7 +371,11 @@ impl<'a> Viewer<'a> {
                     "f" => {
                         if let Some(bounds) = self.scene.bounds() {
                             let size = self.window.inner_size();
-                            camera_control::frame_bounds(&mut self.camera, bounds, size.width as f32 / size.height.max(1) as f32);
+                            camera_control::frame_bounds(
+                                &mut self.camera,
+                                bounds,
+                                size.width as f32 / size.height.max(1) as f32,
+                            );
                             self.camera_moved = true;
                         }
                     }
@@ -389,9 +406,15 @@ impl<'a> Viewer<'a> {
 
     /// Key P: the camera as a `[camera]` table of the scene format, on standard output.
     fn print_camera(&self) {
-        let (samples, (w, h)) = self.session.as_ref().map_or((0, (0, 0)), |s| (s.renderer.samples_done, s.renderer.size()));
+        let (samples, (w, h)) =
+            self.session.as_ref().map_or((0, (0, 0)), |s| (s.renderer.samples_done, s.renderer.size()));
         let mut out = std::io::stdout().lock();
-        let _ = write!(out, "# {} ({w}x{h}) at {samples} spp: paste into the scene file\n{}\n", self.source.title(), camera_toml(&self.camera));
+        let _ = write!(
+            out,
+            "# {} ({w}x{h}) at {samples} spp: paste into the scene file\n{}\n",
+            self.source.title(),
+            camera_toml(&self.camera)
+        );
         let _ = out.flush();
     }
 
@@ -406,7 +429,12 @@ impl<'a> Viewer<'a> {
             eprintln!("caustica view: nothing to save yet (no samples)");
             return Ok(());
         };
-        let stem = self.source.path.as_ref().and_then(|p| p.file_stem()).map_or_else(|| "cornell".to_owned(), |s| s.to_string_lossy().into_owned());
+        let stem = self
+            .source
+            .path
+            .as_ref()
+            .and_then(|p| p.file_stem())
+            .map_or_else(|| "cornell".to_owned(), |s| s.to_string_lossy().into_owned());
         let (png, exr) = (1..)
             .map(|n| (PathBuf::from(format!("{stem}-view-{n}.png")), PathBuf::from(format!("{stem}-view-{n}.exr"))))
             .find(|(png, exr)| !png.exists() && !exr.exists())
@@ -508,7 +536,9 @@ impl<'a> Viewer<'a> {
         if !paused && !self.done() {
             let limit = self.limit().unwrap_or(u32::MAX);
             let session = self.session.as_mut().expect("checked above");
-            let before = session.renderer.samples_done as f64 * session.renderer.size().0 as f64 * session.renderer.size().1 as f64;
+            let before = session.renderer.samples_done as f64
+                * session.renderer.size().0 as f64
+                * session.renderer.size().1 as f64;
             session.renderer.render_step(limit)?;
             let r = &session.renderer;
             let (w, h) = r.size();
@@ -537,7 +567,13 @@ impl<'a> Viewer<'a> {
                     size.1
                 );
                 crate::image::png::write_srgb8(&path, screen.width, screen.height, &screen.rgb)?;
-                eprintln!("caustica view: wrote {} ({}x{}, {} spp)", path.display(), screen.width, screen.height, self.session.as_ref().map_or(0, |s| s.renderer.samples_done));
+                eprintln!(
+                    "caustica view: wrote {} ({}x{}, {} spp)",
+                    path.display(),
+                    screen.width,
+                    screen.height,
+                    self.session.as_ref().map_or(0, |s| s.renderer.samples_done)
+                );
                 return Ok(false);
             }
         }
@@ -562,13 +598,23 @@ impl<'a> Viewer<'a> {
         let samples = self.session.as_ref().map_or(0, |s| s.renderer.samples_done);
         let limit = self.limit().map_or(String::new(), |l| format!("/{l}"));
         let fps = 1.0 / self.frame_seconds.max(1e-6);
-        self.window.set_title(&format!("caustica - {} - {samples}{limit} spp - {:.2} Msamples/s - {fps:.0} fps", self.source.title(), self.speed.per_second() / 1e6));
+        self.window.set_title(&format!(
+            "caustica - {} - {samples}{limit} spp - {:.2} Msamples/s - {fps:.0} fps",
+            self.source.title(),
+            self.speed.per_second() / 1e6
+        ));
     }
 
     fn settings(&self) -> DisplaySettings {
         // Depth shows black at the far side of the scene.
         let depth_far = self.scene.bounds().map_or(1.0, |(lo, hi)| {
-            let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
+            let corners = (0..8).map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            });
             corners.map(|c| (c - self.camera.position).length()).fold(1e-3, f32::max)
         });
         DisplaySettings { exposure: self.exposure, tonemap: self.tonemap, view: self.view, depth_far }
@@ -609,7 +655,11 @@ impl<'a> Viewer<'a> {
         let picture = session.display.picture(&session.renderer, &settings, order)?;
         let frame = Frame {
             picture: Some(picture),
-            overlay: overlay.as_ref().map(|(primitives, textures, pixels_per_point)| OverlayDraw { primitives, textures, pixels_per_point: *pixels_per_point }),
+            overlay: overlay.as_ref().map(|(primitives, textures, pixels_per_point)| OverlayDraw {
+                primitives,
+                textures,
+                pixels_per_point: *pixels_per_point,
+            }),
             read_back,
         };
         let presenter = self.presenter.as_mut().expect("the presenter lives until destroy");

@@ -165,7 +165,10 @@ mod tests {
     fn pan_and_fly_carry_the_pivot_along() {
         let mut c = camera();
         pan(&mut c, 10.0, 0.0, 100.0);
-        assert!(c.position.x < 0.0 && (c.position.x - c.look_at.x).abs() < 1e-6, "dragging right moves the camera left");
+        assert!(
+            c.position.x < 0.0 && (c.position.x - c.look_at.x).abs() < 1e-6,
+            "dragging right moves the camera left"
+        );
         let mut c = camera();
         fly(&mut c, Vec3::new(0.0, 0.0, 1.0));
         assert!(close(c.position, Vec3::new(0.0, 1.0, 4.0)) && close(c.look_at, Vec3::new(0.0, 1.0, -1.0)));

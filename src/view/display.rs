@@ -81,7 +81,12 @@ impl Display {
     pub fn new(ctx: &GpuContext, spirv: &[u32], renderer: &Renderer) -> Result<Self> {
         let (width, height) = renderer.size();
         let thresholds = Buffer::with_data(ctx, "display code tables", BufferKind::HostStorage, &[0u8; 2 * CODES * 4])?;
-        let pixels = Buffer::with_data(ctx, "display pixels", BufferKind::Storage, &vec![0u8; width as usize * height as usize * 4])?;
+        let pixels = Buffer::with_data(
+            ctx,
+            "display pixels",
+            BufferKind::Storage,
+            &vec![0u8; width as usize * height as usize * 4],
+        )?;
         let (accumulation, aovs) = renderer.image_buffers();
         // Without AOV sums the AOV bindings see the accumulation; the views that read them are
         // only chosen with a renderer that keeps them.
@@ -94,11 +99,23 @@ impl Display {
             Binding::whole(4, &pixels),
         ];
         let kernel = ComputeKernel::new(ctx, spirv, &bindings, std::mem::size_of::<DisplayParams>() as u32)?;
-        Ok(Self { kernel, thresholds, pixels, size: [width, height], tables_for: None, params: DisplayParams::zeroed() })
+        Ok(Self {
+            kernel,
+            thresholds,
+            pixels,
+            size: [width, height],
+            tables_for: None,
+            params: DisplayParams::zeroed(),
+        })
     }
 
     /// The picture of `renderer`'s image now, for the presenter: `order` is the swapchain's.
-    pub fn picture(&mut self, renderer: &Renderer, settings: &DisplaySettings, order: ChannelOrder) -> Result<Picture<'_>> {
+    pub fn picture(
+        &mut self,
+        renderer: &Renderer,
+        settings: &DisplaySettings,
+        order: ChannelOrder,
+    ) -> Result<Picture<'_>> {
         let low = renderer.samples_done as f32;
         let high = renderer.pass_target().map_or(low, |t| t as f32);
         let wanted = (low, high, settings.exposure, settings.tonemap);
@@ -115,7 +132,16 @@ impl Display {
             View::Depth => 3,
         };
         let [width, height] = self.size;
-        self.params = DisplayParams { width, height, count_low: low, count_high: high, view, bgra: u32::from(order == ChannelOrder::Bgra), depth_far: settings.depth_far, unused: 0 };
+        self.params = DisplayParams {
+            width,
+            height,
+            count_low: low,
+            count_high: high,
+            view,
+            bgra: u32::from(order == ChannelOrder::Bgra),
+            depth_far: settings.depth_far,
+            unused: 0,
+        };
         Ok(Picture {
             kernel: &self.kernel,
             push: bytemuck::bytes_of(&self.params),

@@ -58,11 +58,16 @@ pub fn run(options: ViewOptions) -> Result<()> {
     check_film(film).context("command-line film settings")?;
     if let Some(path) = &options.screenshot {
         let png = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
-        anyhow::ensure!(png, "--screenshot {}: a screenshot is what the window shows, 8-bit sRGB: give it a .png name", path.display());
+        anyhow::ensure!(
+            png,
+            "--screenshot {}: a screenshot is what the window shows, 8-bit sRGB: give it a .png name",
+            path.display()
+        );
         crate::image::check_output_path(path)?;
     }
     require_display()?;
-    let (mut event_loop, window) = window::open(&format!("caustica - {}", options.source.title()), [film.width, film.height])?;
+    let (mut event_loop, window) =
+        window::open(&format!("caustica - {}", options.source.title()), [film.width, film.height])?;
     let ctx = GpuContext::for_window(&options.context, &window)?;
     let mut viewer = app::Viewer::new(&ctx, &window, options, loaded)?;
     window::run(&mut event_loop, &mut viewer)

@@ -52,12 +52,18 @@ pub fn draw(ctx: &egui::Context, status: &Status) {
             row("scene", status.scene.to_owned());
             row("device", status.device.to_owned());
             row("image", format!("{} x {}", status.size[0], status.size[1]));
-            row("samples", match status.limit {
-                Some(limit) => format!("{} / {limit} spp", status.samples),
-                None => format!("{} spp", status.samples),
-            });
+            row(
+                "samples",
+                match status.limit {
+                    Some(limit) => format!("{} / {limit} spp", status.samples),
+                    None => format!("{} spp", status.samples),
+                },
+            );
             row("speed", format!("{:.2} Msamples/s", status.samples_per_second / 1e6));
-            row("frame", format!("{:.1} ms ({:.0} fps)", status.frame_seconds * 1e3, 1.0 / status.frame_seconds.max(1e-6)));
+            row(
+                "frame",
+                format!("{:.1} ms ({:.0} fps)", status.frame_seconds * 1e3, 1.0 / status.frame_seconds.max(1e-6)),
+            );
             row("exposure", format!("{:+.1} EV", status.exposure));
             row("tonemap", status.tonemap.to_owned());
             row("view", status.view.to_owned());

@@ -25,7 +25,10 @@ pub struct LoadedScene {
 impl SceneSource {
     pub fn load(&self) -> Result<LoadedScene> {
         let Some(path) = &self.path else {
-            anyhow::ensure!(self.defines.is_empty(), "-D sets parameters of a Mitsuba XML scene; the built-in scene has none");
+            anyhow::ensure!(
+                self.defines.is_empty(),
+                "-D sets parameters of a Mitsuba XML scene; the built-in scene has none"
+            );
             return Ok(LoadedScene { scene: Scene::default_scene(), files: vec![] });
         };
         let files = if self.confine { confinement(path) } else { InputFiles::anywhere() }.recording();

@@ -37,7 +37,9 @@ struct Opener {
 impl ApplicationHandler for Opener {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         if self.window.is_none() {
-            self.window = Some(event_loop.create_window(self.attributes.clone()).map_err(|e| anyhow!("creating the window: {e}")));
+            self.window = Some(
+                event_loop.create_window(self.attributes.clone()).map_err(|e| anyhow!("creating the window: {e}")),
+            );
         }
     }
 
@@ -47,7 +49,8 @@ impl ApplicationHandler for Opener {
 /// An event loop and a window of `size` pixels (not scaled: one image pixel per screen pixel).
 pub fn open(title: &str, size: [u32; 2]) -> Result<(EventLoop<()>, Window)> {
     let mut event_loop = EventLoop::new().map_err(|e| anyhow!("cannot open a window: {e}"))?;
-    let attributes = Window::default_attributes().with_title(title).with_inner_size(PhysicalSize::new(size[0], size[1]));
+    let attributes =
+        Window::default_attributes().with_title(title).with_inner_size(PhysicalSize::new(size[0], size[1]));
     let mut opener = Opener { attributes, window: None };
     while opener.window.is_none() {
         if let PumpStatus::Exit(code) = event_loop.pump_app_events(Some(Duration::from_millis(100)), &mut opener) {

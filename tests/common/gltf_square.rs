@@ -23,7 +23,13 @@ pub fn write_gltf_square(dir: &Path, name: &str, y: f32, half: f32, material: &s
     let corners = [[-half, y, -half], [half, y, -half], [half, y, half], [-half, y, half]];
     let uv0 = [[0.0f32, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
     let uv1 = uv0.map(|[u, v]| [v, u]);
-    let mut buffer: Vec<u8> = corners.iter().flatten().chain(uv0.iter().flatten()).chain(uv1.iter().flatten()).flat_map(|v| v.to_le_bytes()).collect();
+    let mut buffer: Vec<u8> = corners
+        .iter()
+        .flatten()
+        .chain(uv0.iter().flatten())
+        .chain(uv1.iter().flatten())
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
     buffer.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
     let json = format!(
         r#"{{

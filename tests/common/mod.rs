@@ -68,7 +68,8 @@ pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, G
             std::env::set_var("VK_DRIVER_FILES", icd);
         }
     });
-    let ctx = GpuContext::new(&ContextOptions { device: None, validation: true, storage_binding_limit: limit }).expect("a Vulkan device (install mesa-vulkan-drivers)");
+    let ctx = GpuContext::new(&ContextOptions { device: None, validation: true, storage_binding_limit: limit })
+        .expect("a Vulkan device (install mesa-vulkan-drivers)");
     if std::env::var_os("CI").is_some() {
         assert!(ctx.validating(), "CI must run with the Khronos validation layer (vulkan-validationlayers)");
     }
@@ -78,7 +79,11 @@ pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, G
 /// Imports the one-file scene `name` (Mitsuba XML or pbrt-v4, by its extension) with the text
 /// `text`, written into a fresh scratch folder tagged `tag`.
 pub fn import_text(tag: &str, name: &str, text: &str) -> anyhow::Result<caustica::scene::import::Imported> {
-    caustica::scene::import::import(&caustica::input_file::InputFiles::anywhere(), &write_files(tag, &[(name, text)]), &[])
+    caustica::scene::import::import(
+        &caustica::input_file::InputFiles::anywhere(),
+        &write_files(tag, &[(name, text)]),
+        &[],
+    )
 }
 
 /// As [`import_text`], then made a scene, the folder kept until then.
@@ -184,7 +189,8 @@ pub fn pixel_noise_variance(a: &RgbImage, b: &RgbImage) -> f64 {
 /// standard errors of zero, the standard error coming from the differences themselves.
 pub fn assert_same_mean(a: &RgbImage, b: &RgbImage, k: f64, what: &str) {
     let (w, h) = (a.width, a.height);
-    let regions = [(0, 0, w, h), (0, 0, w / 2, h / 2), (w / 2, 0, w, h / 2), (0, h / 2, w / 2, h), (w / 2, h / 2, w, h)];
+    let regions =
+        [(0, 0, w, h), (0, 0, w / 2, h / 2), (w / 2, 0, w, h / 2), (0, h / 2, w / 2, h), (w / 2, h / 2, w, h)];
     for (x0, y0, x1, y1) in regions {
         let mut diffs = vec![];
         let mut mean_a = 0.0;

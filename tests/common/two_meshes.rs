@@ -17,8 +17,18 @@ pub fn bumpy_patch(n: u32, material: u32) -> Mesh {
     };
     let positions = (0..=n).flat_map(|j| (0..=n).map(move |i| at(i, j))).collect();
     let v = |i: u32, j: u32| j * (n + 1) + i;
-    let triangles: Vec<[u32; 3]> = (0..n).flat_map(|j| (0..n).flat_map(move |i| [[v(i, j), v(i, j + 1), v(i + 1, j)], [v(i + 1, j), v(i, j + 1), v(i + 1, j + 1)]])).collect();
-    Mesh { name: "patch".into(), positions, triangle_materials: vec![material; triangles.len()], triangles, ..Default::default() }
+    let triangles: Vec<[u32; 3]> = (0..n)
+        .flat_map(|j| {
+            (0..n).flat_map(move |i| [[v(i, j), v(i, j + 1), v(i + 1, j)], [v(i + 1, j), v(i, j + 1), v(i + 1, j + 1)]])
+        })
+        .collect();
+    Mesh {
+        name: "patch".into(),
+        positions,
+        triangle_materials: vec![material; triangles.len()],
+        triangles,
+        ..Default::default()
+    }
 }
 
 /// Two placed meshes (one diffuse, one glass, so that paths end at very different depths) over
@@ -53,15 +63,30 @@ pub fn two_meshes_in_a_room() -> Scene {
     let material = |name: &str| scene.materials.iter().position(|m| m.name == name).unwrap() as u32;
     scene.meshes = vec![bumpy_patch(12, material("clay")), bumpy_patch(10, material("glass"))];
     scene.instances = vec![
-        Instance { mesh: 0, transform: Mat4::from_translation(Vec3::new(-0.6, 0.0, 0.0)) * Mat4::from_rotation_x(0.6) * Mat4::from_scale(Vec3::splat(0.6)) },
-        Instance { mesh: 1, transform: Mat4::from_translation(Vec3::new(0.6, 0.3, 0.2)) * Mat4::from_rotation_z(-0.8) * Mat4::from_scale(Vec3::splat(0.5)) },
+        Instance {
+            mesh: 0,
+            transform: Mat4::from_translation(Vec3::new(-0.6, 0.0, 0.0))
+                * Mat4::from_rotation_x(0.6)
+                * Mat4::from_scale(Vec3::splat(0.6)),
+        },
+        Instance {
+            mesh: 1,
+            transform: Mat4::from_translation(Vec3::new(0.6, 0.3, 0.2))
+                * Mat4::from_rotation_z(-0.8)
+                * Mat4::from_scale(Vec3::splat(0.5)),
+        },
     ];
     scene
 }
 
 /// The sums of `scene` (seed 11, AOVs on), as bits, rendered in passes adding `steps` samples;
 /// the queue its kernel walked from, if any; and whether it ran the wavefront.
-pub fn sums(ctx: &GpuContext, scene: &Scene, choice: KernelChoice, steps: &[u32]) -> (Vec<[u32; 4]>, AovSums, Option<WalkQueue>, bool) {
+pub fn sums(
+    ctx: &GpuContext,
+    scene: &Scene,
+    choice: KernelChoice,
+    steps: &[u32],
+) -> (Vec<[u32; 4]>, AovSums, Option<WalkQueue>, bool) {
     let mut renderer = Renderer::with_kernel(ctx, scene, 11, AovSet::ALL, choice).expect("scene uploads");
     let (bits, aovs) = rendered_sums(&mut renderer, steps);
     (bits, aovs, renderer.walk_queue, renderer.runs_wavefront())

@@ -38,11 +38,7 @@ impl<'b> AccessorLimits<'b> {
     /// (several may share one file's bytes, which count once).
     pub(super) fn new(buffers: &'b [Rc<Vec<u8>>], file_bytes: u64) -> Self {
         let mut seen = std::collections::HashSet::new();
-        let buffer_bytes: u64 = buffers
-            .iter()
-            .filter(|b| seen.insert(Rc::as_ptr(b)))
-            .map(|b| b.len() as u64)
-            .sum();
+        let buffer_bytes: u64 = buffers.iter().filter(|b| seen.insert(Rc::as_ptr(b))).map(|b| b.len() as u64).sum();
         AccessorLimits { buffers, file_bytes: file_bytes + buffer_bytes, decoded: 0 }
     }
 
@@ -67,15 +63,11 @@ impl<'b> AccessorLimits<'b> {
                 accessor.data_type()
             ));
         }
-        let stride_too_small = accessor
-            .view()
-            .and_then(|view| view.stride())
-            .is_some_and(|stride| stride < accessor.size());
+        let stride_too_small =
+            accessor.view().and_then(|view| view.stride()).is_some_and(|stride| stride < accessor.size());
         let sparse_empty = accessor.sparse().is_some_and(|sparse| sparse.count() == 0);
         if accessor.count() == 0 || sparse_empty || stride_too_small {
-            return Err(format!(
-                "accessor {index} is empty or has a byte stride below its element size"
-            ));
+            return Err(format!("accessor {index} is empty or has a byte stride below its element size"));
         }
         let count = accessor.count() as u64;
         let element = accessor.size() as u64;
@@ -98,9 +90,7 @@ impl<'b> AccessorLimits<'b> {
         if let Some(sparse) = accessor.sparse() {
             let sparse_count = sparse.count() as u64;
             if sparse_count > count {
-                return Err(format!(
-                    "accessor {index} replaces {sparse_count} sparse elements but has only {count}"
-                ));
+                return Err(format!("accessor {index} replaces {sparse_count} sparse elements but has only {count}"));
             }
             let indices = sparse.indices();
             let index_size = indices.index_type().size() as u64;
@@ -110,7 +100,9 @@ impl<'b> AccessorLimits<'b> {
             // views anyway) would read past the step, and it panics.
             let stride_below = |view: &gltf::buffer::View, size: u64| view.stride().is_some_and(|s| (s as u64) < size);
             if stride_below(&indices.view(), index_size) || stride_below(&values.view(), element) {
-                return Err(format!("accessor {index}'s sparse indices or values have a byte stride below their element size"));
+                return Err(format!(
+                    "accessor {index}'s sparse indices or values have a byte stride below their element size"
+                ));
             }
             let index_stride = indices.view().stride().map_or(index_size, |s| s as u64);
             self.check_view(
@@ -162,7 +154,5 @@ impl<'b> AccessorLimits<'b> {
 /// Bytes from the start of a view that `count` elements of `element` bytes, `stride` apart from
 /// `offset`, reach (saturating: an absurd count just needs more than any view has).
 fn extent(offset: u64, stride: u64, count: u64, element: u64) -> u64 {
-    offset
-        .saturating_add(stride.saturating_mul(count.saturating_sub(1)))
-        .saturating_add(element)
+    offset.saturating_add(stride.saturating_mul(count.saturating_sub(1))).saturating_add(element)
 }

@@ -71,8 +71,8 @@ use gltf::{Document, Semantic};
 
 use super::gltf_accessors::AccessorLimits;
 use super::{
-    texture, unit_normals, Alpha, AlphaMode, Attenuation, Clearcoat, Wrap, Asset, AssetCamera, AssetError, AssetMaterial, Conductor, Light,
-    MeshData, MetallicRoughness, NormalMap, TextureMaps,
+    texture, unit_normals, Alpha, AlphaMode, Asset, AssetCamera, AssetError, AssetMaterial, Attenuation, Clearcoat,
+    Conductor, Light, MeshData, MetallicRoughness, NormalMap, TextureMaps, Wrap,
 };
 use crate::input_file::{InputFiles, InputKind};
 
@@ -143,32 +143,22 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             }
         }
     }
-    let document = gltf::Document::from_json(json)
-        .map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
+    let document =
+        gltf::Document::from_json(json).map_err(|e| AssetError::invalid(path, format!("cannot parse glTF: {e}")))?;
     // The blob is a copy: the file's bytes are not needed past here, only their count.
     let file_bytes = bytes.len() as u64;
     drop(bytes);
-    let sources = Sources {
-        files,
-        directory: path.parent().unwrap_or(Path::new(".")),
-        read: RefCell::new(HashMap::new()),
-    };
-    let buffers =
-        load_buffers(&document, blob, &sources).map_err(|m| AssetError::invalid(path, m))?;
+    let sources =
+        Sources { files, directory: path.parent().unwrap_or(Path::new(".")), read: RefCell::new(HashMap::new()) };
+    let buffers = load_buffers(&document, blob, &sources).map_err(|m| AssetError::invalid(path, m))?;
 
     let mut asset = Asset::default();
     let mut decoded_images = DecodedImages::new();
     let mut uv_mappings = Vec::new();
     for material in document.materials() {
-        let (converted, uv_mapping) = convert_material(
-            &material,
-            &document,
-            &buffers,
-            &sources,
-            &mut decoded_images,
-            &mut asset,
-        )
-        .map_err(|m| AssetError::invalid(path, m))?;
+        let (converted, uv_mapping) =
+            convert_material(&material, &document, &buffers, &sources, &mut decoded_images, &mut asset)
+                .map_err(|m| AssetError::invalid(path, m))?;
         if uv_mapping.mixed {
             eprintln!("caustica: warning: {}: material '{}': its textures use different texture coordinates or KHR_texture_transforms; all are read through its first texture's", path.display(), converted.name);
         }
@@ -192,20 +182,12 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         asset.meshes.push(converted);
     }
     if skipped_primitives > 0 {
-        eprintln!(
-            "caustica: {}: skipped {skipped_primitives} point or line primitive(s)",
-            path.display()
-        );
+        eprintln!("caustica: {}: skipped {skipped_primitives} point or line primitive(s)", path.display());
     }
 
-    let mut walk = Walk {
-        ancestors: Vec::new(),
-        visited: vec![false; document.nodes().len()],
-        asset: &mut asset,
-    };
+    let mut walk = Walk { ancestors: Vec::new(), visited: vec![false; document.nodes().len()], asset: &mut asset };
     for root in root_nodes(&document) {
-        walk.visit(root, Mat4::IDENTITY)
-            .map_err(|m| AssetError::invalid(path, m))?;
+        walk.visit(root, Mat4::IDENTITY).map_err(|m| AssetError::invalid(path, m))?;
     }
     if document.lights().into_iter().flatten().any(|l| l.range().is_some()) {
         eprintln!(
@@ -219,21 +201,14 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
 /// The first extension the file requires that caustica does not implement: the file cannot be
 /// rendered as its author meant.
 fn unimplemented_required_extension(json: &gltf::json::Root) -> Option<&str> {
-    json.extensions_required
-        .iter()
-        .map(String::as_str)
-        .find(|e| !IMPLEMENTED_EXTENSIONS.contains(e))
+    json.extensions_required.iter().map(String::as_str).find(|e| !IMPLEMENTED_EXTENSIONS.contains(e))
 }
 
 /// What of the file is left out, each said once: every extension it uses that caustica does not
 /// implement (the file stays valid without it), and occlusion textures.
 fn ignored_features(json: &gltf::json::Root) -> Vec<String> {
-    let unimplemented: std::collections::BTreeSet<&str> = json
-        .extensions_used
-        .iter()
-        .map(String::as_str)
-        .filter(|e| !IMPLEMENTED_EXTENSIONS.contains(e))
-        .collect();
+    let unimplemented: std::collections::BTreeSet<&str> =
+        json.extensions_used.iter().map(String::as_str).filter(|e| !IMPLEMENTED_EXTENSIONS.contains(e)).collect();
     let mut ignored: Vec<String> = unimplemented
         .into_iter()
         .map(|e| format!("glTF extension {e} is not implemented: rendering without it"))
@@ -246,7 +221,10 @@ fn ignored_features(json: &gltf::json::Root) -> Vec<String> {
         coat.is_some_and(|c| c.get("clearcoatNormalTexture").is_some())
     };
     if json.materials.iter().any(coat_normal) {
-        ignored.push("KHR_materials_clearcoat clearcoatNormalTexture is not implemented: clear coats use the material's normal".to_owned());
+        ignored.push(
+            "KHR_materials_clearcoat clearcoatNormalTexture is not implemented: clear coats use the material's normal"
+                .to_owned(),
+        );
     }
     ignored
 }
@@ -277,9 +255,7 @@ impl Sources<'_> {
     /// The bytes behind a URI: a base64 `data:` URI, or a file read as `kind`.
     fn read_uri(&self, uri: &str, kind: InputKind) -> Result<Rc<Vec<u8>>, String> {
         let Some(file) = self.file_of(uri)? else {
-            let (_, payload) = uri
-                .split_once(";base64,")
-                .ok_or("only base64 data URIs are supported")?;
+            let (_, payload) = uri.split_once(";base64,").ok_or("only base64 data URIs are supported")?;
             return base64::engine::general_purpose::STANDARD
                 .decode(payload)
                 .map(Rc::new)
@@ -295,24 +271,18 @@ impl Sources<'_> {
 }
 
 /// Loads every buffer: the GLB binary chunk, a base64 data URI, or a file next to the glTF.
-fn load_buffers(
-    document: &Document,
-    mut blob: Option<Vec<u8>>,
-    sources: &Sources,
-) -> Result<Vec<Rc<Vec<u8>>>, String> {
+fn load_buffers(document: &Document, mut blob: Option<Vec<u8>>, sources: &Sources) -> Result<Vec<Rc<Vec<u8>>>, String> {
     document
         .buffers()
         .map(|buffer| {
             let data = match buffer.source() {
-                gltf::buffer::Source::Bin => blob.take().map(Rc::new).ok_or_else(|| {
-                    format!(
-                        "buffer {} refers to a missing GLB binary chunk",
-                        buffer.index()
-                    )
-                })?,
-                gltf::buffer::Source::Uri(uri) => sources
-                    .read_uri(uri, InputKind::Mesh)
-                    .map_err(|m| format!("buffer {}: {m}", buffer.index()))?,
+                gltf::buffer::Source::Bin => blob
+                    .take()
+                    .map(Rc::new)
+                    .ok_or_else(|| format!("buffer {} refers to a missing GLB binary chunk", buffer.index()))?,
+                gltf::buffer::Source::Uri(uri) => {
+                    sources.read_uri(uri, InputKind::Mesh).map_err(|m| format!("buffer {}: {m}", buffer.index()))?
+                }
             };
             if data.len() < buffer.length() {
                 return Err(format!(
@@ -375,18 +345,9 @@ fn image_texture(
     let file_bytes;
     let (bytes, name) = match image.source() {
         gltf::image::Source::View { view, .. } => {
-            let bytes = view_bytes(&view, buffers).ok_or_else(|| {
-                format!(
-                    "image {}: its buffer view lies outside the buffer",
-                    image.index()
-                )
-            })?;
-            (
-                bytes,
-                image
-                    .name()
-                    .map_or_else(|| format!("image {}", image.index()), str::to_owned),
-            )
+            let bytes = view_bytes(&view, buffers)
+                .ok_or_else(|| format!("image {}: its buffer view lies outside the buffer", image.index()))?;
+            (bytes, image.name().map_or_else(|| format!("image {}", image.index()), str::to_owned))
         }
         gltf::image::Source::Uri { uri, .. } => {
             let name = image.name().map_or_else(
@@ -399,9 +360,8 @@ fn image_texture(
                 },
                 str::to_owned,
             );
-            file_bytes = sources
-                .read_uri(uri, InputKind::Texture)
-                .map_err(|m| format!("image {}: {m}", image.index()))?;
+            file_bytes =
+                sources.read_uri(uri, InputKind::Texture).map_err(|m| format!("image {}: {m}", image.index()))?;
             (file_bytes.as_slice(), name)
         }
     };
@@ -468,12 +428,18 @@ struct MaterialUvs {
 fn material_uvs(material: &gltf::Material, clearcoat: Option<&ClearcoatJson>) -> MaterialUvs {
     let pbr = material.pbr_metallic_roughness();
     let info = |i: Option<gltf::texture::Info>| i.map(|i| UvMapping::of(i.tex_coord(), i.texture_transform()));
-    let coat_textures = clearcoat.map_or([None, None], |c| [c.clearcoat_texture.as_ref(), c.clearcoat_roughness_texture.as_ref()]);
-    let mappings: Vec<UvMapping> = [info(pbr.base_color_texture()), info(material.emissive_texture()), info(pbr.metallic_roughness_texture()), material.normal_texture().map(|n| UvMapping::of(n.tex_coord(), None))]
-        .into_iter()
-        .chain(coat_textures.map(|t| t.map(TextureRefJson::mapping)))
-        .flatten()
-        .collect();
+    let coat_textures =
+        clearcoat.map_or([None, None], |c| [c.clearcoat_texture.as_ref(), c.clearcoat_roughness_texture.as_ref()]);
+    let mappings: Vec<UvMapping> = [
+        info(pbr.base_color_texture()),
+        info(material.emissive_texture()),
+        info(pbr.metallic_roughness_texture()),
+        material.normal_texture().map(|n| UvMapping::of(n.tex_coord(), None)),
+    ]
+    .into_iter()
+    .chain(coat_textures.map(|t| t.map(TextureRefJson::mapping)))
+    .flatten()
+    .collect();
     let mapping = mappings.first().copied().unwrap_or(UvMapping::PLAIN);
     MaterialUvs { mapping, mixed: mappings.iter().any(|m| *m != mapping) }
 }
@@ -517,7 +483,9 @@ fn clearcoat_json(material: &gltf::Material) -> Result<Option<ClearcoatJson>, St
         return Ok(None);
     };
     let index = material.index().unwrap_or(0);
-    serde_json::from_value(value.clone()).map(Some).map_err(|e| format!("material {index}: KHR_materials_clearcoat: {e}"))
+    serde_json::from_value(value.clone())
+        .map(Some)
+        .map_err(|e| format!("material {index}: KHR_materials_clearcoat: {e}"))
 }
 
 /// The material's clear coat: factors checked, textures decoded (linear data: R scales the factor,
@@ -534,17 +502,18 @@ fn convert_clearcoat(
 ) -> Result<Option<Clearcoat>, String> {
     let (factor, roughness) = (coat.clearcoat_factor, coat.clearcoat_roughness_factor);
     if !factor.is_finite() || !roughness.is_finite() {
-        return Err(format!("material {index}: KHR_materials_clearcoat clearcoatFactor or clearcoatRoughnessFactor is not finite"));
+        return Err(format!(
+            "material {index}: KHR_materials_clearcoat clearcoatFactor or clearcoatRoughnessFactor is not finite"
+        ));
     }
     if factor <= 0.0 {
         return Ok(None);
     }
     let mut texture = |reference: &Option<TextureRefJson>, what: &str| -> Result<Option<u32>, String> {
         let Some(reference) = reference else { return Ok(None) };
-        let texture = document
-            .textures()
-            .nth(reference.index)
-            .ok_or_else(|| format!("material {index}: KHR_materials_clearcoat {what}: texture {} does not exist", reference.index))?;
+        let texture = document.textures().nth(reference.index).ok_or_else(|| {
+            format!("material {index}: KHR_materials_clearcoat {what}: texture {} does not exist", reference.index)
+        })?;
         Ok(Some(image_texture(texture, false, buffers, sources, decoded_images, asset)? as u32))
     };
     Ok(Some(Clearcoat {
@@ -563,7 +532,9 @@ fn convert_volume(index: usize, material: &gltf::Material, transmission: f32) ->
     let Some(volume) = material.volume() else { return Ok(None) };
     let (color, distance) = (Vec3::from(volume.attenuation_color()), volume.attenuation_distance());
     if !color.is_finite() || distance.is_nan() || distance <= 0.0 {
-        return Err(format!("material {index}: KHR_materials_volume attenuationColor is not finite or attenuationDistance is not > 0"));
+        return Err(format!(
+            "material {index}: KHR_materials_volume attenuationColor is not finite or attenuationDistance is not > 0"
+        ));
     }
     // The default distance is infinite: no absorption.
     if transmission <= 0.0 || distance == f32::INFINITY || color.min_element() >= 1.0 {
@@ -586,29 +557,16 @@ fn convert_material(
     let pbr = material.pbr_metallic_roughness();
     let [r, g, b, opacity] = pbr.base_color_factor();
     let albedo_texture = match pbr.base_color_texture() {
-        Some(info) => Some(image_texture(
-            info.texture(),
-            true,
-            buffers,
-            sources,
-            decoded_images,
-            asset,
-        )?),
+        Some(info) => Some(image_texture(info.texture(), true, buffers, sources, decoded_images, asset)?),
         _ => None,
     };
-    let emission =
-        Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
+    let emission = Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
     // Decoded only when it can show: glTF's default factor is black, and black times the texture
     // is nothing to render.
     let emission_texture = match material.emissive_texture() {
-        Some(info) if emission.max_element() > 0.0 => Some(image_texture(
-            info.texture(),
-            true,
-            buffers,
-            sources,
-            decoded_images,
-            asset,
-        )? as u32),
+        Some(info) if emission.max_element() > 0.0 => {
+            Some(image_texture(info.texture(), true, buffers, sources, decoded_images, asset)? as u32)
+        }
         _ => None,
     };
     let normal = match material.normal_texture() {
@@ -627,10 +585,7 @@ fn convert_material(
     // glTF's mix: the metal covers `metallic`, the dielectric the rest, of which `transmission`
     // is transmitted and the remainder the coated base.
     let metallic = pbr.metallic_factor().clamp(0.0, 1.0);
-    let transmission = material
-        .transmission()
-        .map_or(0.0, |t| t.transmission_factor())
-        .clamp(0.0, 1.0);
+    let transmission = material.transmission().map_or(0.0, |t| t.transmission_factor()).clamp(0.0, 1.0);
     let roughness = pbr.roughness_factor();
     if !roughness.is_finite() {
         return Err(format!("material {index}: roughnessFactor is not finite"));
@@ -638,14 +593,7 @@ fn convert_material(
     let roughness = roughness.clamp(0.0, 1.0);
     let metallic_roughness = match pbr.metallic_roughness_texture() {
         Some(info) => Some(MetallicRoughness {
-            texture: image_texture(
-                info.texture(),
-                false,
-                buffers,
-                sources,
-                decoded_images,
-                asset,
-            )? as u32,
+            texture: image_texture(info.texture(), false, buffers, sources, decoded_images, asset)? as u32,
             metallic,
             roughness,
             transmission,
@@ -660,11 +608,8 @@ fn convert_material(
     if !opacity.is_finite() || matches!(mode, Some(AlphaMode::Mask { cutoff }) if !cutoff.is_finite()) {
         return Err(format!("material {index}: baseColorFactor alpha or alphaCutoff is not finite"));
     }
-    let alpha = mode.map(|mode| Alpha {
-        factor: opacity.clamp(0.0, 1.0),
-        texture: albedo_texture.map(|t| t as u32),
-        mode,
-    });
+    let alpha =
+        mode.map(|mode| Alpha { factor: opacity.clamp(0.0, 1.0), texture: albedo_texture.map(|t| t as u32), mode });
     let clearcoat_json = clearcoat_json(material)?;
     let clearcoat = match &clearcoat_json {
         Some(coat) => convert_clearcoat(index, coat, document, buffers, sources, decoded_images, asset)?,
@@ -676,9 +621,7 @@ fn convert_material(
         return Err(format!("material {index}: KHR_texture_transform is not finite"));
     }
     let converted = AssetMaterial {
-        name: material
-            .name()
-            .map_or_else(|| format!("material {index}"), str::to_owned),
+        name: material.name().map_or_else(|| format!("material {index}"), str::to_owned),
         albedo: Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE),
         albedo_texture,
         emission: emission.max(Vec3::ZERO),
@@ -724,7 +667,9 @@ impl VertexAttribute {
         let p = primitive.index();
         match primitive.get(&self.semantic) {
             Some(accessor) if complete => {
-                limits.admit(&accessor, self.dimensions, &[DataType::F32]).map_err(|m| format!("primitive {p}: {} {m}", self.name))?;
+                limits
+                    .admit(&accessor, self.dimensions, &[DataType::F32])
+                    .map_err(|m| format!("primitive {p}: {} {m}", self.name))?;
                 values.extend(read().ok_or_else(|| outside_buffer(p, self.name))?);
                 Ok(values.len() == vertices)
             }
@@ -748,10 +693,7 @@ fn convert_mesh(
     let (mut normals, mut tangents) = (Vec::new(), Vec::new());
     for primitive in mesh.primitives() {
         let p = primitive.index();
-        if matches!(
-            primitive.mode(),
-            Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip
-        ) {
+        if matches!(primitive.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
             *skipped_primitives += 1;
             continue;
         }
@@ -759,20 +701,15 @@ fn convert_mesh(
         let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|b| b.as_slice()));
         let outside = |what: &str| outside_buffer(p, what);
 
-        let position_accessor = primitive
-            .get(&Semantic::Positions)
-            .ok_or_else(|| format!("primitive {p} has no POSITION"))?;
-        limits.admit(&position_accessor, Dimensions::Vec3, &[DataType::F32])
+        let position_accessor =
+            primitive.get(&Semantic::Positions).ok_or_else(|| format!("primitive {p} has no POSITION"))?;
+        limits
+            .admit(&position_accessor, Dimensions::Vec3, &[DataType::F32])
             .map_err(|m| format!("primitive {p}: POSITION {m}"))?;
-        let positions: Vec<Vec3> = reader
-            .read_positions()
-            .ok_or_else(|| outside("POSITION"))?
-            .map(Vec3::from)
-            .collect();
+        let positions: Vec<Vec3> =
+            reader.read_positions().ok_or_else(|| outside("POSITION"))?.map(Vec3::from).collect();
         if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
-            return Err(format!(
-                "primitive {p}: vertex {i} has a non-finite position"
-            ));
+            return Err(format!("primitive {p}: vertex {i} has a non-finite position"));
         }
         let base = u32::try_from(out.positions.len() + positions.len())
             .map_err(|_| "more than 2^32 vertices".to_owned())?
@@ -780,20 +717,22 @@ fn convert_mesh(
 
         let vertices = out.positions.len() + positions.len();
         let normal = VertexAttribute { semantic: Semantic::Normals, name: "NORMAL", dimensions: Dimensions::Vec3 };
-        all_normals = normal.append(&primitive, limits, all_normals, &mut normals, vertices, || reader.read_normals().map(|r| r.map(Vec3::from)))?;
+        all_normals = normal.append(&primitive, limits, all_normals, &mut normals, vertices, || {
+            reader.read_normals().map(|r| r.map(Vec3::from))
+        })?;
         let tangent = VertexAttribute { semantic: Semantic::Tangents, name: "TANGENT", dimensions: Dimensions::Vec4 };
-        all_tangents = tangent.append(&primitive, limits, all_tangents, &mut tangents, vertices, || reader.read_tangents().map(|r| r.map(Vec4::from)))?;
+        all_tangents = tangent.append(&primitive, limits, all_tangents, &mut tangents, vertices, || {
+            reader.read_tangents().map(|r| r.map(Vec4::from))
+        })?;
         // The coordinates its material's textures are read through, mapped as they say.
-        let uv_mapping = primitive.material().index().and_then(|m| uv_mappings.get(m)).copied().unwrap_or(UvMapping::PLAIN);
+        let uv_mapping =
+            primitive.material().index().and_then(|m| uv_mappings.get(m)).copied().unwrap_or(UvMapping::PLAIN);
         let set = uv_mapping.set;
         match primitive.get(&Semantic::TexCoords(set)) {
             Some(accessor) if all_uvs => {
-                limits.admit(
-                    &accessor,
-                    Dimensions::Vec2,
-                    &[DataType::F32, DataType::U8, DataType::U16],
-                )
-                .map_err(|m| format!("primitive {p}: TEXCOORD_{set} {m}"))?;
+                limits
+                    .admit(&accessor, Dimensions::Vec2, &[DataType::F32, DataType::U8, DataType::U16])
+                    .map_err(|m| format!("primitive {p}: TEXCOORD_{set} {m}"))?;
                 out.uvs.extend(
                     reader
                         .read_tex_coords(set)
@@ -808,25 +747,15 @@ fn convert_mesh(
 
         let indices: Vec<u32> = match primitive.indices() {
             Some(accessor) => {
-                limits.admit(
-                    &accessor,
-                    Dimensions::Scalar,
-                    &[DataType::U8, DataType::U16, DataType::U32],
-                )
-                .map_err(|m| format!("primitive {p}: indices {m}"))?;
-                reader
-                    .read_indices()
-                    .ok_or_else(|| outside("indices"))?
-                    .into_u32()
-                    .collect()
+                limits
+                    .admit(&accessor, Dimensions::Scalar, &[DataType::U8, DataType::U16, DataType::U32])
+                    .map_err(|m| format!("primitive {p}: indices {m}"))?;
+                reader.read_indices().ok_or_else(|| outside("indices"))?.into_u32().collect()
             }
             None => (0..positions.len() as u32).collect(),
         };
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
-            return Err(format!(
-                "primitive {p} uses vertex {bad} but has {} vertices",
-                positions.len()
-            ));
+            return Err(format!("primitive {p} uses vertex {bad} but has {} vertices", positions.len()));
         }
         let material = match primitive.material().index() {
             Some(m) => m as u32,
@@ -836,17 +765,11 @@ fn convert_mesh(
             }),
         };
         let triangles = triangulate(primitive.mode(), &indices);
-        out.triangle_materials
-            .extend(std::iter::repeat_n(material, triangles.len()));
-        out.triangles
-            .extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
+        out.triangle_materials.extend(std::iter::repeat_n(material, triangles.len()));
+        out.triangles.extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
         out.positions.extend(positions);
     }
-    out.normals = if all_normals {
-        unit_normals(&normals)
-    } else {
-        Vec::new()
-    };
+    out.normals = if all_normals { unit_normals(&normals) } else { Vec::new() };
     if !all_uvs || out.uvs.iter().any(|uv| !uv.is_finite()) {
         out.uvs.clear();
     }
@@ -857,7 +780,8 @@ fn convert_mesh(
             .iter()
             .map(|t| {
                 let direction = t.truncate().normalize_or_zero();
-                (direction != Vec3::ZERO && t.w.is_finite()).then(|| direction.extend(if t.w < 0.0 { -1.0 } else { 1.0 }))
+                (direction != Vec3::ZERO && t.w.is_finite())
+                    .then(|| direction.extend(if t.w < 0.0 { -1.0 } else { 1.0 }))
             })
             .collect();
         out.tangents = unit.unwrap_or_default();
@@ -872,42 +796,23 @@ fn triangulate(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
         Mode::TriangleStrip => indices
             .windows(3)
             .enumerate()
-            .map(|(i, w)| {
-                if i % 2 == 0 {
-                    [w[0], w[1], w[2]]
-                } else {
-                    [w[1], w[0], w[2]]
-                }
-            })
+            .map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
             .collect(),
-        Mode::TriangleFan => indices
-            .windows(2)
-            .skip(1)
-            .map(|w| [indices[0], w[0], w[1]])
-            .collect(),
-        _ => indices
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect(),
+        Mode::TriangleFan => indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect(),
+        _ => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
     }
 }
 
 /// The default scene's nodes, else scene 0's, else every node that is no other node's child.
 fn root_nodes(document: &Document) -> Vec<gltf::Node<'_>> {
-    if let Some(scene) = document
-        .default_scene()
-        .or_else(|| document.scenes().next())
-    {
+    if let Some(scene) = document.default_scene().or_else(|| document.scenes().next()) {
         return scene.nodes().collect();
     }
     let mut is_child = vec![false; document.nodes().len()];
     for child in document.nodes().flat_map(|node| node.children()) {
         is_child[child.index()] = true;
     }
-    document
-        .nodes()
-        .filter(|node| !is_child[node.index()])
-        .collect()
+    document.nodes().filter(|node| !is_child[node.index()]).collect()
 }
 
 /// Depth-first walk of the node hierarchy collecting instances and the first camera. Each node
@@ -922,19 +827,13 @@ impl Walk<'_> {
     fn visit(&mut self, node: gltf::Node, parent: Mat4) -> Result<(), String> {
         let index = node.index();
         if self.ancestors.contains(&index) {
-            return Err(format!(
-                "node {index} is its own ancestor (cyclic node graph)"
-            ));
+            return Err(format!("node {index} is its own ancestor (cyclic node graph)"));
         }
         if std::mem::replace(&mut self.visited[index], true) {
-            return Err(format!(
-                "node {index} is reached twice (it has two parents, or two scenes list it)"
-            ));
+            return Err(format!("node {index} is reached twice (it has two parents, or two scenes list it)"));
         }
         if self.ancestors.len() >= MAX_NODE_DEPTH {
-            return Err(format!(
-                "node {index} is nested deeper than {MAX_NODE_DEPTH} levels"
-            ));
+            return Err(format!("node {index} is nested deeper than {MAX_NODE_DEPTH} levels"));
         }
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         if !local.is_finite() {
@@ -978,24 +877,31 @@ fn world_light(node: usize, world: Mat4, light: &gltf::khr_lights_punctual::Ligh
         gltf::khr_lights_punctual::Kind::Point => Light::Point { position: Vec3::ZERO, intensity: value },
         gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
             let quarter = std::f32::consts::FRAC_PI_2;
-            if !(outer_cone_angle > 0.0 && outer_cone_angle <= quarter && (0.0..outer_cone_angle).contains(&inner_cone_angle)) {
+            if !(outer_cone_angle > 0.0
+                && outer_cone_angle <= quarter
+                && (0.0..outer_cone_angle).contains(&inner_cone_angle))
+            {
                 return Err(format!(
                     "{what}: spot angles must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2, got {inner_cone_angle} and {outer_cone_angle}"
                 ));
             }
-            Light::Spot { position: Vec3::ZERO, axis: Vec3::NEG_Z, intensity: value, cone_angle: outer_cone_angle, falloff_start: inner_cone_angle }
+            Light::Spot {
+                position: Vec3::ZERO,
+                axis: Vec3::NEG_Z,
+                intensity: value,
+                cone_angle: outer_cone_angle,
+                falloff_start: inner_cone_angle,
+            }
         }
-        gltf::khr_lights_punctual::Kind::Directional => Light::Directional { direction: Vec3::NEG_Z, irradiance: value, angular_diameter: 0.0 },
+        gltf::khr_lights_punctual::Kind::Directional => {
+            Light::Directional { direction: Vec3::NEG_Z, irradiance: value, angular_diameter: 0.0 }
+        }
     };
     local.transformed(world).ok_or_else(|| format!("{what}: the node's transform collapses its direction"))
 }
 
 /// A glTF camera looks down its node's −Z with +Y up.
-fn world_camera(
-    node: usize,
-    world: Mat4,
-    perspective: &gltf::camera::Perspective,
-) -> Result<AssetCamera, String> {
+fn world_camera(node: usize, world: Mat4, perspective: &gltf::camera::Perspective) -> Result<AssetCamera, String> {
     let position = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
     let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
@@ -1004,9 +910,7 @@ fn world_camera(
     }
     let yfov_degrees = perspective.yfov().to_degrees();
     if !(yfov_degrees > 0.0 && yfov_degrees < 180.0) {
-        return Err(format!(
-            "camera node {node} has a vertical field of view of {yfov_degrees} degrees"
-        ));
+        return Err(format!("camera node {node} has a vertical field of view of {yfov_degrees} degrees"));
     }
     Ok(AssetCamera {
         position,
@@ -1024,10 +928,8 @@ mod tests {
 
     /// One triangle: positions, normals (length 2, to be normalized), uvs, u16 indices.
     fn triangle_bin() -> Vec<u8> {
-        let floats: [f32; 24] = [
-            0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 2., 0., 0., 2., 0., 0., 2., 0., 0., 1., 0.,
-            0., 1.,
-        ];
+        let floats: [f32; 24] =
+            [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 2., 0., 0., 2., 0., 0., 2., 0., 0., 1., 0., 0., 1.];
         let mut bin: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
         bin.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
         bin.extend([0, 0]);
@@ -1038,11 +940,7 @@ mod tests {
         let mut bytes = Vec::new();
         let mut encoder = png::Encoder::new(&mut bytes, 1, 1);
         encoder.set_color(png::ColorType::Rgb);
-        encoder
-            .write_header()
-            .unwrap()
-            .write_image_data(&[10, 20, 30])
-            .unwrap();
+        encoder.write_header().unwrap().write_image_data(&[10, 20, 30]).unwrap();
         bytes
     }
 
@@ -1111,26 +1009,13 @@ mod tests {
         let mesh = &asset.meshes[0];
         assert_eq!(mesh.positions.len(), 6);
         assert_eq!(mesh.triangles, vec![[0, 1, 2], [3, 4, 5]]);
-        assert!(
-            mesh.normals.is_empty(),
-            "the second primitive has no normals"
-        );
-        assert_eq!(
-            mesh.uvs[1],
-            Vec2::new(1.0, 0.0),
-            "glTF uvs are kept as stored"
-        );
+        assert!(mesh.normals.is_empty(), "the second primitive has no normals");
+        assert_eq!(mesh.uvs[1], Vec2::new(1.0, 0.0), "glTF uvs are kept as stored");
         assert_eq!(mesh.uvs[2], Vec2::new(0.0, 1.0));
         assert_eq!(mesh.triangle_materials, vec![0, 1]);
 
         let parent = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
-        assert_eq!(
-            asset.instances,
-            vec![
-                (0, parent),
-                (0, parent * Mat4::from_scale(Vec3::splat(2.0)))
-            ]
-        );
+        assert_eq!(asset.instances, vec![(0, parent), (0, parent * Mat4::from_scale(Vec3::splat(2.0)))]);
 
         let glass = &asset.materials[0];
         assert_eq!(glass.name, "glowing glass");
@@ -1145,17 +1030,20 @@ mod tests {
         assert_eq!(asset.materials[1], AssetMaterial::default_grey());
         assert_eq!(glass.albedo_texture, Some(0));
         assert_eq!(glass.maps.emission, Some(0), "the emissive texture is image 0 as colour, decoded once for both");
-        assert_eq!(glass.maps.normal, Some(NormalMap { texture: 1, scale: 0.75 }), "the normal map is image 0 as data, shared with metallic-roughness");
+        assert_eq!(
+            glass.maps.normal,
+            Some(NormalMap { texture: 1, scale: 0.75 }),
+            "the normal map is image 0 as data, shared with metallic-roughness"
+        );
         let mask = Alpha { factor: 0.75, texture: Some(0), mode: AlphaMode::Mask { cutoff: 0.25 } };
-        assert_eq!(glass.maps.alpha, Some(mask), "baseColorFactor alpha times the base colour texture's, cut at alphaCutoff");
+        assert_eq!(
+            glass.maps.alpha,
+            Some(mask),
+            "baseColorFactor alpha times the base colour texture's, cut at alphaCutoff"
+        );
         assert_eq!(
             glass.metallic_roughness,
-            Some(MetallicRoughness {
-                texture: 1,
-                metallic: 1.0,
-                roughness: 0.2,
-                transmission: 0.5
-            }),
+            Some(MetallicRoughness { texture: 1, metallic: 1.0, roughness: 0.2, transmission: 0.5 }),
             "the texture scales the factors; the kernel weighs transmission by 1 - metallic per texel"
         );
         assert_eq!(
@@ -1180,20 +1068,33 @@ mod tests {
     /// The test document with three KHR_lights_punctual lights on nodes of their own.
     fn document_with_lights(lights: &str) -> String {
         let bin = triangle_bin();
-        let json = document(&format!(r#"{{"uri": "data:application/octet-stream;base64,{}", "byteLength": {}}}"#, base64::engine::general_purpose::STANDARD.encode(&bin), bin.len()), r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#);
+        let json = document(
+            &format!(
+                r#"{{"uri": "data:application/octet-stream;base64,{}", "byteLength": {}}}"#,
+                base64::engine::general_purpose::STANDARD.encode(&bin),
+                bin.len()
+            ),
+            r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#,
+        );
         let down = r#""rotation": [-0.70710678, 0, 0, 0.70710678]"#;
-        json.replacen(r#""asset": {"version": "2.0"},"#, &format!(r#""asset": {{"version": "2.0"}}, "extensions": {{"KHR_lights_punctual": {{"lights": {lights}}}}},"#), 1)
-            .replacen(r#""scenes": [{"nodes": [0, 2]}],"#, r#""scenes": [{"nodes": [0, 2, 3, 4, 5]}],"#, 1)
-            .replacen(
-                r#"{"translation": [0, 0, 5], "camera": 0}"#,
-                &format!(
-                    r#"{{"translation": [0, 0, 5], "camera": 0}},
+        json.replacen(
+            r#""asset": {"version": "2.0"},"#,
+            &format!(
+                r#""asset": {{"version": "2.0"}}, "extensions": {{"KHR_lights_punctual": {{"lights": {lights}}}}},"#
+            ),
+            1,
+        )
+        .replacen(r#""scenes": [{"nodes": [0, 2]}],"#, r#""scenes": [{"nodes": [0, 2, 3, 4, 5]}],"#, 1)
+        .replacen(
+            r#"{"translation": [0, 0, 5], "camera": 0}"#,
+            &format!(
+                r#"{{"translation": [0, 0, 5], "camera": 0}},
     {{"translation": [1, 2, 3], "extensions": {{"KHR_lights_punctual": {{"light": 0}}}}}},
     {{"translation": [0, 3, 0], {down}, "extensions": {{"KHR_lights_punctual": {{"light": 1}}}}}},
     {{{down}, "scale": [4, 4, 4], "extensions": {{"KHR_lights_punctual": {{"light": 2}}}}}}"#
-                ),
-                1,
-            )
+            ),
+            1,
+        )
     }
 
     /// Candela and lux over 683 lm/W, times the colour; placed and aimed down the node's -Z.
@@ -1211,23 +1112,43 @@ mod tests {
             Err(e) => panic!("{e}\n{json}"),
         };
         assert_eq!(asset.lights.len(), 3);
-        assert_eq!(asset.lights[0], Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(1.0, 0.5, 0.25) });
-        let Light::Spot { position, axis, intensity, cone_angle, falloff_start } = asset.lights[1] else { panic!("{:?}", asset.lights[1]) };
-        assert_eq!((position, intensity, cone_angle, falloff_start), (Vec3::new(0.0, 3.0, 0.0), Vec3::splat(2.0), 0.4, 0.2));
+        assert_eq!(
+            asset.lights[0],
+            Light::Point { position: Vec3::new(1.0, 2.0, 3.0), intensity: Vec3::new(1.0, 0.5, 0.25) }
+        );
+        let Light::Spot { position, axis, intensity, cone_angle, falloff_start } = asset.lights[1] else {
+            panic!("{:?}", asset.lights[1])
+        };
+        assert_eq!(
+            (position, intensity, cone_angle, falloff_start),
+            (Vec3::new(0.0, 3.0, 0.0), Vec3::splat(2.0), 0.4, 0.2)
+        );
         assert!((axis - Vec3::NEG_Y).length() < 1e-6, "{axis}");
-        let Light::Directional { direction, irradiance, angular_diameter } = asset.lights[2] else { panic!("{:?}", asset.lights[2]) };
+        let Light::Directional { direction, irradiance, angular_diameter } = asset.lights[2] else {
+            panic!("{:?}", asset.lights[2])
+        };
         assert!((direction - Vec3::NEG_Y).length() < 1e-6, "{direction}: a scaled node still gives a unit direction");
         assert_eq!((irradiance, angular_diameter), (Vec3::splat(10.0), 0.0));
         // A scene's placement moves them too, twice for two instances.
         let toml = format!("camera = {{ position = [0, 0, 3], look_at = [0, 0, 0] }}\n[[meshes]]\nfile = {:?}\ntranslate = [0, 0, 10]\ninstances = [{{}}, {{ translate = [5, 0, 0] }}]", path.display().to_string());
         let scene = crate::scene::Scene::parse(&toml, "placed.toml", Path::new(".")).unwrap();
         assert_eq!(scene.lights.len(), 6);
-        assert_eq!(scene.lights[3], Light::Point { position: Vec3::new(6.0, 2.0, 13.0), intensity: Vec3::new(1.0, 0.5, 0.25) });
+        assert_eq!(
+            scene.lights[3],
+            Light::Point { position: Vec3::new(6.0, 2.0, 13.0), intensity: Vec3::new(1.0, 0.5, 0.25) }
+        );
 
-        let negative = document_with_lights(r#"[{"type": "point", "intensity": -1}, {"type": "point"}, {"type": "point"}]"#);
+        let negative =
+            document_with_lights(r#"[{"type": "point", "intensity": -1}, {"type": "point"}, {"type": "point"}]"#);
         let err = load_asset(&write_file("gltf-lights", "negative.gltf", negative.as_bytes())).unwrap_err().to_string();
-        assert!(err.contains("negative.gltf") && err.contains("KHR_lights_punctual light 0: intensity must be finite and >= 0"), "{err}");
-        let wide = document_with_lights(r#"[{"type": "point"}, {"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.4}}, {"type": "point"}]"#);
+        assert!(
+            err.contains("negative.gltf")
+                && err.contains("KHR_lights_punctual light 0: intensity must be finite and >= 0"),
+            "{err}"
+        );
+        let wide = document_with_lights(
+            r#"[{"type": "point"}, {"type": "spot", "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.4}}, {"type": "point"}]"#,
+        );
         let err = load_asset(&write_file("gltf-lights", "wide.gltf", wide.as_bytes())).unwrap_err().to_string();
         assert!(err.contains("KHR_lights_punctual light 1: spot angles"), "{err}");
     }
@@ -1236,10 +1157,7 @@ mod tests {
     fn gltf_with_external_bin_and_data_uri_images() {
         let bin = triangle_bin();
         let json = document(
-            &format!(
-                r#"{{"uri": "tri%20angle.bin", "byteLength": {}}}"#,
-                bin.len()
-            ),
+            &format!(r#"{{"uri": "tri%20angle.bin", "byteLength": {}}}"#, bin.len()),
             r#"[{"uri": "PNG_URI"}, {"uri": "GARBAGE"}]"#,
         );
         let path = write_file("gltf-external", "scene.gltf", json.as_bytes());
@@ -1248,10 +1166,7 @@ mod tests {
 
         std::fs::remove_file(path.with_file_name("tri angle.bin")).unwrap();
         let err = load_asset(&path).unwrap_err().to_string();
-        assert!(
-            err.contains("scene.gltf") && err.contains("tri angle.bin"),
-            "{err}"
-        );
+        assert!(err.contains("scene.gltf") && err.contains("tri angle.bin"), "{err}");
     }
 
     #[test]
@@ -1281,9 +1196,7 @@ mod tests {
         glb.extend(&bin);
         check_scene(&load_asset(&write_file("glb", "scene.GLB", &glb)).unwrap());
 
-        let err = load_asset(&write_file("glb-cut", "cut.glb", &glb[..glb.len() - 40]))
-            .unwrap_err()
-            .to_string();
+        let err = load_asset(&write_file("glb-cut", "cut.glb", &glb[..glb.len() - 40])).unwrap_err().to_string();
         assert!(err.contains("cut.glb"), "{err}");
     }
 
@@ -1292,16 +1205,30 @@ mod tests {
     #[test]
     fn unimplemented_extensions_are_errors_when_required_and_warnings_when_used() {
         let encode = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
-        let buffer = format!(r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#, triangle_bin().len(), encode(&triangle_bin()));
+        let buffer = format!(
+            r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#,
+            triangle_bin().len(),
+            encode(&triangle_bin())
+        );
         let png = format!(r#"{{"uri": "data:image/png;base64,{}"}}"#, encode(&png_bytes()));
         let images = format!("[{png}, {png}]");
         let plain = document(&buffer, &images);
-        let path = write_file("gltf-required-extension", "required.gltf", plain.replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_draco_mesh_compression"], "scene": 0,"#, 1).as_bytes());
+        let path = write_file(
+            "gltf-required-extension",
+            "required.gltf",
+            plain
+                .replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_draco_mesh_compression"], "scene": 0,"#, 1)
+                .as_bytes(),
+        );
         let err = load_asset(&path).unwrap_err().to_string();
         assert!(err.contains(&path.display().to_string()) && err.contains("KHR_draco_mesh_compression"), "{err}");
 
         let used = plain
-            .replacen(r#""KHR_materials_ior"]"#, r#""KHR_materials_ior", "KHR_materials_sheen", "KHR_materials_sheen", "EXT_texture_webp"]"#, 1)
+            .replacen(
+                r#""KHR_materials_ior"]"#,
+                r#""KHR_materials_ior", "KHR_materials_sheen", "KHR_materials_sheen", "EXT_texture_webp"]"#,
+                1,
+            )
             .replacen(r#""normalTexture""#, r#""occlusionTexture": {"index": 0}, "normalTexture""#, 1);
         let json = gltf::Gltf::from_slice_without_validation(used.as_bytes()).unwrap().document.into_json();
         assert_eq!(unimplemented_required_extension(&json), None);
@@ -1321,12 +1248,24 @@ mod tests {
     /// transmission 0.5 (`transmission` replaces it), and both clear coat and volume required.
     fn document_with_material_extensions(extensions: &str, transmission: &str) -> String {
         let encode = |bytes: &[u8]| base64::engine::general_purpose::STANDARD.encode(bytes);
-        let buffer = format!(r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#, triangle_bin().len(), encode(&triangle_bin()));
+        let buffer = format!(
+            r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#,
+            triangle_bin().len(),
+            encode(&triangle_bin())
+        );
         let png = format!(r#"{{"uri": "data:image/png;base64,{}"}}"#, encode(&png_bytes()));
         document(&buffer, &format!("[{png}, {png}]"))
-            .replacen(r#""KHR_materials_ior": {"ior": 1.4}"#, &format!(r#""KHR_materials_ior": {{"ior": 1.4}}, {extensions}"#), 1)
+            .replacen(
+                r#""KHR_materials_ior": {"ior": 1.4}"#,
+                &format!(r#""KHR_materials_ior": {{"ior": 1.4}}, {extensions}"#),
+                1,
+            )
             .replacen(r#""transmissionFactor": 0.5"#, &format!(r#""transmissionFactor": {transmission}"#), 1)
-            .replacen(r#""scene": 0,"#, r#""extensionsRequired": ["KHR_materials_clearcoat", "KHR_materials_volume"], "scene": 0,"#, 1)
+            .replacen(
+                r#""scene": 0,"#,
+                r#""extensionsRequired": ["KHR_materials_clearcoat", "KHR_materials_volume"], "scene": 0,"#,
+                1,
+            )
     }
 
     /// KHR_materials_clearcoat (which the gltf crate leaves as JSON) and KHR_materials_volume are
@@ -1337,24 +1276,41 @@ mod tests {
     fn clearcoat_and_volume_are_read() {
         let coat = r#""KHR_materials_clearcoat": {"clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.5, "clearcoatTexture": {"index": 1}, "clearcoatRoughnessTexture": {"index": 0}}"#;
         let volume = r#""KHR_materials_volume": {"thicknessFactor": 3, "attenuationColor": [0.5, 0.25, 1], "attenuationDistance": 2}"#;
-        let path = write_file("gltf-coat-volume", "coated.gltf", document_with_material_extensions(&format!("{coat}, {volume}"), "0.5").as_bytes());
+        let path = write_file(
+            "gltf-coat-volume",
+            "coated.gltf",
+            document_with_material_extensions(&format!("{coat}, {volume}"), "0.5").as_bytes(),
+        );
         let asset = load_asset(&path).unwrap_or_else(|e| panic!("{e}"));
         let m = &asset.materials[0];
         let normal_texture = m.maps.normal.expect("the normal map").texture;
         let coat = m.clearcoat.expect("the clear coat");
         assert_eq!((coat.factor, coat.roughness, coat.roughness_texture), (0.75, 0.5, Some(normal_texture)));
         let texture = coat.texture.expect("the clear coat texture") as usize;
-        assert!(texture != normal_texture as usize && !asset.textures[texture].srgb, "texture 1, decoded as data: {texture}");
+        assert!(
+            texture != normal_texture as usize && !asset.textures[texture].srgb,
+            "texture 1, decoded as data: {texture}"
+        );
         assert_eq!(m.attenuation, Some(Attenuation { color: Vec3::new(0.5, 0.25, 1.0), distance: 2.0 }));
-        assert!((m.attenuation.unwrap().sigma_a() - Vec3::new(2f32.ln() / 2.0, 4f32.ln() / 2.0, 0.0)).abs().max_element() < 1e-6);
+        assert!(
+            (m.attenuation.unwrap().sigma_a() - Vec3::new(2f32.ln() / 2.0, 4f32.ln() / 2.0, 0.0)).abs().max_element()
+                < 1e-6
+        );
 
         // No coat at factor 0 (its default), no absorption at the default infinite distance or
         // without transmission.
         for (extensions, transmission) in [
-            (r#""KHR_materials_clearcoat": {"clearcoatRoughnessFactor": 0.5}, "KHR_materials_volume": {"thicknessFactor": 1}"#, "0.5"),
+            (
+                r#""KHR_materials_clearcoat": {"clearcoatRoughnessFactor": 0.5}, "KHR_materials_volume": {"thicknessFactor": 1}"#,
+                "0.5",
+            ),
             (volume, "0"),
         ] {
-            let path = write_file("gltf-no-coat-volume", "plain.gltf", document_with_material_extensions(extensions, transmission).as_bytes());
+            let path = write_file(
+                "gltf-no-coat-volume",
+                "plain.gltf",
+                document_with_material_extensions(extensions, transmission).as_bytes(),
+            );
             let asset = load_asset(&path).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!((asset.materials[0].clearcoat, asset.materials[0].attenuation), (None, None), "{extensions}");
         }
@@ -1364,12 +1320,28 @@ mod tests {
     #[test]
     fn malformed_clearcoat_and_volume_are_errors() {
         for (extensions, fault) in [
-            (r#""KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatTexture": {"index": 7}}"#, "clearcoatTexture: texture 7 does not exist"),
-            (r#""KHR_materials_clearcoat": {"clearcoatFactor": "thick"}"#, "material 0: KHR_materials_clearcoat: invalid type"),
-            (r#""KHR_materials_clearcoat": {"clearcoatFactor": 1e39}"#, "clearcoatFactor or clearcoatRoughnessFactor is not finite"),
-            (r#""KHR_materials_volume": {"attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 0}"#, "attenuationDistance is not > 0"),
+            (
+                r#""KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatTexture": {"index": 7}}"#,
+                "clearcoatTexture: texture 7 does not exist",
+            ),
+            (
+                r#""KHR_materials_clearcoat": {"clearcoatFactor": "thick"}"#,
+                "material 0: KHR_materials_clearcoat: invalid type",
+            ),
+            (
+                r#""KHR_materials_clearcoat": {"clearcoatFactor": 1e39}"#,
+                "clearcoatFactor or clearcoatRoughnessFactor is not finite",
+            ),
+            (
+                r#""KHR_materials_volume": {"attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 0}"#,
+                "attenuationDistance is not > 0",
+            ),
         ] {
-            let path = write_file("gltf-bad-coat-volume", "bad.gltf", document_with_material_extensions(extensions, "0.5").as_bytes());
+            let path = write_file(
+                "gltf-bad-coat-volume",
+                "bad.gltf",
+                document_with_material_extensions(extensions, "0.5").as_bytes(),
+            );
             let err = load_asset(&path).unwrap_err().to_string();
             assert!(err.contains("bad.gltf") && err.contains(fault), "{extensions}: {err}");
         }
@@ -1378,7 +1350,10 @@ mod tests {
     /// The coat's own normal map is not read: a warning says the material's normal serves.
     #[test]
     fn clearcoat_normal_texture_is_warned_about() {
-        let json = document_with_material_extensions(r#""KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatNormalTexture": {"index": 0}}"#, "0.5");
+        let json = document_with_material_extensions(
+            r#""KHR_materials_clearcoat": {"clearcoatFactor": 1, "clearcoatNormalTexture": {"index": 0}}"#,
+            "0.5",
+        );
         let json = gltf::Gltf::from_slice_without_validation(json.as_bytes()).unwrap().document.into_json();
         assert_eq!(unimplemented_required_extension(&json), None);
         assert_eq!(ignored_features(&json), ["KHR_materials_clearcoat clearcoatNormalTexture is not implemented: clear coats use the material's normal"]);
@@ -1389,10 +1364,7 @@ mod tests {
         let json = r#"{"asset": {"version": "2.0"}, "nodes": [{"children": [1]}, {"children": [0]}], "scenes": [{"nodes": [0]}]}"#;
         let path = write_file("gltf-cycle", "cycle.gltf", json.as_bytes());
         let err = load_asset(&path).unwrap_err().to_string();
-        assert!(
-            err.contains("cycle.gltf") && err.contains("cyclic"),
-            "{err}"
-        );
+        assert!(err.contains("cycle.gltf") && err.contains("cyclic"), "{err}");
     }
 
     #[test]
@@ -1406,22 +1378,13 @@ mod tests {
         let path = write_file("gltf-index", "scene.gltf", json.as_bytes());
         std::fs::write(path.with_file_name("t.bin"), &bin).unwrap();
         let err = load_asset(&path).unwrap_err().to_string();
-        assert!(
-            err.contains("mesh 0") && err.contains("uses vertex 7 but has 3 vertices"),
-            "{err}"
-        );
+        assert!(err.contains("mesh 0") && err.contains("uses vertex 7 but has 3 vertices"), "{err}");
     }
 
     #[test]
     fn strips_and_fans_keep_winding() {
-        assert_eq!(
-            triangulate(Mode::TriangleStrip, &[0, 1, 2, 3]),
-            vec![[0, 1, 2], [2, 1, 3]]
-        );
-        assert_eq!(
-            triangulate(Mode::TriangleFan, &[0, 1, 2, 3]),
-            vec![[0, 1, 2], [0, 2, 3]]
-        );
+        assert_eq!(triangulate(Mode::TriangleStrip, &[0, 1, 2, 3]), vec![[0, 1, 2], [2, 1, 3]]);
+        assert_eq!(triangulate(Mode::TriangleFan, &[0, 1, 2, 3]), vec![[0, 1, 2], [0, 2, 3]]);
         assert_eq!(triangulate(Mode::Triangles, &[0, 1, 2, 3]), vec![[0, 1, 2]]);
     }
 
@@ -1454,10 +1417,7 @@ mod tests {
         let metallic_roughness = asset.materials[0].metallic_roughness.unwrap();
         assert!(!asset.textures[metallic_roughness.texture as usize].srgb);
         assert_eq!(asset.instances.len(), 1);
-        assert_eq!(
-            asset.meshes[0].normals.len(),
-            asset.meshes[0].positions.len()
-        );
+        assert_eq!(asset.meshes[0].normals.len(), asset.meshes[0].positions.len());
         assert_eq!(asset.meshes[0].uvs.len(), asset.meshes[0].positions.len());
     }
 }

@@ -12,7 +12,6 @@ mod texture;
 
 pub use texture::{downsample_to_fit, load_texture, srgb_to_linear};
 
-
 use super::{Alpha, AlphaMode, Attenuation, Clearcoat, Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
 use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3, Vec4};
@@ -162,10 +161,7 @@ pub enum AssetError {
 
 impl AssetError {
     fn invalid(path: &Path, message: impl Into<String>) -> Self {
-        AssetError::Invalid {
-            path: path.to_owned(),
-            message: message.into(),
-        }
+        AssetError::Invalid { path: path.to_owned(), message: message.into() }
     }
 }
 
@@ -185,11 +181,7 @@ pub fn load_asset_from(files: &InputFiles, path: &Path) -> Result<Asset, AssetEr
 /// picks a mesh of a Mitsuba `.serialized` file (absent: the first) and is an error for any other
 /// format.
 pub fn load_asset_part(files: &InputFiles, path: &Path, shape_index: Option<u32>) -> Result<Asset, AssetError> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     if shape_index.is_some() && extension != "serialized" {
         return Err(AssetError::invalid(path, "shape_index picks a mesh of a Mitsuba .serialized file only"));
     }
@@ -198,18 +190,10 @@ pub fn load_asset_part(files: &InputFiles, path: &Path, shape_index: Option<u32>
         "ply" => ply::load(files, path)?,
         "gltf" | "glb" => gltf_file::load(files, path)?,
         "serialized" => serialized::load(files, path, shape_index.unwrap_or(0))?,
-        _ => {
-            return Err(AssetError::UnsupportedExtension {
-                path: path.to_owned(),
-                extension,
-            })
-        }
+        _ => return Err(AssetError::UnsupportedExtension { path: path.to_owned(), extension }),
     };
-    let instanced_triangles: usize = asset
-        .instances
-        .iter()
-        .map(|&(mesh, _)| asset.meshes.get(mesh).map_or(0, |m| m.triangles.len()))
-        .sum();
+    let instanced_triangles: usize =
+        asset.instances.iter().map(|&(mesh, _)| asset.meshes.get(mesh).map_or(0, |m| m.triangles.len())).sum();
     if instanced_triangles == 0 {
         return Err(AssetError::invalid(path, "no triangles to render"));
     }
@@ -347,9 +331,7 @@ mod tests {
 
     #[test]
     fn unknown_extension_is_named() {
-        let err = load_asset(Path::new("scene/model.STL"))
-            .unwrap_err()
-            .to_string();
+        let err = load_asset(Path::new("scene/model.STL")).unwrap_err().to_string();
         assert!(err.contains("model.STL") && err.contains("'stl'"), "{err}");
     }
 

@@ -29,51 +29,28 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::{
-    single_mesh_asset, texture, unit_normals, Alpha, AlphaMode, Asset, AssetError, AssetMaterial,
-    MeshData, NormalMap, TextureImage, TextureMaps,
+    single_mesh_asset, texture, unit_normals, Alpha, AlphaMode, Asset, AssetError, AssetMaterial, MeshData, NormalMap,
+    TextureImage, TextureMaps,
 };
 use crate::input_file::{InputError, InputFiles, InputKind};
 
 /// Loads every object of an OBJ file into one mesh with per-triangle materials.
 pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError> {
-    let options = tobj::LoadOptions {
-        single_index: true,
-        triangulate: true,
-        ..Default::default()
-    };
+    let options = tobj::LoadOptions { single_index: true, triangulate: true, ..Default::default() };
     let bytes = files.read(path, InputKind::Mesh)?;
     let directory = path.parent().unwrap_or(Path::new("."));
-    let libraries = MaterialLibraries {
-        files,
-        directory,
-        read: RefCell::new(HashSet::new()),
-        failure: RefCell::new(None),
-    };
-    let (models, mtl) = tobj::load_obj_buf(&mut bytes.as_slice(), &options, |name| {
-        libraries.load(name)
-    })
-    .map_err(|e| AssetError::invalid(path, format!("cannot load OBJ: {e}")))?;
+    let libraries =
+        MaterialLibraries { files, directory, read: RefCell::new(HashSet::new()), failure: RefCell::new(None) };
+    let (models, mtl) = tobj::load_obj_buf(&mut bytes.as_slice(), &options, |name| libraries.load(name))
+        .map_err(|e| AssetError::invalid(path, format!("cannot load OBJ: {e}")))?;
     if let Some(failure) = libraries.failure.into_inner() {
-        return Err(AssetError::invalid(
-            path,
-            format!("cannot load its MTL material library: {failure}"),
-        ));
+        return Err(AssetError::invalid(path, format!("cannot load its MTL material library: {failure}")));
     }
-    let mtl = mtl.map_err(|e| {
-        AssetError::invalid(path, format!("cannot load its MTL material library: {e}"))
-    })?;
+    let mtl = mtl.map_err(|e| AssetError::invalid(path, format!("cannot load its MTL material library: {e}")))?;
     drop(bytes);
 
-    let mut textures = Textures {
-        files,
-        directory,
-        by_path: HashMap::new(),
-        images: Vec::new(),
-    };
-    let mut materials = mtl
-        .iter()
-        .map(|m| convert_material(path, m, &mut textures))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut textures = Textures { files, directory, by_path: HashMap::new(), images: Vec::new() };
+    let mut materials = mtl.iter().map(|m| convert_material(path, m, &mut textures)).collect::<Result<Vec<_>, _>>()?;
     let mut default_material = None;
 
     let mut mesh = MeshData::default();
@@ -91,32 +68,18 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             if !p.is_finite() {
                 return Err(AssetError::invalid(
                     path,
-                    format!(
-                        "object '{}': vertex {} has a non-finite coordinate {p}",
-                        model.name,
-                        i + 1
-                    ),
+                    format!("object '{}': vertex {} has a non-finite coordinate {p}", model.name, i + 1),
                 ));
             }
             mesh.positions.push(p);
         }
         all_normals &= source.normals.len() == 3 * vertex_count;
         if all_normals {
-            normals.extend(
-                source
-                    .normals
-                    .chunks_exact(3)
-                    .map(|n| Vec3::new(n[0], n[1], n[2])),
-            );
+            normals.extend(source.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
         }
         all_uvs &= source.texcoords.len() == 2 * vertex_count;
         if all_uvs {
-            mesh.uvs.extend(
-                source
-                    .texcoords
-                    .chunks_exact(2)
-                    .map(|t| Vec2::new(t[0], 1.0 - t[1])),
-            );
+            mesh.uvs.extend(source.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], 1.0 - t[1])));
         }
 
         let material = match source.material_id {
@@ -124,11 +87,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             Some(id) => {
                 return Err(AssetError::invalid(
                     path,
-                    format!(
-                        "object '{}' uses material {id} but the MTL file has {}",
-                        model.name,
-                        materials.len()
-                    ),
+                    format!("object '{}' uses material {id} but the MTL file has {}", model.name, materials.len()),
                 ));
             }
             None => *default_material.get_or_insert_with(|| {
@@ -140,19 +99,19 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             if let Some(&bad) = corners.iter().find(|&&i| i as usize >= vertex_count) {
                 return Err(AssetError::invalid(
                     path,
-                    format!("object '{}': triangle {} uses vertex {} but the object has {vertex_count} vertices", model.name, face + 1, bad + 1),
+                    format!(
+                        "object '{}': triangle {} uses vertex {} but the object has {vertex_count} vertices",
+                        model.name,
+                        face + 1,
+                        bad + 1
+                    ),
                 ));
             }
-            mesh.triangles
-                .push([corners[0] + base, corners[1] + base, corners[2] + base]);
+            mesh.triangles.push([corners[0] + base, corners[1] + base, corners[2] + base]);
             mesh.triangle_materials.push(material);
         }
     }
-    mesh.normals = if all_normals {
-        unit_normals(&normals)
-    } else {
-        Vec::new()
-    };
+    mesh.normals = if all_normals { unit_normals(&normals) } else { Vec::new() };
     if !all_uvs || mesh.uvs.iter().any(|uv| !uv.is_finite()) {
         mesh.uvs.clear();
     }
@@ -216,11 +175,7 @@ impl Textures<'_> {
     /// The texture that `map` names, read as `decoding` says.
     fn get_decoded(&mut self, map: &str, decoding: Decoding) -> Result<usize, AssetError> {
         // Options (`-bm 1 -clamp on name.png`) precede the file name, which then has no spaces.
-        let name = if map.starts_with('-') {
-            map.split_whitespace().last().unwrap_or(map)
-        } else {
-            map
-        };
+        let name = if map.starts_with('-') { map.split_whitespace().last().unwrap_or(map) } else { map };
         let path = self.directory.join(name);
         if let Some(&index) = self.by_path.get(&(path.clone(), decoding)) {
             return Ok(index);
@@ -254,22 +209,11 @@ fn map_option(map: &str, name: &str) -> Option<String> {
     words.next().map(str::to_owned)
 }
 
-fn convert_material(
-    path: &Path,
-    m: &tobj::Material,
-    textures: &mut Textures,
-) -> Result<AssetMaterial, AssetError> {
+fn convert_material(path: &Path, m: &tobj::Material, textures: &mut Textures) -> Result<AssetMaterial, AssetError> {
     let bad = |what: &str| AssetError::invalid(path, format!("material '{}': {what}", m.name));
     let vec3 = |v: Option<[f32; 3]>| v.map(Vec3::from_array);
-    if [m.ambient, m.diffuse, m.specular, m.emissive]
-        .iter()
-        .flatten()
-        .flatten()
-        .any(|c| !c.is_finite())
-        || [m.dissolve, m.optical_density]
-            .iter()
-            .flatten()
-            .any(|c| !c.is_finite())
+    if [m.ambient, m.diffuse, m.specular, m.emissive].iter().flatten().flatten().any(|c| !c.is_finite())
+        || [m.dissolve, m.optical_density].iter().flatten().any(|c| !c.is_finite())
     {
         return Err(bad("non-finite colour or coefficient"));
     }
@@ -328,11 +272,7 @@ fn convert_material(
         texture: opacity_texture,
         mode: AlphaMode::Blend,
     });
-    let albedo_texture = m
-        .diffuse_texture
-        .as_deref()
-        .map(|map| textures.get(map))
-        .transpose()?;
+    let albedo_texture = m.diffuse_texture.as_deref().map(|map| textures.get(map)).transpose()?;
     // tobj keeps `map_Ke` among the keys it does not know. Like glTF's, the texture is read only
     // where it can show: black `Ke` times it is nothing.
     let emission_texture = match m.unknown_param.get("map_Ke") {
@@ -345,7 +285,11 @@ fn convert_material(
     let normal = match normal_statement {
         Some(map) => {
             let scale = match map_option(map, "-bm") {
-                Some(text) => text.parse::<f32>().ok().filter(|s| s.is_finite()).ok_or_else(|| bad(&format!("cannot read the normal map's -bm '{text}'")))?,
+                Some(text) => text
+                    .parse::<f32>()
+                    .ok()
+                    .filter(|s| s.is_finite())
+                    .ok_or_else(|| bad(&format!("cannot read the normal map's -bm '{text}'")))?,
                 None => 1.0,
             };
             Some(NormalMap { texture: textures.get_decoded(map, Decoding::Data)? as u32, scale })
@@ -354,9 +298,7 @@ fn convert_material(
     };
     Ok(AssetMaterial {
         name: m.name.clone(),
-        albedo: vec3(m.diffuse)
-            .unwrap_or(Vec3::splat(0.8))
-            .clamp(Vec3::ZERO, Vec3::ONE),
+        albedo: vec3(m.diffuse).unwrap_or(Vec3::splat(0.8)).clamp(Vec3::ZERO, Vec3::ONE),
         albedo_texture,
         emission: emission.max(Vec3::ZERO),
         reflectivity: reflectivity.clamp(0.0, 1.0 - transparency),
@@ -430,56 +372,24 @@ Tr 0.6
         assert_eq!(mesh.triangles.len(), 3);
         assert_eq!(mesh.positions.len(), mesh.normals.len());
         assert_eq!(mesh.positions.len(), mesh.uvs.len());
-        assert!(
-            mesh.normals.iter().all(|n| *n == Vec3::Z),
-            "normals are normalized"
-        );
-        let names: Vec<&str> = mesh
-            .triangle_materials
-            .iter()
-            .map(|&m| asset.materials[m as usize].name.as_str())
-            .collect();
+        assert!(mesh.normals.iter().all(|n| *n == Vec3::Z), "normals are normalized");
+        let names: Vec<&str> =
+            mesh.triangle_materials.iter().map(|&m| asset.materials[m as usize].name.as_str()).collect();
         assert_eq!(names, ["lamp", "mirror", "glass"]);
         // v is flipped: OBJ's (0, 0) is the bottom-left corner.
         let first = mesh.triangles[0][0] as usize;
-        assert_eq!(
-            (mesh.positions[first], mesh.uvs[first]),
-            (Vec3::ZERO, Vec2::new(0.0, 1.0))
-        );
+        assert_eq!((mesh.positions[first], mesh.uvs[first]), (Vec3::ZERO, Vec2::new(0.0, 1.0)));
 
         let material = |name: &str| asset.materials.iter().find(|m| m.name == name).unwrap();
         let lamp = material("lamp");
         assert_eq!(
-            (
-                lamp.albedo,
-                lamp.emission,
-                lamp.reflectivity,
-                lamp.transparency
-            ),
-            (
-                Vec3::new(0.5, 0.25, 0.125),
-                Vec3::new(10.0, 9.0, 8.0),
-                0.0,
-                0.0
-            )
+            (lamp.albedo, lamp.emission, lamp.reflectivity, lamp.transparency),
+            (Vec3::new(0.5, 0.25, 0.125), Vec3::new(10.0, 9.0, 8.0), 0.0, 0.0)
         );
-        assert_eq!(
-            (
-                material("mirror").reflectivity,
-                material("mirror").transparency
-            ),
-            (0.9, 0.0)
-        );
+        assert_eq!((material("mirror").reflectivity, material("mirror").transparency), (0.9, 0.0));
         let glass = material("glass");
-        assert_eq!(
-            (glass.transparency, glass.ior, glass.reflectivity),
-            (0.75, 1.33, 0.0)
-        );
-        assert_eq!(
-            material("ambient_light").emission,
-            Vec3::splat(20.0),
-            "old Ka > 1 light convention"
-        );
+        assert_eq!((glass.transparency, glass.ior, glass.reflectivity), (0.75, 1.33, 0.0));
+        assert_eq!(material("ambient_light").emission, Vec3::splat(20.0), "old Ka > 1 light convention");
         assert_eq!(glass.maps.alpha, None, "d of a glass illumination model is its transmission");
         let tr = material("tr_glass");
         assert_eq!((tr.transparency, tr.ior, tr.maps.alpha), (0.6, 1.5, None));
@@ -511,9 +421,7 @@ Tr 0.6
         let path = write_obj("obj-nan", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "");
         let err = load_asset(&path).unwrap_err().to_string();
         assert!(
-            err.contains(&path.display().to_string())
-                && err.contains("vertex 2")
-                && err.contains("non-finite"),
+            err.contains(&path.display().to_string()) && err.contains("vertex 2") && err.contains("non-finite"),
             "{err}"
         );
     }
@@ -522,11 +430,7 @@ Tr 0.6
     fn missing_material_library_and_texture_are_errors() {
         let dir = test_dir("obj-missing");
         let path = dir.join("m.obj");
-        std::fs::write(
-            &path,
-            "mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-        )
-        .unwrap();
+        std::fs::write(&path, "mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
         assert!(load_asset(&path).unwrap_err().to_string().contains("MTL"));
         let path = write_obj(
             "obj-missing-tex",
@@ -543,29 +447,14 @@ Tr 0.6
             return;
         };
         let asset = load_asset(&path).unwrap();
-        let lights: Vec<&AssetMaterial> = asset
-            .materials
-            .iter()
-            .filter(|m| m.emission.max_element() > 0.0)
-            .collect();
+        let lights: Vec<&AssetMaterial> = asset.materials.iter().filter(|m| m.emission.max_element() > 0.0).collect();
         assert_eq!(lights.len(), 1, "{lights:?}");
-        println!(
-            "{}: {} triangles, light {:?}",
-            path.display(),
-            asset.meshes[0].triangles.len(),
-            lights[0].emission
-        );
+        println!("{}: {} triangles, light {:?}", path.display(), asset.meshes[0].triangles.len(), lights[0].emission);
 
         let Some(path) = real_data("meshes/cornell/cornell_box.obj") else {
             return;
         };
         let asset = load_asset(&path).unwrap();
-        assert!(
-            asset
-                .materials
-                .iter()
-                .any(|m| m.emission == Vec3::splat(20.0)),
-            "Ka 20 20 20 is the light"
-        );
+        assert!(asset.materials.iter().any(|m| m.emission == Vec3::splat(20.0)), "Ka 20 20 20 is the light");
     }
 }

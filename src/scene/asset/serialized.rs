@@ -33,7 +33,8 @@ const MAX_DEFLATE_RATIO: u64 = 1032;
 /// Mesh `shape_index` of the file at `path`, with the default grey material.
 pub(super) fn load(files: &InputFiles, path: &Path, shape_index: u32) -> Result<Asset, AssetError> {
     let bytes = files.read(path, InputKind::Mesh)?;
-    let mesh = decode(&bytes, shape_index).map_err(|message| AssetError::invalid(path, format!("shape_index {shape_index}: {message}")))?;
+    let mesh = decode(&bytes, shape_index)
+        .map_err(|message| AssetError::invalid(path, format!("shape_index {shape_index}: {message}")))?;
     let mut mesh = mesh;
     let dropped = mesh.drop_degenerate();
     Ok(single_mesh_asset(mesh, vec![AssetMaterial::default_grey()], Vec::new(), dropped))
@@ -57,7 +58,10 @@ pub fn decode(bytes: &[u8], shape_index: u32) -> Result<MeshData, String> {
     let vertex_count = u64::from_le_bytes(stream.array()?);
     let triangle_count = u64::from_le_bytes(stream.array()?);
     let scalar: usize = if flags & DOUBLE_PRECISION != 0 { 8 } else { 4 };
-    let per_vertex = 3 + 3 * u64::from(flags & HAS_NORMALS != 0) + 2 * u64::from(flags & HAS_UVS != 0) + 3 * u64::from(flags & HAS_COLORS != 0);
+    let per_vertex = 3
+        + 3 * u64::from(flags & HAS_NORMALS != 0)
+        + 2 * u64::from(flags & HAS_UVS != 0)
+        + 3 * u64::from(flags & HAS_COLORS != 0);
     let promised = u128::from(vertex_count) * u128::from(per_vertex * scalar as u64) + u128::from(triangle_count) * 12;
     if vertex_count > u64::from(u32::MAX) || promised > u128::from(budget) {
         return Err(format!("{vertex_count} vertices and {triangle_count} triangles cannot fit in the {} compressed bytes that follow (corrupt file)", compressed.len()));
@@ -100,10 +104,14 @@ pub fn decode(bytes: &[u8], shape_index: u32) -> Result<MeshData, String> {
 
 /// The format version of the mesh header at byte `at`.
 fn header(bytes: &[u8], at: usize) -> Result<u16, String> {
-    let Some(h) = bytes.get(at..at + 4) else { return Err(format!("truncated: no mesh header at byte {at} of {}", bytes.len())) };
+    let Some(h) = bytes.get(at..at + 4) else {
+        return Err(format!("truncated: no mesh header at byte {at} of {}", bytes.len()));
+    };
     let (magic, version) = (u16::from_le_bytes([h[0], h[1]]), u16::from_le_bytes([h[2], h[3]]));
     if magic != MAGIC {
-        return Err(format!("not a Mitsuba serialized mesh (format id {magic:#06x} at byte {at}, expected {MAGIC:#06x})"));
+        return Err(format!(
+            "not a Mitsuba serialized mesh (format id {magic:#06x} at byte {at}, expected {MAGIC:#06x})"
+        ));
     }
     if !matches!(version, 3 | 4) {
         return Err(format!("format version {version} is not supported (3, 4)"));
@@ -122,8 +130,14 @@ fn mesh_offset(bytes: &[u8], version: u16, shape_index: u32) -> Result<usize, St
     let width = if version == 4 { 8 } else { 4 };
     let table = count_at.checked_sub(count as usize * width).ok_or_else(truncated)?;
     let entry = &bytes[table + shape_index as usize * width..][..width];
-    let offset = if width == 8 { u64::from_le_bytes(entry.try_into().expect("8 bytes")) } else { u64::from(u32::from_le_bytes(entry.try_into().expect("4 bytes"))) };
-    usize::try_from(offset).ok().filter(|&o| o < table).ok_or_else(|| format!("the dictionary puts mesh {shape_index} at byte {offset}, past the meshes' {table} bytes"))
+    let offset = if width == 8 {
+        u64::from_le_bytes(entry.try_into().expect("8 bytes"))
+    } else {
+        u64::from(u32::from_le_bytes(entry.try_into().expect("4 bytes")))
+    };
+    usize::try_from(offset).ok().filter(|&o| o < table).ok_or_else(|| {
+        format!("the dictionary puts mesh {shape_index} at byte {offset}, past the meshes' {table} bytes")
+    })
 }
 
 /// The decompressed stream of one mesh.
@@ -200,7 +214,8 @@ mod tests {
             z.write_all(&raw).unwrap();
             z.finish().unwrap()
         };
-        let normals_uvs: Vec<f32> = [[0.0, 0.0, 1.0]; 4].concat().into_iter().chain([0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]).collect();
+        let normals_uvs: Vec<f32> =
+            [[0.0, 0.0, 1.0]; 4].concat().into_iter().chain([0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]).collect();
         let (a, b) = (mesh(0x1000, &[]), mesh(0x1003, &normals_uvs));
         let mut file = [a.clone(), b].concat();
         file.extend(0u64.to_le_bytes());
@@ -236,7 +251,11 @@ mod tests {
 
     #[test]
     fn a_flat_square_gets_normals_along_its_face() {
-        let mesh = MeshData { positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y], triangles: vec![[0, 1, 2], [0, 2, 3]], ..MeshData::default() };
+        let mesh = MeshData {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            ..MeshData::default()
+        };
         let normals = angle_weighted_normals(&mesh);
         assert_eq!(normals.len(), 4);
         assert!(normals.iter().all(|n| n.abs_diff_eq(Vec3::Z, 1e-6)), "{normals:?}");

@@ -26,10 +26,7 @@ const DECODE_LIMIT: u64 = MAX_TEXTURE_SIDE as u64 * MAX_TEXTURE_SIDE as u64 * 8 
 /// sRGB-encoded RGBA8.
 pub fn load_texture(files: &InputFiles, path: &Path) -> Result<TextureImage, AssetError> {
     let bytes = files.read(path, InputKind::Texture)?;
-    let name = path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
+    let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     decode_texture(&bytes, name, true).map_err(|message| AssetError::invalid(path, message))
 }
 
@@ -44,16 +41,13 @@ pub(super) fn decode_texture(bytes: &[u8], name: String, srgb: bool) -> Result<T
 /// while decoding, both sides halved as often as needed (as [`downsample_to_fit`] would), with a
 /// note on stderr.
 fn decode_texture_within(bytes: &[u8], name: String, srgb: bool, max_bytes: u64) -> Result<TextureImage, String> {
-    let guessed = || {
-        ImageReader::new(Cursor::new(bytes))
-            .with_guessed_format()
-            .map_err(|e| format!("image '{name}': {e}"))
-    };
-    let (width, height) = guessed()?
-        .into_dimensions()
-        .map_err(|e| format!("image '{name}': {e}"))?;
+    let guessed =
+        || ImageReader::new(Cursor::new(bytes)).with_guessed_format().map_err(|e| format!("image '{name}': {e}"));
+    let (width, height) = guessed()?.into_dimensions().map_err(|e| format!("image '{name}': {e}"))?;
     if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
-        return Err(format!("image '{name}' is {width}x{height}; at most {MAX_TEXTURE_SIDE} pixels per side are supported"));
+        return Err(format!(
+            "image '{name}' is {width}x{height}; at most {MAX_TEXTURE_SIDE} pixels per side are supported"
+        ));
     }
     let mut reader = guessed()?;
     let mut limits = Limits::default();
@@ -85,14 +79,7 @@ fn decode_texture_within(bytes: &[u8], name: String, srgb: bool, max_bytes: u64)
         );
         reduced
     };
-    Ok(TextureImage {
-        name,
-        width: new_width,
-        height: new_height,
-        texels,
-        srgb,
-        wrap: [Wrap::Repeat; 2],
-    })
+    Ok(TextureImage { name, width: new_width, height: new_height, texels, srgb, wrap: [Wrap::Repeat; 2] })
 }
 
 fn rgba_bytes(width: u32, height: u32) -> u64 {
@@ -154,11 +141,7 @@ pub fn downsample_to_fit(textures: &mut [TextureImage], budget_bytes: u64) -> u6
     let bytes = |t: &TextureImage| u64::from(t.width) * u64::from(t.height) * 4;
     let mut total: u64 = textures.iter().map(bytes).sum();
     while total > budget_bytes {
-        let Some(largest) = textures
-            .iter_mut()
-            .filter(|t| t.width > 1 || t.height > 1)
-            .max_by_key(|t| bytes(t))
-        else {
+        let Some(largest) = textures.iter_mut().filter(|t| t.width > 1 || t.height > 1).max_by_key(|t| bytes(t)) else {
             break;
         };
         total -= bytes(largest);
@@ -183,11 +166,8 @@ fn halve(texture: &mut TextureImage) {
                 for column in columns {
                     let texel = texture.texels[row * width + column];
                     for (c, s) in sum.iter_mut().enumerate() {
-                        *s += if c < 3 && texture.srgb {
-                            srgb_to_linear(texel[c])
-                        } else {
-                            f32::from(texel[c]) / 255.0
-                        };
+                        *s +=
+                            if c < 3 && texture.srgb { srgb_to_linear(texel[c]) } else { f32::from(texel[c]) / 255.0 };
                     }
                 }
             }
@@ -213,11 +193,7 @@ pub fn srgb_to_linear(value: u8) -> f32 {
 }
 
 fn linear_to_srgb(linear: f32) -> u8 {
-    let v = if linear <= 0.003_130_8 {
-        linear * 12.92
-    } else {
-        1.055 * linear.powf(1.0 / 2.4) - 0.055
-    };
+    let v = if linear <= 0.003_130_8 { linear * 12.92 } else { 1.055 * linear.powf(1.0 / 2.4) - 0.055 };
     (v.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
@@ -226,23 +202,12 @@ mod tests {
     use super::super::test_dir;
     use super::*;
 
-    fn write_png(
-        path: &Path,
-        width: u32,
-        height: u32,
-        color: png::ColorType,
-        depth: png::BitDepth,
-        data: &[u8],
-    ) {
+    fn write_png(path: &Path, width: u32, height: u32, color: png::ColorType, depth: png::BitDepth, data: &[u8]) {
         let file = std::fs::File::create(path).unwrap();
         let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
         encoder.set_color(color);
         encoder.set_depth(depth);
-        encoder
-            .write_header()
-            .unwrap()
-            .write_image_data(data)
-            .unwrap();
+        encoder.write_header().unwrap().write_image_data(data).unwrap();
     }
 
     #[test]
@@ -250,19 +215,9 @@ mod tests {
         let dir = test_dir("png-rgba");
         let path = dir.join("tex.png");
         let data: Vec<u8> = (0..32).collect();
-        write_png(
-            &path,
-            4,
-            2,
-            png::ColorType::Rgba,
-            png::BitDepth::Eight,
-            &data,
-        );
+        write_png(&path, 4, 2, png::ColorType::Rgba, png::BitDepth::Eight, &data);
         let texture = load_texture(&InputFiles::anywhere(), &path).unwrap();
-        assert_eq!(
-            (texture.width, texture.height, texture.name.as_str()),
-            (4, 2, "tex.png")
-        );
+        assert_eq!((texture.width, texture.height, texture.name.as_str()), (4, 2, "tex.png"));
         assert_eq!(texture.texels.len(), 8);
         assert_eq!(texture.texels[0], [0, 1, 2, 3]);
         assert_eq!(texture.texels[4], [16, 17, 18, 19]);
@@ -273,31 +228,14 @@ mod tests {
     fn grey_and_sixteen_bit_become_rgba8() {
         let dir = test_dir("png-grey");
         let grey = dir.join("grey.png");
-        write_png(
-            &grey,
-            2,
-            1,
-            png::ColorType::Grayscale,
-            png::BitDepth::Eight,
-            &[10, 200],
-        );
+        write_png(&grey, 2, 1, png::ColorType::Grayscale, png::BitDepth::Eight, &[10, 200]);
         assert_eq!(
             load_texture(&InputFiles::anywhere(), &grey).unwrap().texels,
             vec![[10, 10, 10, 255], [200, 200, 200, 255]]
         );
         let rgb16 = dir.join("rgb16.png");
-        write_png(
-            &rgb16,
-            1,
-            1,
-            png::ColorType::Rgb,
-            png::BitDepth::Sixteen,
-            &[0xff, 0xff, 0x80, 0x00, 0x00, 0x00],
-        );
-        assert_eq!(
-            load_texture(&InputFiles::anywhere(), &rgb16).unwrap().texels,
-            vec![[255, 128, 0, 255]]
-        );
+        write_png(&rgb16, 1, 1, png::ColorType::Rgb, png::BitDepth::Sixteen, &[0xff, 0xff, 0x80, 0x00, 0x00, 0x00]);
+        assert_eq!(load_texture(&InputFiles::anywhere(), &rgb16).unwrap().texels, vec![[255, 128, 0, 255]]);
     }
 
     #[test]
@@ -305,23 +243,13 @@ mod tests {
         let dir = test_dir("png-bad");
         let huge = dir.join("huge.png");
         // A valid 20000x1 PNG: its header alone must get it rejected.
-        write_png(
-            &huge,
-            20000,
-            1,
-            png::ColorType::Grayscale,
-            png::BitDepth::Eight,
-            &[0; 20000],
-        );
+        write_png(&huge, 20000, 1, png::ColorType::Grayscale, png::BitDepth::Eight, &[0; 20000]);
         let err = load_texture(&InputFiles::anywhere(), &huge).unwrap_err().to_string();
         assert!(err.contains("huge.png") && err.contains("20000x1"), "{err}");
 
         let junk = dir.join("junk.png");
         std::fs::write(&junk, b"not an image at all").unwrap();
-        assert!(load_texture(&InputFiles::anywhere(), &junk)
-            .unwrap_err()
-            .to_string()
-            .contains("junk.png"));
+        assert!(load_texture(&InputFiles::anywhere(), &junk).unwrap_err().to_string().contains("junk.png"));
         assert!(load_texture(&InputFiles::anywhere(), &dir.join("missing.png"))
             .unwrap_err()
             .to_string()
@@ -378,27 +306,13 @@ mod tests {
             srgb: true,
             wrap: Default::default(),
         };
-        let mut textures = vec![
-            texture("big", 8, 8, [255, 0, 128, 255]),
-            texture("small", 2, 2, [9, 9, 9, 9]),
-        ];
-        assert_eq!(
-            downsample_to_fit(&mut textures, 1 << 20),
-            8 * 8 * 4 + 2 * 2 * 4
-        );
+        let mut textures = vec![texture("big", 8, 8, [255, 0, 128, 255]), texture("small", 2, 2, [9, 9, 9, 9])];
+        assert_eq!(downsample_to_fit(&mut textures, 1 << 20), 8 * 8 * 4 + 2 * 2 * 4);
         assert_eq!(downsample_to_fit(&mut textures, 100), 4 * 4 * 4 + 2 * 2 * 4);
         assert_eq!((textures[0].width, textures[0].height), (4, 4));
-        assert_eq!(
-            textures[0].texels,
-            vec![[255, 0, 128, 255]; 16],
-            "a uniform colour survives the filter"
-        );
+        assert_eq!(textures[0].texels, vec![[255, 0, 128, 255]; 16], "a uniform colour survives the filter");
         assert_eq!(textures[1].width, 2);
-        assert_eq!(
-            downsample_to_fit(&mut textures, 0),
-            8,
-            "stops when everything is 1x1"
-        );
+        assert_eq!(downsample_to_fit(&mut textures, 0), 8, "stops when everything is 1x1");
 
         // Black and white average to mid grey in linear light (sRGB 188), not sRGB 128.
         let mut stripes = vec![TextureImage {

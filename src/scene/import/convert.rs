@@ -22,8 +22,19 @@ pub fn to_toml(file: &SceneFile, base: &Path, output_folder: &Path, name: &str) 
     for (k, mesh) in file.inline_meshes.iter().enumerate() {
         let ply = format!("{stem}-mesh-{k}.ply");
         let path = base_or_dot(output_folder).join(&ply);
-        std::fs::write(&path, &mesh.ply).with_context(|| format!("{name}: writing the mesh written at {} as {}", mesh.name, path.display()))?;
-        let entry = MeshFile { file: ply, material: Some(mesh.material.clone()), shape_index: None, flip_normals: false, face_normals: false, translate: Default::default(), scale: None, rotate: Default::default(), instances: vec![] };
+        std::fs::write(&path, &mesh.ply)
+            .with_context(|| format!("{name}: writing the mesh written at {} as {}", mesh.name, path.display()))?;
+        let entry = MeshFile {
+            file: ply,
+            material: Some(mesh.material.clone()),
+            shape_index: None,
+            flip_normals: false,
+            face_normals: false,
+            translate: Default::default(),
+            scale: None,
+            rotate: Default::default(),
+            instances: vec![],
+        };
         let entry = toml::Value::try_from(entry).with_context(|| format!("{name}: writing the scene as TOML"))?;
         let table = value.as_table_mut().expect("a scene is a table");
         match table.entry("meshes").or_insert_with(|| toml::Value::Array(vec![])) {

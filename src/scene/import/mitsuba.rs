@@ -4,8 +4,9 @@
 //! parameter is documented in the README's "Scenes from other renderers" section.
 
 use super::super::format::{
-    AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, Encoding, EnvironmentFile, FilmFile, Filter, ImageTextureFile, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler, SceneFile,
-    SphereFile, SpotLightFile, TriangleFile, Triple,
+    AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, Encoding, EnvironmentFile, FilmFile, Filter,
+    ImageTextureFile, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, Microfacet, PointLightFile,
+    QuadFile, Sampler, SceneFile, SphereFile, SpotLightFile, TriangleFile, Triple,
 };
 use super::super::material_maps::needs_mesh;
 use super::mitsuba_xml::{self, Object, Resolver};
@@ -52,11 +53,24 @@ const NAMED_IORS: [(&str, f64); 23] = [
 ];
 
 /// The scene file of the Mitsuba scene at `path`, and the folder its relative paths are from.
-pub fn import(files: &InputFiles, path: &Path, defines: &[(String, String)], notes: &mut Notes) -> Result<(SceneFile, PathBuf)> {
+pub fn import(
+    files: &InputFiles,
+    path: &Path,
+    defines: &[(String, String)],
+    notes: &mut Notes,
+) -> Result<(SceneFile, PathBuf)> {
     let mut resolver = Resolver::new(path);
     let document = mitsuba_xml::read(files, path, defines, &mut resolver)?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut mapper = Mapper { notes, resolver, base: base.clone(), scene_file: path.to_path_buf(), materials: BTreeMap::new(), material_names: HashMap::new(), file: None };
+    let mut mapper = Mapper {
+        notes,
+        resolver,
+        base: base.clone(),
+        scene_file: path.to_path_buf(),
+        materials: BTreeMap::new(),
+        material_names: HashMap::new(),
+        file: None,
+    };
     let file = mapper.scene(&document.objects)?;
     Ok((file, base))
 }
@@ -162,7 +176,11 @@ impl Mapper<'_> {
         let film = FilmFile { spp, ..film };
         let m = s.transform("to_world")?.unwrap_or(DMat4::IDENTITY);
         let position = point(m, DVec3::ZERO);
-        let (forward, up, left) = (vector(m, DVec3::Z).normalize_or_zero(), vector(m, DVec3::Y).normalize_or_zero(), vector(m, DVec3::X).normalize_or_zero());
+        let (forward, up, left) = (
+            vector(m, DVec3::Z).normalize_or_zero(),
+            vector(m, DVec3::Y).normalize_or_zero(),
+            vector(m, DVec3::X).normalize_or_zero(),
+        );
         // caustica's image right is forward x up; Mitsuba's is -x of the camera frame.
         if forward.cross(up).dot(-left) < 0.9999 {
             return Err(s.error("its to_world is not a rotation and translation (it mirrors, shears or collapses the view); caustica's camera cannot follow"));
@@ -170,7 +188,13 @@ impl Mapper<'_> {
         let fov = self.vertical_fov(s, film.width as f64 / film.height as f64)?;
         for clip in ["near_clip", "far_clip"] {
             if s.float_if_given(clip)?.is_some() {
-                self.warn("clip", || format!("{}: {}: near_clip and far_clip are ignored (caustica has no clipping planes)", s.at, s.describe()));
+                self.warn("clip", || {
+                    format!(
+                        "{}: {}: near_clip and far_clip are ignored (caustica has no clipping planes)",
+                        s.at,
+                        s.describe()
+                    )
+                });
             }
         }
         let focus_distance = s.float_if_given("focus_distance")?;
@@ -198,7 +222,12 @@ impl Mapper<'_> {
             (Some(fov), None) => (fov, s.string("fov_axis")?.unwrap_or("x").to_owned()),
             (None, focal) => {
                 let focal = focal.unwrap_or("50mm");
-                let mm: f64 = focal.strip_suffix("mm").unwrap_or(focal).trim().parse().map_err(|_| s.error(format!("focal_length '{focal}' is not a length in mm")))?;
+                let mm: f64 = focal
+                    .strip_suffix("mm")
+                    .unwrap_or(focal)
+                    .trim()
+                    .parse()
+                    .map_err(|_| s.error(format!("focal_length '{focal}' is not a length in mm")))?;
                 if s.string("fov_axis")?.is_some() {
                     return Err(s.error("fov_axis goes with fov, not focal_length"));
                 }
@@ -229,7 +258,10 @@ impl Mapper<'_> {
         }
         let size = |name: &str, default: i64| -> Result<u32> {
             let v = f.integer(name, default)?;
-            u32::try_from(v).ok().filter(|v| (1..=16384).contains(v)).ok_or_else(|| f.error(format!("{name} must be in [1, 16384], got {v}")))
+            u32::try_from(v)
+                .ok()
+                .filter(|v| (1..=16384).contains(v))
+                .ok_or_else(|| f.error(format!("{name} must be in [1, 16384], got {v}")))
         };
         let (width, height) = (size("width", 768)?, size("height", 576)?);
         // What the file looks like, not what is in it: caustica writes what -o says.
@@ -247,7 +279,11 @@ impl Mapper<'_> {
                     "box" => Filter::Box,
                     "tent" if r.float("radius", 1.0)? == 1.0 => Filter::Tent,
                     "gaussian" if r.float("stddev", 0.5)? == 0.5 => Filter::Gaussian,
-                    "tent" | "gaussian" => return Err(r.error("only the default radius (tent: 1) and stddev (gaussian: 0.5) are supported")),
+                    "tent" | "gaussian" => {
+                        return Err(
+                            r.error("only the default radius (tent: 1) and stddev (gaussian: 0.5) are supported")
+                        )
+                    }
                     _ => return Err(r.error("only box, tent and gaussian filters are supported")),
                 };
                 r.check_all_used()?;
@@ -273,7 +309,10 @@ impl Mapper<'_> {
         }
         s.boolean("jitter", true)?;
         s.check_all_used()?;
-        let spp = u32::try_from(spp).ok().filter(|&n| n >= 1).ok_or_else(|| s.error(format!("sample_count must be at least 1, got {spp}")))?;
+        let spp = u32::try_from(spp)
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| s.error(format!("sample_count must be at least 1, got {spp}")))?;
         Ok((spp, sampler))
     }
 
@@ -285,7 +324,12 @@ impl Mapper<'_> {
     /// caustica's own default, by power, starves small bright lights, and on mitsuba-data's Veach
     /// scene (five spheres, one holding 98 % of the power) left 5x the error of the uniform pick.
     fn integrator(&mut self, integrators: &[Rc<Object>]) -> Result<IntegratorFile> {
-        let mut file = IntegratorFile { rr_start: 5, max_bounces: UNBOUNDED_DEPTH, light_selection: LightSelection::Uniform, ..IntegratorFile::default() };
+        let mut file = IntegratorFile {
+            rr_start: 5,
+            max_bounces: UNBOUNDED_DEPTH,
+            light_selection: LightSelection::Uniform,
+            ..IntegratorFile::default()
+        };
         let i = match integrators {
             [] => return Ok(file),
             [i] => i,
@@ -300,7 +344,8 @@ impl Mapper<'_> {
             d => return Err(i.error(format!("max_depth {d} is not supported (-1 or at least 1)"))),
         };
         let rr_depth = i.integer("rr_depth", 5)?;
-        file.rr_start = u32::try_from(rr_depth).map_err(|_| i.error(format!("rr_depth must be >= 0, got {rr_depth}")))?;
+        file.rr_start =
+            u32::try_from(rr_depth).map_err(|_| i.error(format!("rr_depth must be >= 0, got {rr_depth}")))?;
         if i.boolean("hide_emitters", false)? {
             return Err(i.error("hide_emitters is not supported"));
         }
@@ -318,7 +363,9 @@ impl Mapper<'_> {
     fn instance(&mut self, i: &Object) -> Result<()> {
         let m = i.transform("to_world")?.unwrap_or(DMat4::IDENTITY);
         let groups = i.children_tagged("shape")?;
-        let [group] = groups.as_slice() else { return Err(i.error("an instance needs exactly one <ref> to a shapegroup")) };
+        let [group] = groups.as_slice() else {
+            return Err(i.error("an instance needs exactly one <ref> to a shapegroup"));
+        };
         if group.plugin != "shapegroup" {
             return Err(i.error(format!("instances place a shapegroup, not {}", group.describe())));
         }
@@ -424,7 +471,12 @@ impl Mapper<'_> {
     /// `reverse`).
     fn quad(&mut self, m: DMat4, origin: DVec3, u: DVec3, v: DVec3, reverse: bool, material: &str) {
         let (u, v) = if reverse { (v, u) } else { (u, v) };
-        let quad = QuadFile { origin: f32x3(point(m, origin)), edge_u: f32x3(vector(m, u)), edge_v: f32x3(vector(m, v)), material: material.to_owned() };
+        let quad = QuadFile {
+            origin: f32x3(point(m, origin)),
+            edge_u: f32x3(vector(m, u)),
+            edge_v: f32x3(vector(m, v)),
+            material: material.to_owned(),
+        };
         self.out().quads.push(quad);
     }
 
@@ -573,7 +625,11 @@ impl Mapper<'_> {
             return Err(t.error("only bitmap textures are supported here"));
         }
         let (file, raw) = self.bitmap(t)?;
-        let texture = ImageTextureFile { file, to_uv: to_uv(t)?, encoding: Some(if raw { Encoding::Linear } else { Encoding::Srgb }) };
+        let texture = ImageTextureFile {
+            file,
+            to_uv: to_uv(t)?,
+            encoding: Some(if raw { Encoding::Linear } else { Encoding::Srgb }),
+        };
         t.check_all_used()?;
         Ok(texture)
     }
@@ -610,16 +666,19 @@ impl Mapper<'_> {
             other => return Err(b.error(format!("distribution '{other}' is not supported (beckmann, ggx)"))),
         };
         b.boolean("sample_visible", true)?;
-        let (alpha, alpha_v) = match (b.float_if_given("alpha")?, b.float_if_given("alpha_u")?, b.float_if_given("alpha_v")?) {
-            (Some(a), None, None) => (a, None),
-            (None, None, None) => (0.1, None),
-            (None, Some(u), Some(v)) if u == v => (u, None),
-            (None, Some(u), Some(v)) => (u, Some(v)),
-            _ => return Err(b.error("give alpha, or alpha_u and alpha_v")),
-        };
+        let (alpha, alpha_v) =
+            match (b.float_if_given("alpha")?, b.float_if_given("alpha_u")?, b.float_if_given("alpha_v")?) {
+                (Some(a), None, None) => (a, None),
+                (None, None, None) => (0.1, None),
+                (None, Some(u), Some(v)) if u == v => (u, None),
+                (None, Some(u), Some(v)) => (u, Some(v)),
+                _ => return Err(b.error("give alpha, or alpha_u and alpha_v")),
+            };
         for (name, a) in [("alpha", Some(alpha)), ("alpha_v", alpha_v)] {
             match a {
-                Some(a) if !(0.0..=1.0).contains(&a) => return Err(b.error(format!("{name} must be in [0, 1], got {a}"))),
+                Some(a) if !(0.0..=1.0).contains(&a) => {
+                    return Err(b.error(format!("{name} must be in [0, 1], got {a}")))
+                }
                 _ => {}
             }
         }
@@ -643,14 +702,19 @@ impl Mapper<'_> {
                     (Some(p), None) => p,
                     (None, m) => point(m.unwrap_or(DMat4::IDENTITY), DVec3::ZERO),
                 };
-                Some(LightFile::Point(PointLightFile { position: f32x3(position), intensity: f32x3(self.color(e, "intensity", 1.0)?) }))
+                Some(LightFile::Point(PointLightFile {
+                    position: f32x3(position),
+                    intensity: f32x3(self.color(e, "intensity", 1.0)?),
+                }))
             }
             "spot" => {
                 let m = m.unwrap_or(DMat4::IDENTITY);
                 let cutoff = e.float("cutoff_angle", 20.0)?;
                 let beam = e.float("beam_width", cutoff * 0.75)?;
                 if !(cutoff > 0.0 && cutoff <= 180.0 && (0.0..=cutoff).contains(&beam)) {
-                    return Err(e.error(format!("needs 0 < cutoff_angle <= 180 and 0 <= beam_width <= cutoff_angle, got {cutoff} and {beam}")));
+                    return Err(e.error(format!(
+                        "needs 0 < cutoff_angle <= 180 and 0 <= beam_width <= cutoff_angle, got {cutoff} and {beam}"
+                    )));
                 }
                 Some(LightFile::Spot(SpotLightFile {
                     position: f32x3(point(m, DVec3::ZERO)),
@@ -666,18 +730,35 @@ impl Mapper<'_> {
                     (Some(d), None) => d,
                     (None, m) => vector(m.unwrap_or(DMat4::IDENTITY), DVec3::Z),
                 };
-                Some(LightFile::Directional(DirectionalLightFile { direction: f32x3(direction), irradiance: f32x3(self.color(e, "irradiance", 1.0)?), angular_diameter: 0.0 }))
+                Some(LightFile::Directional(DirectionalLightFile {
+                    direction: f32x3(direction),
+                    irradiance: f32x3(self.color(e, "irradiance", 1.0)?),
+                    angular_diameter: 0.0,
+                }))
             }
             "constant" => {
                 if m.is_some() {
                     return Err(e.error("a constant emitter has no to_world"));
                 }
                 let color = f32x3(self.color(e, "radiance", 1.0)?);
-                self.environment(e, EnvironmentFile { color: Some(color), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 })?;
+                self.environment(
+                    e,
+                    EnvironmentFile {
+                        color: Some(color),
+                        probe: None,
+                        latlong: None,
+                        octahedral: None,
+                        axes: None,
+                        intensity: 1.0,
+                        rotation: 0.0,
+                    },
+                )?;
                 None
             }
             "envmap" => {
-                let Some(name) = e.string("filename")?.map(str::to_owned) else { return Err(e.error("needs a filename")) };
+                let Some(name) = e.string("filename")?.map(str::to_owned) else {
+                    return Err(e.error("needs a filename"));
+                };
                 let path = self.resolver.resolve(&name, Path::new(&*e.at.file));
                 let latlong = relative_to(&path, &self.base);
                 let m = m.unwrap_or(DMat4::IDENTITY);
@@ -694,10 +775,23 @@ impl Mapper<'_> {
                         (0.0, Some(Array(turned.to_cols_array_2d().map(|c| Array(c.map(|v| v as f32))))))
                     }
                 };
-                self.environment(e, EnvironmentFile { color: None, probe: None, latlong: Some(latlong), octahedral: None, axes, intensity: scale as f32, rotation })?;
+                self.environment(
+                    e,
+                    EnvironmentFile {
+                        color: None,
+                        probe: None,
+                        latlong: Some(latlong),
+                        octahedral: None,
+                        axes,
+                        intensity: scale as f32,
+                        rotation,
+                    },
+                )?;
                 None
             }
-            _ => return Err(e.error("this emitter is not supported (area, point, spot, directional, constant, envmap)")),
+            _ => {
+                return Err(e.error("this emitter is not supported (area, point, spot, directional, constant, envmap)"))
+            }
         };
         e.check_all_used()?;
         if let Some(light) = light {
@@ -745,7 +839,9 @@ fn relative_ior(b: &Object, interior_default: &str) -> Result<f32> {
             return Ok(v);
         }
         let named = b.string(name)?.unwrap_or(default);
-        NAMED_IORS.iter().find(|(n, _)| *n == named).map(|(_, v)| *v).ok_or_else(|| b.error(format!("{name} '{named}' is neither a number nor a known material (such as water, air, bk7)")))
+        NAMED_IORS.iter().find(|(n, _)| *n == named).map(|(_, v)| *v).ok_or_else(|| {
+            b.error(format!("{name} '{named}' is neither a number nor a known material (such as water, air, bk7)"))
+        })
     };
     let (interior, exterior) = (ior("int_ior", interior_default)?, ior("ext_ior", "air")?);
     if !(interior > 0.0 && exterior > 0.0) {

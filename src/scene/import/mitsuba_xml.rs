@@ -8,8 +8,8 @@ use super::Location;
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{DMat4, DVec3};
 use std::cell::{Cell, RefCell};
-use std::fmt;
 use std::collections::HashMap;
+use std::fmt;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
@@ -85,8 +85,14 @@ pub struct Document {
 }
 
 /// Reads `path` and every file it includes. `defines` are `-D name=value`, overriding `<default>`.
-pub fn read(files: &InputFiles, path: &Path, defines: &[(String, String)], resolver: &mut Resolver) -> Result<Document> {
-    let mut reader = Reader { files, params: defines.iter().cloned().collect(), ids: Ids::default(), objects: vec![], depth: 0 };
+pub fn read(
+    files: &InputFiles,
+    path: &Path,
+    defines: &[(String, String)],
+    resolver: &mut Resolver,
+) -> Result<Document> {
+    let mut reader =
+        Reader { files, params: defines.iter().cloned().collect(), ids: Ids::default(), objects: vec![], depth: 0 };
     reader.read_file(path, resolver)?;
     Ok(Document { objects: reader.objects })
 }
@@ -109,7 +115,8 @@ impl Resolver {
             return p.to_path_buf();
         }
         let from_folder = from.parent().map(Path::to_path_buf).unwrap_or_default();
-        let candidates: Vec<PathBuf> = self.folders.iter().chain(std::iter::once(&from_folder)).map(|f| f.join(p)).collect();
+        let candidates: Vec<PathBuf> =
+            self.folders.iter().chain(std::iter::once(&from_folder)).map(|f| f.join(p)).collect();
         candidates.iter().find(|c| c.exists()).unwrap_or(&candidates[0]).clone()
     }
 }
@@ -137,7 +144,8 @@ impl Source<'_, '_> {
 }
 
 /// Element names that are objects (plugin instances) rather than properties.
-const OBJECT_TAGS: [&str; 9] = ["bsdf", "shape", "emitter", "sensor", "film", "sampler", "rfilter", "integrator", "texture"];
+const OBJECT_TAGS: [&str; 9] =
+    ["bsdf", "shape", "emitter", "sensor", "film", "sampler", "rfilter", "integrator", "texture"];
 
 impl Reader<'_> {
     fn read_file(&mut self, path: &Path, resolver: &mut Resolver) -> Result<()> {
@@ -161,7 +169,9 @@ impl Reader<'_> {
 
     /// Mitsuba 0.x scenes name their parameters differently; refuse them rather than misread them.
     fn check_version(&self, source: &Source, root: roxmltree::Node) -> Result<()> {
-        let version = root.attribute("version").with_context(|| format!("{}: <scene> has no version attribute (Mitsuba 3 scenes say version=\"3.0.0\")", source.at(root)))?;
+        let version = root.attribute("version").with_context(|| {
+            format!("{}: <scene> has no version attribute (Mitsuba 3 scenes say version=\"3.0.0\")", source.at(root))
+        })?;
         let major = version.split('.').next().and_then(|m| m.parse::<u32>().ok());
         if !matches!(major, Some(2 | 3)) {
             bail!("{}: scene version {version} is not supported (Mitsuba 2 and 3 scenes only)", source.at(root));
@@ -181,7 +191,8 @@ impl Reader<'_> {
             "include" => {
                 let file = resolver.resolve(&self.attr(source, node, "filename")?, &source.path);
                 self.depth += 1;
-                self.read_file(&file, resolver).with_context(|| format!("{at}: in the <include> of {}", file.display()))?;
+                self.read_file(&file, resolver)
+                    .with_context(|| format!("{at}: in the <include> of {}", file.display()))?;
                 self.depth -= 1;
             }
             "path" => {
@@ -203,7 +214,16 @@ impl Reader<'_> {
         let tag = node.tag_name().name().to_owned();
         let plugin = self.attr(source, node, "type")?;
         let id = node.attribute("id").map(|i| self.substitute(source, node, i)).transpose()?;
-        let mut object = Object { tag, plugin, id: id.clone(), at: at.clone(), properties: vec![], children: vec![], children_used: vec![], ids: self.ids.clone() };
+        let mut object = Object {
+            tag,
+            plugin,
+            id: id.clone(),
+            at: at.clone(),
+            properties: vec![],
+            children: vec![],
+            children_used: vec![],
+            ids: self.ids.clone(),
+        };
         for child in node.children().filter(|n| n.is_element()) {
             let child_name = child.attribute("name").map(|n| self.substitute(source, child, n)).transpose()?;
             match child.tag_name().name() {
@@ -216,7 +236,9 @@ impl Reader<'_> {
                     object.children.push((child_name, Child::Nested(nested)));
                 }
                 _ => {
-                    let name = child_name.with_context(|| format!("{}: <{}> has no name attribute", source.at(child), child.tag_name().name()))?;
+                    let name = child_name.with_context(|| {
+                        format!("{}: <{}> has no name attribute", source.at(child), child.tag_name().name())
+                    })?;
                     let value = self.value(source, child)?;
                     if object.properties.iter().any(|p| p.name == name) {
                         bail!("{}: {} sets the property '{name}' twice", source.at(child), object.describe());
@@ -240,7 +262,11 @@ impl Reader<'_> {
         let tag = node.tag_name().name();
         let value = || self.attr(source, node, "value");
         Ok(match tag {
-            "integer" => Value::Integer(value()?.trim().parse().map_err(|_| anyhow!("{at}: <integer> value '{}' is not an integer", value().unwrap_or_default()))?),
+            "integer" => {
+                Value::Integer(value()?.trim().parse().map_err(|_| {
+                    anyhow!("{at}: <integer> value '{}' is not an integer", value().unwrap_or_default())
+                })?)
+            }
             "float" => Value::Float(number(&value()?, &at)?),
             "boolean" => Value::Boolean(match value()?.trim() {
                 "true" => true,
@@ -267,7 +293,11 @@ impl Reader<'_> {
                     Some(_) => triple(&value()?, &at)?,
                     None => self.xyz(source, node, 0.0)?,
                 };
-                if tag == "point" { Value::Point(v) } else { Value::Vector(v) }
+                if tag == "point" {
+                    Value::Point(v)
+                } else {
+                    Value::Vector(v)
+                }
             }
             "transform" => Value::Transform(self.transform(source, node)?),
             other => bail!("{at}: <{other}> is not supported"),
@@ -319,10 +349,17 @@ impl Reader<'_> {
                 "lookat" => {
                     let origin = triple(&self.attr(source, op, "origin")?, &at)?;
                     let target = triple(&self.attr(source, op, "target")?, &at)?;
-                    let up = triple(&self.attr(source, op, "up").with_context(|| format!("{at}: <lookat> without up is not supported"))?, &at)?;
+                    let up = triple(
+                        &self
+                            .attr(source, op, "up")
+                            .with_context(|| format!("{at}: <lookat> without up is not supported"))?,
+                        &at,
+                    )?;
                     look_at(origin, target, up).with_context(|| format!("{at}: <lookat>"))?
                 }
-                other => bail!("{at}: <{other}> is not a transform operation (translate, rotate, scale, matrix, lookat)"),
+                other => {
+                    bail!("{at}: <{other}> is not a transform operation (translate, rotate, scale, matrix, lookat)")
+                }
             };
             m = step * m;
         }
@@ -346,7 +383,8 @@ impl Reader<'_> {
 
     /// An attribute without `$` substitution (`<default>` itself).
     fn raw_attr<'n>(&self, source: &Source, node: roxmltree::Node<'n, '_>, name: &str) -> Result<&'n str> {
-        node.attribute(name).with_context(|| format!("{}: <{}> needs a {name} attribute", source.at(node), node.tag_name().name()))
+        node.attribute(name)
+            .with_context(|| format!("{}: <{}> needs a {name} attribute", source.at(node), node.tag_name().name()))
     }
 
     /// An attribute with every `$name` parameter substituted.
@@ -363,7 +401,12 @@ impl Reader<'_> {
             let after = &rest[k + 1..];
             let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
             let name = &after[..len];
-            let value = self.params.get(name).with_context(|| format!("{}: ${name} is not a parameter (no <default name=\"{name}\"> before it, nor -D {name}=...)", source.at(node)))?;
+            let value = self.params.get(name).with_context(|| {
+                format!(
+                    "{}: ${name} is not a parameter (no <default name=\"{name}\"> before it, nor -D {name}=...)",
+                    source.at(node)
+                )
+            })?;
             out.push_str(value);
             rest = &after[len..];
         }
@@ -405,7 +448,9 @@ fn spectrum(text: &str, at: &Location) -> Result<Vec<(f64, f64)>> {
     if !text.contains(':') {
         return match numbers(text, at)?.as_slice() {
             [v] => Ok(vec![(0.0, *v)]),
-            other => bail!("{at}: a <spectrum> value is one number or wavelength:value pairs, got {} numbers", other.len()),
+            other => {
+                bail!("{at}: a <spectrum> value is one number or wavelength:value pairs, got {} numbers", other.len())
+            }
         };
     }
     let pairs: Vec<(f64, f64)> = text
@@ -488,7 +533,12 @@ impl Object {
         self.color_read(name, sampled, super::spectrum::reflectance_to_rgb)
     }
 
-    fn color_read(&self, name: &str, sampled: &mut dyn FnMut(&Location), spectrum_to_rgb: fn(&[(f64, f64)]) -> DVec3) -> Result<Option<DVec3>> {
+    fn color_read(
+        &self,
+        name: &str,
+        sampled: &mut dyn FnMut(&Location),
+        spectrum_to_rgb: fn(&[(f64, f64)]) -> DVec3,
+    ) -> Result<Option<DVec3>> {
         if let Some(texture) = self.texture_for(name)? {
             return Err(texture.error(format!("textures ('{name}') are not supported; give an <rgb>")));
         }
@@ -496,7 +546,9 @@ impl Object {
             None => Ok(None),
             Some(Property { value: Value::Rgb(c), .. }) => Ok(Some(*c)),
             Some(Property { value: Value::Float(v), .. }) => Ok(Some(DVec3::splat(*v))),
-            Some(Property { value: Value::Spectrum(s), .. }) if s.len() == 1 && s[0].0 == 0.0 => Ok(Some(DVec3::splat(s[0].1))),
+            Some(Property { value: Value::Spectrum(s), .. }) if s.len() == 1 && s[0].0 == 0.0 => {
+                Ok(Some(DVec3::splat(s[0].1)))
+            }
             Some(p @ Property { value: Value::Spectrum(s), .. }) => {
                 sampled(&p.at);
                 Ok(Some(spectrum_to_rgb(s)))
@@ -526,7 +578,12 @@ impl Object {
     fn resolve(&self, child: &Child) -> Result<Rc<Object>> {
         match child {
             Child::Nested(o) => Ok(o.clone()),
-            Child::Ref { id, at } => self.ids.borrow().get(id).cloned().with_context(|| format!("{at}: <ref id=\"{id}\"> names no object of the scene")),
+            Child::Ref { id, at } => self
+                .ids
+                .borrow()
+                .get(id)
+                .cloned()
+                .with_context(|| format!("{at}: <ref id=\"{id}\"> names no object of the scene")),
         }
     }
 

@@ -38,7 +38,9 @@ impl fmt::Display for Location {
 
 /// Is `path` a scene of another renderer that [`import`] reads?
 pub fn is_foreign_scene(path: &Path) -> bool {
-    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("xml") || e.eq_ignore_ascii_case("pbrt"))
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml") || e.eq_ignore_ascii_case("pbrt"))
 }
 
 /// A foreign scene in caustica's model, with the approximations made on the way.
@@ -71,7 +73,9 @@ pub fn import(files: &InputFiles, path: &Path, defines: &[(String, String)]) -> 
     let mut notes = Notes::default();
     let pbrt = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("pbrt"));
     let (file, base) = match (pbrt, defines.first()) {
-        (true, Some((name, _))) => bail!("-D {name}=...: parameters are for Mitsuba XML scenes, not {}", path.display()),
+        (true, Some((name, _))) => {
+            bail!("-D {name}=...: parameters are for Mitsuba XML scenes, not {}", path.display())
+        }
         (true, None) => pbrt::import(files, path, &mut notes)?,
         (false, _) => mitsuba::import(files, path, defines, &mut notes)?,
     };

@@ -39,6 +39,7 @@ pub fn uniform_scale(m: DMat4) -> Option<f64> {
     let axes = [m.x_axis, m.y_axis, m.z_axis].map(|a: DVec4| a.truncate());
     let s = axes[0].length();
     let even = axes.iter().all(|a| (a.length() - s).abs() <= 1e-6 * s);
-    let orthogonal = axes[0].dot(axes[1]).abs() + axes[1].dot(axes[2]).abs() + axes[0].dot(axes[2]).abs() <= 1e-6 * s * s;
+    let orthogonal =
+        axes[0].dot(axes[1]).abs() + axes[1].dot(axes[2]).abs() + axes[0].dot(axes[2]).abs() <= 1e-6 * s * s;
     (s > 0.0 && even && orthogonal).then_some(s)
 }

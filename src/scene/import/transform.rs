@@ -14,7 +14,11 @@ pub fn placement(m: DMat4) -> Result<Placement> {
     let rotate = Vec3::new(x, y, z) * (180.0 / std::f32::consts::PI) + Vec3::ZERO;
     let placement = Placement {
         translate: Array(translation.to_array()),
-        scale: Some(if scale.x == scale.y && scale.y == scale.z { Scale::Uniform(scale.x) } else { Scale::PerAxis(Array(scale.to_array())) }),
+        scale: Some(if scale.x == scale.y && scale.y == scale.z {
+            Scale::Uniform(scale.x)
+        } else {
+            Scale::PerAxis(Array(scale.to_array()))
+        }),
         rotate: Array(rotate.to_array()),
     };
     // Rebuilt as scene::placement builds it, the matrix must come back.
@@ -44,12 +48,19 @@ mod tests {
             None => Vec3::ONE,
         };
         let r = Vec3::from(p.rotate.0);
-        Mat4::from_scale_rotation_translation(s, Quat::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians()), Vec3::from(p.translate.0)).as_dmat4()
+        Mat4::from_scale_rotation_translation(
+            s,
+            Quat::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians()),
+            Vec3::from(p.translate.0),
+        )
+        .as_dmat4()
     }
 
     #[test]
     fn scale_rotation_translation_products_come_back() {
-        let m = DMat4::from_translation(DVec3::new(1.0, -2.0, 3.0)) * DMat4::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.7) * DMat4::from_scale(DVec3::new(2.0, 0.5, 3.0));
+        let m = DMat4::from_translation(DVec3::new(1.0, -2.0, 3.0))
+            * DMat4::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.7)
+            * DMat4::from_scale(DVec3::new(2.0, 0.5, 3.0));
         let p = placement(m).unwrap();
         assert!(rebuilt(&p).abs_diff_eq(m, 1e-5), "{p:?}");
         // A mirror too.

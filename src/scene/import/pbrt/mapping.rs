@@ -11,21 +11,22 @@
 //! no mirror. The mirror turns every winding, which the shapes undo, so fronts stay where pbrt
 //! has them.
 
-use crate::scene::format::{
-    Array, CameraFile, DirectionalLightFile, Encoding, ImageTextureFile, InlineMesh, EnvironmentFile, FilmFile, Filter, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler,
-    SceneFile, SphereFile, SpotLightFile, TriangleFile,
-};
+use super::super::super::material_maps::needs_mesh;
 use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
 use super::super::{spectrum, transform, Location, Notes};
 use super::params::Directive;
-use super::textures::TextureValue;
-use super::super::super::material_maps::needs_mesh;
 use super::parser::{MaterialRef, Model, ShapeUse};
-use crate::input_file::InputFiles;
-use anyhow::{bail, Result};
+use super::textures::TextureValue;
 use crate::image::RgbImage;
-use glam::{DMat4, DVec2, DVec3, Vec3};
+use crate::input_file::InputFiles;
 use crate::scene::equal_area_map;
+use crate::scene::format::{
+    Array, CameraFile, DirectionalLightFile, Encoding, EnvironmentFile, FilmFile, Filter, ImageTextureFile, InlineMesh,
+    IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, PointLightFile, QuadFile, Sampler, SceneFile,
+    SphereFile, SpotLightFile, TriangleFile,
+};
+use anyhow::{bail, Result};
+use glam::{DMat4, DVec2, DVec3, Vec3};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -72,11 +73,35 @@ pub struct Mapper<'a> {
 
 /// The scene file of `model`, read from `scene` (for messages).
 pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: &mut Notes) -> Result<SceneFile> {
-    let camera = CameraFile { position: Array([0.0; 3]), look_at: Array([0.0, 0.0, -1.0]), up: Array([0.0, 1.0, 0.0]), fov: 90.0, aperture: 0.0, focus_distance: None };
+    let camera = CameraFile {
+        position: Array([0.0; 3]),
+        look_at: Array([0.0, 0.0, -1.0]),
+        up: Array([0.0, 1.0, 0.0]),
+        fov: 90.0,
+        aperture: 0.0,
+        focus_distance: None,
+    };
     let out = SceneFile::empty(camera, FilmFile::default(), IntegratorFile::default());
-    let mut mapper = Mapper { model, notes, files, base, out, world: DMat4::IDENTITY, material_names: HashMap::new(), powered: HashMap::new(), powered_names: HashMap::new(), shapes: 0, shape_bytes: 0 };
+    let mut mapper = Mapper {
+        model,
+        notes,
+        files,
+        base,
+        out,
+        world: DMat4::IDENTITY,
+        material_names: HashMap::new(),
+        powered: HashMap::new(),
+        powered_names: HashMap::new(),
+        shapes: 0,
+        shape_bytes: 0,
+    };
     let start = Location { file: Rc::from(scene.display().to_string().as_str()), line: 1 };
-    let absent = |directive: &'static str, kind: &str| Directive { directive, kind: kind.to_owned(), at: start.clone(), params: vec![] };
+    let absent = |directive: &'static str, kind: &str| Directive {
+        directive,
+        kind: kind.to_owned(),
+        at: start.clone(),
+        params: vec![],
+    };
     let film = mapper.film(model.film.as_ref().unwrap_or(&absent("Film", "rgb")))?;
     let (camera_directive, camera_from_world) = match &model.camera {
         Some(c) => (&c.camera, c.camera_from_world),
@@ -93,7 +118,9 @@ pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: 
         mapper.shape(s, DMat4::IDENTITY)?;
     }
     for instance in &model.instances {
-        let Some((shapes, _)) = model.objects.get(&instance.name) else { bail!("{}: ObjectInstance \"{}\": no object of that name (ObjectBegin)", instance.at, instance.name) };
+        let Some((shapes, _)) = model.objects.get(&instance.name) else {
+            bail!("{}: ObjectInstance \"{}\": no object of that name (ObjectBegin)", instance.at, instance.name)
+        };
         for s in shapes {
             mapper.shape(s, instance.transform)?;
         }
@@ -135,7 +162,11 @@ impl Mapper<'_> {
         }
         // pbrt's image right is camera +x; caustica's is forward x up. In the usual left-handed
         // frame (a LookAt) forward x up is -right, and a mirror of the world turns it round.
-        self.world = if forward.cross(up).dot(right) < 0.0 { DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0)) } else { DMat4::IDENTITY };
+        self.world = if forward.cross(up).dot(right) < 0.0 {
+            DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0))
+        } else {
+            DMat4::IDENTITY
+        };
         let (forward, up) = (self.world.transform_vector3(forward / size), self.world.transform_vector3(up / size));
         let position = self.world.transform_point3(eye);
 
@@ -184,7 +215,10 @@ impl Mapper<'_> {
         }
         let size = |name: &str, default: i64| -> Result<u32> {
             let v = d.integer(name)?.unwrap_or(default);
-            u32::try_from(v).ok().filter(|v| (1..=16384).contains(v)).ok_or_else(|| d.error(format!("{name} must be in [1, 16384], got {v}")))
+            u32::try_from(v)
+                .ok()
+                .filter(|v| (1..=16384).contains(v))
+                .ok_or_else(|| d.error(format!("{name} must be in [1, 16384], got {v}")))
         };
         let (width, height) = (size("xresolution", 1280)?, size("yresolution", 720)?);
         // Where and how pbrt writes its image: caustica writes what -o says.
@@ -194,8 +228,14 @@ impl Mapper<'_> {
         d.float("diagonal")?;
         // The sensor's response: only pbrt's default (the CIE 1931 observer, ISO 100, a unit
         // exposure, no white balance) leaves the colours as caustica renders them.
-        if d.string("sensor")?.is_some_and(|s| s != "cie1931") || d.float_or("iso", 100.0)? != 100.0 || d.float_or("exposuretime", 1.0)? != 1.0 || d.float_or("whitebalance", 0.0)? != 0.0 {
-            return Err(d.error("only the default sensor (cie1931, iso 100, exposuretime 1, whitebalance 0) is supported"));
+        if d.string("sensor")?.is_some_and(|s| s != "cie1931")
+            || d.float_or("iso", 100.0)? != 100.0
+            || d.float_or("exposuretime", 1.0)? != 1.0
+            || d.float_or("whitebalance", 0.0)? != 0.0
+        {
+            return Err(
+                d.error("only the default sensor (cie1931, iso 100, exposuretime 1, whitebalance 0) is supported")
+            );
         }
         if let Some(clamp) = d.float("maxcomponentvalue")? {
             // pbrt scales a sample down so its largest component is at most this, as caustica's
@@ -210,7 +250,9 @@ impl Mapper<'_> {
     }
 
     fn filter(&mut self, d: &Directive) -> Result<Filter> {
-        let radii = |default: f64| -> Result<(f64, f64)> { Ok((d.float_or("xradius", default)?, d.float_or("yradius", default)?)) };
+        let radii = |default: f64| -> Result<(f64, f64)> {
+            Ok((d.float_or("xradius", default)?, d.float_or("yradius", default)?))
+        };
         let filter = match d.kind.as_str() {
             "box" if radii(0.5)? == (0.5, 0.5) => Filter::Box,
             "triangle" if radii(2.0)? == (1.0, 1.0) => Filter::Tent,
@@ -218,7 +260,9 @@ impl Mapper<'_> {
                 self.warn("filter", || format!("{}: {}: pbrt's Gaussian (sigma 0.5, cut at 1.5 pixels and lowered to 0 there) becomes caustica's uncut Gaussian of sigma 0.5", d.at, d.describe()));
                 Filter::Gaussian
             }
-            "box" | "triangle" | "gaussian" => return Err(d.error("only box of radius 0.5, triangle of radius 1 and gaussian of radius 1.5 and sigma 0.5 are supported")),
+            "box" | "triangle" | "gaussian" => return Err(d.error(
+                "only box of radius 0.5, triangle of radius 1 and gaussian of radius 1.5 and sigma 0.5 are supported",
+            )),
             _ => return Err(d.error("this filter is not supported (box, triangle, gaussian)")),
         };
         d.check_all_used()?;
@@ -230,7 +274,10 @@ impl Mapper<'_> {
             "independent" => (d.integer("pixelsamples")?.unwrap_or(16), Sampler::Independent),
             "stratified" => {
                 d.boolean("jitter", true)?;
-                (d.integer("xsamples")?.unwrap_or(4).saturating_mul(d.integer("ysamples")?.unwrap_or(4)), Sampler::Sobol)
+                (
+                    d.integer("xsamples")?.unwrap_or(4).saturating_mul(d.integer("ysamples")?.unwrap_or(4)),
+                    Sampler::Sobol,
+                )
             }
             "zsobol" | "sobol" | "paddedsobol" | "halton" | "pmj02bn" => {
                 d.string("randomization")?;
@@ -245,7 +292,10 @@ impl Mapper<'_> {
             self.warn("seed", || format!("{}: the sampler's seed is ignored: caustica takes it from --seed", d.at));
         }
         d.check_all_used()?;
-        let spp = u32::try_from(spp).ok().filter(|&n| n >= 1).ok_or_else(|| d.error(format!("the sample count must be at least 1, got {spp}")))?;
+        let spp = u32::try_from(spp)
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| d.error(format!("the sample count must be at least 1, got {spp}")))?;
         Ok((spp, sampler))
     }
 
@@ -259,7 +309,8 @@ impl Mapper<'_> {
             return Err(d.error("only the path and volpath integrators are supported"));
         }
         let depth = d.integer("maxdepth")?.unwrap_or(5);
-        let max_bounces = if depth < 0 { UNBOUNDED_DEPTH } else { u32::try_from(depth + 1).unwrap_or(u32::MAX).min(UNBOUNDED_DEPTH) };
+        let max_bounces =
+            if depth < 0 { UNBOUNDED_DEPTH } else { u32::try_from(depth + 1).unwrap_or(u32::MAX).min(UNBOUNDED_DEPTH) };
         let light_selection = match d.string("lightsampler")?.unwrap_or("bvh") {
             "bvh" | "power" => LightSelection::Power,
             "uniform" => LightSelection::Uniform,
@@ -269,13 +320,25 @@ impl Mapper<'_> {
             return Err(d.error("regularize is not supported"));
         }
         d.check_all_used()?;
-        Ok(IntegratorFile { max_bounces, rr_start: 1, light_selection, clamp: self.out.integrator.clamp, ..IntegratorFile::default() })
+        Ok(IntegratorFile {
+            max_bounces,
+            rr_start: 1,
+            light_selection,
+            clamp: self.out.integrator.clamp,
+            ..IntegratorFile::default()
+        })
     }
 
     /// The caustica material of a shape's material and area light, made once per pair; None
     /// for an `interface` that emits nothing.
     fn shape_material(&mut self, s: &ShapeUse) -> Result<Option<String>> {
-        let short = |at: &Location| format!("{}:{}", Path::new(&*at.file).file_name().map_or(String::new(), |f| f.to_string_lossy().into_owned()), at.line);
+        let short = |at: &Location| {
+            format!(
+                "{}:{}",
+                Path::new(&*at.file).file_name().map_or(String::new(), |f| f.to_string_lossy().into_owned()),
+                at.line
+            )
+        };
         let (def, label) = match &s.material {
             MaterialRef::Default => (None, "default diffuse".to_owned()),
             MaterialRef::Anonymous(def) => (Some(def.clone()), format!("{} at {}", def.ty, short(&def.directive.at))),
@@ -284,7 +347,10 @@ impl Mapper<'_> {
                 None => bail!("{at}: NamedMaterial \"{name}\": no material of that name (MakeNamedMaterial)"),
             },
         };
-        let key = (def.as_ref().map_or(0, |d| Rc::as_ptr(d) as usize), s.area_light.as_ref().map_or(0, |l| Rc::as_ptr(l) as usize));
+        let key = (
+            def.as_ref().map_or(0, |d| Rc::as_ptr(d) as usize),
+            s.area_light.as_ref().map_or(0, |l| Rc::as_ptr(l) as usize),
+        );
         if let Some(name) = self.material_names.get(&key) {
             return Ok(name.clone());
         }
@@ -330,7 +396,13 @@ impl Mapper<'_> {
         let d = &*s.shape;
         let Some(material) = self.shape_material(s)? else {
             // An interface bounds a participating medium, which caustica does not render.
-            self.warn("interface", || format!("{}: {}: shapes with the interface material are left out (they only bound media)", d.at, d.describe()));
+            self.warn("interface", || {
+                format!(
+                    "{}: {}: shapes with the interface material are left out (they only bound media)",
+                    d.at,
+                    d.describe()
+                )
+            });
             return Ok(());
         };
         let to_world = instance * s.transform;
@@ -340,7 +412,10 @@ impl Mapper<'_> {
         // and triangles have not, and opacity is tested on mesh triangles; an emitting mesh is
         // written as triangles.
         let textured = needs_mesh(&self.out.materials[&material]);
-        if let Some(what) = textured.filter(|_| !matches!(d.kind.as_str(), "plymesh" | "trianglemesh") || self.out.materials[&material].emission != Array([0.0; 3])) {
+        if let Some(what) = textured.filter(|_| {
+            !matches!(d.kind.as_str(), "plymesh" | "trianglemesh")
+                || self.out.materials[&material].emission != Array([0.0; 3])
+        }) {
             return Err(d.error(format!("a material with {what} is supported on a plymesh or trianglemesh that does not emit only (caustica's spheres, quads and triangles have no texture coordinates or alpha tests)")));
         }
         let textured = textured.is_some();
@@ -370,7 +445,9 @@ impl Mapper<'_> {
                 }
             }
             "plymesh" => {
-                let Some(name) = d.string("filename")?.map(str::to_owned) else { return Err(d.error("needs a filename")) };
+                let Some(name) = d.string("filename")?.map(str::to_owned) else {
+                    return Err(d.error("needs a filename"));
+                };
                 let path = self.scene_file(&name);
                 if self.out.materials[&material].emission != Array([0.0; 3]) {
                     self.emitting_ply(d, &path, m, s.reverse_orientation, &material)?;
@@ -378,7 +455,17 @@ impl Mapper<'_> {
                     let placement = transform::placement(m).map_err(|e| d.error(e))?;
                     let file = relative_to(&path, self.base);
                     self.count_shape(d, &material)?;
-                    self.out.meshes.push(MeshFile { file, material: Some(material), shape_index: None, flip_normals: false, face_normals: false, translate: placement.translate, scale: placement.scale, rotate: placement.rotate, instances: vec![] });
+                    self.out.meshes.push(MeshFile {
+                        file,
+                        material: Some(material),
+                        shape_index: None,
+                        flip_normals: false,
+                        face_normals: false,
+                        translate: placement.translate,
+                        scale: placement.scale,
+                        rotate: placement.rotate,
+                        instances: vec![],
+                    });
                 }
             }
             _ => return Err(d.error("this shape is not supported (sphere, trianglemesh, bilinearmesh, plymesh)")),
@@ -394,12 +481,16 @@ impl Mapper<'_> {
         let Some(p) = d.param("alpha") else { return Ok(material) };
         let model = self.model;
         let image = match (p.ty.as_str(), p.strings()) {
-            ("texture", [name]) => model.textures.get(&("float".to_owned(), name.clone())).filter(|t| t.class.kind == "imagemap"),
+            ("texture", [name]) => {
+                model.textures.get(&("float".to_owned(), name.clone())).filter(|t| t.class.kind == "imagemap")
+            }
             _ => None,
         };
         let (opacity, texture) = match image {
             Some(t) => {
-                let TextureValue::Varying { texture, factor } = self.imagemap(&t.class)? else { unreachable!("an imagemap varies") };
+                let TextureValue::Varying { texture, factor } = self.imagemap(&t.class)? else {
+                    unreachable!("an imagemap varies")
+                };
                 t.class.check_all_used()?;
                 let file = texture.file.expect("an imagemap has a file");
                 (factor.x, Some(ImageTextureFile { file, to_uv: texture.to_uv, encoding: Some(Encoding::Srgb) }))
@@ -426,11 +517,14 @@ impl Mapper<'_> {
         if radius.is_nan() || radius <= 0.0 {
             return Err(d.error(format!("radius must be > 0, got {radius}")));
         }
-        let partial = d.float_or("zmin", -radius)? > -radius || d.float_or("zmax", radius)? < radius || d.float_or("phimax", 360.0)? < 360.0;
+        let partial = d.float_or("zmin", -radius)? > -radius
+            || d.float_or("zmax", radius)? < radius
+            || d.float_or("phimax", 360.0)? < 360.0;
         if partial {
             return Err(d.error("partial spheres (zmin, zmax, phimax) are not supported"));
         }
-        let scale = uniform_scale(to_world).ok_or_else(|| d.error("its transformation scales unevenly or shears; a sphere needs a uniform scale"))?;
+        let scale = uniform_scale(to_world)
+            .ok_or_else(|| d.error("its transformation scales unevenly or shears; a sphere needs a uniform scale"))?;
         // caustica's spheres face outwards; pbrt's turn inside out under ReverseOrientation or a
         // mirroring transformation, which matters where they emit or refract.
         let m_file = &self.out.materials[material];
@@ -441,7 +535,11 @@ impl Mapper<'_> {
         // pbrt-v4's Sphere::Area is in the sphere's own space: its transformation's scale is left out.
         let material = self.emitter_of_area(material, 4.0 * PI * radius * radius);
         self.count_shape(d, &material)?;
-        self.out.spheres.push(SphereFile { center: f32x3(m.transform_point3(DVec3::ZERO)), radius: (radius * scale) as f32, material });
+        self.out.spheres.push(SphereFile {
+            center: f32x3(m.transform_point3(DVec3::ZERO)),
+            radius: (radius * scale) as f32,
+            material,
+        });
         Ok(())
     }
 
@@ -483,7 +581,11 @@ impl Mapper<'_> {
             "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face {count}\nproperty list uchar int vertex_indices\nend_header\n{vertices}{faces}",
             3 * count
         );
-        self.out.inline_meshes.push(InlineMesh { name: format!("{}: {} (mesh {})", d.at, d.describe(), self.out.inline_meshes.len()), ply, material: material.to_owned() });
+        self.out.inline_meshes.push(InlineMesh {
+            name: format!("{}: {} (mesh {})", d.at, d.describe(), self.out.inline_meshes.len()),
+            ply,
+            material: material.to_owned(),
+        });
         Ok(())
     }
 
@@ -491,7 +593,8 @@ impl Mapper<'_> {
     /// out for a single polygon) and its normals (`N`); texture coordinates, tangents and face
     /// indices, which only textures use, are read and left.
     fn mesh_arrays(&mut self, d: &Directive, corners: usize) -> Result<MeshArrays> {
-        let positions = d.triples("P", &["point3", "point"])?.ok_or_else(|| d.error("needs the vertices \"point3 P\""))?;
+        let positions =
+            d.triples("P", &["point3", "point"])?.ok_or_else(|| d.error("needs the vertices \"point3 P\""))?;
         let indices: Vec<usize> = match d.integers("indices")? {
             Some(i) => {
                 if let Some(bad) = i.iter().find(|&&k| !(k >= 0.0 && k < positions.len() as f64)) {
@@ -500,7 +603,11 @@ impl Mapper<'_> {
                 i.iter().map(|&k| k as usize).collect()
             }
             None if positions.len() == corners => (0..corners).collect(),
-            None => return Err(d.error(format!("needs \"integer indices\" (it has {} vertices, not {corners})", positions.len()))),
+            None => {
+                return Err(
+                    d.error(format!("needs \"integer indices\" (it has {} vertices, not {corners})", positions.len()))
+                )
+            }
         };
         if !indices.len().is_multiple_of(corners) {
             return Err(d.error(format!("the number of indices ({}) is not a multiple of {corners}", indices.len())));
@@ -517,8 +624,12 @@ impl Mapper<'_> {
         }
         let uvs = match d.param("uv") {
             None => Ok(None),
-            Some(p) if p.ty == "point2" && p.numbers().len() == 2 * positions.len() => Ok(Some(p.numbers().chunks_exact(2).map(|c| [c[0], c[1]]).collect())),
-            Some(p) => Err(p.error(format!("{}: needs a point2 a vertex ({} numbers)", d.describe(), 2 * positions.len()))),
+            Some(p) if p.ty == "point2" && p.numbers().len() == 2 * positions.len() => {
+                Ok(Some(p.numbers().chunks_exact(2).map(|c| [c[0], c[1]]).collect()))
+            }
+            Some(p) => {
+                Err(p.error(format!("{}: needs a point2 a vertex ({} numbers)", d.describe(), 2 * positions.len())))
+            }
         };
         // Tangents and face indices, which only textures' filtering and Ptex use.
         for name in ["S", "faceIndices"] {
@@ -550,7 +661,10 @@ impl Mapper<'_> {
             return Ok(());
         }
         self.count_shape(d, material)?;
-        self.out.triangles.push(TriangleFile { vertices: Array(w.map(|p: Vec3| Array(p.to_array()))), material: material.to_owned() });
+        self.out.triangles.push(TriangleFile {
+            vertices: Array(w.map(|p: Vec3| Array(p.to_array()))),
+            material: material.to_owned(),
+        });
         Ok(())
     }
 
@@ -577,7 +691,12 @@ impl Mapper<'_> {
             }
             let material = self.emitter_of_area(material, u.cross(v).length());
             self.count_shape(d, &material)?;
-            self.out.quads.push(QuadFile { origin: f32x3(m.transform_point3(p00)), edge_u: f32x3(u), edge_v: f32x3(v), material });
+            self.out.quads.push(QuadFile {
+                origin: f32x3(m.transform_point3(p00)),
+                edge_u: f32x3(u),
+                edge_v: f32x3(v),
+                material,
+            });
             return Ok(());
         }
         let normal = u.cross(v);
@@ -585,7 +704,9 @@ impl Mapper<'_> {
             if self.powered.contains_key(material) {
                 return Err(d.error("an area light given by its power on a patch that is not planar is not supported (its area is pbrt's integral over the curved patch)"));
             }
-            self.warn("bilinear", || format!("{}: {}: patches that are not planar become two triangles each", d.at, d.describe()));
+            self.warn("bilinear", || {
+                format!("{}: {}: patches that are not planar become two triangles each", d.at, d.describe())
+            });
         }
         // A planar patch covers its quadrilateral, the two triangles' areas together.
         let w = [p00, p10, p01, p11].map(|p| m.transform_point3(p));
@@ -657,8 +778,12 @@ impl Mapper<'_> {
                 }
                 rgb / y
             }
-            ("rgb" | "blackbody", ..) => return Err(p.error("needs 3 numbers (rgb) or one temperature > 0 (blackbody)")),
-            ("spectrum", _, _) => return Err(p.error("only the named spectrum stdillum-D65 is supported for an emitter")),
+            ("rgb" | "blackbody", ..) => {
+                return Err(p.error("needs 3 numbers (rgb) or one temperature > 0 (blackbody)"))
+            }
+            ("spectrum", _, _) => {
+                return Err(p.error("only the named spectrum stdillum-D65 is supported for an emitter"))
+            }
             (ty, ..) => return Err(p.error(format!("an emitter's {name} cannot be given as {ty}"))),
         };
         if !(c.min_element() >= 0.0 && c.is_finite()) {
@@ -695,7 +820,10 @@ impl Mapper<'_> {
                 if let Some(power) = Self::light_target(d, "power")? {
                     intensity *= power / (4.0 * PI);
                 }
-                Some(LightFile::Point(PointLightFile { position: f32x3(m.transform_point3(from(d)?)), intensity: f32x3(intensity) }))
+                Some(LightFile::Point(PointLightFile {
+                    position: f32x3(m.transform_point3(from(d)?)),
+                    intensity: f32x3(intensity),
+                }))
             }
             "spot" => {
                 let mut intensity = self.light_color(d, "I")? * self.light_scale(d)?;
@@ -732,7 +860,11 @@ impl Mapper<'_> {
                 if direction.length() == 0.0 {
                     return Err(d.error("from and to coincide, so the light has no direction"));
                 }
-                Some(LightFile::Directional(DirectionalLightFile { direction: f32x3(direction), irradiance: f32x3(irradiance), angular_diameter: 0.0 }))
+                Some(LightFile::Directional(DirectionalLightFile {
+                    direction: f32x3(direction),
+                    irradiance: f32x3(irradiance),
+                    angular_diameter: 0.0,
+                }))
             }
             "infinite" => {
                 if self.out.environment.is_some() {
@@ -745,7 +877,15 @@ impl Mapper<'_> {
                         if let Some(illuminance) = Self::light_target(d, "illuminance")? {
                             color *= illuminance / PI;
                         }
-                        EnvironmentFile { color: Some(f32x3(color)), probe: None, latlong: None, octahedral: None, axes: None, intensity: 1.0, rotation: 0.0 }
+                        EnvironmentFile {
+                            color: Some(f32x3(color)),
+                            probe: None,
+                            latlong: None,
+                            octahedral: None,
+                            axes: None,
+                            intensity: 1.0,
+                            rotation: 0.0,
+                        }
                     }
                     Some(name) => {
                         if d.param("L").is_some() {
@@ -757,7 +897,10 @@ impl Mapper<'_> {
                         if let Some(illuminance) = Self::light_target(d, "illuminance")? {
                             let image = crate::image::read_image_from(self.files, &path).map_err(|e| d.error(e))?;
                             if image.width != image.height {
-                                return Err(d.error(format!("\"{name}\": an equal-area octahedral map must be square, got {} x {}", image.width, image.height)));
+                                return Err(d.error(format!(
+                                    "\"{name}\": an equal-area octahedral map must be square, got {} x {}",
+                                    image.width, image.height
+                                )));
                             }
                             let own = upper_hemisphere_illuminance(&image);
                             if !(own > 0.0 && own.is_finite()) {
@@ -769,12 +912,23 @@ impl Mapper<'_> {
                         // through the mirror.
                         let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a));
                         let size = axes[0].length();
-                        let orthonormal = size > 0.0 && axes.iter().all(|a| (a.length() - size).abs() <= 1e-6 * size) && (axes[0].dot(axes[1]).abs() + axes[1].dot(axes[2]).abs() + axes[0].dot(axes[2]).abs()) <= 1e-6 * size * size;
+                        let orthonormal = size > 0.0
+                            && axes.iter().all(|a| (a.length() - size).abs() <= 1e-6 * size)
+                            && (axes[0].dot(axes[1]).abs() + axes[1].dot(axes[2]).abs() + axes[0].dot(axes[2]).abs())
+                                <= 1e-6 * size * size;
                         if !orthonormal {
                             return Err(d.error("an image infinite light's transformation must be a rotation (it shears or scales unevenly)"));
                         }
                         let axes = Array(axes.map(|a| f32x3(a / size)));
-                        EnvironmentFile { color: None, probe: None, latlong: None, octahedral: Some(relative_to(&path, self.base)), axes: Some(axes), intensity: scale as f32, rotation: 0.0 }
+                        EnvironmentFile {
+                            color: None,
+                            probe: None,
+                            latlong: None,
+                            octahedral: Some(relative_to(&path, self.base)),
+                            axes: Some(axes),
+                            intensity: scale as f32,
+                            rotation: 0.0,
+                        }
                     }
                 };
                 self.out.environment = Some(environment);

@@ -2,13 +2,13 @@
 //! diffuse reflectance, which may be a texture (`textures.rs`): a texture that varies anywhere
 //! else is an error naming the file and line. The README's "pbrt-v4" section lists each mapping.
 
-use crate::scene::format::{AlbedoTextureFile, Array, Encoding, ImageTextureFile, MaterialFile, Triple};
 use super::super::scene_parts::{f32x3, relative_to};
 use super::super::spectrum;
 use super::mapping::Mapper;
 use super::params::{Directive, Param};
 use super::parser::MaterialDef;
 use super::textures::TextureValue;
+use crate::scene::format::{AlbedoTextureFile, Array, Encoding, ImageTextureFile, MaterialFile, Triple};
 use crate::scene::METALS;
 use anyhow::{anyhow, Result};
 use glam::DVec3;
@@ -17,8 +17,15 @@ use glam::DVec3;
 const NAMED_METALS: [(&str, &str); 4] = [("Au", "gold"), ("Ag", "silver"), ("Cu", "copper"), ("Al", "aluminium")];
 
 /// pbrt's named glasses and their index at the helium d line (587.6 nm), from the Schott catalogue.
-const NAMED_GLASSES: [(&str, f64); 7] =
-    [("glass-BK7", 1.5168), ("glass-BAF10", 1.67003), ("glass-FK51A", 1.48656), ("glass-LASF9", 1.85025), ("glass-F5", 1.6727), ("glass-F10", 1.72825), ("glass-F11", 1.78472)];
+const NAMED_GLASSES: [(&str, f64); 7] = [
+    ("glass-BK7", 1.5168),
+    ("glass-BAF10", 1.67003),
+    ("glass-FK51A", 1.48656),
+    ("glass-LASF9", 1.85025),
+    ("glass-F5", 1.6727),
+    ("glass-F10", 1.72825),
+    ("glass-F11", 1.78472),
+];
 
 /// A conductor's index: one of caustica's named metals, or eta and k per channel.
 enum Conductor {
@@ -99,7 +106,11 @@ impl Mapper<'_> {
     fn normal_map(&mut self, d: &Directive) -> Result<Option<ImageTextureFile>> {
         let Some(name) = d.string("normalmap")?.map(str::to_owned) else { return Ok(None) };
         let (path, _) = self.texture_image(d, &name)?;
-        Ok(Some(ImageTextureFile { file: relative_to(&path, self.base), to_uv: None, encoding: Some(Encoding::Linear) }))
+        Ok(Some(ImageTextureFile {
+            file: relative_to(&path, self.base),
+            to_uv: None,
+            encoding: Some(Encoding::Linear),
+        }))
     }
 
     /// caustica's roughness and roughness_v from pbrt's `uroughness` and `vroughness` (each
@@ -117,7 +128,10 @@ impl Mapper<'_> {
     fn roughness_of(&mut self, d: &Directive, prefix: &str) -> Result<(f32, Option<f32>)> {
         let key = |name: &str| format!("{prefix}{name}");
         let r = self.scalar(d, &key("roughness"), 0.0)?;
-        let (u, v) = (self.scalar_if_given(d, &key("uroughness"))?.unwrap_or(r), self.scalar_if_given(d, &key("vroughness"))?.unwrap_or(r));
+        let (u, v) = (
+            self.scalar_if_given(d, &key("uroughness"))?.unwrap_or(r),
+            self.scalar_if_given(d, &key("vroughness"))?.unwrap_or(r),
+        );
         let remap = d.boolean("remaproughness", true)?;
         let roughness = |name: &str, r: f64| {
             let alpha = if remap { r.max(0.0).sqrt() } else { r };
@@ -190,10 +204,14 @@ impl Mapper<'_> {
             (Ok(a), Ok(b)) if a == b => Conductor::Named(a),
             (eta, k) => {
                 let values = |named: Result<&'static str, DVec3>, which: usize| {
-                    named.map_or_else(|v| v, |name| {
-                        let (_, eta, k) = METALS.iter().find(|(n, _, _)| *n == name).expect("NAMED_METALS are METALS");
-                        DVec3::from(if which == 0 { *eta } else { *k }.map(f64::from))
-                    })
+                    named.map_or_else(
+                        |v| v,
+                        |name| {
+                            let (_, eta, k) =
+                                METALS.iter().find(|(n, _, _)| *n == name).expect("NAMED_METALS are METALS");
+                            DVec3::from(if which == 0 { *eta } else { *k }.map(f64::from))
+                        },
+                    )
                 };
                 Conductor::Complex(values(eta, 0), values(k, 1))
             }
@@ -202,7 +220,12 @@ impl Mapper<'_> {
 
     /// A conductor's `eta` or `k` (`which`), the parameter `name`: Ok(caustica's metal name) for a
     /// named spectrum (pbrt's copper by default), Err(the values) for a colour.
-    fn metal_spectrum(&mut self, d: &Directive, name: &str, which: &str) -> Result<std::result::Result<&'static str, DVec3>> {
+    fn metal_spectrum(
+        &mut self,
+        d: &Directive,
+        name: &str,
+        which: &str,
+    ) -> Result<std::result::Result<&'static str, DVec3>> {
         let named = match d.param(name) {
             None => format!("metal-Cu-{which}"),
             Some(p) if p.ty == "spectrum" && !p.strings().is_empty() => p.strings()[0].clone(),
@@ -220,7 +243,12 @@ impl Mapper<'_> {
             Some((_, caustica)) => Ok(Ok(caustica)),
             None => {
                 let known: Vec<_> = NAMED_METALS.iter().map(|(m, _)| format!("metal-{m}{suffix}")).collect();
-                Err(anyhow!("{}: {}: the spectrum \"{named}\" for {name} is not supported (known: {})", d.at, d.describe(), known.join(", ")))
+                Err(anyhow!(
+                    "{}: {}: the spectrum \"{named}\" for {name} is not supported (known: {})",
+                    d.at,
+                    d.describe(),
+                    known.join(", ")
+                ))
             }
         }
     }
@@ -248,7 +276,10 @@ impl Mapper<'_> {
             TextureValue::Constant(c) => (c, None),
             TextureValue::Varying { texture, factor } => (factor, Some(texture)),
         };
-        let colors = texture.as_ref().and_then(|t| t.checkerboard).map_or(vec![], |Array(c)| c.map(|c| DVec3::from(c.0.map(f64::from))).to_vec());
+        let colors = texture
+            .as_ref()
+            .and_then(|t| t.checkerboard)
+            .map_or(vec![], |Array(c)| c.map(|c| DVec3::from(c.0.map(f64::from))).to_vec());
         for c in colors.iter().chain([&factor]) {
             if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
                 return Err(p.error(format!("must be in [0, 1] per channel (energy conservation), got {c}")));
@@ -321,7 +352,9 @@ impl Mapper<'_> {
         if pairs.windows(2).any(|w| w[1].0 <= w[0].0) {
             return Err(p.error("the wavelengths must increase"));
         }
-        self.warn("spectrum", || format!("{}: spectra given as wavelengths are reduced to linear sRGB (CIE 1931 fit)", p.at));
+        self.warn("spectrum", || {
+            format!("{}: spectra given as wavelengths are reduced to linear sRGB (CIE 1931 fit)", p.at)
+        });
         Ok(spectrum::to_rgb(&pairs))
     }
 }

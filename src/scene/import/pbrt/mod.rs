@@ -11,9 +11,9 @@ mod parser;
 mod textures;
 mod tokens;
 
-use crate::scene::format::SceneFile;
 use super::Notes;
 use crate::input_file::InputFiles;
+use crate::scene::format::SceneFile;
 use anyhow::Result;
 use std::path::{Path, PathBuf};
 

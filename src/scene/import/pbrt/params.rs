@@ -27,7 +27,21 @@ pub struct Param {
 }
 
 /// The declared types pbrt-v4 knows, and the kind of values each takes.
-const NUMERIC_TYPES: [&str; 13] = ["integer", "float", "point2", "vector2", "point3", "vector3", "normal3", "normal", "point", "vector", "rgb", "blackbody", "color"];
+const NUMERIC_TYPES: [&str; 13] = [
+    "integer",
+    "float",
+    "point2",
+    "vector2",
+    "point3",
+    "vector3",
+    "normal3",
+    "normal",
+    "point",
+    "vector",
+    "rgb",
+    "blackbody",
+    "color",
+];
 
 impl Param {
     /// Checks that the values fit the declared type (`at` is the parameter's line).
@@ -39,7 +53,8 @@ impl Param {
             ("bool", Values::Bools(_)) => true,
             _ => false,
         };
-        let known = NUMERIC_TYPES.contains(&ty.as_str()) || matches!(ty.as_str(), "spectrum" | "string" | "texture" | "bool");
+        let known =
+            NUMERIC_TYPES.contains(&ty.as_str()) || matches!(ty.as_str(), "spectrum" | "string" | "texture" | "bool");
         if !known {
             bail!("{at}: '{ty} {name}': unknown parameter type '{ty}'");
         }
@@ -123,7 +138,9 @@ impl Directive {
     /// The parameter called `name` if it has one of `types`, else an error naming its line.
     fn typed(&self, name: &str, types: &[&str]) -> Result<Option<&Param>> {
         match self.param(name) {
-            Some(p) if !types.contains(&p.ty.as_str()) => Err(p.error(format!("{}: '{name}' is a {}, not a {}", self.describe(), types.join(" or "), p.ty))),
+            Some(p) if !types.contains(&p.ty.as_str()) => {
+                Err(p.error(format!("{}: '{name}' is a {}, not a {}", self.describe(), types.join(" or "), p.ty)))
+            }
             p => Ok(p),
         }
     }
@@ -187,7 +204,11 @@ impl Directive {
             Some(p) => {
                 let v = p.numbers();
                 if v.len() % 3 != 0 {
-                    return Err(p.error(format!("{}: needs a multiple of 3 numbers, got {}", self.describe(), v.len())));
+                    return Err(p.error(format!(
+                        "{}: needs a multiple of 3 numbers, got {}",
+                        self.describe(),
+                        v.len()
+                    )));
                 }
                 Ok(Some(v.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect()))
             }

@@ -103,7 +103,12 @@ pub fn read(files: &InputFiles, path: &Path) -> Result<Model> {
         // pbrt resolves every relative file name against the main file's folder.
         base: path.parent().map(Path::to_path_buf).unwrap_or_default(),
         model: Model::default(),
-        state: GraphicsState { ctm: DMat4::IDENTITY, reverse_orientation: false, material: MaterialRef::Default, area_light: None },
+        state: GraphicsState {
+            ctm: DMat4::IDENTITY,
+            reverse_orientation: false,
+            material: MaterialRef::Default,
+            area_light: None,
+        },
         stack: vec![],
         coordinate_systems: HashMap::new(),
         in_world: false,
@@ -152,7 +157,11 @@ impl Reader<'_> {
         let text = self.files.read_to_string(path, InputKind::Scene)?;
         self.bytes += text.len();
         if self.bytes > MAX_TOTAL_BYTES {
-            bail!("{}: the scene and its includes hold more than {} MiB of text", path.display(), MAX_TOTAL_BYTES >> 20);
+            bail!(
+                "{}: the scene and its includes hold more than {} MiB of text",
+                path.display(),
+                MAX_TOTAL_BYTES >> 20
+            );
         }
         let mut tokens = Tokens::new(&text, Rc::from(path.display().to_string().as_str()));
         while let Some((token, at)) = tokens.next()? {
@@ -166,7 +175,19 @@ impl Reader<'_> {
         if OPTIONS.contains(&name) && self.in_world {
             bail!("{at}: {name} must come before WorldBegin");
         }
-        let world_only = matches!(name, "Shape" | "Material" | "MakeNamedMaterial" | "NamedMaterial" | "Texture" | "LightSource" | "AreaLightSource" | "ObjectBegin" | "ObjectEnd" | "ObjectInstance");
+        let world_only = matches!(
+            name,
+            "Shape"
+                | "Material"
+                | "MakeNamedMaterial"
+                | "NamedMaterial"
+                | "Texture"
+                | "LightSource"
+                | "AreaLightSource"
+                | "ObjectBegin"
+                | "ObjectEnd"
+                | "ObjectInstance"
+        );
         if world_only && !self.in_world {
             bail!("{at}: {name} must come after WorldBegin");
         }
@@ -181,12 +202,15 @@ impl Reader<'_> {
             }
             "Rotate" => {
                 let v = numbers(t, &at, 4, name)?;
-                let axis = DVec3::new(v[1], v[2], v[3]).try_normalize().ok_or_else(|| anyhow!("{at}: Rotate about a zero axis"))?;
+                let axis = DVec3::new(v[1], v[2], v[3])
+                    .try_normalize()
+                    .ok_or_else(|| anyhow!("{at}: Rotate about a zero axis"))?;
                 self.concat(DMat4::from_axis_angle(axis, v[0].to_radians()));
             }
             "LookAt" => {
                 let v = numbers(t, &at, 9, name)?;
-                let (eye, look, up) = (DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]), DVec3::new(v[6], v[7], v[8]));
+                let (eye, look, up) =
+                    (DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]), DVec3::new(v[6], v[7], v[8]));
                 self.concat(look_at(eye, look, up).map_err(|e| anyhow!("{at}: LookAt: {e}"))?);
             }
             "Transform" | "ConcatTransform" => {
@@ -206,7 +230,10 @@ impl Reader<'_> {
             }
             "CoordSysTransform" => {
                 let n = string(t, &at, name)?;
-                self.state.ctm = *self.coordinate_systems.get(&n).ok_or_else(|| anyhow!("{at}: CoordSysTransform: no coordinate system named \"{n}\""))?;
+                self.state.ctm = *self
+                    .coordinate_systems
+                    .get(&n)
+                    .ok_or_else(|| anyhow!("{at}: CoordSysTransform: no coordinate system named \"{n}\""))?;
             }
             "ReverseOrientation" => self.state.reverse_orientation = !self.state.reverse_orientation,
             "AttributeBegin" => self.push("AttributeBegin", at),
@@ -267,7 +294,8 @@ impl Reader<'_> {
                 let d = directive(t, at.clone(), "MakeNamedMaterial")?;
                 let ty = d.string("type")?.ok_or_else(|| d.error("needs a \"string type\""))?.to_owned();
                 let name = d.kind.clone();
-                if self.model.named_materials.insert(name.clone(), Rc::new(MaterialDef { ty, directive: d })).is_some() {
+                if self.model.named_materials.insert(name.clone(), Rc::new(MaterialDef { ty, directive: d })).is_some()
+                {
                     bail!("{at}: the material \"{name}\" is defined twice");
                 }
             }
@@ -283,7 +311,12 @@ impl Reader<'_> {
                 }
                 let class = directive(t, at.clone(), "Texture")?;
                 let key = (value_type.clone(), tex_name.clone());
-                if self.model.textures.insert(key, Rc::new(TextureDef { name: tex_name.clone(), value_type, class })).is_some() {
+                if self
+                    .model
+                    .textures
+                    .insert(key, Rc::new(TextureDef { name: tex_name.clone(), value_type, class }))
+                    .is_some()
+                {
                     bail!("{at}: the texture \"{tex_name}\" is defined twice");
                 }
             }
@@ -308,7 +341,9 @@ impl Reader<'_> {
                     area_light: self.state.area_light.clone(),
                 };
                 match &mut self.object {
-                    Some(_) if shape.area_light.is_some() => bail!("{at}: an area light inside ObjectBegin (pbrt does not instance area lights)"),
+                    Some(_) if shape.area_light.is_some() => {
+                        bail!("{at}: an area light inside ObjectBegin (pbrt does not instance area lights)")
+                    }
                     Some((_, shapes, _)) => shapes.push(shape),
                     None => self.model.shapes.push(shape),
                 }
@@ -339,7 +374,9 @@ impl Reader<'_> {
                 let file = string(t, &at, name)?;
                 let path = self.resolve(&file);
                 if self.depth >= MAX_INCLUDE_DEPTH {
-                    bail!("{at}: {name} \"{file}\": includes nest more than {MAX_INCLUDE_DEPTH} deep (an include cycle?)");
+                    bail!(
+                        "{at}: {name} \"{file}\": includes nest more than {MAX_INCLUDE_DEPTH} deep (an include cycle?)"
+                    );
                 }
                 // Import is Include whose graphics state does not leak out (pbrt-v4 reads it in
                 // parallel, so its state changes cannot reach the including file).
@@ -366,7 +403,9 @@ impl Reader<'_> {
             "MakeNamedMedium" => bail!("{at}: MakeNamedMedium: participating media are not supported"),
             "Attribute" => bail!("{at}: Attribute (default parameters for a kind of directive) is not supported"),
             "Option" => bail!("{at}: Option is not supported"),
-            "ActiveTransform" | "TransformTimes" => bail!("{at}: {name}: animated transformations (motion blur) are not supported"),
+            "ActiveTransform" | "TransformTimes" => {
+                bail!("{at}: {name}: animated transformations (motion blur) are not supported")
+            }
             _ => bail!("{at}: unknown directive '{name}'"),
         }
         Ok(())
@@ -481,7 +520,9 @@ fn directive(t: &mut Tokens, at: Location, name: &'static str) -> Result<Directi
     while let Some((Token::Quoted(_), _)) = t.peek()? {
         let Some((Token::Quoted(declaration), param_at)) = t.next()? else { unreachable!("peeked a quoted string") };
         let words: Vec<&str> = declaration.split_whitespace().collect();
-        let [ty, param_name] = words[..] else { bail!("{param_at}: {name} \"{kind}\": \"{declaration}\" is not a parameter declaration (\"type name\")") };
+        let [ty, param_name] = words[..] else {
+            bail!("{param_at}: {name} \"{kind}\": \"{declaration}\" is not a parameter declaration (\"type name\")")
+        };
         let values = values(t, &param_at, ty, &declaration)?;
         if params.iter().any(|p| p.name == param_name) {
             bail!("{param_at}: {name} \"{kind}\": the parameter '{param_name}' is given twice");

@@ -8,11 +8,11 @@
 //! vscale v + vdelta) and reads an image at (s, 1 - t) from its top-left. The `to_uv` of each
 //! texture below is that map written in caustica's coordinates.
 
-use crate::scene::format::{AlbedoTextureFile, Array};
 use super::super::scene_parts::{f32x3, relative_to};
 use super::mapping::Mapper;
 use super::params::{Directive, Param};
 use super::parser::TextureDef;
+use crate::scene::format::{AlbedoTextureFile, Array};
 use anyhow::{anyhow, Result};
 use glam::DVec3;
 use std::path::PathBuf;
@@ -25,7 +25,10 @@ const MAX_TEXTURE_DEPTH: usize = 32;
 pub(super) enum TextureValue {
     Constant(DVec3),
     /// `texture` times `factor` (a checkerboard carries its scaled colours, with factor 1).
-    Varying { texture: AlbedoTextureFile, factor: DVec3 },
+    Varying {
+        texture: AlbedoTextureFile,
+        factor: DVec3,
+    },
 }
 
 impl TextureValue {
@@ -56,9 +59,17 @@ impl Mapper<'_> {
     }
 
     /// The value of the texture `name` of `value_type`, which `used_by` refers to.
-    pub(super) fn texture(&mut self, value_type: &str, name: &str, used_by: &Param, depth: usize) -> Result<TextureValue> {
+    pub(super) fn texture(
+        &mut self,
+        value_type: &str,
+        name: &str,
+        used_by: &Param,
+        depth: usize,
+    ) -> Result<TextureValue> {
         if depth > MAX_TEXTURE_DEPTH {
-            return Err(used_by.error(format!("textures refer to each other more than {MAX_TEXTURE_DEPTH} deep (a cycle?)")));
+            return Err(
+                used_by.error(format!("textures refer to each other more than {MAX_TEXTURE_DEPTH} deep (a cycle?)"))
+            );
         }
         let model = self.model;
         let Some(t) = model.textures.get(&(value_type.to_owned(), name.to_owned())) else {
@@ -82,7 +93,9 @@ impl Mapper<'_> {
         // A part that must be constant (a scale, an amount, a checkerboard's squares).
         let constant = |value: TextureValue, name: &str| match value {
             TextureValue::Constant(v) => Ok(v),
-            TextureValue::Varying { .. } => Err(varies(&format!("its {name} varies over the surface; caustica takes it constant here"))),
+            TextureValue::Varying { .. } => {
+                Err(varies(&format!("its {name} varies over the surface; caustica takes it constant here")))
+            }
         };
         match c.kind.as_str() {
             "constant" => get(self, "value", ty, 1.0),
@@ -127,11 +140,17 @@ impl Mapper<'_> {
                 // the same squares: floor(s) is even exactly where frac(s / 2) < 1/2.
                 let (su, sv, du, dv) = uv_mapping(c)?;
                 let to_uv = [[su / 2.0, 0.0, du / 2.0], [0.0, -sv / 2.0, (sv + dv) / 2.0]];
-                let texture = AlbedoTextureFile { file: None, checkerboard: Some(Array([f32x3(a), f32x3(b)])), to_uv: Some(Array(to_uv.map(|r| Array(r.map(|x| x as f32))))) };
+                let texture = AlbedoTextureFile {
+                    file: None,
+                    checkerboard: Some(Array([f32x3(a), f32x3(b)])),
+                    to_uv: Some(Array(to_uv.map(|r| Array(r.map(|x| x as f32))))),
+                };
                 Ok(TextureValue::Varying { texture, factor: DVec3::ONE })
             }
             "imagemap" if ty == "spectrum" => self.imagemap(c),
-            "imagemap" => Err(varies("a float image map varies over the surface; caustica takes float parameters constant")),
+            "imagemap" => {
+                Err(varies("a float image map varies over the surface; caustica takes float parameters constant"))
+            }
             _ => Err(varies("this texture is not supported (constant, scale, mix, checkerboard, imagemap)")),
         }
     }
@@ -166,7 +185,11 @@ impl Mapper<'_> {
         // Read at (s, 1 - t) = (su u + du, 1 - sv (1 - w) - dv) where caustica's w is 1 - v.
         let to_uv = [[su, 0.0, du], [0.0, sv, 1.0 - sv - dv]];
         let identity = to_uv == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
-        let texture = AlbedoTextureFile { file: Some(relative_to(&path, self.base)), checkerboard: None, to_uv: (!identity).then(|| Array(to_uv.map(|r| Array(r.map(|x| x as f32))))) };
+        let texture = AlbedoTextureFile {
+            file: Some(relative_to(&path, self.base)),
+            checkerboard: None,
+            to_uv: (!identity).then(|| Array(to_uv.map(|r| Array(r.map(|x| x as f32))))),
+        };
         Ok(TextureValue::Varying { texture, factor: DVec3::splat(scale) })
     }
 }

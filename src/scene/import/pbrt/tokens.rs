@@ -95,7 +95,10 @@ impl<'t> Tokens<'t> {
             }
             b'"' => Token::Quoted(self.quoted(&at)?),
             _ => {
-                while bytes.get(self.position).is_some_and(|&b| !(b.is_ascii_whitespace() || matches!(b, b'"' | b'[' | b']' | b'#'))) {
+                while bytes
+                    .get(self.position)
+                    .is_some_and(|&b| !(b.is_ascii_whitespace() || matches!(b, b'"' | b'[' | b']' | b'#')))
+                {
                     self.position += 1;
                 }
                 // Stops only at ASCII bytes, so the slice ends on a character boundary.
@@ -110,7 +113,9 @@ impl<'t> Tokens<'t> {
         let mut out = String::new();
         let mut chars = self.text[self.position + 1..].char_indices();
         loop {
-            let Some((i, c)) = chars.next() else { bail!("{at}: unterminated string (the file ends before its closing quote)") };
+            let Some((i, c)) = chars.next() else {
+                bail!("{at}: unterminated string (the file ends before its closing quote)")
+            };
             match c {
                 '"' => {
                     self.position += 1 + i + 1;
@@ -118,7 +123,9 @@ impl<'t> Tokens<'t> {
                 }
                 '\n' => bail!("{at}: unterminated string (a newline before its closing quote)"),
                 '\\' => {
-                    let Some((_, e)) = chars.next() else { bail!("{at}: unterminated string (the file ends in an escape)") };
+                    let Some((_, e)) = chars.next() else {
+                        bail!("{at}: unterminated string (the file ends in an escape)")
+                    };
                     out.push(match e {
                         'n' => '\n',
                         't' => '\t',
@@ -151,12 +158,17 @@ mod tests {
 
     #[test]
     fn words_strings_brackets_and_comments_carry_their_lines() {
-        let tokens = all("LookAt 0 0 5 # a comment \"not a string\n  Shape \"sphere\" \"float radius\" [2.5]\n\"a\\\"b\"").unwrap();
+        let tokens =
+            all("LookAt 0 0 5 # a comment \"not a string\n  Shape \"sphere\" \"float radius\" [2.5]\n\"a\\\"b\"")
+                .unwrap();
         let words: Vec<_> = tokens.iter().map(|(t, l)| (t.describe(), *l)).collect();
         assert_eq!(words[0], ("'LookAt'".to_owned(), 1));
         assert_eq!(words[4], ("'Shape'".to_owned(), 2));
         assert_eq!(tokens[5].0, Token::Quoted("sphere".into()));
-        assert_eq!((&tokens[7].0, &tokens[8].0, &tokens[9].0), (&Token::Open, &Token::Word("2.5".into()), &Token::Close));
+        assert_eq!(
+            (&tokens[7].0, &tokens[8].0, &tokens[9].0),
+            (&Token::Open, &Token::Word("2.5".into()), &Token::Close)
+        );
         assert_eq!(tokens[10], (Token::Quoted("a\"b".into()), 3));
     }
 
