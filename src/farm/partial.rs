@@ -12,9 +12,10 @@
 //! kernel's raw sums, "accumulation.albedo.R/G/B", "accumulation.normal.X/Y/Z" and
 //! "accumulation.depth.Z/hits", so AOVs resume and merge exactly like the beauty.
 
+use crate::image::mean_image;
 use crate::image::{read_exr_document, write_exr_document, ExrDocument, ExrLayer, ImageError, RgbImage};
 use crate::input_file::{InputFiles, InputKind};
-use crate::render::{mean_image, AovSet, AovSums};
+use crate::render::{AovSet, AovSums};
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use std::collections::BTreeMap;
 use std::ops::Range;

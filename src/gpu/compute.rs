@@ -3,7 +3,7 @@
 //! texel.
 
 use super::buffer::{Buffer, BufferKind};
-use super::context::GpuContext;
+use super::context::{DeviceInfo, GpuContext};
 use super::pipeline_statistics::{self, KernelStatistic};
 use anyhow::{anyhow, Context as _, Result};
 use ash::vk;
@@ -43,6 +43,13 @@ impl TexelWords {
             TexelWords::Two => vk::Format::R32G32_UINT,
             TexelWords::Four => vk::Format::R32G32B32A32_UINT,
         }
+    }
+}
+
+impl DeviceInfo {
+    /// Bytes one uniform texel buffer of texels `words` wide can see.
+    pub fn max_texel_buffer_range(&self, words: TexelWords) -> u64 {
+        (self.max_texel_buffer_elements * words.bytes()).min(self.texel_binding_limit)
     }
 }
 

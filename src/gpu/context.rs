@@ -1,6 +1,5 @@
 //! Vulkan instance, physical-device choice, logical device, queue and memory allocator.
 
-use super::compute::TexelWords;
 use super::failure::VulkanError;
 use super::validation::{self, ValidationLog};
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -55,9 +54,9 @@ pub struct DeviceInfo {
     /// measurement ran on, which the device name does not say. Empty on devices below Vulkan 1.2.
     pub driver_name: String,
     pub driver_info: String,
-    /// The driver's identity (VK_KHR_driver_properties; `None` below Vulkan 1.2): kernels that
-    /// rely on how one driver runs them ask it (render/walk_queue.rs).
-    pub driver_id: Option<vk::DriverId>,
+    /// The driver's identity (VK_KHR_driver_properties; `None` below Vulkan 1.2), read through
+    /// [`DeviceInfo::is_lavapipe`]: kernels that rely on how one driver runs them ask it.
+    driver_id: Option<vk::DriverId>,
     /// Bytes of shared memory a workgroup may use (`maxComputeSharedMemorySize`).
     pub max_compute_shared_memory_size: u32,
     /// Invocations in a subgroup (`subgroupSize`, Vulkan 1.1): lavapipe's SIMD width in lanes,
@@ -82,9 +81,10 @@ pub struct DeviceInfo {
 }
 
 impl DeviceInfo {
-    /// Bytes one uniform texel buffer of texels `words` wide can see.
-    pub fn max_texel_buffer_range(&self, words: TexelWords) -> u64 {
-        (self.max_texel_buffer_elements * words.bytes()).min(self.texel_binding_limit)
+    /// Mesa's lavapipe (llvmpipe's Vulkan driver): its kernels run on the CPU, a subgroup one SIMD
+    /// loop, which several kernel choices are tuned for (render/walk_queue.rs, walk_records.rs).
+    pub fn is_lavapipe(&self) -> bool {
+        self.driver_id == Some(vk::DriverId::MESA_LLVMPIPE)
     }
 }
 
@@ -116,8 +116,8 @@ pub struct GpuContext {
     pub info: DeviceInfo,
     /// Nanoseconds per timestamp tick where the compute queue records timestamps, else `None`.
     pub timestamp_period_ns: Option<f64>,
-    /// See [`GpuContext::loop_limit`]; probed on first use.
-    loop_limit: OnceLock<Option<u32>>,
+    /// See [`GpuContext::loop_limit`] (loop_limit.rs); probed on first use.
+    pub(super) loop_limit: OnceLock<Option<u32>>,
     /// Reads what the driver says of each compiled kernel, where the device can
     /// (pipeline_statistics.rs).
     pub(super) pipeline_statistics: Option<ash::khr::pipeline_executable_properties::Device>,
@@ -418,18 +418,6 @@ impl GpuContext {
             loop_limit: OnceLock::new(),
             pipeline_statistics,
         })
-    }
-
-    /// The most loop iterations a shader invocation runs on this device before its loops are
-    /// ended early without an error (llvmpipe before Mesa 24: 65,535), or `None` where loops run
-    /// to their end. Probed once, by a tiny kernel (see loop_limit.rs).
-    pub fn loop_limit(&self) -> Result<Option<u32>> {
-        if let Some(&limit) = self.loop_limit.get() {
-            return Ok(limit);
-        }
-        let limit = super::loop_limit::probe_loop_limit(self)
-            .with_context(|| format!("probing {} for a loop limit", self.info.name))?;
-        Ok(*self.loop_limit.get_or_init(|| limit))
     }
 
     /// Waits until the device has finished everything submitted (before freeing what it uses).

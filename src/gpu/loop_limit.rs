@@ -8,7 +8,7 @@ use super::buffer::{Buffer, BufferKind};
 use super::compute::{Binding, ComputeKernel};
 use super::context::GpuContext;
 use super::shader::compile_compute;
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 
 /// Iterations the probe asks for: above every limit known, and quick on any device.
 const PROBE_ITERATIONS: u32 = 1 << 20;
@@ -23,9 +23,22 @@ void main() {
 }
 ";
 
+impl GpuContext {
+    /// The most loop iterations a shader invocation runs on this device before its loops are
+    /// ended early without an error (llvmpipe before Mesa 24: 65,535), or `None` where loops run
+    /// to their end. Probed once, by the tiny kernel below.
+    pub fn loop_limit(&self) -> Result<Option<u32>> {
+        if let Some(&limit) = self.loop_limit.get() {
+            return Ok(limit);
+        }
+        let limit = probe_loop_limit(self).with_context(|| format!("probing {} for a loop limit", self.info.name))?;
+        Ok(*self.loop_limit.get_or_init(|| limit))
+    }
+}
+
 /// The most loop iterations one invocation of this device runs before its loops are ended, or
 /// `None` when it ran the probe's 2^20 to the end.
-pub fn probe_loop_limit(ctx: &GpuContext) -> Result<Option<u32>> {
+fn probe_loop_limit(ctx: &GpuContext) -> Result<Option<u32>> {
     let counter = Buffer::with_data(ctx, "loop limit probe", BufferKind::HostStorage, &0u32.to_le_bytes())?;
     let result = (|| {
         let kernel = ComputeKernel::new(ctx, &compile_compute(PROBE_SOURCE)?, &[Binding::whole(0, &counter)], 4)?;

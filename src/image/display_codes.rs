@@ -12,8 +12,8 @@
 //! every device does exactly. Non-negative floats order as their bit patterns do, so the
 //! comparison is an integer one, free of any denormal flushing.
 
+use super::mean_image;
 use super::tonemap::{tonemap_srgb8, Tonemap};
-use crate::render::mean_image;
 
 /// Entries of a table: entry k (1..=255) is the threshold of code k; entry 0, the threshold of
 /// code 0, is 0 (every non-negative sum has a code of at least 0).

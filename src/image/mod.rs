@@ -27,6 +27,17 @@ pub use tonemap::Tonemap;
 /// loader reserve gigabytes (2^28 RGB f32 pixels is already 3 GiB).
 pub const MAX_PIXELS: u64 = 1 << 28;
 
+/// Mean radiance from an accumulation of (sum, count) pixels, the kernel's accumulation buffer and
+/// a farm part's sums alike; pixels without samples are black.
+pub fn mean_image(width: u32, height: u32, accumulation: &[[f32; 4]]) -> RgbImage {
+    let mut image = RgbImage::new(width, height);
+    for (dst, a) in image.pixels.iter_mut().zip(accumulation) {
+        let n = a[3].max(1.0);
+        *dst = [a[0] / n, a[1] / n, a[2] / n];
+    }
+    image
+}
+
 /// Linear RGB float image, rows top to bottom, row-major.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbImage {

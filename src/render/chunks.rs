@@ -8,16 +8,13 @@
 //! non-uniform index, so the windows are separate bindings chosen by a `switch`; with one window
 //! (the usual case) the accessor is a plain load.
 
-use super::bindings::{BufferBinding, Element, KernelBuffer};
+use super::bindings::{BufferBinding, Element, KernelBuffer, EXTRA_BINDING_BASE};
 use super::glsl_block::Texel;
 use anyhow::{bail, Result};
 use std::ops::{Index, IndexMut};
 
 /// Most windows one array may have.
 pub const MAX_CHUNKS: u32 = 8;
-/// Bindings of windows past the first: the array that [`KernelBuffer`] `k` names uses
-/// `EXTRA_BINDING_BASE + MAX_CHUNKS * k + (window - 1)`, clear of the table's own bindings.
-pub const EXTRA_BINDING_BASE: u32 = 64;
 
 /// How one array is split: `chunks` windows of `1 << shift` elements (the last one shorter).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -31,8 +31,7 @@ pub const FEW_PRIMITIVES: usize = 32;
 /// the selects gain 1.14x on the Cornell box's 9 shapes, are level at 17 and lose 0.90x at 31.
 pub const FEW_SHAPE_SELECTS: usize = 12;
 
-/// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl).
-pub const ALPHA_DELTA: f32 = 1e-3;
+pub use crate::scene::ALPHA_DELTA;
 
 /// The kinds (PRIM_*) of a scene's few shapes in the order they are stored: its rays test them as
 /// straight-line code, each shape by its own kind's test, before walking any mesh (bvh.glsl,

@@ -126,7 +126,6 @@ pub fn alias_table(weights: &[f64]) -> Vec<GpuAliasEntry> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Conductor;
     use glam::Vec3;
 
     /// The probability of each index that the table gives: (its kept share + the shares others
@@ -197,24 +196,9 @@ mod tests {
         Material {
             name: "lamp".into(),
             albedo: Vec3::ZERO,
-            reflectivity: 0.0,
-            transparency: 0.0,
-            ior: 1.5,
             emission: Vec3::from(emission),
             two_sided,
-            albedo_texture: None,
-            roughness: 0.0,
-            roughness_v: None,
-            conductor: Conductor::Mirror,
-            coat: false,
-            coat_internal_reflections: false,
-            microfacet: Default::default(),
-            thin: false,
-            one_sided: false,
-            metallic_roughness: None,
-            maps: Default::default(),
-            clearcoat: None,
-            attenuation: None,
+            ..Default::default()
         }
     }
 

@@ -12,19 +12,20 @@ use super::bindings::{self, BufferBinding, KernelBuffer, Shape};
 use super::chunks::{self, SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::group_order::GroupOrder;
-use super::kernel::{kernel_spirv, KernelVariant};
+use super::kernel::kernel_spirv;
 use super::layout::{
     FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES,
     LOOP_CHECK_ITERATIONS, SAMPLER_INDEPENDENT, SAMPLER_SOBOL,
 };
 use super::scene_data::SceneData;
 use super::tile_taking;
+use super::variant::KernelVariant;
 use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
 use super::wavefront::{self, WavefrontKernels, WavefrontStage};
 use super::workgroup::Workgroup;
 use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic};
-use crate::image::RgbImage;
+use crate::image::{mean_image, RgbImage};
 use crate::scene::{Camera, Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
 use bytemuck::Zeroable;
@@ -164,8 +165,9 @@ pub struct GeometryReport {
     pub split_arrays: Vec<(&'static str, u32)>,
 }
 
-/// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so).
-pub const TEXTURE_BUDGET_BYTES: u64 = 512 << 20;
+/// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so). The same
+/// bound caps one decoded texture (a larger one could never be uploaded whole).
+pub const TEXTURE_BUDGET_BYTES: u64 = crate::scene::MAX_TEXTURE_BYTES;
 
 /// The statistics buffer's contents at the start of every dispatch.
 const CLEARED_STATS: GpuStats = GpuStats {
@@ -1012,16 +1014,6 @@ impl<'a> Renderer<'a> {
     pub fn image(&self) -> Result<RgbImage> {
         Ok(mean_image(self.width, self.height, &self.accumulation()?))
     }
-}
-
-/// Mean radiance from an accumulation of (sum, count) pixels; pixels without samples are black.
-pub fn mean_image(width: u32, height: u32, accumulation: &[[f32; 4]]) -> RgbImage {
-    let mut image = RgbImage::new(width, height);
-    for (dst, a) in image.pixels.iter_mut().zip(accumulation) {
-        let n = a[3].max(1.0);
-        *dst = [a[0] / n, a[1] / n, a[2] / n];
-    }
-    image
 }
 
 impl Drop for Renderer<'_> {

@@ -26,7 +26,6 @@ use super::layout::{GpuInstance, INSTANCE_PRIMITIVES};
 use crate::bvh::{WideNode, CHILD_NONE, WIDTH};
 use crate::gpu::DeviceInfo;
 use anyhow::{bail, Result};
-use ash::vk;
 
 /// The queue a kernel is compiled with: `QUEUE_WALKS_PER_RAY` of walk_queue.glsl.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -97,7 +96,7 @@ impl WalkQueue {
         instances: &[GpuInstance],
     ) -> Result<Option<WalkQueue>> {
         let request = Request::from_env()?;
-        let lavapipe = device.driver_id == Some(vk::DriverId::MESA_LLVMPIPE);
+        let lavapipe = device.is_lavapipe();
         if request == Request::Off || (request == Request::Default && !lavapipe) {
             return Ok(None);
         }

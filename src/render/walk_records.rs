@@ -21,7 +21,6 @@
 
 use crate::gpu::DeviceInfo;
 use anyhow::{bail, Result};
-use ash::vk;
 
 /// Names the environment variable that picks the form on any device.
 pub const WALK_RECORDS_VAR: &str = "CAUSTICA_WALK_RECORDS";
@@ -39,7 +38,7 @@ impl WalkRecords {
     /// The form for `device`; an error where [`WALK_RECORDS_VAR`] holds anything but `texels` or
     /// `storage`.
     pub fn for_device(device: &DeviceInfo) -> Result<WalkRecords> {
-        let lavapipe = device.driver_id == Some(vk::DriverId::MESA_LLVMPIPE);
+        let lavapipe = device.is_lavapipe();
         let storage_faster = lavapipe && mesa_major(&device.driver_info) == Some(25) && cpu_is_amd();
         decide(std::env::var(WALK_RECORDS_VAR).ok().as_deref(), storage_faster)
     }

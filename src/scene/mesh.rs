@@ -1,9 +1,9 @@
 //! Meshes in a scene: shared triangle geometry, its placements (instances), and the import of
 //! mesh files (OBJ + MTL, PLY, glTF) into the scene's materials, meshes and textures.
 
-use super::asset::{self, Asset, AssetMaterial};
+use super::asset::{self, Asset};
 use super::format::InlineMesh;
-use super::{Light, Material, MetallicRoughness, Microfacet, Scene};
+use super::{Light, Material, MetallicRoughness, Scene};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Context as _, Result};
 use glam::{Affine2, Mat4, Vec2, Vec3, Vec4};
@@ -269,9 +269,9 @@ fn add_asset(scene: &mut Scene, path: &Path, asset: Asset, material: Option<u32>
     Ok(asset.instances.iter().map(|&(mesh, local)| (mesh_base + mesh as u32, local)).collect())
 }
 
-/// A file's material in the scene's model; albedo above 1 (some MTL files have it) is clamped so
-/// no surface creates energy.
-fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base: u32) -> Result<Material> {
+/// A file's material placed in the scene: named after its file, its textures rebased onto the
+/// scene's, its albedo above 1 (some MTL files have it) clamped so no surface creates energy.
+fn scene_material(path: &Path, file_name: &str, m: &Material, texture_base: u32) -> Result<Material> {
     let values = [m.albedo.to_array(), m.emission.to_array()].concat();
     if values.iter().chain([m.reflectivity, m.transparency, m.ior, m.roughness].iter()).any(|v| !v.is_finite())
         || m.albedo.min_element() < 0.0
@@ -282,25 +282,13 @@ fn scene_material(path: &Path, file_name: &str, m: &AssetMaterial, texture_base:
     Ok(Material {
         name: format!("{file_name}:{}", m.name),
         albedo: m.albedo.min(Vec3::ONE),
-        reflectivity: m.reflectivity,
-        transparency: m.transparency,
-        ior: m.ior,
-        emission: m.emission,
-        two_sided: false,
-        albedo_texture: m.albedo_texture.map(|t| texture_base + t as u32),
+        albedo_texture: m.albedo_texture.map(|t| texture_base + t),
         roughness: m.roughness.clamp(0.0, 1.0),
-        roughness_v: None,
-        conductor: m.conductor,
-        coat: m.coat,
-        coat_internal_reflections: false,
-        microfacet: Microfacet::Ggx,
-        thin: false,
-        one_sided: false,
         metallic_roughness: m
             .metallic_roughness
             .map(|mr| MetallicRoughness { texture: texture_base + mr.texture, ..mr }),
         maps: m.maps.rebased(texture_base),
         clearcoat: m.clearcoat.map(|c| c.rebased(texture_base)),
-        attenuation: m.attenuation,
+        ..m.clone()
     })
 }

@@ -15,6 +15,7 @@ mod toml_error;
 
 pub use asset::{
     downsample_to_fit, load_asset, load_asset_from, load_asset_part, srgb_to_linear, Asset, AssetError, Wrap,
+    MAX_TEXTURE_BYTES,
 };
 pub use camera_toml::camera_toml;
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
@@ -24,7 +25,6 @@ pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Sides, Texture};
 pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 
 use crate::input_file::{InputFiles, InputKind};
-use crate::render::ALPHA_DELTA;
 use anyhow::{bail, Context as _, Result};
 use format::{
     Array, CameraFile, FilmFile, IntegratorFile, MaterialFile, MeshFile, Placement, Scale, SceneFile, Triple,
@@ -77,6 +77,18 @@ pub struct Integrator {
     pub light_selection: LightSelection,
 }
 
+/// GGX alpha below which a lobe is smooth, a delta lobe (`ALPHA_DELTA` of shaders/microfacet.glsl):
+/// the scene clamps anisotropic alphas to it, and the kernel's specialization (render::features)
+/// compiles rough lobes in for materials at or above it.
+pub const ALPHA_DELTA: f32 = 1e-3;
+
+/// The one material model inside caustica: the TOML scene format, the importers and the mesh
+/// loaders all produce it (their own file structs stay at the edges: format.rs's `MaterialFile`,
+/// glTF's and MTL's), and render/scene_data.rs packs it for the kernel. A base (diffuse, or a
+/// plastic when `coat`) that is, per bounce, replaced with probability `reflectivity` by a
+/// reflector (mirror or conductor) and with probability `transparency` by a Fresnel dielectric,
+/// each GGX-rough by `roughness`. `Material::default()` is 0.8 grey diffuse, the material of
+/// faces that name none; build others as `Material { albedo, ..Default::default() }`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -117,6 +129,33 @@ pub struct Material {
     pub clearcoat: Option<Clearcoat>,
     /// Absorption inside the material, a dielectric (`transparency` > 0); None: clear.
     pub attenuation: Option<Attenuation>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: "default".to_owned(),
+            albedo: Vec3::splat(0.8),
+            reflectivity: 0.0,
+            transparency: 0.0,
+            ior: 1.5,
+            emission: Vec3::ZERO,
+            two_sided: false,
+            albedo_texture: None,
+            roughness: 0.0,
+            roughness_v: None,
+            conductor: Conductor::Mirror,
+            coat: false,
+            coat_internal_reflections: false,
+            microfacet: Microfacet::Ggx,
+            thin: false,
+            one_sided: false,
+            metallic_roughness: None,
+            maps: TextureMaps::default(),
+            clearcoat: None,
+            attenuation: None,
+        }
+    }
 }
 
 /// glTF's clear coat (`KHR_materials_clearcoat`): a smooth or GGX-rough dielectric layer of index
@@ -587,7 +626,6 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         ior: finite(&key("ior"), m.ior)?,
         emission: non_negative3(&key("emission"), m.emission)?,
         two_sided: m.two_sided,
-        albedo_texture: None,
         roughness: unit_interval(&key("roughness"), m.roughness)?,
         roughness_v: m.roughness_v.map(|r| unit_interval(&key("roughness_v"), r)).transpose()?,
         conductor,
@@ -596,10 +634,10 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
         microfacet: m.distribution,
         thin: m.thin,
         one_sided: m.one_sided,
-        metallic_roughness: None,
-        maps: TextureMaps::default(),
         clearcoat: clearcoat_from(m, &key)?,
         attenuation: attenuation_from(m, &key)?,
+        // Textures come from the scene's `albedo_texture` table below and from mesh files.
+        ..Material::default()
     };
     if material.coat_internal_reflections && !material.coat {
         bail!("{} needs coat = true (it describes the coat of a plastic)", key("coat_internal_reflections"));

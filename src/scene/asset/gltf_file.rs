@@ -37,7 +37,7 @@
 //!   `attenuationDistance` (world units) as Beer–Lambert absorption along each path inside.
 //!   `thicknessFactor` and `thicknessTexture` are ignored: they stand in for the thickness a
 //!   rasterizer cannot trace, and a path tracer has the real one.
-//! - Primitives without a material get [`AssetMaterial::default_grey`].
+//! - Primitives without a material get [`Material::default`] (0.8 grey diffuse).
 //!
 //! `KHR_lights_punctual` lights become [`Light`]s, converted from glTF's photometric units to
 //! caustica's radiometric ones at 683 lm/W (the luminous efficacy that defines the candela):
@@ -71,8 +71,8 @@ use gltf::{Document, Semantic};
 
 use super::gltf_accessors::AccessorLimits;
 use super::{
-    texture, unit_normals, Alpha, AlphaMode, Asset, AssetCamera, AssetError, AssetMaterial, Attenuation, Clearcoat,
-    Conductor, Light, MeshData, MetallicRoughness, NormalMap, TextureMaps, Wrap,
+    texture, unit_normals, Alpha, AlphaMode, Asset, AssetCamera, AssetError, Attenuation, Clearcoat, Conductor, Light,
+    Material, MeshData, MetallicRoughness, NormalMap, TextureMaps, Wrap,
 };
 use crate::input_file::{InputFiles, InputKind};
 
@@ -552,7 +552,7 @@ fn convert_material(
     sources: &Sources,
     decoded_images: &mut DecodedImages,
     asset: &mut Asset,
-) -> Result<(AssetMaterial, MaterialUvs), String> {
+) -> Result<(Material, MaterialUvs), String> {
     let index = material.index().unwrap_or(0);
     let pbr = material.pbr_metallic_roughness();
     let [r, g, b, opacity] = pbr.base_color_factor();
@@ -620,10 +620,10 @@ fn convert_material(
     if !uvs.mapping.transform.is_finite() {
         return Err(format!("material {index}: KHR_texture_transform is not finite"));
     }
-    let converted = AssetMaterial {
+    let converted = Material {
         name: material.name().map_or_else(|| format!("material {index}"), str::to_owned),
         albedo: Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE),
-        albedo_texture,
+        albedo_texture: albedo_texture.map(|t| t as u32),
         emission: emission.max(Vec3::ZERO),
         reflectivity: metallic,
         transparency: (1.0 - metallic) * transmission,
@@ -635,6 +635,7 @@ fn convert_material(
         maps: TextureMaps { emission: emission_texture, normal, alpha },
         clearcoat,
         attenuation,
+        ..Material::default()
     };
     Ok((converted, uvs))
 }
@@ -684,7 +685,7 @@ fn convert_mesh(
     mesh: &gltf::Mesh,
     uv_mappings: &[UvMapping],
     limits: &mut AccessorLimits,
-    materials: &mut Vec<AssetMaterial>,
+    materials: &mut Vec<Material>,
     default_material: &mut Option<u32>,
     skipped_primitives: &mut usize,
 ) -> Result<MeshData, String> {
@@ -760,7 +761,7 @@ fn convert_mesh(
         let material = match primitive.material().index() {
             Some(m) => m as u32,
             None => *default_material.get_or_insert_with(|| {
-                materials.push(AssetMaterial::default_grey());
+                materials.push(Material::default());
                 materials.len() as u32 - 1
             }),
         };
@@ -1027,7 +1028,7 @@ mod tests {
             "metallic 1 covers the surface: its transmission 0.5 weighs (1 - metallic) x 0.5 = 0"
         );
         assert_eq!((glass.conductor, glass.coat), (Conductor::Albedo, true));
-        assert_eq!(asset.materials[1], AssetMaterial::default_grey());
+        assert_eq!(asset.materials[1], Material::default());
         assert_eq!(glass.albedo_texture, Some(0));
         assert_eq!(glass.maps.emission, Some(0), "the emissive texture is image 0 as colour, decoded once for both");
         assert_eq!(

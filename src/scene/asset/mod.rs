@@ -10,9 +10,11 @@ mod serialized;
 mod tangents;
 mod texture;
 
-pub use texture::{downsample_to_fit, load_texture, srgb_to_linear};
+pub use texture::{downsample_to_fit, load_texture, srgb_to_linear, MAX_TEXTURE_BYTES};
 
-use super::{Alpha, AlphaMode, Attenuation, Clearcoat, Conductor, Light, MetallicRoughness, NormalMap, TextureMaps};
+use super::{
+    Alpha, AlphaMode, Attenuation, Clearcoat, Conductor, Light, Material, MetallicRoughness, NormalMap, TextureMaps,
+};
 use crate::input_file::{InputError, InputFiles};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::{Path, PathBuf};
@@ -21,7 +23,9 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Default)]
 pub struct Asset {
     pub meshes: Vec<MeshData>,
-    pub materials: Vec<AssetMaterial>,
+    /// The scene's material model, with texture indices into `textures` (mesh.rs rebases them
+    /// into the scene's).
+    pub materials: Vec<Material>,
     pub textures: Vec<TextureImage>,
     /// Placements of meshes: (index into meshes, object-to-world transform). OBJ and PLY give one
     /// instance of their single mesh with the identity; glTF gives one per node that has a mesh,
@@ -52,61 +56,6 @@ pub struct MeshData {
     pub triangles: Vec<[u32; 3]>,
     /// One per triangle: index into [`Asset::materials`].
     pub triangle_materials: Vec<u32>,
-}
-
-/// The renderer's material model: a base (diffuse, or a plastic when `coat`) that is, per bounce,
-/// replaced with probability `reflectivity` by a reflector (mirror or conductor) and with
-/// probability `transparency` by a Fresnel dielectric, both GGX-rough by `roughness`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AssetMaterial {
-    pub name: String,
-    /// Linear RGB.
-    pub albedo: Vec3,
-    /// Index into [`Asset::textures`]; multiplies `albedo`.
-    pub albedo_texture: Option<usize>,
-    /// Linear radiance.
-    pub emission: Vec3,
-    /// R: probability of a perfect mirror bounce.
-    pub reflectivity: f32,
-    /// T: probability of a Fresnel dielectric event; R + T <= 1.
-    pub transparency: f32,
-    pub ior: f32,
-    /// Perceptual GGX roughness in [0, 1] of the R and T lobes and the coat.
-    pub roughness: f32,
-    /// Fresnel of the R lobe.
-    pub conductor: Conductor,
-    /// The base is the albedo under a dielectric coat of index `ior` (a plastic).
-    pub coat: bool,
-    /// glTF: R, T and roughness per texel from a texture (its index into [`Asset::textures`]).
-    pub metallic_roughness: Option<MetallicRoughness>,
-    /// Emission, normal and alpha textures (indices into [`Asset::textures`]).
-    pub maps: TextureMaps,
-    /// glTF `KHR_materials_clearcoat` (texture indices into [`Asset::textures`]).
-    pub clearcoat: Option<Clearcoat>,
-    /// glTF `KHR_materials_volume`: absorption inside (a transmissive material only).
-    pub attenuation: Option<Attenuation>,
-}
-
-impl AssetMaterial {
-    /// The material of faces that name none: 0.8 grey diffuse.
-    pub fn default_grey() -> Self {
-        AssetMaterial {
-            name: "default".to_owned(),
-            albedo: Vec3::splat(0.8),
-            albedo_texture: None,
-            emission: Vec3::ZERO,
-            reflectivity: 0.0,
-            transparency: 0.0,
-            ior: 1.5,
-            roughness: 0.0,
-            conductor: Conductor::Mirror,
-            coat: false,
-            metallic_roughness: None,
-            maps: TextureMaps::default(),
-            clearcoat: None,
-            attenuation: None,
-        }
-    }
 }
 
 /// An 8-bit RGBA texture as stored in the file, top row first.
@@ -257,7 +206,7 @@ pub fn ensure_tangents(mesh: &mut MeshData) -> Result<(), &'static str> {
 /// Wraps a single object-space mesh (OBJ, PLY) as an asset with one identity instance.
 fn single_mesh_asset(
     mesh: MeshData,
-    materials: Vec<AssetMaterial>,
+    materials: Vec<Material>,
     textures: Vec<TextureImage>,
     dropped_triangles: usize,
 ) -> Asset {

@@ -1,6 +1,6 @@
 //! Wavefront OBJ with its MTL material library, via tobj.
 //!
-//! MTL → [`AssetMaterial`] mapping:
+//! MTL → [`Material`] mapping:
 //! - `Kd` → albedo (0.8 grey when missing), clamped to [0, 1]; `map_Kd` → albedo texture, a path
 //!   relative to the OBJ's directory (options such as `-bm 1` before the name are skipped).
 //! - `norm`, else `map_Bump` / `bump` → a tangent-space normal map (linear; `-bm` its scale) read
@@ -17,7 +17,7 @@
 //!   opaque (exporters write them for opaque surfaces). Such a material has no alpha.
 //! - `Ni` → ior, 1.5 when missing or not positive. R + T <= 1 is kept by lowering R.
 //!
-//! Faces without a material get [`AssetMaterial::default_grey`].
+//! Faces without a material get [`Material::default`] (0.8 grey diffuse).
 //!
 //! tobj parses bytes that [`InputFiles`] read (the OBJ and each `mtllib`), never a path: its own
 //! file reading would skip the checks on devices, sizes and `--confine`.
@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::{
-    single_mesh_asset, texture, unit_normals, Alpha, AlphaMode, Asset, AssetError, AssetMaterial, MeshData, NormalMap,
+    single_mesh_asset, texture, unit_normals, Alpha, AlphaMode, Asset, AssetError, Material, MeshData, NormalMap,
     TextureImage, TextureMaps,
 };
 use crate::input_file::{InputError, InputFiles, InputKind};
@@ -91,7 +91,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
                 ));
             }
             None => *default_material.get_or_insert_with(|| {
-                materials.push(AssetMaterial::default_grey());
+                materials.push(Material::default());
                 materials.len() as u32 - 1
             }),
         };
@@ -209,7 +209,7 @@ fn map_option(map: &str, name: &str) -> Option<String> {
     words.next().map(str::to_owned)
 }
 
-fn convert_material(path: &Path, m: &tobj::Material, textures: &mut Textures) -> Result<AssetMaterial, AssetError> {
+fn convert_material(path: &Path, m: &tobj::Material, textures: &mut Textures) -> Result<Material, AssetError> {
     let bad = |what: &str| AssetError::invalid(path, format!("material '{}': {what}", m.name));
     let vec3 = |v: Option<[f32; 3]>| v.map(Vec3::from_array);
     if [m.ambient, m.diffuse, m.specular, m.emissive].iter().flatten().flatten().any(|c| !c.is_finite())
@@ -296,16 +296,16 @@ fn convert_material(path: &Path, m: &tobj::Material, textures: &mut Textures) ->
         }
         None => None,
     };
-    Ok(AssetMaterial {
+    Ok(Material {
         name: m.name.clone(),
         albedo: vec3(m.diffuse).unwrap_or(Vec3::splat(0.8)).clamp(Vec3::ZERO, Vec3::ONE),
-        albedo_texture,
+        albedo_texture: albedo_texture.map(|t| t as u32),
         emission: emission.max(Vec3::ZERO),
         reflectivity: reflectivity.clamp(0.0, 1.0 - transparency),
         transparency,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(1.5),
         maps: TextureMaps { emission: emission_texture, normal, alpha },
-        ..AssetMaterial::default_grey()
+        ..Material::default()
     })
 }
 
@@ -406,7 +406,7 @@ Tr 0.6
     fn faces_without_material_get_the_default_and_degenerate_ones_are_dropped() {
         let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n";
         let asset = load_asset(&write_obj("obj-default", obj, "")).unwrap();
-        assert_eq!(asset.materials, vec![AssetMaterial::default_grey()]);
+        assert_eq!(asset.materials, vec![Material::default()]);
         assert_eq!(asset.meshes[0].triangle_materials, vec![0]);
         assert_eq!(asset.dropped_triangles, 1);
         assert!(asset.meshes[0].normals.is_empty() && asset.meshes[0].uvs.is_empty());
@@ -447,7 +447,7 @@ Tr 0.6
             return;
         };
         let asset = load_asset(&path).unwrap();
-        let lights: Vec<&AssetMaterial> = asset.materials.iter().filter(|m| m.emission.max_element() > 0.0).collect();
+        let lights: Vec<&Material> = asset.materials.iter().filter(|m| m.emission.max_element() > 0.0).collect();
         assert_eq!(lights.len(), 1, "{lights:?}");
         println!("{}: {} triangles, light {:?}", path.display(), asset.meshes[0].triangles.len(), lights[0].emission);
 

@@ -13,7 +13,7 @@ use ply_rs_bw::ply::{
     ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
 };
 
-use super::{single_mesh_asset, unit_normals, Asset, AssetError, AssetMaterial, MeshData};
+use super::{single_mesh_asset, unit_normals, Asset, AssetError, Material, MeshData};
 use crate::input_file::{InputFiles, InputKind};
 
 /// Loads a PLY file as one mesh with the default material.
@@ -100,7 +100,7 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<Asset, AssetError> {
         }
     }
     dropped += mesh.drop_degenerate();
-    Ok(single_mesh_asset(mesh, vec![AssetMaterial::default_grey()], Vec::new(), dropped))
+    Ok(single_mesh_asset(mesh, vec![Material::default()], Vec::new(), dropped))
 }
 
 /// Rejects headers whose element counts cannot fit in the bytes that follow, before anything is
@@ -297,7 +297,7 @@ end_header
         assert_eq!(mesh.normals, vec![Vec3::Z; 5]);
         assert_eq!(mesh.uvs[1], Vec2::new(1.0, 1.0), "v is flipped");
         assert_eq!(mesh.positions[4], Vec3::Z);
-        assert_eq!(asset.materials, vec![AssetMaterial::default_grey()]);
+        assert_eq!(asset.materials, vec![Material::default()]);
     }
 
     #[test]

@@ -17,7 +17,7 @@ use std::path::Path;
 use flate2::read::ZlibDecoder;
 use glam::{Vec2, Vec3};
 
-use super::{single_mesh_asset, unit_normals, Asset, AssetError, AssetMaterial, MeshData};
+use super::{single_mesh_asset, unit_normals, Asset, AssetError, Material, MeshData};
 use crate::input_file::{InputFiles, InputKind};
 
 const MAGIC: u16 = 0x041C;
@@ -37,7 +37,7 @@ pub(super) fn load(files: &InputFiles, path: &Path, shape_index: u32) -> Result<
         .map_err(|message| AssetError::invalid(path, format!("shape_index {shape_index}: {message}")))?;
     let mut mesh = mesh;
     let dropped = mesh.drop_degenerate();
-    Ok(single_mesh_asset(mesh, vec![AssetMaterial::default_grey()], Vec::new(), dropped))
+    Ok(single_mesh_asset(mesh, vec![Material::default()], Vec::new(), dropped))
 }
 
 /// Mesh `shape_index` of a whole `.serialized` file's bytes; the error is the reason alone.

@@ -16,7 +16,6 @@ use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, 
 use super::super::{spectrum, transform, Location, Notes};
 use super::params::Directive;
 use super::parser::{MaterialRef, Model, ShapeUse};
-use super::textures::TextureValue;
 use crate::image::RgbImage;
 use crate::input_file::InputFiles;
 use crate::scene::equal_area_map;
@@ -488,9 +487,7 @@ impl Mapper<'_> {
         };
         let (opacity, texture) = match image {
             Some(t) => {
-                let TextureValue::Varying { texture, factor } = self.imagemap(&t.class)? else {
-                    unreachable!("an imagemap varies")
-                };
+                let (texture, factor) = self.imagemap_file(&t.class)?;
                 t.class.check_all_used()?;
                 let file = texture.file.expect("an imagemap has a file");
                 (factor.x, Some(ImageTextureFile { file, to_uv: texture.to_uv, encoding: Some(Encoding::Srgb) }))

@@ -156,6 +156,14 @@ impl Mapper<'_> {
     }
 
     /// An `imagemap`: its image read at pbrt's (s, 1 - t), times its `scale`.
+    /// An `imagemap` texture's image, and the factor that scales it.
+    pub(super) fn imagemap_file(&mut self, c: &Directive) -> Result<(AlbedoTextureFile, DVec3)> {
+        match self.imagemap(c)? {
+            TextureValue::Varying { texture, factor } => Ok((texture, factor)),
+            TextureValue::Constant(_) => unreachable!("an imagemap varies"),
+        }
+    }
+
     pub(super) fn imagemap(&mut self, c: &Directive) -> Result<TextureValue> {
         let Some(name) = c.string("filename")?.map(str::to_owned) else { return Err(c.error("needs a filename")) };
         let (path, extension) = self.texture_image(c, &name)?;
