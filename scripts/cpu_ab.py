@@ -12,7 +12,7 @@ and a round's figure the ratio B / A. The script prints each round's ratio and t
 geometric mean.
 
 Why at the same time: the shared 2-core machines this project is measured on drift by 10-30 %
-within seconds (docs/benchmarks.md), so an A/B of runs one after the other reads the drift as
+within seconds (docs/benchmarks/history.md), so an A/B of runs one after the other reads the drift as
 often as the change. Two processes running side by side see the same drift; each gets about
 half the cores, so the ratio is that of the work each kernel does per CPU-second. It is not a
 wall-clock figure: a change that only keeps the device's threads busier (the tiles of
@@ -35,7 +35,7 @@ import sys
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
-# Named scenes: the mesh box and mesh under a sky (docs/benchmarks.md) and the Cornell box.
+# Named scenes: the mesh box and mesh under a sky (docs/benchmarks/history.md) and the Cornell box.
 SCENES = {"mesh": "scenes/bunny_cornell.toml", "sky": "scenes/bunny_sky.toml", "box": "scenes/cornell.toml"}
 # A render's summary line: "wrote FILE (WxH, N spp ...".
 RENDERED = re.compile(r"\(\d+x\d+, (\d+) spp")

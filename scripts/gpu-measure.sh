@@ -1,6 +1,15 @@
 #!/usr/bin/env bash
-# The speed issue's GPU measurements in one run, for a session that is lent a GPU machine for a
-# few minutes (no cargo, no network there). Prepare here:
+# caustica's speed on a GPU, in one run: the device list and `nvidia-smi`, `bench --suite` at
+# 1024x768 (each scene's kernel specialized to it), smallpt's Cornell box (the anchor scene) at
+# 1024x768 and 256 spp, the A/Bs the kernel has switches for (the general kernel against the
+# specialized one, workgroup row order), each as `bench --json`, small renders to check by eye and
+# against lavapipe's images, and, where Mitsuba 3 is at hand, `scripts/mitsuba_compare.py --variant
+# cuda_ad_rgb` per scene on the same GPU. Rates come from the device's own timestamps
+# (`samples_per_gpu_second`).
+#
+# What it needs: a built caustica (`.run/caustica`, else `target/release/caustica`; CAUSTICA=PATH
+# overrides); neither cargo nor a network. A machine without the Vulkan loader needs the debs
+# below unpacked. Prepare both on a machine with cargo and apt:
 #   echo /.gl/ >> .git/info/exclude; echo /.run/ >> .git/info/exclude; mkdir -p .gl .run
 #   (cd .gl && apt-get download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
 #        # the Vulkan loader, and glvnd, without which NVIDIA's driver (libGLX_nvidia) creates no
@@ -12,22 +21,19 @@
 #   mitsuba.tar.xz  Mitsuba 3 and Dr.Jit for the machine's python3, unpacked from their wheels (the
 #                   variants and plugins this comparison does not use may be left out), so Mitsuba's
 #                   `cuda_ad_rgb` renders the same scenes on the same GPU in the same run
-# then run there, carrying .gl and .run:
+# then, on the GPU machine, with .gl and .run beside the tree:
 #   for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig; bash scripts/gpu-measure.sh
-# Everything goes to $OUT (default ./gpu-out) as one archive, results.tar.gz (the device hands back
-# few files), plus log.txt: the device list, `nvidia-smi`, the suite at 1024x768 (the issue's size),
-# the smallpt anchor scene at 1024x768, 256 spp, the A/Bs the kernel has switches for (general
-# kernel, workgroup row order), each as `bench --json`, small renders to check by eye and against
-# lavapipe's, and with Mitsuba, `scripts/mitsuba_compare.py --variant cuda_ad_rgb` per scene.
-# Rates come from the device's own timestamps (`samples_per_gpu_second`). SIZE=WxH and SPP shrink
-# it for a dry run on lavapipe; MITSUBA_VARIANT=llvm_ad_rgb tries the comparison on a CPU; STEPS
-# (default "caustica mitsuba") picks the parts to run; "workgroups" is the A/B of the kernel's
-# workgroup shapes (CAUSTICA_WORKGROUP), the suite and the anchor scene with each; "queue" the A/B
-# of the walk queue (CAUSTICA_WALK_QUEUE=1: on a GPU, with subgroup barriers) against the plain
-# kernel, the suite and the anchor scene each way, and the mesh box's image with the queue, to
-# check against lavapipe's; "wavefront" the same A/B of the wavefront's kernels (CAUSTICA_WAVEFRONT=1)
-# against the megakernel; "tiles" the same A/B of subgroups taking their tiles from a counter
-# (CAUSTICA_TAKE_TILES=1); "shaders" runs each .run/shaders-NAME/ folder (CAUSTICA_SHADER_DIR).
+#
+# Everything goes to $OUT (default ./gpu-out) as one archive, results.tar.gz, plus log.txt.
+# SIZE=WxH and SPP shrink it for a dry run on lavapipe; MITSUBA_VARIANT=llvm_ad_rgb tries the
+# comparison on a CPU; STEPS (default "caustica mitsuba") picks the parts to run: "workgroups" is the
+# A/B of the kernel's workgroup shapes (CAUSTICA_WORKGROUP), the suite and the anchor scene with
+# each; "queue" the A/B of the walk queue (CAUSTICA_WALK_QUEUE=1: on a GPU, with subgroup barriers)
+# against the plain kernel, the suite and the anchor scene each way, and the mesh box's image with
+# the queue, to check against lavapipe's; "wavefront" the same A/B of the wavefront's kernels
+# (CAUSTICA_WAVEFRONT=1) against the megakernel; "tiles" the same A/B of subgroups taking their
+# tiles from a counter (CAUSTICA_TAKE_TILES=1); "shaders" runs each .run/shaders-NAME/ folder
+# (CAUSTICA_SHADER_DIR).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"

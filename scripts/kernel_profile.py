@@ -22,7 +22,7 @@ the kernel does not run in the process. The driver is the one the environment se
 (VK_DRIVER_FILES; source `.lavapipe/env` for Mesa 25); the meshes' scenes need $CAUSTICA_DATA
 (default ../shared/data).
 
-Why it is built this way, and what Mesa 25.0.7 showed (docs/benchmarks.md, stop 41): gallivm
+Why it is built this way, and what Mesa 25.0.7 showed (docs/benchmarks/history.md, 2026-12-06, `273e196`): gallivm
 compiles each `texelFetch` as an indirect call through the descriptor into a small function, so
 `perf report` can only say that a fifth to a third of the time is in anonymous 4 KiB pages; the
 call sites say which buffer's fetches those are. A call site's buffer is read from the code before

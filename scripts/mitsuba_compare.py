@@ -27,7 +27,7 @@ from `caustica compare` against a reference that caustica renders at --reference
 
 With --rounds N the two timed measurements alternate N times (caustica's bench, then Mitsuba's
 timed render, again and again; Mitsuba's scene is loaded and compiled once). A shared 2-core
-machine drifts by 10-30 % within seconds (docs/benchmarks.md, stop 37), so one pair of
+machine drifts by 10-30 % within seconds (docs/benchmarks/history.md, 2026-12-05, `9e81c69`), so one pair of
 measurements can read the drift; the report gives every round's ratio and takes the round whose
 ratio is the median (the lower middle one of an even count) as the result.
 
@@ -310,7 +310,7 @@ def run(cmd, **kwargs):
 
 def compare(caustica, image, reference):
     """`caustica compare`: the project's relative MSE and ratio of means, so the figures are those
-    of docs/benchmarks.md."""
+    of docs/benchmarks/history.md."""
     out = run([caustica, "compare", image, reference])
     figure = lambda label: float(re.search(rf"{label}:\s+(\S+)", out).group(1))
     ratio = re.search(r"ratio of means:\s+([0-9.eE+-]+)", out)
@@ -562,7 +562,7 @@ def print_error_table(result, renderers):
 
 def mitsuba_data_table(args):
     """Every scene of MITSUBA_DATA_SCENES from the mitsuba-data checkout at args.mitsuba_data, and
-    a Markdown table of the figures (docs/benchmarks.md)."""
+    a Markdown table of the figures (docs/benchmarks/history.md)."""
     root = Path(args.mitsuba_data)
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="mitsuba-compare-"))
     results = []

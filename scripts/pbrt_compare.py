@@ -228,7 +228,7 @@ def render_caustica(args, scene, spp, seed, path):
 
 
 def compare(caustica, image, reference):
-    """`caustica compare`: the project's relative MSE and ratio of means (docs/benchmarks.md)."""
+    """`caustica compare`: the project's relative MSE and ratio of means (docs/benchmarks/history.md)."""
     done, _ = run([caustica, "compare", image, reference], "caustica compare")
     figure = lambda label: float(re.search(rf"{label}:\s+(\S+)", done.stdout).group(1))
     ratio = re.search(r"ratio of means:\s+([0-9.eE+-]+)", done.stdout)

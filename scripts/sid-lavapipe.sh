@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Puts the newest Mesa lavapipe Debian has (sid's, 26.x with its own LLVM) in a folder, with sid's
 # glibc and every library it needs newer than the machine's, and writes DIR/run, which starts a
-# program through that folder's dynamic loader. For measurement only (docs/benchmarks.md, stop 23:
+# program through that folder's dynamic loader. For measurement only (docs/benchmarks/history.md, 2026-12-03, `c7edf9f`:
 # how much a newer driver is worth); nothing is installed and apt's own state is not touched.
 #
 #   bash scripts/sid-lavapipe.sh [DIR]          # default DIR: .lavapipe-sid in the repository

@@ -27,7 +27,7 @@ const uint STACK_SIZE = 3u * (BVH_MAX_DEPTH + 1u) + 1u;
 // zero, whose sign bit is 0), which read back as a float no larger. A node popped after the walk
 // found a hit nearer than that is left without loading it: the hit culls far siblings that a
 // node's own visit would only have culled after loading it (bunny under a sky, Mesa 25: 1.068x,
-// docs/benchmarks.md, stop 43). Node arrays hold fewer than 2^31 nodes (64 bytes each), so at
+// docs/benchmarks/history.md, 2026-12-06, `6bd217d`). Node arrays hold fewer than 2^31 nodes (64 bytes each), so at
 // least one bit of the distance is kept. Only walks call these, and a scene walks only where it has
 // a node (trace_ray and queue_ray return first where frame.node_count is 0).
 uint entry_index_bits() {
@@ -174,8 +174,8 @@ bool intersect_shapes(uint first, uint count, uint instance, vec3 o, vec3 d, boo
 
 // The host lists the scene's few shapes in SCENE_FEW_SHAPES, one FEW_SHAPE(index, kind) each in
 // stored (leaf) order, so that each is straight-line code of its own kind's test: no loop, and no
-// switch on the kind, every case of which Mesa 22.3 would run for each shape (docs/benchmarks.md,
-// stop 18). Their hits are in the shapes' own instance.
+// switch on the kind, every case of which Mesa 22.3 would run for each shape (docs/benchmarks/history.md,
+// 2026-12-01 (`7e4cc16`)). Their hits are in the shapes' own instance.
 #define FEW_SHAPE(i, kind) if (intersect_shape(kind, prims[i], i, frame.shape_instance, o, d, any_hit, hit)) return true;
 
 // The scene's few shapes against the ray, as intersect_shape: true when any_hit and one was hit.
@@ -189,7 +189,7 @@ bool few_shapes_hit(vec3 o, vec3 d, bool any_hit, inout Hit hit) {
 // (src/render/features.rs, FEW_PRIMITIVES). With any_hit, returns at the first hit found. The
 // shapes are tested one after another, all lanes of a subgroup on the same shape at once, which
 // lavapipe loads once for all of them; a walk loads each lane's own node and leaves, and keeps a
-// stack (docs/benchmarks.md, "few shapes").
+// stack (docs/benchmarks/history.md, "few shapes").
 bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     hit = Hit(t_max, NO_INDEX, NO_INDEX, vec2(0.0));
     SCENE_FEW_SHAPES
@@ -222,7 +222,7 @@ bool leaf_hit(uint first, uint count, uint instance, uint instance_kind, vec3 ro
 // instance's object space, keeping the nearest hit before hit.t. True when any_hit and it was
 // hit: the caller returns at once. The walk knows nothing of instances, their transforms or the
 // top level: every scene walks its meshes with this loop alone, and Mesa 22.3, which runs every
-// block of a loop body taken or not (docs/benchmarks.md, stop 16), pays for nothing else in it.
+// block of a loop body taken or not (docs/benchmarks/history.md, 2026-12-01, `be8847b`), pays for nothing else in it.
 bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 rd, bool any_hit, inout Hit hit) {
     vec3 inv_d = safe_inverse(rd);
     uint stack[STACK_SIZE];
@@ -245,7 +245,7 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
             // stack, so that the nearest becomes the next node and the nearer of the rest lie on
             // top. One loop over the children in this order measured faster on lavapipe than a
             // nearest-first pass over the leaves and a second, farthest-first, over the rest
-            // (docs/benchmarks.md): a leaf's hit can no longer cull a farther sibling in the same
+            // (docs/benchmarks/history.md): a leaf's hit can no longer cull a farther sibling in the same
             // node, but fewer loops run in step.
             uint next = NO_INDEX;
             float t_next = 0.0;
@@ -262,7 +262,7 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
             }
 #if WALK_CHILDREN_UNROLLED
             // Four straight-line steps, each its child's own variables: no loop and no selects of
-            // kth_child (Mesa 25: 1.046x on the bunny under a sky, docs/benchmarks.md, stop 40).
+            // kth_child (Mesa 25: 1.046x on the bunny under a sky, docs/benchmarks/history.md, 2026-12-06, `ee3ce82`).
             WALK_CHILD(4u, t3, c3)
             WALK_CHILD(3u, t2, c2)
             WALK_CHILD(2u, t1, c1)

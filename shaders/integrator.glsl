@@ -181,7 +181,7 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
         shadow_wanted = direct_light(lobe, path.dir, surface, path.throughput, rng, rays, shadow);
 #if !WALK_QUEUE && !WAVEFRONT
         // Traced here where no queue or wavefront takes it: held past the BSDF sample's state, it measured
-        // 1-4 % slower on lavapipe (docs/benchmarks.md, stop 24).
+        // 1-4 % slower on lavapipe (docs/benchmarks/history.md, 2026-12-04, `d1c2c17`).
         if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;
         shadow_wanted = false;
 #endif

@@ -34,7 +34,7 @@ float intersect_quad(vec3 origin, vec3 eu, vec3 ev, vec3 o, vec3 d, float t_max)
 // (instanced meshes are hit in object space).
 // Every test is made at the end, with no early return: on lavapipe each early return is a mask
 // test and a branch for the whole subgroup, and computing the few products it would skip measured
-// faster (docs/benchmarks.md, stop 37). Which triangles are hit is the same: u <= 1 follows from
+// faster (docs/benchmarks/history.md, 2026-12-05, `9e81c69`). Which triangles are hit is the same: u <= 1 follows from
 // v >= 0 and u + v <= 1.
 float intersect_triangle(vec3 v0, vec3 e1, vec3 e2, vec3 o, vec3 d, float t_max, out vec2 bary) {
     vec3 p = cross(d, e2);

@@ -1,7 +1,7 @@
 // A pixel's samples traced through the walk queue (walk_queue.glsl), two paths at a time: rounds
 // in which each lane queues its paths' rays, the subgroup walks the queue, and each lane takes
 // its paths through the vertices their rays met. Two paths a lane give the queue twice the walks
-// to share out (docs/benchmarks.md: one path a lane gained half as much).
+// to share out (docs/benchmarks/history.md: one path a lane gained half as much).
 //
 // The sums are the plain kernel's bit for bit: each vertex is path_vertex's, its shadow ray traced
 // in the next round beside the path's next ray and its light added before that vertex's, in the

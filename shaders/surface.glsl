@@ -56,7 +56,7 @@ vec4 interpolated_tangent(uvec3 tri, vec3 w) {
 // Shape `i`'s record. Where the scene's shapes are a handful of few shapes (SCENE_FEW_SHAPE_SELECTS:
 // src/render/features.rs says how many), each is loaded at its constant index, a load lavapipe
 // makes once for all lanes, and each lane's own is picked by selects; a storage load at each
-// lane's own index runs lane by lane, behind a bounds check (docs/benchmarks.md, stop 40).
+// lane's own index runs lane by lane, behind a bounds check (docs/benchmarks/history.md, 2026-12-06, `ee3ce82`).
 // FEW_SHAPE is bvh.glsl's, redefined here for the one list and then left undefined, so that no
 // later file expands the list into the wrong code.
 #undef FEW_SHAPE

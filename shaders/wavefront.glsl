@@ -6,8 +6,8 @@
 // ray's light first, as the plain kernel does) and starts the pixel's next sample where one ends.
 // Each kernel holds one of the two walks (trace_ray inlined once) and its lanes all run the same
 // step, where the megakernel's lanes run the two walks and the shading in turn as their paths reach
-// them: on a GPU that is the cost the profile of stop 25 pointed at (docs/benchmarks.md). What it
-// pays is the paths' state, read and written through memory at each step.
+// them: on a GPU that is the cost the profile of 2026-12-04 (`3e96a5c`) pointed at (docs/benchmarks/history.md). What
+// it pays is the paths' state, read and written through memory at each step.
 //
 // The sums are the plain kernel's bit for bit: the same vertices, the shadow ray's light added
 // before the next vertex's, the samples in sample order (a pixel has one path in flight).

@@ -11,7 +11,7 @@
 //!   inside one of the allowed folders (the scene's folder and the shared data folder).
 //!
 //! The caps are generous bounds for real files, not quotas; they exist so that no input can make
-//! caustica read without end. README ("Input files") lists them.
+//! caustica read without end. docs/cli.md ("Input files") lists them.
 
 use std::fs::{File, Metadata};
 use std::io::{self, Read, Seek, SeekFrom};

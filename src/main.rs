@@ -162,7 +162,7 @@ enum Command {
         gpu: DeviceArgs,
     },
     /// Open a window that shows the image as samples accumulate, with a camera to move (see the
-    /// keys in the window's overlay or README "Viewer"). Needs a display (X11 or Wayland).
+    /// keys in the window's overlay or docs/cli.md "Viewer"). Needs a display (X11 or Wayland).
     View {
         /// Scene file (TOML) or mesh file, as `render` takes. Omit for the built-in Cornell box.
         scene: Option<PathBuf>,

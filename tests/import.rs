@@ -1,5 +1,5 @@
-//! Mitsuba 3 XML import (src/scene/import): each construct maps onto caustica's scene as the
-//! README documents, bad input is an error naming the file and line, `convert` writes TOML that
+//! Mitsuba 3 XML import (src/scene/import): each construct maps onto caustica's scene as
+//! docs/importers.md documents, bad input is an error naming the file and line, `convert` writes TOML that
 //! loads to the same scene, and an XML scene renders bit for bit like its hand-written TOML twin.
 
 mod common;
@@ -369,7 +369,7 @@ fn convert_writes_toml_that_loads_to_the_same_scene() {
     assert!(toml.contains("max_bounces = 5") && toml.contains("[materials.white]"), "{toml}");
 }
 
-/// The hand-written TOML twin of `lit_scene_xml(5)`: what the README says each element becomes.
+/// The hand-written TOML twin of `lit_scene_xml(5)`: what docs/importers.md says each element becomes.
 const LIT_SCENE_TOML: &str = r#"
 [camera]
 position = [0.0, 1.0, 4.0]
@@ -410,7 +410,7 @@ fn an_xml_scene_renders_bit_for_bit_like_its_toml_twin() {
     let path = write_scene("twin", &[("scene.xml", &lit_scene_xml(5))]);
     let from_xml = import(&InputFiles::anywhere(), &path, &[]).unwrap().into_scene(&InputFiles::anywhere()).unwrap();
     // The quads come from the importer (their corners are transformed floats); everything else is
-    // written by hand as the README's mapping says.
+    // written by hand as docs/importers.md's mapping says.
     let mut twin = Scene::parse(LIT_SCENE_TOML, "twin.toml", Path::new(".")).unwrap();
     let material = |s: &Scene, k: usize| s.materials[s.shapes[k].material() as usize].clone();
     for (k, shape) in from_xml.shapes.iter().enumerate() {

@@ -1,4 +1,4 @@
-//! pbrt-v4 import (src/scene/import/pbrt): each construct maps onto caustica's scene as the README
+//! pbrt-v4 import (src/scene/import/pbrt): each construct maps onto caustica's scene as docs/importers.md
 //! documents (the camera and its handedness, the order of transformations, maxdepth, named
 //! materials, instancing, front sides), bad input is an error naming the file and line, `convert`
 //! writes TOML that loads to the same scene, and a pbrt scene renders bit for bit like its
@@ -482,7 +482,7 @@ AttributeEnd
 LightSource \"point\" \"point3 from\" [1 2 1] \"rgb I\" [2 2 2]
 ";
 
-/// The hand-written TOML twin of `LIT_SCENE`: what the README says each directive becomes, x
+/// The hand-written TOML twin of `LIT_SCENE`: what docs/importers.md says each directive becomes, x
 /// negated by the mirror (and the patches' edges swapped, which keeps their fronts).
 const LIT_SCENE_TOML: &str = r#"
 [camera]

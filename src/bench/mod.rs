@@ -34,7 +34,7 @@ pub struct KernelSetup {
 /// Wall time the warm-up renders for at least, before the timed samples: a GPU idles at a
 /// fraction of its clock (an H200 at 345 MHz against 1980) and raises it only under load, and
 /// renders of a tenth of a second timed straight after a kernel's compile ran up to 3.5x slower
-/// on one in some runs than in others (docs/benchmarks.md, stop 25). It also lets the renderer
+/// on one in some runs than in others (docs/benchmarks/history.md, 2026-12-04, `3e96a5c`). It also lets the renderer
 /// size its dispatches from measured costs before any is timed.
 const WARM_UP_SECONDS: f64 = 0.3;
 

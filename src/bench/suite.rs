@@ -44,7 +44,7 @@ impl FilmOverrides {
 /// Per-scene sizes chosen so that the whole suite (shared data included) takes about two minutes
 /// on the 2-core machine with Debian 12's lavapipe (Mesa 22.3), the slowest device it runs on,
 /// and each scene renders for about 10 s there and 2 s on Mesa 25: long enough that dispatch
-/// overheads and the machine's noise do not dominate. Timings are in docs/benchmarks.md (issue 11).
+/// overheads and the machine's noise do not dominate. Timings are in docs/benchmarks/history.md (issue 11).
 const SIZES: &[(&str, SuiteSize)] = &[
     ("cornell.toml", SuiteSize { width: 160, height: 120, spp: 64 }),
     ("cornell_original.toml", SuiteSize { width: 128, height: 128, spp: 32 }),

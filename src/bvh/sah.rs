@@ -13,7 +13,7 @@ use super::{Aabb, BvhNode};
 /// that `wide_nodes` chooses from this one by a cost of its own, so the binary tree only offers
 /// the choices: at 1 its leaves are small (~1.9 primitives) and the wide tree can merge them where
 /// that pays. 1 with that choice measured 4 % faster on lavapipe than 2 with two binary levels a
-/// wide node, and 1 alone (two binary levels a node) 3 % slower (docs/benchmarks.md, stop 38).
+/// wide node, and 1 alone (two binary levels a node) 3 % slower (docs/benchmarks/history.md, 2026-12-05, `eef345d`).
 const TRAVERSAL_COST: f32 = 1.0;
 
 /// Subtrees larger than this are built as two rayon tasks; smaller ones are cheaper to build inline.

@@ -7,7 +7,7 @@
 //! compressed wide BVHs", section 3), rounded outwards, so the four boxes cost 24 bytes where full
 //! floats cost 96: one node is four 16-byte loads, where the pair nodes it replaced needed eight
 //! loads for four boxes. Loads are what traversal pays for, on lavapipe most of all
-//! (docs/benchmarks.md). Leaves get no node of their own: a leaf child names its primitives
+//! (docs/benchmarks/history.md). Leaves get no node of their own: a leaf child names its primitives
 //! directly.
 
 use super::{Aabb, BvhNode};
@@ -161,7 +161,7 @@ fn quantum_exponent(min: f32, max: f32) -> u32 {
 
 /// What a wide node's visit costs against one primitive test, in the surface-area cost that
 /// chooses the wide tree's shape (`plan_subtree`): a visit decodes and tests four boxes and sorts
-/// them. Measured on lavapipe (docs/benchmarks.md, stop 38): 2 gains; 4 merges more leaves and
+/// them. Measured on lavapipe (docs/benchmarks/history.md, 2026-12-05, `eef345d`): 2 gains; 4 merges more leaves and
 /// is level, 8 merges more still and loses 3 % on the mesh box.
 const NODE_COST: f32 = 2.0;
 
@@ -448,7 +448,7 @@ mod tests {
     }
 
     /// The 8-bit boxes cost a few per cent in the tree's surface-area cost (1.7-1.9 % on the Stanford
-    /// scans, docs/benchmarks.md, stop 41), never less than nothing. Fails boxes four times as
+    /// scans, docs/benchmarks/history.md, 2026-12-06, `273e196`), never less than nothing. Fails boxes four times as
     /// coarse (6-bit steps: +10 % here), and a cost that ignores the stored boxes.
     #[test]
     fn stored_boxes_cost_a_few_per_cent_over_exact_ones() {

@@ -74,8 +74,8 @@ pub enum Shape {
     /// `load_<name>(i)`, and split like a chunked array. For every array the kernel reads at a
     /// per-lane index: lavapipe fetches a texel for all of a subgroup's lanes as straight-line
     /// code, where it loads a storage buffer with a per-lane index one lane at a time, each lane's
-    /// load behind a branch of its own (docs/benchmarks.md, stops 21 and 22). GPUs have read BVHs
-    /// through the texture path since Aila and Laine (2009). Which is faster depends on the CPU
+    /// load behind a branch of its own (docs/benchmarks/history.md, 2026-12-02, `093d897`, `6ce9ade`). GPUs have read
+    /// BVHs through the texture path since Aila and Laine (2009). Which is faster depends on the CPU
     /// under lavapipe too: [`WALK_RECORDS`] become storage arrays where the device reads them so
     /// ([`BufferBinding::in_variant`], walk_records.rs).
     TexelBuffer { element: Element, texels: &'static [Texel] },
@@ -247,7 +247,8 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Per-dispatch counters, cleared and read by the host (see GpuStats).
     BufferBinding { buffer: Stats, binding: 7, name: "stats", shape: Shape::StorageBlock(Block::of::<GpuStats>()), access: ReadWrite, bound_in: EveryKernel, what: "statistics" },
     // Placements of bottom-level BVHs; the top-level BVH's leaves index them. Read as texels: each
-    // lane reads its own ray's and hit's (mesh box 1.055x on lavapipe, docs/benchmarks.md, stop 39).
+    // lane reads its own ray's and hit's (mesh box 1.055x on lavapipe, docs/benchmarks/history.md, 2026-12-06,
+    // `badf81e`).
     BufferBinding { buffer: Instances, binding: 8, name: "instances", shape: texel_buffer::<GpuInstance>(), access: Read, bound_in: EveryKernel, what: "instances" },
     // Every mesh's triangles by value (MeshTriangle) and their materials, in their BVH's leaf order.
     BufferBinding { buffer: MeshTriangles, binding: 9, name: "mesh_triangles", shape: texel_buffer::<GpuMeshTriangle>(), access: Read, bound_in: EveryKernel, what: "mesh triangles" },

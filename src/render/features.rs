@@ -6,7 +6,7 @@
 //! light) is left out by `#if` and by constants the compiler folds, so the scene pays nothing for
 //! it: fewer instructions and live values a path. Mesa 22.3's lavapipe runs every branch of a
 //! subgroup even where no lane takes it, so there the code a scene does not use costs as much as
-//! the code it does (docs/benchmarks.md, stop 16).
+//! the code it does (docs/benchmarks/history.md, 2026-12-01, `be8847b`).
 //! A feature wrongly detected as absent changes the image; tests/specialization.rs renders every
 //! checked-in scene with both kernels and requires the same sums bit for bit.
 
@@ -20,14 +20,14 @@ use crate::bvh::{CHILD_INTERIOR, WIDTH};
 
 /// Most shapes a scene may have for its rays to test each in turn rather than walk them in its BVH
 /// (`few_shapes`; with no mesh, the `bvh` feature off). Measured on lavapipe with each shape's test
-/// compiled in as straight-line code of its kind (docs/benchmarks.md, stop 18): at 32 shapes it
+/// compiled in as straight-line code of its kind (docs/benchmarks/history.md, 2026-12-01, `7e4cc16`): at 32 shapes it
 /// beats the walk 3-5x on Mesa 25 and 1.3-1.6x on Mesa 22.3; at 48 and 64 Mesa 22.3 is level, and
 /// the kernel's compile grows.
 pub const FEW_PRIMITIVES: usize = 32;
 
 /// Most few shapes for which a hit's shape record is picked by selects among loads at constant
 /// indices (`SCENE_FEW_SHAPE_SELECTS`, shaders/surface.glsl) rather than loaded at each lane's own
-/// index, which lavapipe does lane by lane. Measured on Mesa 25 (docs/benchmarks.md, stop 40):
+/// index, which lavapipe does lane by lane. Measured on Mesa 25 (docs/benchmarks/history.md, 2026-12-06, `ee3ce82`):
 /// the selects gain 1.14x on the Cornell box's 9 shapes, are level at 17 and lose 0.90x at 31.
 pub const FEW_SHAPE_SELECTS: usize = 12;
 
@@ -168,7 +168,7 @@ pub struct SceneFeatures {
     /// its index is the constant 0, so that the light and its material are loaded once for a
     /// subgroup (lavapipe loads at an index it cannot prove uniform lane by lane). A scene of no
     /// light keeps the pick, which never runs: with the constant there, a bunny under a sky
-    /// measured 18 % slower on Mesa 25 (docs/benchmarks.md, stop 18).
+    /// measured 18 % slower on Mesa 25 (docs/benchmarks/history.md, 2026-12-01, `7e4cc16`).
     pub light_pick: bool,
     /// Directional lights with an angular size (a sun's disk): what a path that escapes sees of
     /// them.

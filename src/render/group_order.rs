@@ -3,7 +3,7 @@
 //! lavapipe splits a dispatch among its threads up front: each takes one contiguous run of
 //! workgroup indices (Mesa's `lp_cs_tpool`, `iter_per_thread`). Taken in order, a run is a
 //! horizontal slab of the image, and slabs differ in cost (a sky above, a mesh below), so one
-//! thread idles while the other finishes: on the 2-core machine of docs/benchmarks.md a bunny
+//! thread idles while the other finishes: on the 2-core machine of docs/benchmarks/history.md a bunny
 //! under a sky kept 1.5 of 2 cores busy. Dealing the rows of workgroups into stripes gives every
 //! run rows from the whole band. GPUs hand out workgroups as their units free up, so they keep
 //! the image's order and the locality it has. Where loops run to their end (Mesa 24 and newer),

@@ -37,7 +37,7 @@ const GPU_DISPATCH_TARGET_S: f64 = 0.2;
 /// whose pixels are done idling beside those still on their last paths, and a thread whose share
 /// of the workgroups is done idling beside the other; longer dispatches pay it less often. 1 s
 /// against 0.2 s: the mesh scenes up to 1.3x on Mesa 25 and 1.4x on Mesa 22.3, the Cornell box
-/// level (docs/benchmarks.md, stop 19). A time budget or an interrupt waits for the pass in
+/// level (docs/benchmarks/history.md, 2026-12-01, `7a44715`). A time budget or an interrupt waits for the pass in
 /// progress, so about this long at most.
 const CPU_DISPATCH_TARGET_S: f64 = 1.0;
 

@@ -7,7 +7,7 @@
 //! (a subgroup's share of a workgroup: eight pixels of a row on lavapipe) from a counter in
 //! the statistics buffer as soon as it has finished one, until none is left, so the thread that
 //! finishes its tiles first takes more of them: 1.99 cores busy and 1.10x the samples per
-//! second (docs/benchmarks.md, stop 36). Every tile is one workgroup's subgroup's pixels as
+//! second (docs/benchmarks/history.md, 2026-12-05, `36b0b8f`). Every tile is one workgroup's subgroup's pixels as
 //! before, whichever subgroup renders it, so the images are the same bit for bit
 //! (tests/tile_taking.rs).
 //!

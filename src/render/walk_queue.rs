@@ -1,7 +1,7 @@
 //! Where a kernel walks its rays from a queue its subgroup shares (shaders/walk_queue.glsl and
 //! queued_paths.glsl): each lane carries two paths, queues a walk of each instance its rays enter,
 //! and every lane of the subgroup takes the next walk as soon as it is free. On lavapipe that fills
-//! the lanes a mesh walk leaves idle (docs/benchmarks.md, stop 24); the images are the plain
+//! the lanes a mesh walk leaves idle (docs/benchmarks/history.md, 2026-12-04, `d1c2c17`); the images are the plain
 //! kernel's bit for bit.
 //!
 //! By default it is compiled only where all of these hold:

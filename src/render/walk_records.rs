@@ -5,15 +5,15 @@
 //!
 //! - Mesa 25's lavapipe makes every texel fetch an indirect call into a function of the
 //!   descriptor's, which fetches the lanes' texels one by one and transposes them; the caller
-//!   spills its live vector registers around each call (docs/benchmarks.md, stop 41). A storage
+//!   spills its live vector registers around each call (docs/benchmarks/history.md, 2026-12-06, `273e196`). A storage
 //!   load at a per-lane index is a loop over the lanes instead, each behind its own branch and
 //!   bounds check, inlined in the kernel.
 //! - With Mesa 25.0 on an AMD EPYC (Zen 4) the storage loads measured 1.09x on the mesh box and
 //!   1.43x on the bunny under a sky; on an Intel Xeon (Sapphire Rapids) the nodes as storage
-//!   measured 0.91x on the mesh box (docs/benchmarks.md, stops 41 and 42). With Mesa 26.2 (LLVM
-//!   22) on the same AMD EPYC the storage loads lost on the mesh box (0.90x, sky 1.03x). On Mesa
-//!   22.3 the texels measured 1.2-2x faster (stop 21), and on an NVIDIA GPU the two are level
-//!   (stop 25).
+//!   measured 0.91x on the mesh box (docs/benchmarks/history.md, 2026-12-06, `273e196`, `b968832`). With Mesa 26.2
+//!   (LLVM 22) on the same AMD EPYC the storage loads lost on the mesh box (0.90x, sky 1.03x). On Mesa
+//!   22.3 the texels measured 1.2-2x faster (2026-12-02, `093d897`), and on an NVIDIA GPU the two are level
+//!   (2026-12-04, `3e96a5c`).
 //!
 //! So the storage buffers are the default on Mesa 25's lavapipe running on an AMD CPU, and texels
 //! everywhere else. `CAUSTICA_WALK_RECORDS` (`texels` or `storage`) overrides the choice on any

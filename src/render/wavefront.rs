@@ -9,7 +9,7 @@
 //!
 //! Where it is compiled: devices whose loops run to their end (a round's kernels are short, but
 //! the plain kernel's loop limit handling has no wavefront form). It is the default nowhere: on
-//! lavapipe it lost to the megakernel in stop 19 (docs/benchmarks.md: each kernel reloads and
+//! lavapipe it lost to the megakernel on 2026-12-01 (`7a44715`) (docs/benchmarks/history.md: each kernel reloads and
 //! stores every path's state through the lanes); on GPUs it is for the next GPU run to measure.
 
 use super::layout::GpuStats;

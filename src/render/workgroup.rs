@@ -1,7 +1,7 @@
 //! The path-tracing kernel's workgroup shape (`local_size_x/y` of pathtrace.comp), a kernel
 //! variant. Every device measured runs best at 8x8: lavapipe runs a subgroup of 8 lanes as one
 //! SIMD thread and a workgroup of 8x8 as eight of them (its walk queue is laid out for that), and
-//! on an NVIDIA H200 no other shape gained more than 3 % (docs/benchmarks.md, stop 25). A device
+//! on an NVIDIA H200 no other shape gained more than 3 % (docs/benchmarks/history.md, 2026-12-04, `3e96a5c`). A device
 //! found to want another shape would get its own here. `CAUSTICA_WORKGROUP=WxH` overrides the
 //! shape, for an A/B of one binary on one device.
 

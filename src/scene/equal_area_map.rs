@@ -44,7 +44,7 @@ pub fn square_to_sphere(p: DVec2) -> DVec3 {
     DVec3::new(phi.cos().copysign(u) * s, phi.sin().copysign(v) * s, z)
 }
 
-/// The lat-long map (caustica's convention, README "Environment map conventions") of the square
+/// The lat-long map (caustica's convention, docs/scene-format.md "Environment map conventions") of the square
 /// equal-area map `image`, whose x, y and z axes point along the columns of `axes` in the world
 /// (orthonormal: a rotation, or a rotation and a mirror). Texels are looked up nearest, so each
 /// lat-long texel takes the equal-area texel its centre falls in.

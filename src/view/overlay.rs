@@ -2,7 +2,7 @@
 //! keys, drawn with egui over the picture, at the top left and no wider than [`WIDTH`] points. It
 //! collapses (or its key list does) with a click on its title.
 
-/// The keys, as the overlay and the README list them.
+/// The keys, as the overlay and docs/cli.md list them.
 pub const KEYS: [(&str, &str); 14] = [
     ("left drag", "orbit around the pivot"),
     ("middle drag", "pan (or shift + left drag)"),

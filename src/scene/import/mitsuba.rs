@@ -1,7 +1,7 @@
 //! Mitsuba 3 scenes onto caustica's scene file model: one function per kind of object (sensor,
 //! film, sampler, integrator, shape, BSDF, emitter), each reading the parameters it understands
 //! with Mitsuba's defaults and refusing the rest (`Object::check_all_used`). The mapping of each
-//! parameter is documented in the README's "Scenes from other renderers" section.
+//! parameter is documented in docs/importers.md ("Mitsuba 3").
 
 use super::super::format::{
     AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, Encoding, EnvironmentFile, FilmFile, Filter,

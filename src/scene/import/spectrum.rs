@@ -124,7 +124,7 @@ mod tests {
     fn the_red_wall_of_mitsubas_cornell_box_gets_mitsubas_own_rgb() {
         // scenes/cbox of mitsuba-data gives the box both as spectra and as RGB (cbox-rgb.xml).
         // The light's RGB there is not this conversion of its spectrum (red 18.4 where this
-        // gives 20.6); the README says so.
+        // gives 20.6); docs/importers.md says so.
         let red: Vec<(f64, f64)> = RED_WALL
             .split(", ")
             .map(|pair| {

@@ -1,7 +1,7 @@
 //! A pbrt-v4 [`Model`] onto caustica's scene file: camera, film, sampler, integrator, filter,
 //! shapes (with their instances), lights and, through `materials.rs`, materials. Each directive
 //! reads the parameters it understands with pbrt's defaults and refuses the rest
-//! (`Directive::check_all_used`). The README's "pbrt-v4" section documents each mapping.
+//! (`Directive::check_all_used`). docs/importers.md ("pbrt-v4") documents each mapping.
 //!
 //! Handedness: pbrt's camera puts camera +x on the image's right with +y up and +z forward, so a
 //! `LookAt` shows the world the other way round from caustica's right-handed camera (whose image

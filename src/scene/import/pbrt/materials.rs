@@ -1,6 +1,6 @@
 //! pbrt-v4 materials as caustica materials. caustica's materials take constant values but for the
 //! diffuse reflectance, which may be a texture (`textures.rs`): a texture that varies anywhere
-//! else is an error naming the file and line. The README's "pbrt-v4" section lists each mapping.
+//! else is an error naming the file and line. docs/importers.md ("pbrt-v4") lists each mapping.
 
 use super::super::scene_parts::{f32x3, relative_to};
 use super::super::spectrum;

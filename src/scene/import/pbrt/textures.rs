@@ -1,7 +1,7 @@
 //! pbrt-v4 textures as caustica values: a texture that does not vary (`constant`, and `scale`,
 //! `mix` and `checkerboard` of values that do not) is a constant; an `imagemap` (times a
 //! constant) or a 2D `checkerboard` of two constants is caustica's `albedo_texture`, which
-//! materials take as a diffuse reflectance. The README's "pbrt-v4" section lists each mapping.
+//! materials take as a diffuse reflectance. docs/importers.md ("pbrt-v4") lists each mapping.
 //!
 //! Texture coordinates: caustica turns a PLY's (u, v) into (u, 1 - v) as it reads it, with
 //! (0, 0) the image's top-left corner; pbrt keeps (u, v), maps it to (s, t) = (uscale u + udelta,
