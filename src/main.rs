@@ -6,7 +6,7 @@ use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Ou
 use caustica::gpu::{list_devices, ContextOptions, GpuContext};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
 use caustica::input_file::InputFiles;
-use caustica::render::{AovSet, GroupOrder, KernelChoice, Renderer};
+use caustica::render::{AovSet, GroupOrder, KernelChoice, KernelOptions, Renderer};
 use caustica::scene::{check_film, Film, Filter, Scene};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -159,6 +159,8 @@ enum Command {
         #[command(flatten)]
         scene_files: SceneFileArgs,
         #[command(flatten)]
+        kernel: KernelOptionArgs,
+        #[command(flatten)]
         gpu: DeviceArgs,
     },
     /// Open a window that shows the image as samples accumulate, with a camera to move (see the
@@ -267,6 +269,8 @@ enum Command {
         #[command(flatten)]
         scene_files: SceneFileArgs,
         #[command(flatten)]
+        kernel: KernelOptionArgs,
+        #[command(flatten)]
         gpu: DeviceArgs,
     },
 }
@@ -281,6 +285,29 @@ struct SceneFileArgs {
     /// Set a Mitsuba XML scene's `<default>` parameter, e.g. -D spp=64 (repeatable).
     #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = define)]
     define: Vec<(String, String)>,
+}
+
+/// How the kernel runs (render and bench).
+#[derive(clap::Args, Clone)]
+struct KernelOptionArgs {
+    /// Override one of the kernel's run-time choices for an A/B of one binary, e.g. walk-queue=0
+    /// (repeatable; the image is the same, only the speed differs). `--kernel-option help` lists
+    /// the keys, their values, and each device class's defaults. The CAUSTICA_* variables of
+    /// docs/development.md set the same options; this flag wins.
+    #[arg(long = "kernel-option", value_name = "KEY=VALUE")]
+    kernel_option: Vec<String>,
+}
+
+impl KernelOptionArgs {
+    /// The options asked for, over the environment's; `None` after printing the help that
+    /// `help` asks for.
+    fn options(&self) -> Result<Option<KernelOptions>> {
+        if self.kernel_option.iter().any(|o| o == "help") {
+            print!("{}", caustica::render::kernel_options_help());
+            return Ok(None);
+        }
+        KernelOptions::from_env_and(&self.kernel_option).map(Some)
+    }
 }
 
 /// `name=value` of `-D`.
@@ -369,6 +396,7 @@ struct RenderRequest {
     spp: Option<u32>,
     quiet: bool,
     json: bool,
+    kernel: KernelOptions,
 }
 
 fn render(
@@ -402,7 +430,8 @@ fn render(
     handle_signals(true)?;
     let ctx = gpu.context()?;
     let started = Instant::now();
-    let mut renderer = Renderer::with_aovs(&ctx, &scene, request.seed, request.aovs)?;
+    let mut renderer =
+        Renderer::with_options(&ctx, &scene, request.seed, request.aovs, KernelChoice::ForScene, &request.kernel)?;
     renderer.set_sample_offset(farm_args.sample_offset);
     if let Some(partial) = &resume_from {
         farm::resume(&mut renderer, partial, &checkpoint)?;
@@ -556,7 +585,7 @@ fn bench(
     mut scene: Scene,
     film: FilmOverrides,
     aovs: AovSet,
-    kernel: KernelSetup,
+    kernel: &KernelSetup,
     json: bool,
     gpu: &DeviceArgs,
 ) -> Result<()> {
@@ -582,7 +611,7 @@ fn bench_suite(
     scenes: &Path,
     overrides: FilmOverrides,
     aovs: AovSet,
-    kernel: KernelSetup,
+    kernel: &KernelSetup,
     json: bool,
     scene_files: &SceneFileArgs,
     gpu: &DeviceArgs,
@@ -632,15 +661,17 @@ fn run() -> Result<()> {
             quiet,
             json,
             scene_files,
+            kernel,
             gpu,
         } => {
+            let Some(kernel) = kernel.options()? else { return Ok(()) };
             let mut s = scene_files.load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
             render(
                 s,
-                RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json },
+                RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json, kernel },
                 &output_args,
                 &farm,
                 &gpu,
@@ -708,16 +739,18 @@ fn run() -> Result<()> {
             general_kernel,
             group_order,
             scene_files,
+            kernel,
             gpu,
         } => {
+            let Some(options) = kernel.options()? else { return Ok(()) };
             let (aovs, film) = (aov.unwrap_or_default(), FilmOverrides { width, height, spp });
             let choice = if general_kernel { KernelChoice::General } else { KernelChoice::ForScene };
-            let kernel = KernelSetup { choice, group_order };
+            let kernel = KernelSetup { choice, group_order, options };
             if suite {
                 let scenes = scenes.unwrap_or_else(|| PathBuf::from("scenes"));
-                return bench_suite(&scenes, film, aovs, kernel, json, &scene_files, &gpu);
+                return bench_suite(&scenes, film, aovs, &kernel, json, &scene_files, &gpu);
             }
-            bench(scene_files.load_scene(scene.as_ref())?, film, aovs, kernel, json, &gpu)
+            bench(scene_files.load_scene(scene.as_ref())?, film, aovs, &kernel, json, &gpu)
         }
     }
 }

@@ -423,3 +423,52 @@ fn bench_suite_refuses_a_scene_argument_and_bad_sizes_before_any_work() {
     let stderr = fails_naming(&caustica(&["bench", "--suite", "--spp", "0", "--device", "no-such-gpu"]), &["spp"]);
     assert!(!stderr.contains("no-such-gpu"), "checked only after the device: {stderr}");
 }
+
+/// `--kernel-option`: one place for the kernel's A/B switches. A bad key or value fails before any
+/// work (exit 1, naming it); `help` lists every key; an option reaches the kernel (bench's JSON
+/// reports it) and overrides the environment variable; and the image does not depend on it.
+#[test]
+fn kernel_options_are_checked_listed_applied_and_leave_the_image_alone() {
+    for (bad, says) in [
+        ("walk-queue=2", "walk-queue=2"),
+        ("no-such=1", "no kernel option 'no-such'"),
+        ("take-tiles", "expected KEY=VALUE"),
+    ] {
+        fails_naming(&caustica(&["render", "--kernel-option", bad, "-o", "x.png", "-q"]), &[says]);
+        fails_naming(&caustica(&["bench", "--kernel-option", bad]), &[says]);
+    }
+    let help = caustica(&["bench", "--kernel-option", "help"]);
+    assert!(help.status.success());
+    let text = String::from_utf8_lossy(&help.stdout);
+    for key in ["wavefront", "walk-queue", "walk-records", "take-tiles", "workgroup", "experimental", "GPU"] {
+        assert!(text.contains(key), "help does not list {key}: {text}");
+    }
+    let records = |extra: &[&str], env: Option<&str>| {
+        let mut args = vec!["bench", "--width", "8", "--height", "8", "--spp", "1", "--json"];
+        args.extend_from_slice(extra);
+        let mut command = caustica_command(&args);
+        if let Some(value) = env {
+            command.env("CAUSTICA_WALK_RECORDS", value);
+        }
+        let o = command.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        summary["walk_records"].as_str().unwrap().to_owned()
+    };
+    assert_eq!(records(&["--kernel-option", "walk-records=storage"], None), "storage");
+    assert_eq!(records(&["--kernel-option", "walk-records=texels"], Some("storage")), "texels", "the flag wins");
+    assert_eq!(records(&[], Some("storage")), "storage");
+    let dir = temp_dir("cli-kernel-options");
+    let render = |name: &str, option: &str| {
+        let out = dir.join(name);
+        let args = ["render", "-o", out.to_str().unwrap(), "--width", "16", "--height", "12", "--spp", "2", "-q"];
+        let o = caustica(&[&args[..], &["--kernel-option", option]].concat());
+        assert!(o.status.success(), "{option}: {}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    assert_eq!(
+        render("a.pfm", "walk-records=texels"),
+        render("b.pfm", "walk-records=storage"),
+        "walk-records changed the image"
+    );
+}

@@ -16,7 +16,8 @@ use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic};
 use crate::process_time::cpu_seconds;
 use crate::render::{
-    AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, WalkRecords, Workgroup,
+    AovSet, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, WalkQueue, WalkRecords,
+    Workgroup,
 };
 use crate::scene::Scene;
 use anyhow::Result;
@@ -24,11 +25,13 @@ use serde_json::{json, Value};
 use std::time::Instant;
 
 /// How the kernel measured is compiled and dispatched: the A/B switches of `caustica bench`.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct KernelSetup {
     pub choice: KernelChoice,
     /// The order of the workgroups' rows; `None`: the device's own ([`GroupOrder::for_device`]).
     pub group_order: Option<GroupOrder>,
+    /// The kernel options over the device's defaults (`--kernel-option`, render/kernel_options.rs).
+    pub options: KernelOptions,
 }
 
 /// Wall time the warm-up renders for at least, before the timed samples: a GPU idles at a
@@ -93,10 +96,10 @@ pub struct Measurement {
 
 /// Renders `scene` at its film's size and sample count (seed 1) with the kernel set up as `setup`
 /// says and times it.
-pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup) -> Result<Measurement> {
+pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: &KernelSetup) -> Result<Measurement> {
     let (width, height, spp) = (scene.film.width, scene.film.height, scene.film.spp);
     let setup_start = Instant::now();
-    let mut renderer = Renderer::with_kernel(ctx, scene, 1, aovs, setup.choice)?;
+    let mut renderer = Renderer::with_options(ctx, scene, 1, aovs, setup.choice, &setup.options)?;
     if let Some(order) = setup.group_order {
         renderer.set_group_order(order);
     }

@@ -145,7 +145,7 @@ pub fn run_suite(
     entries: &[SuiteEntry],
     overrides: FilmOverrides,
     aovs: AovSet,
-    kernel: KernelSetup,
+    kernel: &KernelSetup,
     load: impl Fn(&Path) -> Result<Scene>,
 ) -> SuiteOutcome {
     let mut outcome = SuiteOutcome::default();

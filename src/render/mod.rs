@@ -7,10 +7,13 @@ pub mod bindings;
 mod chunks;
 mod env_sampling;
 mod features;
+mod frame;
 mod glsl_block;
 mod group_order;
 mod interface;
 mod kernel;
+mod kernel_options;
+mod kernel_setup;
 pub mod layout;
 mod light_selection;
 mod renderer;
@@ -29,16 +32,20 @@ pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
 pub use chunks::UNSPLIT;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
+pub use frame::{frame_params, TEXTURE_BUDGET_BYTES};
 pub use group_order::GroupOrder;
 pub use kernel::{assemble_with_kernel_files, kernel_source, kernel_spirv, shader_file, SHADER_DIR_VAR};
-pub use renderer::{frame_params, GeometryReport, KernelChoice, Renderer, MAX_SAMPLES_PER_PIXEL, TEXTURE_BUDGET_BYTES};
+pub use kernel_options::{
+    help as kernel_options_help, DeviceClass, KernelChoices, KernelOption, KernelOptions, OPTIONS as KERNEL_OPTIONS,
+    TAKE_TILES_VAR, WALK_QUEUE_VAR, WALK_RECORDS_VAR, WAVEFRONT_VAR, WORKGROUP_VAR,
+};
+pub use renderer::{GeometryReport, Renderer, MAX_SAMPLES_PER_PIXEL};
 pub use scene_data::SceneData;
-pub use tile_taking::TAKE_TILES_VAR;
-pub use variant::KernelVariant;
-pub use walk_queue::{WalkQueue, WALK_QUEUE_VAR};
-pub use walk_records::{WalkRecords, WALK_RECORDS_VAR};
-pub use wavefront::{WavefrontStage, WAVEFRONT_VAR};
-pub use workgroup::{Workgroup, WORKGROUP_VAR};
+pub use variant::{KernelChoice, KernelVariant};
+pub use walk_queue::{QueueRequest, WalkQueue};
+pub use walk_records::WalkRecords;
+pub use wavefront::WavefrontStage;
+pub use workgroup::Workgroup;
 
 /// Rec. 709 luminance of linear RGB (the first three values): what light and environment sampling
 /// make their distributions proportional to (lights.glsl evaluates the same weights in the kernel).

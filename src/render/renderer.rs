@@ -8,27 +8,21 @@
 
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
-use super::bindings::{self, BufferBinding, KernelBuffer, Shape};
-use super::chunks::{self, SplitPlans, UNSPLIT};
+use super::bindings::{BufferBinding, KernelBuffer};
 use super::features::SceneFeatures;
+use super::frame::set_camera_params;
 use super::group_order::GroupOrder;
-use super::kernel::kernel_spirv;
-use super::layout::{
-    FrameParams, GpuStats, PassParams, FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, INSTANCE_PRIMITIVES,
-    LOOP_CHECK_ITERATIONS, SAMPLER_INDEPENDENT, SAMPLER_SOBOL,
-};
-use super::scene_data::SceneData;
-use super::tile_taking;
-use super::variant::KernelVariant;
+use super::kernel_options::KernelOptions;
+use super::kernel_setup::{scene_hash, Initial, KernelPlan, Kernels, CLEARED_STATS};
+use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS};
+use super::variant::KernelChoice;
 use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
-use super::wavefront::{self, WavefrontKernels, WavefrontStage};
 use super::workgroup::Workgroup;
-use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic};
+use crate::gpu::{Buffer, DeviceType, GpuContext, KernelStatistic};
 use crate::image::{mean_image, RgbImage};
-use crate::scene::{Camera, Filter, Sampler, Scene};
-use anyhow::{Context as _, Result};
-use bytemuck::Zeroable;
+use crate::scene::{Camera, Scene};
+use anyhow::Result;
 use std::time::Instant;
 
 /// Wall time one dispatch aims for on a GPU. Windows' GPU watchdog fires at 2 s.
@@ -125,12 +119,6 @@ pub struct Renderer<'a> {
     group_order: GroupOrder,
 }
 
-/// The compiled kernels a pass runs: the megakernel, or the wavefront's three (wavefront.rs).
-enum Kernels {
-    Megakernel(ComputeKernel),
-    Wavefront(WavefrontKernels),
-}
-
 /// A pass cut into bands and dispatched a band per [`Renderer::render_step`]: rows before
 /// `next_row` hold `target` samples per pixel, the rest `samples_done`.
 #[derive(Clone, Copy, Debug)]
@@ -138,16 +126,6 @@ struct PassInProgress {
     target: u32,
     band: u32,
     next_row: u32,
-}
-
-/// Which kernel a renderer compiles (features.rs).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum KernelChoice {
-    /// Compiled for what the scene uses: the default.
-    #[default]
-    ForScene,
-    /// Every feature compiled in: what specialization is measured against.
-    General,
 }
 
 /// What was uploaded, for logs and `caustica bench`.
@@ -165,234 +143,6 @@ pub struct GeometryReport {
     pub split_arrays: Vec<(&'static str, u32)>,
 }
 
-/// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so). The same
-/// bound caps one decoded texture (a larger one could never be uploaded whole).
-pub const TEXTURE_BUDGET_BYTES: u64 = crate::scene::MAX_TEXTURE_BYTES;
-
-/// The statistics buffer's contents at the start of every dispatch.
-const CLEARED_STATS: GpuStats = GpuStats {
-    ray_count: 0,
-    nonfinite_samples: 0,
-    pixels_complete: 0,
-    samples_added: 0,
-    max_loop_iterations: 0,
-    paths_in_flight_even: 0,
-    paths_in_flight_odd: 0,
-    tiles_taken: 0,
-};
-
-pub fn frame_params(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
-    let mut params = frame_params_without_camera(scene, data, seed);
-    set_camera_params(&mut params, &scene.camera);
-    params
-}
-
-/// Writes the camera's fields of `params` (the film size must already be there).
-fn set_camera_params(params: &mut FrameParams, cam: &Camera) {
-    let forward = (cam.look_at - cam.position).normalize();
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
-    params.cam_origin = cam.position.into();
-    params.cam_forward = forward.into();
-    params.tan_half_fov = (cam.fov_deg.to_radians() * 0.5).tan();
-    params.cam_right = right.into();
-    params.aspect = params.width as f32 / params.height as f32;
-    params.cam_up = up.into();
-    params.lens_radius = cam.aperture;
-    params.focus_distance = cam.focus_distance;
-}
-
-fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> FrameParams {
-    let rot = data.env_rotation_deg.to_radians();
-    let i = &scene.integrator;
-    let filter = match scene.film.filter {
-        Filter::Box => FILTER_BOX,
-        Filter::Tent => FILTER_TENT,
-        Filter::Gaussian => FILTER_GAUSSIAN,
-    };
-    let sampler = match i.sampler {
-        Sampler::Independent => SAMPLER_INDEPENDENT,
-        Sampler::Sobol => SAMPLER_SOBOL,
-    };
-    FrameParams {
-        env_color: data.env_color.into(),
-        env_rotation: [rot.cos(), rot.sin()],
-        env_selection_probability: data.env_selection_probability(),
-        width: scene.film.width,
-        height: scene.film.height,
-        seed,
-        light_count: data.lights.len() as u32,
-        rr_start: i.rr_start,
-        nee: u32::from(i.nee),
-        env_kind: data.env_kind,
-        max_bounces: i.max_bounces,
-        env_width: data.env_size[0],
-        env_height: data.env_size[1],
-        instance_count: data.acceleration.instances.len() as u32,
-        node_count: data.acceleration.stats.nodes as u32,
-        rr_absorption: i.absorption.unwrap_or(-1.0),
-        rr_survival_min: 0.05,
-        rr_survival_max: 0.95,
-        radiance_clamp: i.clamp.unwrap_or(0.0),
-        pixel_filter: filter,
-        sampler_kind: sampler,
-        light_total_power: data.light_distribution.total_power,
-        punctual_light_count: data.punctual_lights.len() as u32,
-        shape_instance: data
-            .acceleration
-            .instances
-            .iter()
-            .position(|i| i.info[0] == INSTANCE_PRIMITIVES)
-            .map_or(u32::MAX, |i| i as u32),
-        ..FrameParams::zeroed()
-    }
-}
-
-/// What a buffer holds when a render starts: data, or zeroes to accumulate into.
-enum Initial<'d> {
-    Data(&'d [u8]),
-    Zeroes(u64),
-}
-
-impl Initial<'_> {
-    fn bytes(&self) -> u64 {
-        match self {
-            Initial::Data(data) => data.len() as u64,
-            Initial::Zeroes(bytes) => *bytes,
-        }
-    }
-}
-
-/// What `buffer` starts as in a render of `data` with these parameters and image size.
-fn initial_contents<'d>(
-    buffer: KernelBuffer,
-    params: &'d FrameParams,
-    data: &'d SceneData,
-    image_bytes: u64,
-) -> Initial<'d> {
-    use KernelBuffer::*;
-    let a = &data.acceleration;
-    Initial::Data(match buffer {
-        Frame => bytemuck::bytes_of(params),
-        Nodes => bytemuck::cast_slice(&a.nodes),
-        Primitives => bytemuck::cast_slice(&a.primitives),
-        Materials => bytemuck::cast_slice(&data.materials),
-        Lights => bytemuck::cast_slice(&data.lights),
-        EnvTexels => bytemuck::cast_slice(&data.env_texels),
-        Accum | AovAlbedoDepth | AovNormalHits => return Initial::Zeroes(image_bytes),
-        // Each pixel's path state (wavefront.rs): image_bytes is 16 bytes a pixel.
-        PathStates => return Initial::Zeroes(image_bytes * wavefront::STATE_VEC4S),
-        Stats => bytemuck::bytes_of(&CLEARED_STATS),
-        Instances => bytemuck::cast_slice(&a.instances),
-        MeshTriangles => bytemuck::cast_slice(&a.triangles),
-        TriangleMaterials => bytemuck::cast_slice(&a.triangle_materials),
-        VertexNormals => bytemuck::cast_slice(&a.normals),
-        VertexUvs => bytemuck::cast_slice(&a.uvs),
-        TextureInfos => bytemuck::cast_slice(&data.textures),
-        Texels => bytemuck::cast_slice(&data.texels),
-        EnvCdf => bytemuck::cast_slice(&data.env_cdf),
-        LightAlias => bytemuck::cast_slice(&data.light_distribution.table),
-        PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
-        TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
-        VertexTangents => bytemuck::cast_slice(&a.tangents),
-    })
-}
-
-/// Hex BLAKE3 of the frame parameters (seed zeroed) and every scene buffer (the storage buffers the
-/// kernel only reads), in binding order. It covers what the scene file references (meshes,
-/// textures, probes) and the film size as they reach the kernel, so partial renders that hash
-/// alike rendered the same image.
-fn scene_hash(params_without_seed: &FrameParams, contents: &[(&BufferBinding, Initial)]) -> String {
-    let mut hasher = blake3::Hasher::new();
-    hasher.update(bytemuck::bytes_of(params_without_seed));
-    for (binding, contents) in contents {
-        if let (true, Initial::Data(bytes)) = (is_hashed(binding), contents) {
-            // Length-prefixed so that bytes cannot move between neighbouring buffers unnoticed.
-            hasher.update(&(bytes.len() as u64).to_le_bytes());
-            hasher.update(bytes);
-        }
-    }
-    hasher.finalize().to_hex().to_string()
-}
-
-/// Whether [`scene_hash`] covers the buffer: the scene data the kernel only reads.
-fn is_hashed(binding: &BufferBinding) -> bool {
-    !binding.is_written() && !matches!(binding.shape, Shape::UniformBlock(_))
-}
-
-/// Bytes one binding of `binding` can see on `device`: a texel buffer's as many texels as the
-/// device allows in one, a storage buffer's its storage range.
-fn binding_range(device: &DeviceInfo, binding: &BufferBinding) -> u64 {
-    match binding.texel_words() {
-        Some(words) => device.max_texel_buffer_range(words),
-        None => device.max_storage_buffer_range,
-    }
-}
-
-/// How each large array is split across bindings (see chunks.rs), or why the scene cannot fit the
-/// device: an array larger than its bindings can see, more storage bindings than the kernel may
-/// have, or more bytes than the device's memory. Checked before any upload; the message says how
-/// much is needed and how much there is.
-fn plan_bindings<'b>(
-    ctx: &GpuContext,
-    scene: &str,
-    sizes: impl Iterator<Item = (&'b BufferBinding, u64)> + Clone,
-) -> Result<SplitPlans> {
-    let mib = |b: u64| b as f64 / 1048576.0;
-    let device = &ctx.info;
-    let range = device.max_storage_buffer_range;
-    let mut plans = UNSPLIT;
-    let (mut storage_bindings, mut texel_bindings) = (0, 0);
-    for (binding, bytes) in sizes.clone() {
-        let name = binding.what;
-        match (binding.shape, binding.chunked_element()) {
-            (Shape::UniformBlock(_), _) => {}
-            (_, Some(element)) => {
-                let (alignment, count) = match binding.is_texel_buffer() {
-                    true => (device.min_texel_buffer_offset_alignment, &mut texel_bindings),
-                    false => (device.min_storage_buffer_offset_alignment, &mut storage_bindings),
-                };
-                let plan = &mut plans[binding.buffer];
-                *plan = chunks::plan(element.bytes, bytes, binding_range(device, binding), alignment).map_err(|e| {
-                    anyhow::anyhow!("{scene}: the {name} need {:.1} MiB but {} allows {e}", mib(bytes), device.name)
-                })?;
-                *count += plan.chunks;
-            }
-            _ if bytes > range => anyhow::bail!(
-                "{scene}: the {name} need {:.1} MiB but {} allows at most {:.1} MiB per storage buffer",
-                mib(bytes),
-                device.name,
-                mib(range)
-            ),
-            _ => storage_bindings += 1,
-        }
-    }
-    if storage_bindings > device.max_storage_buffers_per_stage {
-        anyhow::bail!(
-            "{scene}: the scene needs {storage_bindings} storage buffer bindings but {} allows {} (its arrays are too large to split further)",
-            device.name,
-            device.max_storage_buffers_per_stage
-        );
-    }
-    if texel_bindings > device.max_texel_buffers_per_stage {
-        anyhow::bail!(
-            "{scene}: the scene needs {texel_bindings} texel buffer bindings but {} allows {} (its arrays are too large to split further)",
-            device.name,
-            device.max_texel_buffers_per_stage
-        );
-    }
-    let total: u64 = sizes.map(|(_, b)| b).sum();
-    if device.device_local_bytes > 0 && total > device.device_local_bytes {
-        anyhow::bail!(
-            "{scene}: the scene needs {:.1} MiB of GPU memory but {} has {:.1} MiB",
-            mib(total),
-            device.name,
-            mib(device.device_local_bytes)
-        );
-    }
-    Ok(plans)
-}
-
 impl<'a> Renderer<'a> {
     /// A renderer of the beauty alone.
     pub fn new(ctx: &'a GpuContext, scene: &Scene, seed: u32) -> Result<Self> {
@@ -405,8 +155,9 @@ impl<'a> Renderer<'a> {
         Self::with_kernel(ctx, scene, seed, aovs, KernelChoice::ForScene)
     }
 
-    /// A renderer whose kernel is compiled as `choice` says. The image is the same bit for bit
-    /// either way (tests/specialization.rs); only the speed differs.
+    /// A renderer whose kernel is compiled as `choice` says, and runs as the `CAUSTICA_*`
+    /// environment variables ask (kernel_options.rs). The image is the same bit for bit either way
+    /// (tests/specialization.rs); only the speed differs.
     pub fn with_kernel(
         ctx: &'a GpuContext,
         scene: &Scene,
@@ -414,147 +165,37 @@ impl<'a> Renderer<'a> {
         aovs: AovSet,
         choice: KernelChoice,
     ) -> Result<Self> {
-        // One texel buffer holds every texture: it must fit the bindings it can be split across.
-        let texels = KernelBuffer::Texels.entry();
-        let texel_bytes = texels.chunked_element().expect("texels may be split").bytes;
-        let texture_budget =
-            TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texel_bytes, binding_range(&ctx.info, texels)));
-        let data = SceneData::new(scene, texture_budget);
-        if data.texture_bytes() < data.texture_bytes_requested {
-            eprintln!(
-                "caustica: {}: textures downsampled from {:.1} MiB to {:.1} MiB to fit the texture budget",
-                scene.name,
-                data.texture_bytes_requested as f64 / 1048576.0,
-                data.texture_bytes() as f64 / 1048576.0
-            );
-        }
+        Self::with_options(ctx, scene, seed, aovs, choice, &KernelOptions::from_env()?)
+    }
+
+    /// A renderer whose kernel is compiled as `choice` says and runs as `options` ask, over the
+    /// device's defaults (kernel_options.rs): planned, its buffers uploaded, bound and compiled
+    /// (kernel_setup.rs).
+    pub fn with_options(
+        ctx: &'a GpuContext,
+        scene: &Scene,
+        seed: u32,
+        aovs: AovSet,
+        choice: KernelChoice,
+        options: &KernelOptions,
+    ) -> Result<Self> {
+        let plan = KernelPlan::new(ctx, scene, seed, aovs, choice, options)?;
+        let buffers = plan.upload(ctx)?;
+        let descriptors = plan.bind(&buffers);
+        let (kernels, statistics) = plan.compile(ctx, &descriptors)?;
+        let KernelPlan { data, params, loop_limit, choices, scene_hash, hashed_bytes, split_arrays, variant, .. } =
+            plan;
+        let plan_features = variant.features;
         let (width, height) = (scene.film.width, scene.film.height);
-        let image_bytes = width as u64 * height as u64 * 16;
-        let params = frame_params(scene, &data, seed);
-        let loop_limit = ctx.loop_limit()?;
-        let features = match choice {
-            KernelChoice::ForScene => SceneFeatures::of(&data),
-            KernelChoice::General => SceneFeatures::ALL,
-        };
-        let workgroup = Workgroup::chosen()?;
-        let use_wavefront = wavefront::requested()?;
-        if use_wavefront && loop_limit.is_some() {
-            anyhow::bail!(
-                "{}=1: {} ends shader loops early, and the wavefront runs only where loops run to their end",
-                wavefront::WAVEFRONT_VAR,
-                ctx.info.name
-            );
-        }
-        let walk_queue = match use_wavefront {
-            true => None,
-            false => WalkQueue::for_scene(
-                &ctx.info,
-                loop_limit.is_some(),
-                workgroup.invocations(),
-                &features,
-                data.acceleration.nodes.first(),
-                &data.acceleration.instances,
-            )?,
-        };
-        let take_tiles = tile_taking::takes_tiles(&ctx.info, loop_limit.is_some(), use_wavefront, workgroup)?;
-        // The wavefront's three kernels bind the same buffers: the first stands for them here.
-        let walk_records = WalkRecords::for_device(&ctx.info)?;
-        let variant = KernelVariant {
-            aovs: aovs.needs_kernel(),
-            count_loop_iterations: loop_limit.is_some(),
-            features,
-            walk_queue,
-            workgroup,
-            take_tiles,
-            wavefront: use_wavefront.then_some(WavefrontStage::Extend),
-            walk_records,
-        };
-        // Every buffer this kernel variant binds, in binding order, as it declares them, with what
-        // it starts as.
-        let bound: Vec<BufferBinding> = bindings::bound_in(variant).collect();
-        let contents: Vec<(&BufferBinding, Initial)> =
-            bound.iter().map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes))).collect();
-        let plans = plan_bindings(ctx, &scene.name, contents.iter().map(|(b, c)| (*b, c.bytes())))?;
-        let scene_hash = scene_hash(&frame_params(scene, &data, 0), &contents);
-        let mut buffers = Vec::new();
-        for (binding, initial) in &contents {
-            let kind = match binding.shape {
-                Shape::UniformBlock(_) => BufferKind::Uniform,
-                // Cleared before and read after every dispatch: kept where the host sees it.
-                _ if binding.buffer == KernelBuffer::Stats => BufferKind::HostStorage,
-                _ => BufferKind::Storage,
-            };
-            let zeroes;
-            let bytes = match initial {
-                Initial::Data(data) => *data,
-                Initial::Zeroes(n) => {
-                    zeroes = vec![0u8; *n as usize];
-                    &zeroes[..]
-                }
-            };
-            let buffer = Buffer::with_data(ctx, binding.what, kind, bytes)
-                .with_context(|| format!("uploading {}", scene.name))?;
-            buffers.push((binding.buffer, buffer));
-        }
-        let mut descriptors = Vec::new();
-        for ((binding, initial), (_, buffer)) in contents.iter().zip(&buffers) {
-            let plan = plans[binding.buffer];
-            match binding.chunked_element() {
-                Some(element) if plan.chunks > 1 => {
-                    for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
-                        descriptors.push(Binding {
-                            binding: chunks::window_binding(binding, c as u32),
-                            buffer,
-                            offset,
-                            range,
-                            as_texels: binding.texel_words(),
-                        });
-                    }
-                }
-                // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => descriptors
-                    .push(Binding { as_texels: binding.texel_words(), ..Binding::whole(binding.binding, buffer) }),
-            }
-        }
-        let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
-        let split_arrays = contents
-            .iter()
-            .map(|(b, _)| (b.what, plans[b.buffer].chunks))
-            .filter(|&(_, windows)| windows > 1)
-            .collect();
-        let push_size = std::mem::size_of::<PassParams>() as u32;
-        let (kernels, statistics) = if use_wavefront {
-            let mut kernels = Vec::new();
-            let mut statistics = Vec::new();
-            for stage in WavefrontStage::ALL {
-                let k = ComputeKernel::new(
-                    ctx,
-                    kernel_spirv(&plans, KernelVariant { wavefront: Some(stage), ..variant })?,
-                    &descriptors,
-                    push_size,
-                )?;
-                statistics.extend(
-                    k.statistics
-                        .iter()
-                        .map(|s| KernelStatistic { name: format!("{stage:?}: {}", s.name), value: s.value.clone() }),
-                );
-                kernels.push(k);
-            }
-            (Kernels::Wavefront(WavefrontKernels { kernels }), statistics)
-        } else {
-            let k = ComputeKernel::new(ctx, kernel_spirv(&plans, variant)?, &descriptors, push_size)?;
-            let statistics = k.statistics.clone();
-            (Kernels::Megakernel(k), statistics)
-        };
         Ok(Self {
             ctx,
             kernels: Some(kernels),
             statistics,
-            features,
-            walk_queue,
-            take_tiles,
-            walk_records,
-            workgroup,
+            features: plan_features,
+            walk_queue: choices.walk_queue,
+            take_tiles: choices.take_tiles,
+            walk_records: choices.walk_records,
+            workgroup: choices.workgroup,
             buffers,
             aovs,
             width,
@@ -830,8 +471,8 @@ impl<'a> Renderer<'a> {
                 None => continue,
             });
         }
-        let contents: Vec<(&BufferBinding, Initial)> =
-            contents.iter().map(|(b, bytes)| (*b, Initial::Data(bytes))).collect();
+        let contents: Vec<(BufferBinding, Initial)> =
+            contents.iter().map(|(b, bytes)| (**b, Initial::Data(bytes))).collect();
         self.scene_hash = scene_hash(&FrameParams { seed: 0, ..self.params }, &contents);
         Ok(())
     }

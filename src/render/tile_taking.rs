@@ -19,23 +19,28 @@
 //! - **whole subgroups**: the workgroup's invocations are a multiple of the subgroup size, so the
 //!   tiles cover the workgroup.
 //!
-//! `CAUSTICA_TAKE_TILES` changes the first condition, for an A/B of one binary: `0` compiles no
+//! The `take-tiles` kernel option (`CAUSTICA_TAKE_TILES`, kernel_options.rs) changes the first condition, for an A/B of one binary: `0` compiles no
 //! counter, `1` compiles it on any device that meets the others.
 
 use super::workgroup::Workgroup;
-use crate::gpu::{DeviceInfo, DeviceType};
+use crate::gpu::DeviceInfo;
 use anyhow::{bail, Result};
 
-/// Names the environment variable that turns tile taking off (`0`) or on for any device (`1`).
-pub const TAKE_TILES_VAR: &str = "CAUSTICA_TAKE_TILES";
-
 /// Whether the kernel for `device` (whose loops are cut short where `loop_limit`), the wavefront's
-/// kernels where `wavefront`, in workgroups of `workgroup`, takes its tiles from the counter. An
-/// error where [`TAKE_TILES_VAR`] asks for what cannot run.
-pub fn takes_tiles(device: &DeviceInfo, loop_limit: bool, wavefront: bool, workgroup: Workgroup) -> Result<bool> {
+/// kernels where `wavefront`, in workgroups of `workgroup`, takes its tiles from the counter, where
+/// it is `wanted` (the device's default, or the `take-tiles` option where `asked`). An error where
+/// the option asks for what cannot run.
+pub fn takes_tiles(
+    wanted: bool,
+    asked: bool,
+    device: &DeviceInfo,
+    loop_limit: bool,
+    wavefront: bool,
+    workgroup: Workgroup,
+) -> Result<bool> {
     let whole_subgroups = device.subgroup_size > 0 && workgroup.invocations().is_multiple_of(device.subgroup_size);
     let possible = !loop_limit && !wavefront && whole_subgroups;
-    decide(std::env::var(TAKE_TILES_VAR).ok().as_deref(), device.kind, possible).map_err(|why| {
+    decide(wanted, asked, possible).map_err(|why| {
         anyhow::anyhow!(
             "{why} ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations a workgroup, subgroups of {})",
             device.name,
@@ -45,15 +50,12 @@ pub fn takes_tiles(device: &DeviceInfo, loop_limit: bool, wavefront: bool, workg
     })
 }
 
-/// [`takes_tiles`] for the variable's value `request`, on a device of `kind` where taking tiles
-/// is `possible`.
-fn decide(request: Option<&str>, kind: DeviceType, possible: bool) -> Result<bool> {
-    match request {
-        None => Ok(kind == DeviceType::Cpu && possible),
-        Some("0") => Ok(false),
-        Some("1") if possible => Ok(true),
-        Some("1") => bail!("{TAKE_TILES_VAR}=1: tiles are taken only by the megakernel, on a device whose loops run to their end, in workgroups of whole subgroups"),
-        Some(other) => bail!("{TAKE_TILES_VAR}={other}: expected 0 (each workgroup renders its own pixels) or 1 (subgroups take tiles from a counter)"),
+/// [`takes_tiles`] where taking tiles is `possible`.
+fn decide(wanted: bool, asked: bool, possible: bool) -> Result<bool> {
+    match (wanted, possible) {
+        (true, true) => Ok(true),
+        (true, false) if asked => bail!("take-tiles=1: tiles are taken only by the megakernel, on a device whose loops run to their end, in workgroups of whole subgroups"),
+        _ => Ok(false),
     }
 }
 
@@ -67,15 +69,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cpu_devices_take_tiles_where_they_can_and_the_variable_overrides_the_kind() {
-        assert!(decide(None, DeviceType::Cpu, true).unwrap());
-        assert!(!decide(None, DeviceType::Cpu, false).unwrap(), "a CPU device with a loop limit took tiles");
-        assert!(!decide(None, DeviceType::Discrete, true).unwrap());
-        assert!(decide(Some("1"), DeviceType::Discrete, true).unwrap());
-        assert!(!decide(Some("0"), DeviceType::Cpu, true).unwrap());
-        let impossible = decide(Some("1"), DeviceType::Cpu, false).unwrap_err().to_string();
+    fn tiles_are_taken_where_wanted_and_possible_and_asking_for_the_impossible_fails() {
+        assert!(decide(true, false, true).unwrap());
+        assert!(!decide(true, false, false).unwrap(), "a default took tiles where it cannot");
+        assert!(!decide(false, true, true).unwrap());
+        let impossible = decide(true, true, false).unwrap_err().to_string();
         assert!(impossible.contains("loops run to their end"), "{impossible}");
-        let bad = decide(Some("yes"), DeviceType::Cpu, true).unwrap_err().to_string();
-        assert!(bad.contains("CAUSTICA_TAKE_TILES=yes") && bad.contains("expected 0"), "{bad}");
     }
 }

@@ -29,3 +29,13 @@ pub struct KernelVariant {
     /// How it reads the walk's nodes and mesh triangles (walk_records.rs).
     pub walk_records: WalkRecords,
 }
+
+/// Which kernel a renderer compiles (features.rs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum KernelChoice {
+    /// Compiled for what the scene uses: the default.
+    #[default]
+    ForScene,
+    /// Every feature compiled in: what specialization is measured against.
+    General,
+}

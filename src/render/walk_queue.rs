@@ -13,7 +13,7 @@
 //!   its walk to collect the instances;
 //! - **the queue fits the device's shared memory**.
 //!
-//! `CAUSTICA_WALK_QUEUE` changes the first condition, for an A/B of one binary: `0` compiles no
+//! The `walk-queue` kernel option (`CAUSTICA_WALK_QUEUE`, kernel_options.rs) changes the first condition, for an A/B of one binary: `0` compiles no
 //! queue, `1` compiles it on any device (a GPU's kernel then has subgroup barriers between the
 //! round's steps, since its lanes need not run in step), and `barriers` also gives lavapipe's
 //! kernel the barriers, where a workgroup is one subgroup (gallivm makes a subgroup barrier a
@@ -44,36 +44,14 @@ pub const SHARED_BYTES_PER_WALK: u32 = 16 + 16 + 8;
 /// ray and a shadow ray (queued_paths.glsl).
 const WALKS_PER_LANE_PER_INSTANCE: u32 = 2 * 2;
 
-/// Names the environment variable that turns the queue off (`0`) or on for any device (`1`,
-/// `barriers`), for A/B measurement of one binary (see the module's documentation).
-pub const WALK_QUEUE_VAR: &str = "CAUSTICA_WALK_QUEUE";
-
-/// What [`WALK_QUEUE_VAR`] asks for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Request {
-    /// Unset: the queue on lavapipe alone.
-    Default,
+/// What was asked of the queue (kernel_options.rs: `walk-queue`, `CAUSTICA_WALK_QUEUE`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum QueueRequest {
     Off,
-    /// On any device, with subgroup barriers except on lavapipe.
+    /// Where the scene qualifies, with subgroup barriers except on lavapipe.
     On,
-    /// On any device, with subgroup barriers on every one.
+    /// Where the scene qualifies, with subgroup barriers on every device.
     WithBarriers,
-}
-
-impl Request {
-    fn parse(value: Option<&str>) -> Result<Request> {
-        Ok(match value {
-            None => Request::Default,
-            Some("0") => Request::Off,
-            Some("1") => Request::On,
-            Some("barriers") => Request::WithBarriers,
-            Some(other) => bail!("{WALK_QUEUE_VAR}={other}: expected 0 (no queue), 1 (the queue on any device) or barriers (with subgroup barriers on lavapipe too)"),
-        })
-    }
-
-    fn from_env() -> Result<Request> {
-        Request::parse(std::env::var(WALK_QUEUE_VAR).ok().as_deref())
-    }
 }
 
 impl WalkQueue {
@@ -86,8 +64,9 @@ impl WalkQueue {
     /// The queue for a scene with these `features`, whose top-level root is `root` over
     /// `instances`, on `device` (whose loops are cut short where `loop_limit`) in workgroups of
     /// `lanes` invocations; `None` where the kernel walks each lane's rays itself (see the
-    /// module's conditions). An error where [`WALK_QUEUE_VAR`] asks for what cannot run.
+    /// module's conditions). An error where `request` asks for what cannot run.
     pub fn for_scene(
+        request: QueueRequest,
         device: &DeviceInfo,
         loop_limit: bool,
         lanes: u32,
@@ -95,14 +74,13 @@ impl WalkQueue {
         root: Option<&WideNode>,
         instances: &[GpuInstance],
     ) -> Result<Option<WalkQueue>> {
-        let request = Request::from_env()?;
         let lavapipe = device.is_lavapipe();
-        if request == Request::Off || (request == Request::Default && !lavapipe) {
+        if request == QueueRequest::Off {
             return Ok(None);
         }
-        let subgroup_barriers = !lavapipe || request == Request::WithBarriers;
+        let subgroup_barriers = !lavapipe || request == QueueRequest::WithBarriers;
         if lavapipe && subgroup_barriers && lanes > device.subgroup_size {
-            bail!("{WALK_QUEUE_VAR}=barriers: lavapipe runs a subgroup barrier as a workgroup barrier, so its kernel needs a workgroup of one subgroup ({} lanes, e.g. CAUSTICA_WORKGROUP={}x1), not {lanes}", device.subgroup_size, device.subgroup_size);
+            bail!("walk-queue=barriers: lavapipe runs a subgroup barrier as a workgroup barrier, so its kernel needs a workgroup of one subgroup ({} lanes, e.g. workgroup={}x1), not {lanes}", device.subgroup_size, device.subgroup_size);
         }
         let flat_top_level = features.bvh() && features.top_level && !features.top_level_tree;
         if loop_limit || !flat_top_level {
@@ -148,17 +126,5 @@ mod tests {
     fn four_instances_do_not_fit_lavapipes_32_kib() {
         assert!(WalkQueue { walks_per_ray: 3, subgroup_barriers: false }.shared_bytes(64) <= 32 * 1024);
         assert!(WalkQueue { walks_per_ray: 4, subgroup_barriers: false }.shared_bytes(64) > 32 * 1024);
-    }
-
-    #[test]
-    fn the_variable_takes_three_values_and_refuses_others() {
-        assert_eq!(Request::parse(None).unwrap(), Request::Default);
-        assert_eq!(Request::parse(Some("0")).unwrap(), Request::Off);
-        assert_eq!(Request::parse(Some("1")).unwrap(), Request::On);
-        assert_eq!(Request::parse(Some("barriers")).unwrap(), Request::WithBarriers);
-        for bad in ["", "2", "on", "Barriers"] {
-            let error = Request::parse(Some(bad)).unwrap_err().to_string();
-            assert!(error.contains(WALK_QUEUE_VAR) && error.contains("expected"), "{bad}: {error}");
-        }
     }
 }

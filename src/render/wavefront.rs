@@ -1,5 +1,6 @@
 //! The wavefront split of the path loop (shaders/wavefront.glsl), an alternative to the megakernel
-//! chosen by `CAUSTICA_WAVEFRONT=1` for an A/B of one binary. A pass over a band runs in rounds of
+//! chosen by the `wavefront=1` kernel option (`CAUSTICA_WAVEFRONT=1`, kernel_options.rs) for an A/B of one
+//! binary. A pass over a band runs in rounds of
 //! three kernels, each over every pixel of the band: EXTEND (each path's ray to its hit), SHADOW
 //! (each shadow ray the last vertex handed back) and SHADE (the vertex, and the next sample where
 //! one ends), the paths' state kept between them in a buffer (`path_states`,
@@ -15,9 +16,6 @@
 use super::layout::GpuStats;
 use crate::gpu::{ComputeKernel, GpuContext};
 use anyhow::{bail, Result};
-
-/// Names the environment variable that selects the wavefront (`1`) or the megakernel (`0`, or unset).
-pub const WAVEFRONT_VAR: &str = "CAUSTICA_WAVEFRONT";
 
 /// uvec4s of a pixel's state in `path_states` (wavefront.glsl's layout, which fails to compile
 /// with another count).
@@ -46,15 +44,6 @@ impl WavefrontStage {
             ("WAVEFRONT_STAGE", stage.map_or(0, |s| s as u32).to_string()),
             ("WAVEFRONT_STATE_VEC4S", format!("{STATE_VEC4S}u")),
         ]
-    }
-}
-
-/// Whether [`WAVEFRONT_VAR`] asks for the wavefront; an error for a value it does not know.
-pub fn requested() -> Result<bool> {
-    match std::env::var(WAVEFRONT_VAR).ok().as_deref() {
-        None | Some("0") => Ok(false),
-        Some("1") => Ok(true),
-        Some(other) => bail!("{WAVEFRONT_VAR}={other}: expected 1 (the wavefront) or 0 (the megakernel)"),
     }
 }
 

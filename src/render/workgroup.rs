@@ -2,13 +2,10 @@
 //! variant. Every device measured runs best at 8x8: lavapipe runs a subgroup of 8 lanes as one
 //! SIMD thread and a workgroup of 8x8 as eight of them (its walk queue is laid out for that), and
 //! on an NVIDIA H200 no other shape gained more than 3 % (docs/benchmarks/history.md, 2026-12-04, `3e96a5c`). A device
-//! found to want another shape would get its own here. `CAUSTICA_WORKGROUP=WxH` overrides the
-//! shape, for an A/B of one binary on one device.
+//! found to want another shape would get its own here. The `workgroup=WxH` kernel option
+//! (`CAUSTICA_WORKGROUP`, kernel_options.rs) overrides the shape, for an A/B of one binary on one device.
 
 use anyhow::{bail, Result};
-
-/// Names the environment variable that overrides the workgroup shape (`WxH`, e.g. `16x8`).
-pub const WORKGROUP_VAR: &str = "CAUSTICA_WORKGROUP";
 
 /// Most invocations in a workgroup: the least `maxComputeWorkGroupInvocations` Vulkan allows.
 const MAX_INVOCATIONS: u32 = 128;
@@ -29,14 +26,6 @@ impl Default for Workgroup {
 impl Workgroup {
     /// The shape every device ran before shapes were chosen per device, and lavapipe's.
     pub const EIGHT_BY_EIGHT: Workgroup = Workgroup { width: 8, height: 8 };
-
-    /// The shape kernels are compiled with: [`WORKGROUP_VAR`]'s where it is set, else 8x8.
-    pub fn chosen() -> Result<Workgroup> {
-        match std::env::var(WORKGROUP_VAR) {
-            Ok(text) => Workgroup::parse(&text).map_err(|e| anyhow::anyhow!("{WORKGROUP_VAR}={text}: {e}")),
-            Err(_) => Ok(Workgroup::default()),
-        }
-    }
 
     /// `WxH`, each a power of two, at most [`MAX_INVOCATIONS`] in all.
     pub fn parse(text: &str) -> Result<Workgroup> {
