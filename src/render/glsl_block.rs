@@ -11,6 +11,14 @@ use crate::gpu::TexelWords;
 pub trait GlslType: bytemuck::Pod {
     /// The type's name in GLSL.
     const NAME: &'static str;
+    /// What follows a member's name in GLSL: `[3]` for an array of three, else nothing.
+    const ARRAY: &'static str = "";
+}
+
+/// The rows of a 3x4 affine map (an instance's transforms).
+impl GlslType for [[f32; 4]; 3] {
+    const NAME: &'static str = "vec4";
+    const ARRAY: &'static str = "[3]";
 }
 
 macro_rules! glsl_names {
@@ -101,13 +109,16 @@ impl GlslTexels for [f32; 4] {
 pub struct GlslMember {
     pub name: &'static str,
     pub glsl_type: &'static str,
+    /// `[n]` after the name of an array member, else empty.
+    pub array: &'static str,
     pub offset: usize,
     pub doc: &'static [&'static str],
 }
 
-/// A host struct that the kernel sees as a uniform, push-constant or storage block.
+/// A host struct that the kernel sees as a uniform, push-constant or storage block, or as the
+/// element of an array (a record of layout.rs).
 pub trait GlslBlock: bytemuck::Pod {
-    /// The block's type name in GLSL (the host struct's name).
+    /// The block's type name in GLSL (the host struct's name unless declared `as "Name"`).
     const NAME: &'static str;
     /// Every field, in declaration order.
     const MEMBERS: &'static [GlslMember];
@@ -120,17 +131,27 @@ pub fn glsl_members(members: &[GlslMember]) -> String {
         for line in member.doc {
             out += &format!("    //{line}\n");
         }
-        out += &format!("    {} {};\n", member.glsl_type, member.name);
+        out += &format!("    {} {}{};\n", member.glsl_type, member.name, member.array);
     }
     out
 }
 
+/// `struct NAME { ... };` for a record, after its doc comment: what the kernel declares it as.
+pub fn glsl_struct<T: GlslBlock>(doc: &[&str]) -> String {
+    let mut out = String::new();
+    for line in doc {
+        out += &format!("//{line}\n");
+    }
+    out + &format!("struct {} {{\n{}}};\n", T::NAME, glsl_members(T::MEMBERS))
+}
+
 /// Declares a `#[repr(C)]`, `Pod` struct whose fields are all [`GlslType`]s, and its
-/// [`GlslBlock`] member list. Fields take doc comments only (they are copied into the GLSL).
+/// [`GlslBlock`] member list, under the struct's own name or the GLSL name given after `as`.
+/// Fields take doc comments only (they are copied into the GLSL).
 macro_rules! glsl_block {
     (
         $(#[$attr:meta])*
-        pub struct $name:ident {
+        pub struct $name:ident $(as $glsl_name:literal)? {
             $($(#[doc = $doc:literal])* pub $field:ident: $ty:ty,)*
         }
     ) => {
@@ -142,11 +163,13 @@ macro_rules! glsl_block {
         }
 
         impl $crate::render::glsl_block::GlslBlock for $name {
-            const NAME: &'static str = stringify!($name);
+            // The name after `as` where there is one, else the struct's.
+            const NAME: &'static str = [$($glsl_name,)? stringify!($name)][0];
             const MEMBERS: &'static [$crate::render::glsl_block::GlslMember] = &[$(
                 $crate::render::glsl_block::GlslMember {
                     name: stringify!($field),
                     glsl_type: <$ty as $crate::render::glsl_block::GlslType>::NAME,
+                    array: <$ty as $crate::render::glsl_block::GlslType>::ARRAY,
                     offset: ::std::mem::offset_of!($name, $field),
                     doc: &[$($doc),*],
                 },

@@ -5,6 +5,7 @@
 use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::interface;
+use super::layout::records_glsl;
 use super::tile_taking;
 use super::variant::KernelVariant;
 use super::walk_queue::WalkQueue;
@@ -66,18 +67,27 @@ pub fn shader_file(name: &str) -> Result<Cow<'static, str>> {
     }
 }
 
-/// The shader `main` assembled from `extra` files and every shader file of the kernel, as
-/// [`shader_file`] reads them, with `defines`.
+/// The shader `main` assembled from `extra` files, the generated records.glsl and every shader
+/// file of the kernel, as [`shader_file`] reads them, with `defines`.
 fn assemble_with(extra: &[(&str, &str)], main: &str, defines: &[(&str, String)]) -> Result<String> {
     let files = SHADERS.iter().map(|&(name, _)| Ok((name, shader_file(name)?))).collect::<Result<Vec<_>>>()?;
-    let sources: Vec<(&str, &str)> =
-        extra.iter().copied().chain(files.iter().map(|(name, text)| (*name, text.as_ref()))).collect();
+    let records = records_glsl();
+    let sources: Vec<(&str, &str)> = extra
+        .iter()
+        .copied()
+        .chain([(RECORDS_FILE, records.as_str())])
+        .chain(files.iter().map(|(name, text)| (*name, text.as_ref())))
+        .collect();
     assemble_source(&sources, main, defines)
 }
 
 /// Name of the generated file of the kernel's input declarations (bindings.rs), which
 /// layout.glsl includes.
 const INTERFACE_FILE: &str = "interface.glsl";
+
+/// Name of the generated file of the kernel's constants and record structs (layout.rs), which
+/// layout.glsl includes.
+const RECORDS_FILE: &str = "records.glsl";
 
 /// A compute shader of `main` (GLSL whose `#include`s name the kernel's shader files) with those
 /// files as [`shader_file`] reads them: test kernels run the kernel's own code, mutations included.

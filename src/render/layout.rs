@@ -1,151 +1,221 @@
-//! Host twins of the GPU structs in shaders/layout.glsl, and the blocks the kernel's GLSL is
-//! generated from (FrameParams, GpuStats, PassParams: see glsl_block.rs). Field order, sizes and
-//! the kind constants of the twins must match the GLSL; the tests below pin every offset.
+//! Everything the kernel reads whose layout the host decides, declared once here: the kind and flag
+//! constants, the record structs of the kernel's arrays (written into the kernel as `records.glsl`
+//! by [`records_glsl`]) and the blocks its `interface.glsl` declares (FrameParams, GpuStats,
+//! PassParams: see glsl_block.rs and interface.rs). The BVH's WideNode (bvh/wide_node.rs) is the
+//! one record declared by hand in layout.glsl, as four 16-byte loads rather than its host fields;
+//! the tests below pin every offset, and bindings.rs's compare the compiled kernel's.
 
-use super::glsl_block::{glsl_block, GlslTexels, GlslType, Texel};
+use super::glsl_block::{glsl_block, glsl_struct, GlslBlock, GlslTexels, GlslType, Texel};
 use crate::bvh::WideNode;
-use bytemuck::{Pod, Zeroable};
 
-pub const PRIM_SPHERE: u32 = 0;
-pub const PRIM_QUAD: u32 = 1;
-pub const PRIM_TRIANGLE: u32 = 2;
-/// Set in a triangle light's a.w (its place in `mesh_triangles`) when vertices 1 and 2 were swapped.
-pub const TRIANGLE_LIGHT_MIRRORED: u32 = 0x8000_0000;
+/// Declares `pub const NAME: u32 = value;` for each constant, in documented groups, and
+/// `GLSL_CONSTANT_GROUPS`, from which [`records_glsl`] writes them into the kernel.
+macro_rules! glsl_constants {
+    ($($(#[doc = $doc:literal])* $group:ident { $($name:ident = $value:expr),* $(,)? })*) => {
+        $($(pub const $name: u32 = $value;)*)*
+        /// Every constant group: its doc comment and its (name, value) pairs.
+        pub const GLSL_CONSTANT_GROUPS: &[(&[&str], &[(&str, u32)])] =
+            &[$((&[$($doc),*], &[$((stringify!($name), $name)),*])),*];
+    };
+}
 
-pub const INSTANCE_PRIMITIVES: u32 = 0;
-pub const INSTANCE_MESH: u32 = 1;
-pub const INSTANCE_HAS_NORMALS: u32 = 1;
-pub const INSTANCE_HAS_UVS: u32 = 2;
-pub const INSTANCE_HAS_TANGENTS: u32 = 4;
-pub const NO_TEXTURE: u32 = u32::MAX;
-pub const TEXTURE_SRGB: u32 = 1;
-/// A texture's wrap mode along u sits at this bit of its flags, along v at TEXTURE_WRAP_V_SHIFT.
-pub const TEXTURE_WRAP_U_SHIFT: u32 = 1;
-pub const TEXTURE_WRAP_V_SHIFT: u32 = 3;
-pub const TEXTURE_WRAP_REPEAT: u32 = 0;
-pub const TEXTURE_WRAP_CLAMP: u32 = 1;
-pub const TEXTURE_WRAP_MIRROR: u32 = 2;
+glsl_constants! {
+    /// Primitive kinds.
+    PRIMITIVE_KINDS { PRIM_SPHERE = 0, PRIM_QUAD = 1, PRIM_TRIANGLE = 2 }
+    /// Set in a triangle light's a.w (its place in `mesh_triangles`) when vertices 1 and 2 were
+    /// swapped to keep the front side of a placement that mirrors it.
+    TRIANGLE_LIGHT { TRIANGLE_LIGHT_MIRRORED = 0x8000_0000 }
+    /// Instance kinds: the scene's own spheres, quads and triangles (one group, identity
+    /// transform), or a placed triangle mesh.
+    INSTANCE_KINDS { INSTANCE_PRIMITIVES = 0, INSTANCE_MESH = 1 }
+    /// Instance flags: the mesh has per-vertex normals / texture coordinates / tangents (for
+    /// normal maps; a mesh with tangents has the other two).
+    INSTANCE_FLAGS { INSTANCE_HAS_NORMALS = 1, INSTANCE_HAS_UVS = 2, INSTANCE_HAS_TANGENTS = 4 }
+    /// A texture index that names no texture.
+    NO_TEXTURES { NO_TEXTURE = u32::MAX }
+    /// Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored); the
+    /// TEXTURE_WRAP_* mode along u at bit TEXTURE_WRAP_U_SHIFT and along v at TEXTURE_WRAP_V_SHIFT
+    /// (glTF samplers).
+    TEXTURE_FLAGS {
+        TEXTURE_SRGB = 1,
+        TEXTURE_WRAP_U_SHIFT = 1,
+        TEXTURE_WRAP_V_SHIFT = 3,
+        TEXTURE_WRAP_REPEAT = 0,
+        TEXTURE_WRAP_CLAMP = 1,
+        TEXTURE_WRAP_MIRROR = 2,
+    }
+    /// Material flags in `maps.w`: the rough lobes and the coat are Beckmann rather than GGX; the
+    /// T lobe is a thin sheet rather than the surface of a solid; the surface scatters on its
+    /// front side only and is black from behind (Mitsuba's BSDFs); a plastic whose coat reflects
+    /// light back down onto its base.
+    MATERIAL_FLAGS { MATERIAL_BECKMANN = 1, MATERIAL_THIN = 2, MATERIAL_ONE_SIDED = 4, MATERIAL_COAT_INTERNAL = 16 }
+    /// Alpha modes: always there; there where the opacity reaches the cutoff (glTF MASK); met
+    /// with probability equal to the opacity (glTF BLEND, MTL d).
+    ALPHA_MODES { ALPHA_OPAQUE = 0, ALPHA_MASK = 1, ALPHA_BLEND = 2 }
+    /// Fresnel of the reflector (R) lobe: none (a perfect reflector), a complex IOR eta + ik, or
+    /// Schlick's form with the albedo as F0 (glTF's metals).
+    CONDUCTORS { CONDUCTOR_MIRROR = 0, CONDUCTOR_COMPLEX = 1, CONDUCTOR_ALBEDO = 2 }
+    /// Lights without a surface (src/scene/light.rs).
+    LIGHT_KINDS { LIGHT_POINT = 0, LIGHT_SPOT = 1, LIGHT_DIRECTIONAL = 2 }
+    /// Environment kinds.
+    ENV_KINDS { ENV_CONSTANT = 0, ENV_ANGULAR = 1, ENV_LATLONG = 2 }
+    /// Pixel reconstruction filters.
+    FILTERS { FILTER_BOX = 0, FILTER_TENT = 1, FILTER_GAUSSIAN = 2 }
+}
 
-/// Material flags in `maps[3]` (u32 bits): Beckmann rather than GGX rough lobes and coat; a thin
-/// sheet rather than a solid's surface for the T lobe; black from behind; a plastic whose coat
-/// reflects light back down onto its base.
-pub const MATERIAL_BECKMANN: u32 = 1;
-pub const MATERIAL_THIN: u32 = 2;
-pub const MATERIAL_ONE_SIDED: u32 = 4;
-pub const MATERIAL_COAT_INTERNAL: u32 = 16;
-
-pub const ALPHA_OPAQUE: u32 = 0;
-pub const ALPHA_MASK: u32 = 1;
-pub const ALPHA_BLEND: u32 = 2;
-
-pub const CONDUCTOR_MIRROR: u32 = 0;
-pub const CONDUCTOR_COMPLEX: u32 = 1;
-pub const CONDUCTOR_ALBEDO: u32 = 2;
-
-pub const LIGHT_POINT: u32 = 0;
-pub const LIGHT_SPOT: u32 = 1;
-pub const LIGHT_DIRECTIONAL: u32 = 2;
-
-pub const ENV_CONSTANT: u32 = 0;
-pub const ENV_ANGULAR: u32 = 1;
-pub const ENV_LATLONG: u32 = 2;
-
-pub const FILTER_BOX: u32 = 0;
-pub const FILTER_TENT: u32 = 1;
-pub const FILTER_GAUSSIAN: u32 = 2;
-
+/// The random sequences (FrameParams::sampler_kind), declared in rng.glsl beside the samplers.
 pub const SAMPLER_INDEPENDENT: u32 = 0;
 pub const SAMPLER_SOBOL: u32 = 1;
 
-/// `struct Primitive`: see layout.glsl for what a, b and c hold per kind.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuPrimitive {
-    pub a: [f32; 4],
-    pub b: [f32; 4],
-    pub c: [f32; 4],
+glsl_block! {
+    /// `struct Primitive`: a sphere, quad or triangle (area lights and the scene's own shapes).
+    pub struct GpuPrimitive as "Primitive" {
+        /// Sphere: xyz = center, w = radius. Quad: xyz = origin. Triangle: xyz = v0. A light made
+        /// of a mesh triangle (in `lights`, or built at a hit by world_primitive): w = its place
+        /// in `mesh_triangles` (uint bits), with TRIANGLE_LIGHT_MIRRORED set where its placement
+        /// mirrors it and vertices 1 and 2 were swapped to keep its front side.
+        pub a: [f32; 4],
+        /// Quad: xyz = edge u. Triangle: xyz = v1 - v0. w = the PRIM_* kind (uint bits).
+        pub b: [f32; 4],
+        /// Quad: xyz = edge v (the emitting side faces cross(u, v)). Triangle: xyz = v2 - v0 (the
+        /// front side faces cross(e1, e2)). w = the material index (uint bits).
+        pub c: [f32; 4],
+    }
 }
 
-/// `struct Material`: see layout.glsl for what each member holds.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuMaterial {
-    pub albedo_r: [f32; 4],
-    pub emission_t: [f32; 4],
-    /// ior, two-sided (0/1), albedo texture (u32 bits), microfacet alpha (along u where anisotropic)
-    pub params: [f32; 4],
-    /// conductor eta, CONDUCTOR_* (u32 bits)
-    pub conductor_eta: [f32; 4],
-    /// conductor k, 1 / (1 - average coat Fresnel) for a plastic (0: plain diffuse base)
-    pub conductor_k: [f32; 4],
-    /// metallic-roughness texture (u32 bits), metallic, roughness and transmission factors
-    pub metallic_roughness: [f32; 4],
-    /// emission texture (u32 bits), normal map (u32 bits), normal map scale, MATERIAL_* flags (u32 bits)
-    pub maps: [f32; 4],
-    /// alpha texture (u32 bits), opacity factor, MASK cutoff, ALPHA_* mode (u32 bits)
-    pub alpha: [f32; 4],
-    /// clear coat factor (0: none), its perceptual roughness, their textures (u32 bits: R
-    /// multiplies the factor, G the roughness)
-    pub coat: [f32; 4],
-    /// absorption coefficient sigma_a per world unit inside (0: clear), alpha along v of an
-    /// anisotropic material (0: isotropic)
-    pub volume: [f32; 4],
+glsl_block! {
+    /// `struct Material`: a base (diffuse, or a plastic) replaced per bounce with probability R
+    /// by a reflector and with probability T by a Fresnel dielectric (scene::Material).
+    pub struct GpuMaterial as "Material" {
+        /// rgb = albedo, w = reflectivity R.
+        pub albedo_r: [f32; 4],
+        /// rgb = emitted radiance, w = transparency T.
+        pub emission_t: [f32; 4],
+        /// x = ior, y = 1 when the emitter radiates from both sides, z = albedo texture index
+        /// (uint bits; NO_TEXTURE for none), w = GGX alpha of the R and T lobes and the coat
+        /// (along u where anisotropic).
+        pub params: [f32; 4],
+        /// rgb = eta of CONDUCTOR_COMPLEX, w = the CONDUCTOR_* kind (uint bits).
+        pub conductor_eta: [f32; 4],
+        /// rgb = k of CONDUCTOR_COMPLEX, w = 1 / (1 - the coat's average Fresnel) for a plastic (a
+        /// coated base), 0 for a plain diffuse base.
+        pub conductor_k: [f32; 4],
+        /// x = glTF metallic-roughness texture index (uint bits; NO_TEXTURE for none), y / z / w =
+        /// the metallic, roughness and transmission factors that surface_material() turns into R,
+        /// T and alpha per texel.
+        pub metallic_roughness: [f32; 4],
+        /// x = emission texture index (uint bits; NO_TEXTURE for none), which multiplies
+        /// emission_t.rgb per texel; y = tangent-space normal map index (uint bits; NO_TEXTURE for
+        /// none), z = its scale (of the normal's x and y); w = MATERIAL_* flags (uint bits).
+        pub maps: [f32; 4],
+        /// Tested in traversal (alpha.glsl): x = an RGBA texture whose A channel is the opacity
+        /// (uint bits; NO_TEXTURE for none), y = the opacity factor it multiplies, z = the cutoff
+        /// of ALPHA_MASK, w = the ALPHA_* mode (uint bits).
+        pub alpha: [f32; 4],
+        /// glTF KHR_materials_clearcoat (pick_lobe): x = the clear coat's factor (0: none), y its
+        /// perceptual roughness (GGX alpha is its square), z / w = textures whose R / G channel
+        /// multiplies x / y per texel (uint bits; NO_TEXTURE for none).
+        pub coat: [f32; 4],
+        /// rgb = the absorption coefficient sigma_a per world unit inside (Beer-Lambert,
+        /// path_step; 0: clear); w = the alpha along v of an anisotropic material's R and T lobes
+        /// and coat, params.w being the one along u (0: isotropic, params.w along both).
+        pub volume: [f32; 4],
+    }
 }
 
-/// `struct Instance`: rows of the two 3x4 affine maps, then kind, BVH root node and flags.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuInstance {
-    pub world_to_object: [[f32; 4]; 3],
-    pub object_to_world: [[f32; 4]; 3],
-    pub info: [u32; 4],
+glsl_block! {
+    /// `struct Instance`: one placement of a bottom-level BVH.
+    pub struct GpuInstance as "Instance" {
+        /// Rows of the 3x4 affine map from world to object space.
+        pub world_to_object: [[f32; 4]; 3],
+        /// Rows of the 3x4 affine map from object to world space.
+        pub object_to_world: [[f32; 4]; 3],
+        /// x = the INSTANCE_* kind, y = the root node of its BVH, z = INSTANCE_HAS_* flags.
+        pub info: [u32; 4],
+    }
 }
 
-/// `struct MeshTriangle`: a mesh triangle by value, in its BVH's leaf order, so intersecting it is
-/// three vec4 loads with no index indirection. `v0.xyz` is the first vertex, `e1.xyz` and `e2.xyz`
-/// the edges to the second and third; the w lanes hold the three global vertex indices (u32 bits)
-/// that shading uses for normals and texture coordinates.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuMeshTriangle {
-    pub v0: [f32; 4],
-    pub e1: [f32; 4],
-    pub e2: [f32; 4],
+glsl_block! {
+    /// `struct MeshTriangle`: a mesh triangle by value, in its BVH's leaf order, so intersecting
+    /// it is three vec4 loads with no index indirection.
+    pub struct GpuMeshTriangle as "MeshTriangle" {
+        /// xyz = the first vertex; w = its global vertex index (uint bits), for normals and
+        /// texture coordinates.
+        pub v0: [f32; 4],
+        /// xyz = the edge to the second vertex; w = the second's global vertex index (uint bits).
+        pub e1: [f32; 4],
+        /// xyz = the edge to the third vertex; w = the third's global vertex index (uint bits).
+        pub e2: [f32; 4],
+    }
 }
 
-/// `struct TextureInfo`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuTexture {
-    pub offset: u32,
-    pub width: u32,
-    pub height: u32,
-    /// TEXTURE_* bits
-    pub flags: u32,
+glsl_block! {
+    /// `struct TextureInfo`: texels offset..offset + width * height of `texels` (RGBA8, top row
+    /// first).
+    pub struct GpuTexture as "TextureInfo" {
+        pub offset: u32,
+        pub width: u32,
+        pub height: u32,
+        /// TEXTURE_* bits.
+        pub flags: u32,
+    }
 }
 
-/// `struct PunctualLight`: a point, spot or directional light (see layout.glsl for its members).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuPunctualLight {
-    /// Position (point, spot), LIGHT_* kind (u32 bits)
-    pub position_kind: [f32; 4],
-    /// Unit axis (spot) or direction of travel (directional), cos of the cone's half-angle
-    pub axis_cos: [f32; 4],
-    /// Intensity, irradiance or disk radiance; power for selection
-    pub value_power: [f32; 4],
-    /// Spot cone_angle and falloff_start (radians), 1 - cos of a disk's angular radius, unused
-    pub shape: [f32; 4],
+glsl_block! {
+    /// `struct PunctualLight`: a point, spot or directional light.
+    pub struct GpuPunctualLight as "PunctualLight" {
+        /// xyz = position (point, spot), w = the LIGHT_* kind (uint bits).
+        pub position_kind: [f32; 4],
+        /// xyz = the spot's unit axis, or the unit direction a directional light travels; w = cos
+        /// of the angular radius of a directional light's disk (1 for a delta light).
+        pub axis_cos: [f32; 4],
+        /// rgb = radiant intensity W/sr (point; spot on its axis), irradiance W/m^2 (delta
+        /// directional) or radiance (a disk); w = the power light selection weighs it by
+        /// (light_selection.rs).
+        pub value_power: [f32; 4],
+        /// x / y = the spot's cone_angle / falloff_start in radians; z = 1 - cos of a disk's
+        /// angular radius, to full precision for sun-sized disks (0: a delta light); w unused.
+        pub shape: [f32; 4],
+    }
 }
 
-/// `struct LightAlias`: one entry of the alias table that picks area lights by power
-/// (light_selection.rs).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuAliasEntry {
-    /// Probability of keeping this entry's own light rather than taking `alias`.
-    pub threshold: f32,
-    pub alias: u32,
+glsl_block! {
+    /// `struct LightAlias`: one entry of the alias table that picks area lights by power
+    /// (light_selection.rs).
+    pub struct GpuAliasEntry as "LightAlias" {
+        /// Probability of keeping this entry's own light rather than taking `alias`.
+        pub threshold: f32,
+        pub alias: u32,
+    }
+}
+
+/// The kernel's generated `records.glsl`, which layout.glsl includes: every constant and record
+/// struct above, declared from these Rust definitions so that the two cannot drift.
+pub fn records_glsl() -> String {
+    let mut out = String::from("// Generated by src/render/layout.rs from its constants and record structs.\n");
+    for (doc, constants) in GLSL_CONSTANT_GROUPS {
+        out += "\n";
+        for line in *doc {
+            out += &format!("//{line}\n");
+        }
+        for (name, value) in *constants {
+            let literal = if *value >= 1 << 31 { format!("{value:#x}u") } else { format!("{value}u") };
+            out += &format!("const uint {name} = {literal};\n");
+        }
+    }
+    for declaration in [
+        glsl_struct::<GpuPrimitive>(&[" A sphere, quad or triangle (area lights and the scene's own shapes)."]),
+        glsl_struct::<GpuMaterial>(&[" A material (scene::Material's kernel form)."]),
+        glsl_struct::<GpuInstance>(&[" One placement of a bottom-level BVH."]),
+        glsl_struct::<GpuMeshTriangle>(&[" A mesh triangle by value, in its BVH's leaf order."]),
+        glsl_struct::<GpuTexture>(&[" Texture descriptor."]),
+        glsl_struct::<GpuPunctualLight>(&[" A point, spot or directional light."]),
+        glsl_struct::<GpuAliasEntry>(&[" One entry of the alias table that picks area lights by power."]),
+    ] {
+        out += "\n";
+        out += &declaration;
+    }
+    out
 }
 
 glsl_block! {
@@ -282,28 +352,28 @@ glsl_block! {
 
 // The GLSL names of the twins, for the arrays of them that the kernel binds (bindings.rs).
 impl GlslType for GpuPrimitive {
-    const NAME: &'static str = "Primitive";
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for GpuMaterial {
-    const NAME: &'static str = "Material";
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for GpuInstance {
-    const NAME: &'static str = "Instance";
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for GpuTexture {
-    const NAME: &'static str = "TextureInfo";
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for GpuPunctualLight {
-    const NAME: &'static str = "PunctualLight";
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for GpuAliasEntry {
-    const NAME: &'static str = "LightAlias";
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for WideNode {
     const NAME: &'static str = "WideNode";
 }
 impl GlslType for GpuMeshTriangle {
-    const NAME: &'static str = "MeshTriangle";
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 // The walk's records, read as texels (bindings.rs): `origin`, `quantized_xy`, `quantized_z_kinds`,
 // `links`; `v0`, `e1`, `e2`.
@@ -352,9 +422,6 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, alpha), 112);
         assert_eq!(offset_of!(GpuMaterial, coat), 128);
         assert_eq!(offset_of!(GpuMaterial, volume), 144);
-        let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "struct Material {\n    vec4 albedo_r;\n    vec4 emission_t;\n    vec4 params;\n    vec4 conductor_eta;\n    vec4 conductor_k;\n    vec4 metallic_roughness;\n    vec4 maps;\n    vec4 alpha;\n    vec4 coat;\n    vec4 volume;\n};";
-        assert!(glsl.contains(members), "struct Material members differ from GpuMaterial");
     }
 
     #[test]
@@ -370,9 +437,6 @@ mod tests {
         assert_eq!(offset_of!(GpuTexture, width), 4);
         assert_eq!(offset_of!(GpuTexture, height), 8);
         assert_eq!(offset_of!(GpuTexture, flags), 12);
-        let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "struct TextureInfo {\n    uint offset;\n    uint width;\n    uint height;\n    uint flags;\n};";
-        assert!(glsl.contains(members), "struct TextureInfo members differ from GpuTexture");
     }
 
     #[test]
@@ -381,9 +445,6 @@ mod tests {
         assert_eq!(offset_of!(GpuPunctualLight, axis_cos), 16);
         assert_eq!(offset_of!(GpuPunctualLight, value_power), 32);
         assert_eq!(offset_of!(GpuPunctualLight, shape), 48);
-        let glsl = include_str!("../../shaders/layout.glsl");
-        let members = "struct PunctualLight {\n    vec4 position_kind;\n    vec4 axis_cos;\n    vec4 value_power;\n    vec4 shape;\n};";
-        assert!(glsl.contains(members), "struct PunctualLight members differ from GpuPunctualLight");
     }
 
     #[test]
@@ -483,7 +544,7 @@ mod tests {
     /// The GLSL side declares the same kinds; a renumbering on one side only must fail here.
     #[test]
     fn kind_constants_match_glsl() {
-        let glsl = concat!(include_str!("../../shaders/layout.glsl"), include_str!("../../shaders/rng.glsl"));
+        let glsl = records_glsl() + include_str!("../../shaders/layout.glsl") + include_str!("../../shaders/rng.glsl");
         for (name, value) in [
             ("PRIM_SPHERE", PRIM_SPHERE),
             ("PRIM_QUAD", PRIM_QUAD),
@@ -520,8 +581,29 @@ mod tests {
             let literal = if value >= 1 << 31 { format!("{value:#x}u") } else { format!("{value}u") };
             assert!(
                 glsl.contains(&format!("const uint {name} = {literal};")),
-                "{name} = {literal} not found in layout.glsl or rng.glsl"
+                "{name} = {literal} not found in records.glsl, layout.glsl or rng.glsl"
             );
+        }
+    }
+
+    /// records.glsl is what the kernel compiles (the bindings' tests read its offsets back from
+    /// the SPIR-V); here: every record and constant group is in it, with its members' comments,
+    /// and layout.glsl no longer declares any of them by hand.
+    #[test]
+    fn records_glsl_declares_every_record_and_constant_once() {
+        let records = records_glsl();
+        let layout = include_str!("../../shaders/layout.glsl");
+        for name in ["Primitive", "Material", "Instance", "MeshTriangle", "TextureInfo", "PunctualLight", "LightAlias"]
+        {
+            assert_eq!(records.matches(&format!("struct {name} {{")).count(), 1, "{name}");
+            assert!(!layout.contains(&format!("struct {name} {{")), "layout.glsl declares {name} by hand");
+        }
+        assert!(records.contains("    vec4 world_to_object[3];"), "{records}");
+        assert!(records.contains("    // x = ior, y = 1 when the emitter radiates from both sides"), "{records}");
+        for (_, constants) in GLSL_CONSTANT_GROUPS {
+            for (name, _) in *constants {
+                assert!(!layout.contains(&format!("const uint {name} ")), "layout.glsl declares {name} by hand");
+            }
         }
     }
 }
