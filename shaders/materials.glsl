@@ -156,162 +156,20 @@ Lobe pick_lobe(Material m, vec3 d, vec3 ns, vec3 tangent, bool entering, inout R
     return l;
 }
 
-// Each lobe is a pair below: sample_<lobe> (given s.delta, the rest of s to fill) draws a direction for a ray arriving along `d` (false
-// when it yields none: the path ends) with its weight f cos / pdf times the lobe's scale and its
-// solid-angle pdf; eval_<lobe> gives f cos times the scale for light arriving from `wi` (world)
-// and leaving along -d, and the pdf with which sample_<lobe> draws wi. sample_lobe and eval_lobe
-// dispatch on the kind; a new lobe is a LOBE_* kind, its pair and a case in each (and its cases
-// in tests/bsdf_sampling.rs, which checks every kind listed here has some).
+// Each lobe is a pair, in its own file lobe_<lobe>.glsl: sample_<lobe> (given s.delta, the rest
+// of s to fill) draws a direction for a ray arriving along `d` (false when it yields none: the
+// path ends) with its weight f cos / pdf times the lobe's scale and its solid-angle pdf;
+// eval_<lobe> gives f cos times the scale for light arriving from `wi` (world) and leaving along
+// -d, and the pdf with which sample_<lobe> draws wi (a delta lobe has no eval_). sample_lobe and
+// eval_lobe dispatch on the kind; a new lobe is a LOBE_* kind, its file, an include here and a case
+// in each (and its cases in tests/bsdf_sampling.rs, which checks every kind listed here has some;
+// render/kernel.rs's tests check the file and the cases).
 
-// Diffuse: albedo / pi, cosine-weighted sampling.
-bool sample_diffuse(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
-    s.dir = sample_cosine_hemisphere(rng_next2(rng), l.n);
-    s.pdf = max(0.0, dot(s.dir, l.n)) * INV_PI;
-    s.weight = l.color * l.scale;
-    return s.pdf > 0.0;
-}
-
-vec3 eval_diffuse(Lobe l, vec3 d, vec3 wi, out float pdf) {
-    float cos_i = dot(wi, l.n);
-    pdf = 0.0;
-    if (cos_i <= 0.0) return vec3(0.0);
-    pdf = cos_i * INV_PI;
-    return l.color * (INV_PI * cos_i * l.scale);
-}
-
-// The coated base of a plastic: light refracts into the coat (1 - F(wi)), scatters diffusely and
-// leaves through it (1 - F(wo)). Dividing by 1 - the average of F over the cosine-weighted
-// hemisphere makes the exit factor integrate to 1, so a white base under a smooth coat reflects
-// exactly 1 - F(wo) beside the coat's F(wo): no energy is created. The coat's internal
-// reflections and the eta^2 spreading are not modelled; under a rough coat the sum stays at or
-// below 1 (it is E_spec(wo) + 1 - F(wo), and GGX reflects E_spec <= F up to ~1e-3 at low
-// roughness). Sampled like the diffuse lobe.
-vec3 coated_diffuse(Lobe l, float cos_o, float cos_i) {
-    float through = (1.0 - fresnel_dielectric(cos_o, l.eta)) * (1.0 - fresnel_dielectric(cos_i, l.eta));
-    return l.color * (INV_PI * through * l.coat_norm);
-}
-
-bool sample_coated_diffuse(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
-    s.dir = sample_cosine_hemisphere(rng_next2(rng), l.n);
-    float cos_i = max(0.0, dot(s.dir, l.n));
-    s.pdf = cos_i * INV_PI;
-    s.weight = coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i) * (PI * l.scale);
-    return s.pdf > 0.0;
-}
-
-vec3 eval_coated_diffuse(Lobe l, vec3 d, vec3 wi, out float pdf) {
-    float cos_i = dot(wi, l.n);
-    pdf = 0.0;
-    if (cos_i <= 0.0) return vec3(0.0);
-    pdf = cos_i * INV_PI;
-    return coated_diffuse(l, clamp(-dot(d, l.n), 0.0, 1.0), cos_i) * (cos_i * l.scale);
-}
-
-// Reflector: a mirror (smooth) or GGX reflection, with the lobe's Fresnel.
-bool sample_reflect(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
-    if (s.delta) {
-        s.dir = reflect(d, l.n);
-        s.weight = lobe_fresnel(l, -dot(d, l.n)) * l.scale;
-        return true;
-    }
-    vec3 wo = to_local(l, -d);
-    if (wo.z <= 0.0) return false;
-    vec3 m;
-    if (!sample_normal(wo, l.alpha, l.distribution, rng_next2(rng), m)) return false;
-    vec3 wi = reflect(-wo, m);
-    if (wi.z <= 0.0) return false;
-    s.pdf = reflection_pdf(wo, m, l.alpha, l.distribution);
-    s.weight = lobe_fresnel(l, dot(wo, m)) * (microfacet_weight(wo, wi, m, l.alpha, l.distribution) * l.scale);
-    s.dir = from_local(l, wi);
-    return s.pdf > 0.0;
-}
-
-vec3 eval_reflect(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
-    pdf = 0.0;
-    vec3 wo = to_local(l, -d);
-    vec3 wi = to_local(l, wi_world);
-    if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
-    vec3 h = normalize(wo + wi);
-    float cos_h = dot(wo, h);
-    if (cos_h <= 0.0) return vec3(0.0);
-    pdf = reflection_pdf(wo, h, l.alpha, l.distribution);
-    return lobe_fresnel(l, cos_h) * (microfacet_d(h, l.alpha, l.distribution) * microfacet_g2(wo, wi, l.alpha, l.distribution) / (4.0 * wo.z) * l.scale);
-}
-
-// Dielectric: smooth or GGX reflection and refraction (Walter et al. 2007), each picked with its
-// Fresnel weight.
-bool sample_dielectric(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
-    if (s.delta) {
-        float f = fresnel_dielectric(-dot(d, l.n), l.eta);
-        vec3 refracted = refract(d, l.n, l.eta);
-        // refract() returns 0 at total internal reflection; rounding can put that just below f = 1.
-        bool reflects = rng_next(rng) < f || dot(refracted, refracted) == 0.0;
-        s.dir = reflects ? reflect(d, l.n) : refracted;
-        s.weight = vec3(l.scale);
-        return true;
-    }
-    vec3 wo = to_local(l, -d);
-    if (wo.z <= 0.0) return false;
-    vec3 m;
-    if (!sample_normal(wo, l.alpha, l.distribution, rng_next2(rng), m)) return false;
-    float f = fresnel_dielectric(dot(wo, m), l.eta);
-    vec3 refracted = refract(-wo, m, l.eta);
-    vec3 wi;
-    if (rng_next(rng) < f || dot(refracted, refracted) == 0.0) {
-        wi = reflect(-wo, m);
-        if (wi.z <= 0.0) return false;
-        s.pdf = f * reflection_pdf(wo, m, l.alpha, l.distribution);
-    } else {
-        wi = refracted;
-        if (wi.z >= 0.0) return false;
-        s.pdf = (1.0 - f) * refraction_pdf(wo, wi, m, l.alpha, l.eta, l.distribution);
-    }
-    s.weight = vec3(microfacet_weight(wo, wi, m, l.alpha, l.distribution) * l.scale);
-    s.dir = from_local(l, wi);
-    return s.pdf > 0.0;
-}
-
-vec3 eval_dielectric(Lobe l, vec3 d, vec3 wi_world, out float pdf) {
-    pdf = 0.0;
-    vec3 wo = to_local(l, -d);
-    vec3 wi = to_local(l, wi_world);
-    if (wo.z <= 0.0 || wi.z == 0.0) return vec3(0.0);
-    if (wi.z > 0.0) {
-        vec3 h = normalize(wo + wi);
-        float cos_h = dot(wo, h);
-        if (cos_h <= 0.0) return vec3(0.0);
-        float f = fresnel_dielectric(cos_h, l.eta);
-        pdf = f * reflection_pdf(wo, h, l.alpha, l.distribution);
-        return vec3(f * microfacet_d(h, l.alpha, l.distribution) * microfacet_g2(wo, wi, l.alpha, l.distribution) / (4.0 * wo.z) * l.scale);
-    }
-    // Refraction: the generalised half vector, turned to the +z side.
-    vec3 h = -(l.eta * wo + wi);
-    if (dot(h, h) <= 0.0) return vec3(0.0);
-    h = normalize(h);
-    if (h.z < 0.0) h = -h;
-    float cos_o = dot(wo, h);
-    float cos_t = dot(wi, h);
-    if (cos_o <= 0.0 || cos_t >= 0.0) return vec3(0.0);
-    float f = fresnel_dielectric(cos_o, l.eta);
-    float denom = l.eta * cos_o + cos_t;
-    pdf = (1.0 - f) * refraction_pdf(wo, wi, h, l.alpha, l.eta, l.distribution);
-    // Walter et al.'s BTDF times |wi.z|, without the 1/eta^2 radiance scaling (as the smooth
-    // dielectric above: the factors cancel for a camera outside a closed object).
-    float fcos = (1.0 - f) * microfacet_d(h, l.alpha, l.distribution) * microfacet_g2(wo, wi, l.alpha, l.distribution) * cos_o * abs(cos_t) / (wo.z * denom * denom);
-    return vec3(fcos * l.scale);
-}
-
-// Thin dielectric (Mitsuba's and pbrt-v4's thindielectric): a sheet whose two parallel faces are
-// the same interface. Light that enters leaves parallel to how it came, after any number of inner
-// reflections; summing them, F + (1 - F)^2 F (1 + F^2 + F^4 + ...) = 2F / (1 + F) is reflected and
-// the rest passes straight through. Smooth only (a delta lobe: no eval).
-bool sample_thin_dielectric(Lobe l, vec3 d, inout Rng rng, inout BsdfSample s) {
-    float f = fresnel_dielectric(-dot(d, l.n), l.eta);
-    float reflected = 2.0 * f / (1.0 + f);
-    s.dir = rng_next(rng) < reflected ? reflect(d, l.n) : d;
-    s.weight = vec3(l.scale);
-    return true;
-}
+#include "lobe_diffuse.glsl"
+#include "lobe_coated_diffuse.glsl"
+#include "lobe_reflect.glsl"
+#include "lobe_dielectric.glsl"
+#include "lobe_thin_dielectric.glsl"
 
 // Samples the lobe for a ray arriving along `d`. False when it yields no direction (the path ends).
 bool sample_lobe(Lobe l, vec3 d, inout Rng rng, out BsdfSample s) {

@@ -38,6 +38,11 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("fresnel.glsl", include_str!("../../shaders/fresnel.glsl")),
     ("microfacet.glsl", include_str!("../../shaders/microfacet.glsl")),
     ("materials.glsl", include_str!("../../shaders/materials.glsl")),
+    ("lobe_diffuse.glsl", include_str!("../../shaders/lobe_diffuse.glsl")),
+    ("lobe_coated_diffuse.glsl", include_str!("../../shaders/lobe_coated_diffuse.glsl")),
+    ("lobe_reflect.glsl", include_str!("../../shaders/lobe_reflect.glsl")),
+    ("lobe_dielectric.glsl", include_str!("../../shaders/lobe_dielectric.glsl")),
+    ("lobe_thin_dielectric.glsl", include_str!("../../shaders/lobe_thin_dielectric.glsl")),
     ("lights.glsl", include_str!("../../shaders/lights.glsl")),
     ("environment.glsl", include_str!("../../shaders/environment.glsl")),
     ("camera.glsl", include_str!("../../shaders/camera.glsl")),
@@ -165,5 +170,43 @@ mod tests {
             kernel_spirv(&split, KernelVariant { aovs: true, count_loop_iterations: true, ..Default::default() })
                 .expect("pathtrace.comp compiles split");
         assert_eq!(spirv[0], 0x0723_0203, "SPIR-V magic number");
+    }
+
+    /// The body of the GLSL function that starts with `signature` in `glsl`, up to its closing brace.
+    fn function_body<'g>(glsl: &'g str, signature: &str) -> &'g str {
+        let start = glsl.find(signature).unwrap_or_else(|| panic!("no `{signature}`"));
+        let end = glsl[start..].find("\n}\n").expect("the function closes");
+        &glsl[start..start + end]
+    }
+
+    /// Every lobe kind of materials.glsl (`const uint LOBE_<NAME>`) has its file
+    /// lobe_<name>.glsl among the kernel's shaders, included by materials.glsl, defining
+    /// sample_<name>, with a case in sample_lobe, and a case in eval_lobe where it defines
+    /// eval_<name> (a delta lobe has none): a lobe half added fails here.
+    #[test]
+    fn every_lobe_kind_has_its_file_and_its_dispatch_cases() {
+        let materials = shader_file("materials.glsl").unwrap();
+        let sample_lobe = function_body(&materials, "bool sample_lobe(");
+        let eval_lobe = function_body(&materials, "vec3 eval_lobe(");
+        let mut lobes = 0;
+        for line in materials.lines().filter(|l| l.starts_with("const uint LOBE_")) {
+            let kind = line["const uint ".len()..].split(' ').next().unwrap();
+            let name = kind["LOBE_".len()..].to_lowercase();
+            let file = format!("lobe_{name}.glsl");
+            let glsl = shader_file(&file).unwrap_or_else(|e| panic!("{kind}: {e}"));
+            assert!(materials.contains(&format!("#include \"{file}\"")), "materials.glsl does not include {file}");
+            assert!(glsl.contains(&format!(" sample_{name}(Lobe l")), "{file} defines no sample_{name}");
+            assert!(sample_lobe.contains(&format!("case {kind}:")), "sample_lobe has no case {kind}");
+            let has_eval = glsl.contains(&format!(" eval_{name}(Lobe l"));
+            assert_eq!(
+                eval_lobe.contains(&format!("case {kind}:")),
+                has_eval,
+                "eval_lobe's case {kind} and {file}'s eval_{name}"
+            );
+            lobes += 1;
+        }
+        assert!(lobes >= 5, "found {lobes} lobe kinds");
+        let files = SHADERS.iter().filter(|(name, _)| name.starts_with("lobe_")).count();
+        assert_eq!(files, lobes, "a lobe_*.glsl file without its LOBE_* kind");
     }
 }
