@@ -160,7 +160,7 @@ fn create_instance(
             .iter()
             .any(|l| l.layer_name_as_c_str().ok() == Some(validation::LAYER_NAME));
     if validation && !layer_available {
-        eprintln!(
+        log::warn!(
             "caustica: validation requested but {:?} is not installed; running without it",
             validation::LAYER_NAME
         );
@@ -370,6 +370,7 @@ impl GpuContext {
         }
         let mut statistics_feature =
             vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(statistics);
+        log::debug!("caustica: device {} ({}, {})", info.name, info.kind.label(), info.driver_name);
         let mut device_info =
             vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
         if statistics {

@@ -44,7 +44,7 @@ unsafe extern "system" fn on_message(
     let text = unsafe { (*data).message_as_c_str() }.map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
     let log = unsafe { &*(user as *const ValidationLog) };
     let line = format!("[{severity:?}] {text}");
-    eprintln!("vulkan validation: {line}");
+    log::warn!("vulkan validation: {line}");
     log.messages.lock().unwrap_or_else(|e| e.into_inner()).push(line);
     vk::FALSE
 }
