@@ -78,6 +78,7 @@ fn cpu_is_amd() -> bool {
     {
         // CPUID leaf 0 holds the vendor string in EBX, EDX, ECX.
         #[allow(unused_unsafe)]
+        // SAFETY: every x86_64 processor has CPUID and its leaf 0; the instruction only reads registers.
         let leaf = unsafe { std::arch::x86_64::__cpuid(0) };
         let vendor: Vec<u8> = [leaf.ebx, leaf.edx, leaf.ecx].iter().flat_map(|r| r.to_le_bytes()).collect();
         vendor == b"AuthenticAMD"
