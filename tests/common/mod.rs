@@ -20,10 +20,17 @@ use std::sync::{Mutex, MutexGuard, Once};
 
 pub const LAVAPIPE_ICD: &str = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
 
-/// Lavapipe's ICD when the caller has not chosen a driver already (VK_DRIVER_FILES unset) and
-/// Mesa's lavapipe is installed.
+/// Whether the suite runs on the machine's own Vulkan devices (`CAUSTICA_LAVAPIPE=none`, see
+/// scripts/test.sh) rather than on lavapipe.
+pub fn own_devices() -> bool {
+    std::env::var_os("CAUSTICA_LAVAPIPE").is_some_and(|v| v == "none")
+}
+
+/// Lavapipe's ICD when the caller has not chosen a driver already (VK_DRIVER_FILES unset) nor
+/// asked for the machine's own devices, and Mesa's lavapipe is installed.
 pub fn lavapipe_override() -> Option<&'static str> {
-    (std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists()).then_some(LAVAPIPE_ICD)
+    (std::env::var_os("VK_DRIVER_FILES").is_none() && !own_devices() && Path::new(LAVAPIPE_ICD).exists())
+        .then_some(LAVAPIPE_ICD)
 }
 
 /// The caustica binary of this build, on lavapipe unless the caller chose a driver.
@@ -53,7 +60,8 @@ pub fn loops_end_early(ctx: &GpuContext, what: &str) -> bool {
 }
 
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
-/// lavapipe already uses every core for one dispatch.
+/// lavapipe already uses every core for one dispatch. With `CAUSTICA_LAVAPIPE=none` they run on the
+/// device the CLI takes by default.
 pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
     gpu_with_storage_limit(None)
 }
