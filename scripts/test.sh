@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Runs the whole test suite on lavapipe (forced even on a machine with a GPU, so every machine runs
-# the same checks) with the Khronos validation layer, which fails the tests on any message.
+# Runs the whole test suite on lavapipe by default (forced even on a machine with a GPU, so every
+# machine runs the same checks) with the Khronos validation layer, which fails the tests on any
+# message.
 #
 # Which lavapipe: a current one (Mesa 24 or newer) by default. Where the system's is older (Debian
 # 12 ships 22.3), scripts/current-lavapipe.sh puts Mesa 25 from bookworm-backports beside it in
@@ -8,6 +9,13 @@
 # lavapipe whatever its version: Debian 12's 22.3 silently ends shader loops after 65,535
 # iterations, a defect only it shows, which tests/sample_integrity.rs checks that caustica survives.
 # An explicit VK_DRIVER_FILES wins over both.
+#
+# CAUSTICA_LAVAPIPE=none runs the suite on the machine's own Vulkan devices instead, so that a real
+# driver is tested whenever one is at hand: no driver is forced (neither here nor by the tests'
+# helpers in tests/common, which read the same variable), and every test takes the device the CLI
+# takes by default (a discrete GPU, else any GPU, a CPU implementation last). The few tests that
+# check what only lavapipe does say SKIPPED and why, or check the GPU's own form instead. With
+# VK_DRIVER_FILES set too, that driver is the only one the loader sees.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 system_icd=/usr/share/vulkan/icd.d/lvp_icd.x86_64.json
@@ -16,8 +24,14 @@ mesa_major() {
     dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null | sed 's/^[0-9]*://; s/\..*//'
 }
 
+choice="${CAUSTICA_LAVAPIPE:-current}"
+if [ "$choice" = none ]; then
+    # Read by tests/common's lavapipe_override too.
+    export CAUSTICA_LAVAPIPE=none
+    echo "scripts/test.sh: the machine's own Vulkan devices (CAUSTICA_LAVAPIPE=none), VK_DRIVER_FILES ${VK_DRIVER_FILES:-unset}" >&2
+    exec cargo test --release "$@"
+fi
 if [ -z "${VK_DRIVER_FILES:-}" ]; then
-    choice="${CAUSTICA_LAVAPIPE:-current}"
     case "$choice" in
     system)
         export VK_DRIVER_FILES="$system_icd"
@@ -33,7 +47,7 @@ if [ -z "${VK_DRIVER_FILES:-}" ]; then
         fi
         ;;
     *)
-        echo "CAUSTICA_LAVAPIPE is '$choice': use 'current' (the default) or 'system'" >&2
+        echo "CAUSTICA_LAVAPIPE is '$choice': use 'current' (the default), 'system' or 'none' (no lavapipe forced: the machine's own devices)" >&2
         exit 1
         ;;
     esac

@@ -150,9 +150,12 @@ enum Command {
         output_args: OutputArgs,
         #[command(flatten)]
         farm: FarmArgs,
-        /// No progress bar or summary.
-        #[arg(short, long)]
+        /// No progress bar or summary, and of the messages only warnings and errors.
+        #[arg(short, long, conflicts_with = "verbose")]
         quiet: bool,
+        /// Detail messages too (the log's debug level).
+        #[arg(short, long)]
+        verbose: bool,
         /// Print a summary as JSON on standard output at the end.
         #[arg(long)]
         json: bool,
@@ -206,9 +209,12 @@ enum Command {
         output: PathBuf,
         #[command(flatten)]
         output_args: OutputArgs,
-        /// No summary.
-        #[arg(short, long)]
+        /// No summary, and of the messages only warnings and errors.
+        #[arg(short, long, conflicts_with = "verbose")]
         quiet: bool,
+        /// Detail messages too (the log's debug level).
+        #[arg(short, long)]
+        verbose: bool,
     },
     /// List the Vulkan devices.
     Devices,
@@ -646,8 +652,45 @@ fn parse_command_line() -> Cli {
     })
 }
 
+/// The library's messages (the `log` facade) on standard error, each as its bare text: they carry
+/// their own "caustica: " or "caustica view: " prefix. Only caustica's own: the log records of its
+/// dependencies (winit, gpu-allocator, ...) stay unprinted, as before the library logged.
+struct StderrLog;
+
+impl log::Log for StderrLog {
+    fn enabled(&self, metadata: &log::Metadata) -> bool {
+        metadata.level() <= log::max_level() && metadata.target().split("::").next() == Some("caustica")
+    }
+
+    fn log(&self, record: &log::Record) {
+        if self.enabled(record.metadata()) {
+            eprintln!("{}", record.args());
+        }
+    }
+
+    fn flush(&self) {}
+}
+
+/// Installs [`StderrLog`]: warnings and errors always; progress and choices (info) unless `-q`;
+/// detail (debug) with `-v`.
+fn install_log(quiet: bool, verbose: bool) {
+    static LOG: StderrLog = StderrLog;
+    // set_logger fails only when a logger is installed already, and this runs once.
+    let _ = log::set_logger(&LOG);
+    log::set_max_level(match (quiet, verbose) {
+        (true, _) => log::LevelFilter::Warn,
+        (false, true) => log::LevelFilter::Debug,
+        (false, false) => log::LevelFilter::Info,
+    });
+}
+
 fn run() -> Result<()> {
-    match parse_command_line().command {
+    let command = parse_command_line().command;
+    match &command {
+        Command::Render { quiet, verbose, .. } | Command::Merge { quiet, verbose, .. } => install_log(*quiet, *verbose),
+        _ => install_log(false, false),
+    }
+    match command {
         Command::Render {
             scene,
             output,
@@ -659,6 +702,7 @@ fn run() -> Result<()> {
             output_args,
             farm,
             quiet,
+            verbose: _,
             json,
             scene_files,
             kernel,
@@ -696,7 +740,7 @@ fn run() -> Result<()> {
                 stop: &STOP,
             })
         }
-        Command::Merge { inputs, output, output_args, quiet } => merge(&inputs, &output, &output_args, quiet),
+        Command::Merge { inputs, output, output_args, quiet, .. } => merge(&inputs, &output, &output_args, quiet),
         Command::Compare { image, reference } => {
             let (a, b) = (caustica::image::read_image(&image)?, caustica::image::read_image(&reference)?);
             let c = caustica::image::compare(&a, &b, (&image.display().to_string(), &reference.display().to_string()))?;

@@ -11,7 +11,6 @@ use caustica::scene::{Instance, Mesh, Scene, Texture};
 use common::*;
 use glam::{Mat4, Vec2, Vec3};
 use std::path::Path;
-use std::process::Output;
 
 /// A 8x8 render of the built-in scene with `args` added; panics unless it succeeds.
 fn render_cli(out: &Path, args: &[&str]) {
@@ -19,12 +18,6 @@ fn render_cli(out: &Path, args: &[&str]) {
     all.extend_from_slice(args);
     let o = caustica(&all);
     assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
-}
-
-fn fails_with(o: &Output, needle: &str) {
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_ne!(o.status.code(), Some(0), "succeeded; stderr {stderr}");
-    assert!(stderr.contains(needle), "stderr does not say '{needle}': {stderr}");
 }
 
 /// Renders `scene` with every AOV, as the partial render an EXR output would hold.

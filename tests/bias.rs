@@ -14,38 +14,6 @@ use glam::Vec3;
 use std::f64::consts::PI;
 use std::path::Path;
 
-/// Mean over the image of the pixels' mean luminance, and its standard error from the scatter of
-/// the pixels: each pixel is an independent estimate (its random numbers are scrambled by pixel).
-fn mean_and_stderr_of(image: &RgbImage) -> (f64, f64) {
-    let values: Vec<f64> = image.pixels.iter().map(|&p| luminance(p)).collect();
-    mean_and_stderr(&values)
-}
-
-/// Asserts that `image`'s mean is `expected` within 5 standard errors plus `floor` (relative: the
-/// rounding of f32 sums and ray offsets), and that this tolerance is below `bias` (relative), the
-/// smallest bias the test claims to fail.
-fn assert_mean_is(image: &RgbImage, expected: f64, floor: f64, bias: f64, what: &str) {
-    let (mean, stderr) = mean_and_stderr_of(image);
-    let tolerance = 5.0 * stderr + floor * expected;
-    eprintln!(
-        "{what}: mean {mean:.6}, expected {expected:.6}, difference {:+.4} %, tolerance {:.4} %",
-        (mean / expected - 1.0) * 100.0,
-        tolerance / expected * 100.0
-    );
-    assert!(
-        tolerance <= bias * expected,
-        "{what}: the tolerance {:.3} % no longer resolves a {:.2} % bias: raise the sample count",
-        tolerance / expected * 100.0,
-        bias * 100.0
-    );
-    assert!(
-        (mean - expected).abs() <= tolerance,
-        "{what}: mean {mean:.6}, expected {expected:.6} ({:+.3} %, tolerance {:.3} %)",
-        (mean / expected - 1.0) * 100.0,
-        tolerance / expected * 100.0
-    );
-}
-
 /// The camera inside a closed, two-sided emissive diffuse sphere: every surface point sees only
 /// the sphere's inside, whose radiance is therefore everywhere L = Le + albedo L, so
 /// L = Le / (1 - albedo) exactly, at every pixel. With albedo 0.7 most of it arrives after

@@ -5,6 +5,9 @@
 //! `render/chunks.rs` using each other), and on `ash` used outside `src/gpu/`. Unit tests
 //! (`#[cfg(test)] mod tests`) may reach any layer and are not read.
 
+mod common;
+
+use common::rust_files;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
@@ -16,17 +19,6 @@ fn code_of(path: &Path) -> String {
         None => &text[..],
     };
     without_tests.lines().map(|l| l.split("//").next().unwrap_or("")).collect::<Vec<_>>().join("\n")
-}
-
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
 }
 
 /// The identifiers that follow each occurrence of `prefix` in `code`.

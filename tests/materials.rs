@@ -106,11 +106,9 @@ fn smooth_metals_reflect_their_complex_fresnel_at_normal_incidence() {
     }
 }
 
+/// The Cornell box (common's) with its mirror and glass spheres of `roughness`.
 fn cornell(size: u32, spp: u32, roughness: f32) -> Scene {
-    let mut scene = Scene::default_scene();
-    scene.film.width = size;
-    scene.film.height = size;
-    scene.film.spp = spp;
+    let mut scene = common::cornell(size, spp);
     for m in scene.materials.iter_mut().filter(|m| m.reflectivity > 0.0 || m.transparency > 0.0) {
         m.roughness = roughness;
     }

@@ -3,7 +3,6 @@
 
 mod common;
 
-use caustica::scene::Scene;
 use common::furnace::*;
 use common::*;
 use glam::Vec3;
@@ -47,14 +46,6 @@ fn mixed_rt_material_is_invisible_in_furnace() {
         1.0,
         "R/T material in a white furnace",
     );
-}
-
-fn cornell(size: u32, spp: u32) -> Scene {
-    let mut scene = Scene::default_scene();
-    scene.film.width = size;
-    scene.film.height = size;
-    scene.film.spp = spp;
-    scene
 }
 
 #[test]

@@ -159,9 +159,9 @@ fn sobol_draws_are_uniform_and_decorrelated_across_pixels() {
     }
 }
 
+/// The Cornell box (common's) with `sampler`.
 fn cornell(size: u32, spp: u32, sampler: Sampler) -> Scene {
-    let mut scene = Scene::default_scene();
-    (scene.film.width, scene.film.height, scene.film.spp) = (size, size, spp);
+    let mut scene = common::cornell(size, spp);
     scene.integrator.sampler = sampler;
     scene
 }

@@ -153,11 +153,11 @@ pub fn print_suite(outcome: &SuiteOutcome, device: &DeviceInfo) {
 pub fn print_left_out(outcome: &SuiteOutcome) {
     if !outcome.skipped.is_empty() {
         let names: Vec<&str> = outcome.skipped.iter().map(|(name, _)| name.as_str()).collect();
-        eprintln!("caustica: SKIPPED {} of the suite's scenes: {}", names.len(), names.join(", "));
+        log::warn!("caustica: SKIPPED {} of the suite's scenes: {}", names.len(), names.join(", "));
     }
     if !outcome.failed.is_empty() {
         let names: Vec<&str> = outcome.failed.iter().map(|(name, _)| name.as_str()).collect();
-        eprintln!("caustica: FAILED {} of the suite's scenes: {}", names.len(), names.join(", "));
+        log::warn!("caustica: FAILED {} of the suite's scenes: {}", names.len(), names.join(", "));
     }
 }
 

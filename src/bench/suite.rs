@@ -152,14 +152,14 @@ pub fn run_suite(
     for entry in entries {
         let (name, path, size) = match entry {
             SuiteEntry::Skip { name, reason } => {
-                eprintln!("caustica: SKIPPED {name}: {reason}");
+                log::warn!("caustica: SKIPPED {name}: {reason}");
                 outcome.skipped.push((name.clone(), reason.clone()));
                 continue;
             }
             SuiteEntry::Run { name, path, size } => (name, path, size),
         };
         let film = overrides.applied_to(*size);
-        eprintln!("caustica: bench {name} ({}x{}, {} spp)", film.width, film.height, film.spp);
+        log::info!("caustica: bench {name} ({}x{}, {} spp)", film.width, film.height, film.spp);
         let measured = (|| {
             let mut scene = match path {
                 Some(p) => load(p)?,
@@ -174,7 +174,7 @@ pub fn run_suite(
             Ok(row) => outcome.rows.push(row),
             Err(e) => {
                 let error = format!("{e:#}");
-                eprintln!("caustica: FAILED {name}: {error}");
+                log::warn!("caustica: FAILED {name}: {error}");
                 outcome.failed.push((name.clone(), error));
             }
         }

@@ -38,6 +38,8 @@ impl Buffer {
         let size = size.max(MIN_SIZE);
         let device = &ctx.device;
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: `info` is a complete create-info on the stack with no borrowed arrays, and `device` is the
+        // context's live logical device; the new handle is queried at once, while nothing else knows it.
         let buffer = unsafe { device.create_buffer(&info, None) }.with_context(|| format!("creating buffer {name}"))?;
         let requirements = unsafe { device.get_buffer_memory_requirements(buffer) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
@@ -50,6 +52,8 @@ impl Buffer {
         let allocation = match allocation {
             Ok(a) => a,
             Err(e) => {
+                // SAFETY: `buffer` was created just above, has no memory bound and was handed to nobody: destroying
+                // it leaks nothing and nothing can still use it.
                 unsafe { device.destroy_buffer(buffer, None) };
                 return Err(anyhow!(
                     "allocating {:.1} MiB for {name} on {}: {e}",
@@ -58,6 +62,8 @@ impl Buffer {
                 ));
             }
         };
+        // SAFETY: the allocation was made for this buffer's own memory requirements (size and alignment), so its
+        // memory and offset satisfy vkBindBufferMemory; the buffer has no memory bound yet.
         unsafe { device.bind_buffer_memory(buffer, allocation.memory(), allocation.offset()) }?;
         Ok(Self { buffer, allocation: Some(allocation), size, kind })
     }
@@ -97,6 +103,9 @@ impl Buffer {
         )?;
         staging.write(bytes)?;
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len() as u64 };
+        // SAFETY: `cb` is the recording command buffer submit_and_wait gives, and both buffers are alive until the
+        // call has waited for the copy: `staging` is destroyed after it, `self` is borrowed. The region lies inside
+        // both: `staging` holds `bytes.len()` bytes and the caller's buffer at least as many.
         let result = ctx.submit_and_wait(|device, cb| unsafe {
             device.cmd_copy_buffer(cb, staging.buffer, self.buffer, &[region])
         });
@@ -116,6 +125,9 @@ impl Buffer {
         )?;
         let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: len };
         let result = ctx
+            // SAFETY: `cb` is recording (submit_and_wait), both buffers outlive the wait for the copy (`staging` is
+            // destroyed after it), and the region of `len` bytes lies inside both: `staging` was made `len` bytes
+            // long and the caller asks for no more than its buffer holds.
             .submit_and_wait(|device, cb| unsafe { device.cmd_copy_buffer(cb, self.buffer, staging.buffer, &[region]) })
             .and_then(|_| Ok(staging.read()?[..len as usize].to_vec()));
         staging.destroy(ctx);
@@ -143,6 +155,8 @@ impl Buffer {
     }
 
     pub fn destroy(mut self, ctx: &GpuContext) {
+        // SAFETY: `self` is consumed, so this handle is destroyed once; every copy or dispatch that used it was
+        // waited for (submit_and_wait) or the device was made idle (the viewer) before its owner lets it go.
         unsafe { ctx.device.destroy_buffer(self.buffer, None) };
         if let Some(a) = self.allocation.take() {
             let _ = ctx.allocator().free(a);

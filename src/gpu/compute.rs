@@ -96,6 +96,8 @@ impl ComputeKernel {
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
             .collect();
+        // SAFETY: `device` is the context's live device, and the create-info borrows `layout_bindings`, a local
+        // that outlives the call.
         let set_layout = unsafe {
             device.create_descriptor_set_layout(
                 &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
@@ -105,12 +107,17 @@ impl ComputeKernel {
         let push_ranges =
             [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).offset(0).size(push_size)];
         let set_layouts = [set_layout];
+        // SAFETY: `set_layouts` holds the layout just created and `push_ranges` is a local; both outlive the call,
+        // which only reads them.
         let layout = unsafe {
             device.create_pipeline_layout(
                 &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push_ranges),
                 None,
             )
         }?;
+        // SAFETY: `spirv` is a slice of u32 words, so the code pointer, its length in bytes and its 4-byte
+        // alignment come from one live slice; a malformed module is an error of the call (and of validation), not
+        // undefined behaviour of the host.
         let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None) }
             .context("creating the shader module")?;
         let stage = vk::PipelineShaderStageCreateInfo::default()
@@ -122,6 +129,9 @@ impl ComputeKernel {
         } else {
             vk::PipelineCreateFlags::empty()
         };
+        // SAFETY: the create-info array is a temporary that lives to the end of the statement; its stage names
+        // `module` (alive until the line below) with the entry point a static C string, and `layout` was created
+        // above.
         let created = unsafe {
             device.create_compute_pipelines(
                 vk::PipelineCache::null(),
@@ -129,6 +139,8 @@ impl ComputeKernel {
                 None,
             )
         };
+        // SAFETY: the module is needed only while the pipeline is created, which the call above finished
+        // (successfully or not); nothing else holds the handle.
         unsafe { device.destroy_shader_module(module, None) };
         let pipeline = created.map_err(|(_, e)| anyhow!("creating the compute pipeline: {e}"))?[0];
         let statistics = ctx
@@ -149,12 +161,15 @@ impl ComputeKernel {
         })
         .filter(|size| size.descriptor_count > 0)
         .collect();
+        // SAFETY: the create-info borrows `pool_sizes`, a local that outlives the call; `device` is alive.
         let pool = unsafe {
             device.create_descriptor_pool(
                 &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&pool_sizes),
                 None,
             )
         }?;
+        // SAFETY: `pool` was created above with room for one set of these bindings, and `set_layouts` (a local)
+        // holds the live layout.
         let set = unsafe {
             device.allocate_descriptor_sets(
                 &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&set_layouts),
@@ -174,6 +189,9 @@ impl ComputeKernel {
                         .format(words.format())
                         .offset(b.offset)
                         .range(b.range);
+                    // SAFETY: `info` names `b.buffer`, a live buffer made with UNIFORM_TEXEL_BUFFER usage
+                    // (Buffer::with_data), at an offset aligned to min_texel_buffer_offset_alignment by the
+                    // renderer's binding plan; it has no borrowed arrays.
                     unsafe { device.create_buffer_view(&info, None) }
                         .map(|view| [view])
                         .context("creating a texel view of a buffer")
@@ -196,7 +214,11 @@ impl ComputeKernel {
                 }
             })
             .collect();
+        // SAFETY: each write names `set` (allocated above) and borrows an element of `infos` or `views`, locals
+        // that outlive the update; the buffers and views they name are alive, and no command buffer uses the set
+        // yet.
         unsafe { device.update_descriptor_sets(&writes, &[]) };
+        // SAFETY: a create-info without borrowed arrays, on the live device.
         let timestamps = match ctx.timestamp_period_ns {
             Some(_) => Some(unsafe {
                 device.create_query_pool(
@@ -213,6 +235,8 @@ impl ComputeKernel {
     /// commands (the viewer's frames); the caller orders it with barriers.
     pub(super) fn record(&self, device: &ash::Device, cb: vk::CommandBuffer, push: &[u8], groups: [u32; 3]) {
         assert_eq!(push.len() as u32, self.push_size, "push-constant block size");
+        // SAFETY: `cb` is in the recording state (the caller's); the pipeline, layout and set belong to this live
+        // kernel, and `push` is exactly the push-constant range's size (asserted above).
         unsafe {
             device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, self.pipeline);
             device.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
@@ -243,6 +267,8 @@ impl ComputeKernel {
         let Some(&(first, _, _)) = steps.first() else {
             return Ok(Some(0.0));
         };
+        // SAFETY: `cb` is recording (submit_and_wait), the query pool and every kernel of `steps` are alive while
+        // the submission is waited for, and the barrier is a local the call only reads.
         ctx.submit_and_wait(|device, cb| unsafe {
             if let Some(pool) = first.timestamps {
                 device.cmd_reset_query_pool(cb, pool, 0, 2);
@@ -279,6 +305,8 @@ impl ComputeKernel {
             return Ok(None);
         };
         let mut ticks = [0u64; 2];
+        // SAFETY: the submission that wrote both timestamps of `pool` was waited for above, `ticks` has room for
+        // the two 64-bit results asked for (TYPE_64), and WAIT makes the call return only available values.
         unsafe {
             ctx.device.get_query_pool_results(
                 pool,
@@ -292,6 +320,9 @@ impl ComputeKernel {
 
     pub fn destroy(self, ctx: &GpuContext) {
         let device = &ctx.device;
+        // SAFETY: `self` is consumed, so each handle is destroyed once, dependents first (views, pipeline, then
+        // layouts); every dispatch that used them was waited for (submit_and_wait) or the viewer made the device
+        // idle before dropping its kernel.
         unsafe {
             if let Some(pool) = self.timestamps {
                 device.destroy_query_pool(pool, None);

@@ -138,6 +138,8 @@ struct WindowHandles {
 }
 
 fn load_entry() -> Result<ash::Entry> {
+    // SAFETY: loading libvulkan runs its initialisers; ash::Entry keeps the library loaded for as long as the entry
+    // (and every instance made from it: GpuContext holds `_entry`) lives.
     unsafe { ash::Entry::load() }.map_err(|e| {
         anyhow!(
             "cannot load the Vulkan loader (libvulkan.so.1): {e}. Install it, e.g. `apt-get install libvulkan1 mesa-vulkan-drivers`"
@@ -154,13 +156,14 @@ fn create_instance(
         .application_name(c"caustica")
         .engine_name(c"caustica")
         .api_version(vk::API_VERSION_1_2);
+    // SAFETY: a global command on a loaded entry; it takes no handles and fills a Vec it allocates.
     let layer_available = validation
         && unsafe { entry.enumerate_instance_layer_properties() }
             .unwrap_or_default()
             .iter()
             .any(|l| l.layer_name_as_c_str().ok() == Some(validation::LAYER_NAME));
     if validation && !layer_available {
-        eprintln!(
+        log::warn!(
             "caustica: validation requested but {:?} is not installed; running without it",
             validation::LAYER_NAME
         );
@@ -174,12 +177,16 @@ fn create_instance(
         .application_info(&app)
         .enabled_layer_names(&layers)
         .enabled_extension_names(&extensions);
+    // SAFETY: `info` borrows `app`, `layers` and `extensions`, locals alive until the call returns; their pointers
+    // are to static C strings (the layer's and extensions' names, the window extensions ash_window returns as
+    // 'static).
     let instance = unsafe { entry.create_instance(&info, None) }
         .map_err(|e| anyhow!("vkCreateInstance failed: {e} (is a Vulkan driver installed? try mesa-vulkan-drivers)"))?;
     Ok((instance, layer_available))
 }
 
 fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> DeviceInfo {
+    // SAFETY: `pd` was enumerated from this live `instance`, and these queries only fill structures they return.
     let props = unsafe { instance.get_physical_device_properties(pd) };
     let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
     let queues = unsafe { instance.get_physical_device_queue_family_properties(pd) };
@@ -226,6 +233,9 @@ fn driver_properties(
     }
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    // SAFETY: `pd` belongs to the live `instance`, which was created for Vulkan 1.2, and the device reports 1.2
+    // (checked above), so the chained PhysicalDeviceDriverProperties is a structure it knows; `driver` is a local
+    // that outlives the call.
     unsafe { instance.get_physical_device_properties2(pd, &mut props) };
     let text = |c: Result<&std::ffi::CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
     (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()), Some(driver.driver_id))
@@ -238,11 +248,14 @@ fn subgroup_size(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: 
     }
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    // SAFETY: `pd` belongs to the live `instance` and the device reports Vulkan 1.1 or newer (checked above), where
+    // PhysicalDeviceSubgroupProperties is core; `subgroup` is a local that outlives the call.
     unsafe { instance.get_physical_device_properties2(pd, &mut props) };
     subgroup.subgroup_size
 }
 
 fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceInfo)>> {
+    // SAFETY: `instance` is alive (the caller's); the call fills a Vec it allocates.
     let devices = unsafe { instance.enumerate_physical_devices() }.context("vkEnumeratePhysicalDevices failed")?;
     Ok(devices.into_iter().enumerate().map(|(i, pd)| (pd, describe(instance, pd, i))).collect())
 }
@@ -252,6 +265,8 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     let entry = load_entry()?;
     let (instance, _) = create_instance(&entry, false, &[])?;
     let devices = enumerate(&instance);
+    // SAFETY: the instance was made above for this listing alone; nothing was created from it (no device, surface
+    // or messenger), and `devices` holds only copied-out information.
     unsafe { instance.destroy_instance(None) };
     Ok(devices?.into_iter().map(|(_, info)| info).collect())
 }
@@ -284,9 +299,12 @@ fn presenting_family(
     pd: vk::PhysicalDevice,
     surface: vk::SurfaceKHR,
 ) -> Option<u32> {
+    // SAFETY: `pd` was enumerated from the caller's live `instance`; the query fills a Vec it returns.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let wanted = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
     (0..families.len() as u32).find(|&f| {
+        // SAFETY: `pd` and `surface` belong to the live `instance` (the caller's), and `f` is an index below
+        // the family count just queried.
         families[f as usize].queue_flags.contains(wanted)
             && unsafe { loader.get_physical_device_surface_support(pd, f, surface) }.unwrap_or(false)
     })
@@ -316,9 +334,14 @@ impl GpuContext {
         };
         let (instance, validating) = create_instance(&entry, options.validation, &window_extensions)?;
         let surface = match window {
+            // SAFETY: the raw handles come from a live window that, as for_window's contract says, outlives this
+            // context, whose surface is destroyed before the instance (Drop); `instance` was created with the
+            // extensions ash_window asked for.
             Some(w) => match unsafe { ash_window::create_surface(&entry, &instance, w.display, w.window, None) } {
                 Ok(surface) => Some((ash::khr::surface::Instance::new(&entry, &instance), surface)),
                 Err(e) => {
+                    // SAFETY: the instance was created above and nothing has been created from it yet (the surface
+                    // failed), so it can be destroyed before returning the error.
                     unsafe { instance.destroy_instance(None) };
                     bail!("creating a Vulkan surface for the window: {e}");
                 }
@@ -329,6 +352,9 @@ impl GpuContext {
         let debug = if validating {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
             let messenger =
+                // SAFETY: the create-info points at `validation_log`, a Box whose heap place never moves and
+                // which the context owns until Drop destroys the messenger, before the log; the instance was
+                // created with VK_EXT_debug_utils enabled.
                 unsafe { loader.create_debug_utils_messenger(&validation::messenger_info(&validation_log), None) }
                     .context("creating the validation messenger")?;
             Some((loader, messenger))
@@ -344,10 +370,12 @@ impl GpuContext {
             }
         }
         let (physical, mut info) = choose(devices, options.device.as_deref())?;
+        log::debug!("caustica: device {} ({}, {})", info.name, info.kind.label(), info.driver_name);
         if let Some(limit) = options.storage_binding_limit {
             info.max_storage_buffer_range = info.max_storage_buffer_range.min(limit);
             info.texel_binding_limit = limit;
         }
+        // SAFETY: `physical` was enumerated from the live `instance`; the queries fill structures they return.
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
         let family = match &surface {
             Some((loader, surface)) => presenting_family(&instance, loader, physical, *surface)
@@ -357,6 +385,7 @@ impl GpuContext {
                 .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
                 .ok_or_else(|| anyhow!("{} has no compute queue", info.name))? as u32,
         };
+        // SAFETY: `physical` belongs to the live `instance`; the query fills a structure it returns.
         let timestamp_period = unsafe { instance.get_physical_device_properties(physical) }.limits.timestamp_period;
         let timestamp_period_ns = (families[family as usize].timestamp_valid_bits > 0 && timestamp_period > 0.0)
             .then_some(timestamp_period as f64);
@@ -375,9 +404,15 @@ impl GpuContext {
         if statistics {
             device_info = device_info.push_next(&mut statistics_feature);
         }
+        // SAFETY: `device_info` borrows `queue_info`, `priorities`, `device_extensions` and `statistics_feature`,
+        // locals alive until the call returns; `family` is a queue family of `physical` that computes (and
+        // presents, for a window); the extensions are supported (swapchain for a surface, statistics by supported()).
         let device = unsafe { instance.create_device(physical, &device_info, None) }
             .with_context(|| format!("creating a logical device on {}", info.name))?;
+        // SAFETY: the device was just created with one queue of `family`.
         let queue = unsafe { device.get_device_queue(family, 0) };
+        // SAFETY: a create-info without borrowed arrays for a queue family the device was created with; the pool is
+        // destroyed in Drop, before the device.
         let command_pool = unsafe {
             device.create_command_pool(
                 &vk::CommandPoolCreateInfo::default()
@@ -422,6 +457,7 @@ impl GpuContext {
 
     /// Waits until the device has finished everything submitted (before freeing what it uses).
     pub fn wait_idle(&self) {
+        // SAFETY: the device is alive as long as `self`; waiting for idle needs no other handles.
         let _ = unsafe { self.device.device_wait_idle() };
     }
 
@@ -454,9 +490,16 @@ impl GpuContext {
             .command_pool(self.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
+        // SAFETY: the pool is the context's, created with RESET_COMMAND_BUFFER for this queue family, and the
+        // context is used from one thread (nothing in caustica shares a context across threads), which is the
+        // external synchronisation the pool and the queue need.
         let cb = unsafe { device.allocate_command_buffers(&alloc) }?[0];
+        // SAFETY: a create-info without borrowed arrays on the live device; the fence is destroyed below.
         let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
         let result = (|| -> Result<()> {
+            // SAFETY: `cb` was just allocated and is recorded once (ONE_TIME_SUBMIT); `record` gets the device and
+            // the recording buffer only; `cbs` and `submit` are locals alive until the submission call returns, and
+            // the wait for `fence` means the commands have finished before the buffer is freed below.
             unsafe {
                 device.begin_command_buffer(
                     cb,
@@ -471,6 +514,8 @@ impl GpuContext {
             }
             Ok(())
         })();
+        // SAFETY: the fence was waited for, or the submission never happened (an error before it), so neither the
+        // fence nor the command buffer is in use; a failed wait means a lost device, whose objects may be destroyed.
         unsafe {
             device.destroy_fence(fence, None);
             device.free_command_buffers(self.command_pool, &[cb]);
@@ -481,6 +526,9 @@ impl GpuContext {
 
 impl Drop for GpuContext {
     fn drop(&mut self) {
+        // SAFETY: the device is waited idle first, so nothing in flight uses what is destroyed; the order is
+        // children before parents: the allocator's memory and the command pool before the device, the surface and
+        // the validation messenger before the instance. `self` is being dropped, so each handle is destroyed once.
         unsafe {
             let _ = self.device.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);

@@ -53,6 +53,8 @@ impl OverlayPass {
             .dst_access_mask(vk::AccessFlags::COLOR_ATTACHMENT_READ | vk::AccessFlags::COLOR_ATTACHMENT_WRITE)];
         let info =
             vk::RenderPassCreateInfo::default().attachments(&attachment).subpasses(&subpass).dependencies(&dependency);
+        // SAFETY: `info` borrows `attachment`, `subpass` (which borrows `color`) and `dependency`, locals alive
+        // until the call returns; the device is the context's, alive while `ctx` is.
         let render_pass =
             unsafe { ctx.device.create_render_pass(&info, None) }.context("creating the overlay's render pass")?;
         let options =
@@ -88,6 +90,9 @@ impl OverlayPass {
                 .width(swapchain.extent.width)
                 .height(swapchain.extent.height)
                 .layers(1);
+            // SAFETY: `info` borrows `views` (alive to the end of this iteration) naming a live view of the
+            // swapchain, whose extent it takes, and the render pass made for the swapchain's format (checked
+            // above).
             self.framebuffers.push(
                 unsafe { ctx.device.create_framebuffer(&info, None) }.context("creating an overlay framebuffer")?,
             );
@@ -130,15 +135,21 @@ impl OverlayPass {
             .render_pass(self.render_pass)
             .framebuffer(self.framebuffers[index])
             .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent });
+        // SAFETY: `cb` is recording (Presenter::record), the framebuffer is this pass's for swapchain image `index`
+        // and the render area is that swapchain's extent; `begin` is a local.
         unsafe { device.cmd_begin_render_pass(cb, &begin, vk::SubpassContents::INLINE) };
         let renderer = self.renderer.as_mut().expect("renderer lives until destroy");
         let drawn = renderer.cmd_draw(cb, extent, draw.pixels_per_point, draw.primitives);
+        // SAFETY: ends the render pass begun above on the same recording `cb`, whatever cmd_draw returned.
         unsafe { device.cmd_end_render_pass(cb) };
         drawn.map_err(|e| anyhow!("recording the overlay: {e}"))
     }
 
     fn destroy_framebuffers(&mut self, ctx: &GpuContext) {
         for fb in self.framebuffers.drain(..) {
+            // SAFETY: framebuffers are destroyed only with the device idle: by destroy() (after the device is idle)
+            // or on re-creation, which Presenter::recreate begins by waiting for the device; each handle is drained
+            // from the list as it goes.
             unsafe { ctx.device.destroy_framebuffer(fb, None) };
         }
     }
@@ -147,6 +158,8 @@ impl OverlayPass {
     pub(super) fn destroy(mut self, ctx: &GpuContext) {
         self.destroy_framebuffers(ctx);
         drop(self.renderer.take());
+        // SAFETY: as its doc says, destroy() runs with the device idle; the framebuffers and egui's renderer, which
+        // use the render pass, are gone first, and `self` is consumed, so the pass is destroyed once.
         unsafe { ctx.device.destroy_render_pass(self.render_pass, None) };
     }
 }

@@ -7,6 +7,7 @@ use ash::vk;
 
 /// Whether `pd` offers the extension and its `pipelineExecutableInfo` feature.
 pub(super) fn supported(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+    // SAFETY: `pd` was enumerated from the caller's live `instance`; the query fills a Vec it returns.
     let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     let named = extensions
         .iter()
@@ -16,6 +17,9 @@ pub(super) fn supported(instance: &ash::Instance, pd: vk::PhysicalDevice) -> boo
     }
     let mut feature = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default();
     let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut feature);
+    // SAFETY: `pd` belongs to the live `instance`, which is created for Vulkan 1.2 (where PhysicalDeviceFeatures2
+    // is core), and the device offers the extension whose feature structure is chained; `feature` is a local that
+    // outlives the call.
     unsafe { instance.get_physical_device_features2(pd, &mut features) };
     feature.pipeline_executable_info == vk::TRUE
 }
@@ -34,6 +38,9 @@ pub(super) fn read(
     pipeline: vk::Pipeline,
 ) -> Vec<KernelStatistic> {
     let info = vk::PipelineInfoKHR::default().pipeline(pipeline);
+    // SAFETY: the loader exists only where the device was created with the extension and its pipelineExecutableInfo
+    // feature (GpuContext::create), and `pipeline` is a live pipeline created with CAPTURE_STATISTICS_KHR
+    // (ComputeKernel::new sets it whenever the loader exists).
     let Ok(executables) = (unsafe { loader.get_pipeline_executable_properties(&info) }) else {
         return Vec::new();
     };
@@ -41,6 +48,7 @@ pub(super) fn read(
     let mut statistics = Vec::new();
     for (index, executable) in executables.iter().enumerate() {
         let info = vk::PipelineExecutableInfoKHR::default().pipeline(pipeline).executable_index(index as u32);
+        // SAFETY: as above; `index` is below the executable count the driver just gave.
         let Ok(figures) = (unsafe { loader.get_pipeline_executable_statistics(&info) }) else {
             continue;
         };

@@ -68,6 +68,8 @@ impl Presenter {
             .command_pool(ctx.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
+        // SAFETY: the context's command pool (RESET_COMMAND_BUFFER, so the buffer may be reset each frame) and
+        // create-infos without borrowed arrays, on the live device; each handle is freed in destroy().
         let command_buffer = unsafe { device.allocate_command_buffers(&alloc) }?[0];
         let image_available = unsafe { device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }?;
         let frame_done = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }?;
@@ -107,6 +109,8 @@ impl Presenter {
     }
 
     fn recreate(&mut self, ctx: &GpuContext) -> Result<()> {
+        // SAFETY: the device is alive as long as `ctx`; after the wait nothing in flight uses the old swapchain,
+        // its views and framebuffers, which are destroyed below.
         unsafe { ctx.device.device_wait_idle() }.map_err(VulkanError)?;
         let old = self.swapchain.take();
         let created = Swapchain::new(ctx, self.size, old.as_ref().map_or(vk::SwapchainKHR::null(), |s| s.handle));
@@ -122,9 +126,13 @@ impl Presenter {
             None => self.overlay = Some(OverlayPass::new(ctx, &swapchain)?),
         }
         for s in self.render_finished.drain(..) {
+            // SAFETY: the device was made idle at the top of recreate(), so no presentation still waits on these
+            // semaphores; each was created by this presenter and is drained from the list as it is destroyed.
             unsafe { ctx.device.destroy_semaphore(s, None) };
         }
         for _ in &swapchain.images {
+            // SAFETY: a create-info without borrowed arrays on the live device; the semaphore is kept in
+            // `render_finished` and destroyed by recreate() or destroy().
             self.render_finished
                 .push(unsafe { ctx.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }?);
         }
@@ -143,6 +151,9 @@ impl Presenter {
         let (handle, extent, order, readable) =
             (swapchain.handle, swapchain.extent, swapchain.order, swapchain.readable);
         let loader = &ctx.presentation.as_ref().expect("a swapchain implies a presentation").swapchain_loader;
+        // SAFETY: `handle` is the live swapchain of this presenter (made for ctx's surface, whose loader this is),
+        // and `image_available` has no signal pending: the frame submitted after each successful acquire waits
+        // on it and is waited for (a frame that fails before its submission ends the viewer with the error).
         let index =
             match unsafe { loader.acquire_next_image(handle, u64::MAX, self.image_available, vk::Fence::null()) } {
                 Ok((index, suboptimal)) => {
@@ -192,6 +203,8 @@ impl Presenter {
         let indices = [index as u32];
         let present =
             vk::PresentInfoKHR::default().wait_semaphores(&semaphores).swapchains(&swapchains).image_indices(&indices);
+        // SAFETY: `present` borrows `semaphores`, `swapchains` and `indices`, locals alive until the call returns;
+        // `index` was acquired above, and the semaphore is signalled by the frame submitted for that image.
         match unsafe { loader.queue_present(ctx.queue, &present) } {
             Ok(suboptimal) => {
                 self.stale |= suboptimal;
@@ -213,6 +226,10 @@ impl Presenter {
         let cb = self.command_buffer;
         let swapchain = self.swapchain.as_ref().expect("recording needs a swapchain");
         let (image, extent) = (swapchain.images[index], swapchain.extent);
+        // SAFETY: `cb` is this presenter's buffer from a pool that allows resets, and the last frame that used it
+        // was waited for (submit); `image` is the acquired swapchain image, `p.pixels` a live buffer of the
+        // picture's size, and the copy region lies inside both (the extent is the smaller of the two). Barriers and
+        // regions are locals the calls only read.
         unsafe {
             device.reset_command_buffer(cb, vk::CommandBufferResetFlags::empty())?;
             device.begin_command_buffer(
@@ -291,6 +308,8 @@ impl Presenter {
                 .as_mut()
                 .expect("a swapchain has an overlay pass")
                 .record(device, cb, index, extent, draw)?,
+            // SAFETY: `cb` is recording (above), and `image` the acquired swapchain image, left in
+            // TRANSFER_DST_OPTIMAL by the copy above.
             None => unsafe {
                 image_barrier(
                     device,
@@ -305,6 +324,9 @@ impl Presenter {
         if let Some(readback) = readback {
             let written = vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT;
             let write_access = vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::COLOR_ATTACHMENT_WRITE;
+            // SAFETY: `cb` is recording; `image` is in PRESENT_SRC_KHR (the overlay pass or the barrier above put
+            // it there), `readback` holds extent.width x extent.height x 4 bytes (made for this extent in
+            // present()), and the image was made with TRANSFER_SRC usage (`readable`, checked in present()).
             unsafe {
                 image_barrier(
                     device,
@@ -351,6 +373,7 @@ impl Presenter {
                 );
             }
         }
+        // SAFETY: `cb` is in the recording state begun above.
         unsafe { device.end_command_buffer(cb) }?;
         Ok(())
     }
@@ -367,6 +390,9 @@ impl Presenter {
             .wait_dst_stage_mask(&stages)
             .command_buffers(&cbs)
             .signal_semaphores(&signals)];
+        // SAFETY: `submit` borrows `waits`, `stages`, `cbs` and `signals`, locals alive until the call returns;
+        // `cb` was recorded by record(), and waiting for `frame_done` then resetting it leaves it unsignalled for
+        // the next frame. The context is used from one thread, which is the queue's external synchronisation.
         unsafe {
             ctx.device
                 .queue_submit(ctx.queue, &submit, self.frame_done)
@@ -379,6 +405,9 @@ impl Presenter {
     }
 
     pub fn destroy(mut self, ctx: &GpuContext) {
+        // SAFETY: the device is waited idle first, so no frame or presentation still uses what is destroyed; `self`
+        // is consumed, so each handle is destroyed once, and the command buffer goes back to the context's pool it
+        // came from.
         unsafe {
             let _ = ctx.device.device_wait_idle();
             if let Some(overlay) = self.overlay.take() {
@@ -398,6 +427,10 @@ impl Presenter {
 }
 
 /// A layout transition of a whole swapchain image.
+///
+/// # Safety
+/// `cb` must be a command buffer of `device` in the recording state, and `image` a live image of
+/// `device` (a swapchain image) in layout `layouts.0` when the barrier runs.
 unsafe fn image_barrier(
     device: &ash::Device,
     cb: vk::CommandBuffer,

@@ -39,10 +39,14 @@ impl Swapchain {
     pub(super) fn new(ctx: &GpuContext, size: [u32; 2], old: vk::SwapchainKHR) -> Result<Option<Self>> {
         let p = ctx.presentation.as_ref().ok_or_else(|| anyhow!("this GPU context was not made for a window"))?;
         let (pd, surface) = (ctx.physical_device, p.surface);
+        // SAFETY: `pd` is the context's device, chosen among those that can present to `surface`
+        // (GpuContext::for_window), and the surface is alive as long as the context; the queries fill what they
+        // return.
         let caps = unsafe { p.surface_loader.get_physical_device_surface_capabilities(pd, surface) }
             .context("the window surface's capabilities")?;
         let formats = unsafe { p.surface_loader.get_physical_device_surface_formats(pd, surface) }
             .context("the window surface's formats")?;
+        // SAFETY: the same device and surface as the two queries above.
         let modes = unsafe { p.surface_loader.get_physical_device_surface_present_modes(pd, surface) }
             .context("the window surface's present modes")?;
         let (format, order) = FORMATS
@@ -97,7 +101,11 @@ impl Swapchain {
             .present_mode(mode)
             .clipped(true)
             .old_swapchain(old);
+        // SAFETY: `info` has no borrowed arrays (one queue family, EXCLUSIVE); its format, colour space, extent,
+        // image count and usage come from what the surface reported above, and `old` is the caller's live swapchain
+        // or null, which the caller destroys only after this call.
         let handle = unsafe { p.swapchain_loader.create_swapchain(&info, None) }.context("creating the swapchain")?;
+        // SAFETY: `handle` was just created by this loader.
         let images = unsafe { p.swapchain_loader.get_swapchain_images(handle) }?;
         let mut chain = Self { handle, images, views: vec![], format, order, extent, readable };
         for &image in &chain.images {
@@ -106,6 +114,8 @@ impl Swapchain {
                 .view_type(vk::ImageViewType::TYPE_2D)
                 .format(format)
                 .subresource_range(COLOR_RANGE);
+            // SAFETY: `view_info` names an image of the swapchain just created, with its own format and its one
+            // level and layer.
             match unsafe { ctx.device.create_image_view(&view_info, None) } {
                 Ok(view) => chain.views.push(view),
                 Err(e) => {
@@ -118,6 +128,9 @@ impl Swapchain {
     }
 
     pub(super) fn destroy(self, ctx: &GpuContext) {
+        // SAFETY: the callers destroy a swapchain with the device idle (Presenter::recreate and destroy wait for it
+        // first, and Swapchain::new's own error path has submitted nothing); views go before the swapchain that
+        // owns their images, and `self` is consumed, so each handle is destroyed once.
         unsafe {
             for view in self.views {
                 ctx.device.destroy_image_view(view, None);

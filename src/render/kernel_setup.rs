@@ -69,7 +69,7 @@ impl KernelPlan {
             TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texel_bytes, binding_range(&ctx.info, texels)));
         let data = SceneData::new(scene, texture_budget);
         if data.texture_bytes() < data.texture_bytes_requested {
-            eprintln!(
+            log::warn!(
                 "caustica: {}: textures downsampled from {:.1} MiB to {:.1} MiB to fit the texture budget",
                 scene.name,
                 data.texture_bytes_requested as f64 / 1048576.0,

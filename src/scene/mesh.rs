@@ -146,7 +146,7 @@ impl<'a> MeshImporter<'a> {
         if !self.loaded.contains_key(&key) {
             let mut asset = load()?;
             if asset.dropped_triangles > 0 {
-                eprintln!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
+                log::info!("caustica: {}: dropped {} zero-area triangle(s)", path.display(), asset.dropped_triangles);
             }
             sides.apply(&mut asset);
             // Tangents before the texture coordinates are mapped: Mitsuba's and pbrt's frames (of

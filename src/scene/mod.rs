@@ -381,7 +381,7 @@ impl Scene {
         if import::is_foreign_scene(path) {
             let imported = import::import(files, path, defines)?;
             for warning in &imported.warnings {
-                eprintln!("caustica: warning: {warning}");
+                log::warn!("caustica: warning: {warning}");
             }
             return imported.into_scene(files);
         }

@@ -400,7 +400,7 @@ impl<'a> Viewer<'a> {
 
     /// Says it on standard error and in the overlay.
     fn report(&mut self, problem: String) {
-        eprintln!("caustica view: {problem}");
+        log::warn!("caustica view: {problem}");
         self.problem = Some(problem);
     }
 
@@ -426,7 +426,7 @@ impl<'a> Viewer<'a> {
         renderer.finish_pass()?;
         renderer.refresh_scene_hash()?;
         let Some(partial) = farm::snapshot(renderer)? else {
-            eprintln!("caustica view: nothing to save yet (no samples)");
+            log::info!("caustica view: nothing to save yet (no samples)");
             return Ok(());
         };
         let stem = self
@@ -442,7 +442,7 @@ impl<'a> Viewer<'a> {
         let options = OutputOptions { exposure: self.exposure, tonemap: self.tonemap, png_depth: PngDepth::Eight };
         write_image_with(&png, &partial.image(), &options)?;
         partial.write(&exr)?;
-        eprintln!("caustica view: saved {} and {} ({} spp)", png.display(), exr.display(), partial.samples());
+        log::info!("caustica view: saved {} and {} ({} spp)", png.display(), exr.display(), partial.samples());
         Ok(())
     }
 
@@ -455,7 +455,7 @@ impl<'a> Viewer<'a> {
                 match self.start_session() {
                     Ok(()) => {
                         self.problem = None;
-                        eprintln!("caustica view: reloaded {} ({why})", self.source.title());
+                        log::info!("caustica view: reloaded {} ({why})", self.source.title());
                     }
                     Err(e) => self.report(format!("cannot render the reloaded scene: {e:#}")),
                 }
@@ -476,7 +476,7 @@ impl<'a> Viewer<'a> {
                 match self.start_session() {
                     Ok(()) => {
                         self.problem = None;
-                        eprintln!("caustica view: opened {}", path.display());
+                        log::info!("caustica view: opened {}", path.display());
                     }
                     Err(e) => self.report(format!("cannot render {}: {e:#}", path.display())),
                 }
@@ -567,7 +567,7 @@ impl<'a> Viewer<'a> {
                     size.1
                 );
                 crate::image::png::write_srgb8(&path, screen.width, screen.height, &screen.rgb)?;
-                eprintln!(
+                log::info!(
                     "caustica view: wrote {} ({}x{}, {} spp)",
                     path.display(),
                     screen.width,

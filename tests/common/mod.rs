@@ -20,10 +20,17 @@ use std::sync::{Mutex, MutexGuard, Once};
 
 pub const LAVAPIPE_ICD: &str = "/usr/share/vulkan/icd.d/lvp_icd.x86_64.json";
 
-/// Lavapipe's ICD when the caller has not chosen a driver already (VK_DRIVER_FILES unset) and
-/// Mesa's lavapipe is installed.
+/// Whether the suite runs on the machine's own Vulkan devices (`CAUSTICA_LAVAPIPE=none`, see
+/// scripts/test.sh) rather than on lavapipe.
+pub fn own_devices() -> bool {
+    std::env::var_os("CAUSTICA_LAVAPIPE").is_some_and(|v| v == "none")
+}
+
+/// Lavapipe's ICD when the caller has not chosen a driver already (VK_DRIVER_FILES unset) nor
+/// asked for the machine's own devices, and Mesa's lavapipe is installed.
 pub fn lavapipe_override() -> Option<&'static str> {
-    (std::env::var_os("VK_DRIVER_FILES").is_none() && Path::new(LAVAPIPE_ICD).exists()).then_some(LAVAPIPE_ICD)
+    (std::env::var_os("VK_DRIVER_FILES").is_none() && !own_devices() && Path::new(LAVAPIPE_ICD).exists())
+        .then_some(LAVAPIPE_ICD)
 }
 
 /// The caustica binary of this build, on lavapipe unless the caller chose a driver.
@@ -53,7 +60,8 @@ pub fn loops_end_early(ctx: &GpuContext, what: &str) -> bool {
 }
 
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
-/// lavapipe already uses every core for one dispatch.
+/// lavapipe already uses every core for one dispatch. With `CAUSTICA_LAVAPIPE=none` they run on the
+/// device the CLI takes by default.
 pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
     gpu_with_storage_limit(None)
 }
@@ -162,6 +170,61 @@ pub fn floor_point_scene(lights: &str, spp: u32, nee: bool) -> Scene {
         {lights}
         "#
     ))
+}
+
+/// The built-in Cornell box (scenes/cornell.toml) at `size` x `size` pixels and `spp` samples.
+pub fn cornell(size: u32, spp: u32) -> Scene {
+    let mut scene = Scene::default_scene();
+    (scene.film.width, scene.film.height, scene.film.spp) = (size, size, spp);
+    scene
+}
+
+/// Asserts that `image`'s mean luminance is `expected` within 5 standard errors plus `floor`
+/// (relative: the rounding of f32 sums and ray offsets), and that this tolerance is below `bias`
+/// (relative), the smallest bias the test claims to fail. The standard error comes from the
+/// scatter of the pixels: each is an independent estimate (its random numbers are scrambled by
+/// pixel).
+pub fn assert_mean_is(image: &RgbImage, expected: f64, floor: f64, bias: f64, what: &str) {
+    let (mean, stderr) = mean_and_stderr(&image.pixels.iter().map(|&p| luminance(p)).collect::<Vec<_>>());
+    let tolerance = 5.0 * stderr + floor * expected;
+    eprintln!(
+        "{what}: mean {mean:.6}, expected {expected:.6}, difference {:+.4} %, tolerance {:.4} %",
+        (mean / expected - 1.0) * 100.0,
+        tolerance / expected * 100.0
+    );
+    assert!(
+        tolerance <= bias * expected,
+        "{what}: the tolerance {:.3} % no longer resolves a {:.2} % bias: raise the sample count",
+        tolerance / expected * 100.0,
+        bias * 100.0
+    );
+    assert!(
+        (mean - expected).abs() <= tolerance,
+        "{what}: mean {mean:.6}, expected {expected:.6} ({:+.3} %, tolerance {:.3} %)",
+        (mean / expected - 1.0) * 100.0,
+        tolerance / expected * 100.0
+    );
+}
+
+/// Asserts that the caustica run `o` failed (exit status 1, as for any bad input or usage error)
+/// saying `needle` on stderr.
+pub fn fails_with(o: &std::process::Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "exit status {:?}, stderr {stderr}", o.status);
+    assert!(stderr.contains(needle), "stderr does not say '{needle}': {stderr}");
+}
+
+/// The Rust files below `dir`, at any depth (the source checks: tests/layers.rs,
+/// tests/safety_notes.rs).
+pub fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
 }
 
 pub fn luminance(p: [f32; 3]) -> f64 {

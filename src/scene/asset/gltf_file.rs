@@ -125,7 +125,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     // as JSON, nor KHR_materials_volume, which it parses).
     json.extensions_required.retain(|e| gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e.as_str()));
     for warning in ignored_features(&json) {
-        eprintln!("caustica: warning: {}: {warning}", path.display());
+        log::warn!("caustica: warning: {}: {warning}", path.display());
     }
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -160,7 +160,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             convert_material(&material, &document, &buffers, &sources, &mut decoded_images, &mut asset)
                 .map_err(|m| AssetError::invalid(path, m))?;
         if uv_mapping.mixed {
-            eprintln!("caustica: warning: {}: material '{}': its textures use different texture coordinates or KHR_texture_transforms; all are read through its first texture's", path.display(), converted.name);
+            log::warn!("caustica: warning: {}: material '{}': its textures use different texture coordinates or KHR_texture_transforms; all are read through its first texture's", path.display(), converted.name);
         }
         asset.materials.push(converted);
         uv_mappings.push(uv_mapping.mapping);
@@ -182,7 +182,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         asset.meshes.push(converted);
     }
     if skipped_primitives > 0 {
-        eprintln!("caustica: {}: skipped {skipped_primitives} point or line primitive(s)", path.display());
+        log::warn!("caustica: {}: skipped {skipped_primitives} point or line primitive(s)", path.display());
     }
 
     let mut walk = Walk { ancestors: Vec::new(), visited: vec![false; document.nodes().len()], asset: &mut asset };
@@ -190,7 +190,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         walk.visit(root, Mat4::IDENTITY).map_err(|m| AssetError::invalid(path, m))?;
     }
     if document.lights().into_iter().flatten().any(|l| l.range().is_some()) {
-        eprintln!(
+        log::warn!(
             "caustica: {}: KHR_lights_punctual range ignored (lights fall off by the inverse square)",
             path.display()
         );

@@ -180,11 +180,11 @@ pub fn add_anisotropy_tangents(path: &Path, asset: &mut Asset) {
     }
 }
 
-/// MikkTSpace tangents for mesh `k` unless it has tangents; where it cannot have them, a note on
-/// stderr naming what is missing and, in `consequence`, what that does.
+/// MikkTSpace tangents for mesh `k` unless it has tangents; where it cannot have them, a warning
+/// (the log) naming what is missing and, in `consequence`, what that does.
 fn give_tangents(path: &Path, k: usize, mesh: &mut MeshData, consequence: &str) {
     if let Err(missing) = ensure_tangents(mesh) {
-        eprintln!("caustica: {}: mesh {k} has no {missing}: {consequence}", path.display());
+        log::warn!("caustica: {}: mesh {k} has no {missing}: {consequence}", path.display());
     }
 }
 

@@ -70,7 +70,7 @@ fn decode_texture_within(bytes: &[u8], name: String, srgb: bool, max_bytes: u64)
         (texels, width, height)
     } else {
         let reduced = reduce(&image, factor, srgb);
-        eprintln!(
+        log::warn!(
             "caustica: note: texture '{name}' ({width}x{height}, {} as RGBA8) reduced to {}x{} to fit the {} texture budget",
             describe_bytes(rgba_bytes(width, height)),
             reduced.1,
