@@ -13,7 +13,7 @@ pub use report::{print_left_out, print_measurement, print_suite, suite_json, SUI
 pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcome, SuiteSize};
 
 use crate::farm::per_second;
-use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic};
+use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic, Traversal};
 use crate::process_time::cpu_seconds;
 use crate::render::{
     AovSet, GeometryReport, GroupOrder, KernelChoice, Renderer, SceneFeatures, WalkQueue, WalkRecords, Workgroup,
@@ -68,6 +68,9 @@ pub struct Measurement {
     pub wavefront: bool,
     /// The kernel's workgroup shape.
     pub workgroup: Workgroup,
+    /// How its rays found what they hit: the compute walk or the device's ray queries
+    /// (`--traversal`).
+    pub traversal: Traversal,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
     pub setup_seconds: f64,
     /// Wall time of the timed dispatches, fences included.
@@ -125,6 +128,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: KernelSetup
         walk_records: renderer.walk_records,
         wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
+        traversal: renderer.traversal,
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
@@ -176,6 +180,7 @@ impl Measurement {
             "walk_records": self.walk_records.label(),
             "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
+            "traversal": self.traversal.name(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,

@@ -43,10 +43,11 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
     };
     let wavefront = if m.wavefront { "; the wavefront's three kernels (CAUSTICA_WAVEFRONT)" } else { "" };
     println!(
-        "kernel:       {kernel}: {}; workgroups {}, rows {}{tiles}{records}{walks}{wavefront}",
+        "kernel:       {kernel}: {}; workgroups {}, rows {}, traversal {}{tiles}{records}{walks}{wavefront}",
         m.features.names().join(", "),
         m.workgroup.label(),
-        m.group_order.label()
+        m.group_order.label(),
+        m.traversal.name()
     );
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.

@@ -2,6 +2,7 @@
 
 use super::compute::TexelWords;
 use super::failure::VulkanError;
+use super::traversal::{self, Traversal, TraversalRequest};
 use super::validation::{self, ValidationLog};
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
@@ -97,6 +98,8 @@ pub struct ContextOptions {
     /// Act as if one storage or texel-buffer binding could see at most this many bytes (tests of the splitting of
     /// large arrays, and of the refusal of scenes too large, on any device).
     pub storage_binding_limit: Option<u64>,
+    /// Which traversal the kernel runs (traversal.rs); ray queries enable their extensions.
+    pub traversal: TraversalRequest,
 }
 
 pub struct GpuContext {
@@ -121,6 +124,11 @@ pub struct GpuContext {
     /// Reads what the driver says of each compiled kernel, where the device can
     /// (pipeline_statistics.rs).
     pub(super) pipeline_statistics: Option<ash::khr::pipeline_executable_properties::Device>,
+    /// The traversal the kernel runs on this device (what `ContextOptions::traversal` resolved to).
+    pub traversal: Traversal,
+    /// Builds acceleration structures where the traversal is ray queries
+    /// (acceleration_structure.rs), with the device's alignment of their scratch memory.
+    pub(super) acceleration_structures: Option<(ash::khr::acceleration_structure::Device, u64)>,
 }
 
 /// What presenting to a window needs beside the device: its surface and the extensions' loaders.
@@ -370,10 +378,30 @@ impl GpuContext {
         }
         let mut statistics_feature =
             vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(statistics);
+        let api_version = unsafe { instance.get_physical_device_properties(physical) }.api_version;
+        let traversal = Traversal::resolve(
+            options.traversal,
+            &info,
+            traversal::supports_ray_query(&instance, physical, api_version),
+        )?;
+        let ray_query = traversal == Traversal::RayQuery;
+        if ray_query {
+            device_extensions.extend(traversal::RAY_QUERY_EXTENSIONS.iter().map(|name| name.as_ptr()));
+        }
+        let mut structures_feature =
+            vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+        let mut query_feature = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let mut address_feature = vk::PhysicalDeviceBufferDeviceAddressFeatures::default().buffer_device_address(true);
         let mut device_info =
             vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
         if statistics {
             device_info = device_info.push_next(&mut statistics_feature);
+        }
+        if ray_query {
+            device_info = device_info
+                .push_next(&mut structures_feature)
+                .push_next(&mut query_feature)
+                .push_next(&mut address_feature);
         }
         let device = unsafe { instance.create_device(physical, &device_info, None) }
             .with_context(|| format!("creating a logical device on {}", info.name))?;
@@ -391,12 +419,19 @@ impl GpuContext {
             device: device.clone(),
             physical_device: physical,
             debug_settings: Default::default(),
-            buffer_device_address: false,
+            buffer_device_address: ray_query,
             allocation_sizes: Default::default(),
         })
         .context("creating the GPU memory allocator")?;
         let pipeline_statistics =
             statistics.then(|| ash::khr::pipeline_executable_properties::Device::new(&instance, &device));
+        let acceleration_structures = ray_query.then(|| {
+            let mut properties = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+            let mut all = vk::PhysicalDeviceProperties2::default().push_next(&mut properties);
+            unsafe { instance.get_physical_device_properties2(physical, &mut all) };
+            let scratch_alignment = u64::from(properties.min_acceleration_structure_scratch_offset_alignment).max(1);
+            (ash::khr::acceleration_structure::Device::new(&instance, &device), scratch_alignment)
+        });
         let presentation = surface.map(|(surface_loader, surface)| Presentation {
             surface_loader,
             surface,
@@ -417,6 +452,8 @@ impl GpuContext {
             timestamp_period_ns,
             loop_limit: OnceLock::new(),
             pipeline_statistics,
+            traversal,
+            acceleration_structures,
         })
     }
 

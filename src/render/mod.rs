@@ -12,6 +12,7 @@ mod group_order;
 mod kernel;
 pub mod layout;
 mod light_selection;
+mod ray_query_scene;
 mod renderer;
 mod scene_data;
 #[cfg(test)]

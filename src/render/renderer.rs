@@ -23,7 +23,10 @@ use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
 use super::wavefront::{self, WavefrontKernels, WavefrontStage};
 use super::workgroup::Workgroup;
-use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic};
+use crate::gpu::{
+    Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, DeviceType, GpuContext, KernelStatistic, SceneStructure,
+    Traversal,
+};
 use crate::image::RgbImage;
 use crate::scene::{Camera, Filter, Sampler, Scene};
 use anyhow::{Context as _, Result};
@@ -73,6 +76,11 @@ pub struct Renderer<'a> {
     pub walk_records: WalkRecords,
     /// The kernel's workgroup shape (workgroup.rs).
     pub workgroup: Workgroup,
+    /// How the kernel finds what rays hit: the device's choice (`GpuContext::traversal`), or the
+    /// compute walk's code for a scene with no walk at all (a few shapes tested in turn).
+    pub traversal: Traversal,
+    /// The scene's acceleration structures, where the kernel traces with ray queries.
+    structure: Option<SceneStructure>,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
     buffers: Vec<(KernelBuffer, Buffer)>,
     aovs: AovSet,
@@ -293,6 +301,8 @@ fn initial_contents<'d>(
         PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
         TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
         VertexTangents => bytemuck::cast_slice(&a.tangents),
+        // Built from the scene's data rather than uploaded (ray_query_scene.rs).
+        SceneStructure => &[],
     })
 }
 
@@ -443,7 +453,9 @@ impl<'a> Renderer<'a> {
                 ctx.info.name
             );
         }
-        let walk_queue = match use_wavefront {
+        // Ray queries replace the walk; a scene tested shape by shape has none to replace.
+        let traversal = if features.bvh() { ctx.traversal } else { Traversal::Compute };
+        let walk_queue = match use_wavefront || traversal == Traversal::RayQuery {
             true => None,
             false => WalkQueue::for_scene(
                 &ctx.info,
@@ -466,10 +478,12 @@ impl<'a> Renderer<'a> {
             take_tiles,
             wavefront: use_wavefront.then_some(WavefrontStage::Extend),
             walk_records,
+            traversal,
         };
         // Every buffer this kernel variant binds, in binding order, as it declares them, with what
-        // it starts as.
-        let bound: Vec<BufferBinding> = bindings::bound_in(variant).collect();
+        // it starts as; the acceleration structure is built apart, below.
+        let bound: Vec<BufferBinding> =
+            bindings::bound_in(variant).filter(|b| !b.is_acceleration_structure()).collect();
         let contents: Vec<(&BufferBinding, Initial)> =
             bound.iter().map(|b| (b, initial_contents(b.buffer, &params, &data, image_bytes))).collect();
         let plans = plan_bindings(ctx, &scene.name, contents.iter().map(|(b, c)| (*b, c.bytes())))?;
@@ -500,19 +514,21 @@ impl<'a> Renderer<'a> {
             match binding.chunked_element() {
                 Some(element) if plan.chunks > 1 => {
                     for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
-                        descriptors.push(Binding {
-                            binding: chunks::window_binding(binding, c as u32),
-                            buffer,
-                            offset,
-                            range,
-                            as_texels: binding.texel_words(),
-                        });
+                        let window = chunks::window_binding(binding, c as u32);
+                        descriptors
+                            .push(Binding::window(window, buffer, offset, range).with_texels(binding.texel_words()));
                     }
                 }
                 // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => descriptors
-                    .push(Binding { as_texels: binding.texel_words(), ..Binding::whole(binding.binding, buffer) }),
+                _ => descriptors.push(Binding::whole(binding.binding, buffer).with_texels(binding.texel_words())),
             }
+        }
+        let structure = match traversal {
+            Traversal::RayQuery => Some(super::ray_query_scene::build(ctx, scene, &data, &features)?),
+            Traversal::Compute => None,
+        };
+        if let Some(structure) = &structure {
+            descriptors.push(Binding::acceleration_structure(KernelBuffer::SceneStructure.entry().binding, structure));
         }
         let hashed_bytes = contents.iter().map(|(b, c)| is_hashed(b).then(|| c.bytes())).collect();
         let split_arrays = contents
@@ -553,6 +569,8 @@ impl<'a> Renderer<'a> {
             take_tiles,
             walk_records,
             workgroup,
+            traversal,
+            structure,
             buffers,
             aovs,
             width,
@@ -1033,6 +1051,9 @@ impl Drop for Renderer<'_> {
         }
         for (_, b) in self.buffers.drain(..) {
             b.destroy(self.ctx);
+        }
+        if let Some(structure) = self.structure.take() {
+            structure.destroy(self.ctx);
         }
     }
 }
