@@ -56,9 +56,9 @@ impl Traversal {
     /// A GPU that exposes them has ray-tracing hardware (NVIDIA exposes them on its RTX products
     /// alone; AMD from RDNA2, Intel from Arc): ray queries there. Their speed on such a GPU is not
     /// measured (none was available; docs/benchmarks.md). On a CPU device (lavapipe) the faster
-    /// traversal measured there: the compute walk, which ran the mesh scenes of `bench --suite`
-    /// at 1.9-2.9x lavapipe's ray queries on Mesa 25.0.7, 2-core AMD EPYC Zen 4 (docs/benchmarks.md,
-    /// 2026-12-07).
+    /// traversal measured there: the compute walk, whose samples per CPU second on the six mesh
+    /// scenes of `bench --suite` were 1.33-3.21x lavapipe's ray queries' (Mesa 25.0.7, 2-core AMD
+    /// EPYC Zen 4; docs/benchmarks.md, 2026-12-07).
     pub fn auto_for(info: &DeviceInfo, has_ray_query: bool) -> Self {
         if has_ray_query && info.kind != DeviceType::Cpu {
             Self::RayQuery
