@@ -382,7 +382,7 @@ impl GpuContext {
         let traversal = Traversal::resolve(
             options.traversal,
             &info,
-            traversal::supports_ray_query(&instance, physical, api_version),
+            &traversal::missing_for_ray_query(&instance, physical, api_version),
         )?;
         let ray_query = traversal == Traversal::RayQuery;
         if ray_query {

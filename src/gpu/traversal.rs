@@ -67,18 +67,20 @@ impl Traversal {
         }
     }
 
-    /// What `request` resolves to on a device; a request for ray queries on a device without them
-    /// is an error naming the device.
-    pub fn resolve(request: TraversalRequest, info: &DeviceInfo, has_ray_query: bool) -> Result<Self> {
+    /// What `request` resolves to on a device that lacks `missing` of what ray queries need
+    /// (nothing: it has them); a request for ray queries on a device without them is an error
+    /// naming the device and what it lacks.
+    pub fn resolve(request: TraversalRequest, info: &DeviceInfo, missing: &[String]) -> Result<Self> {
+        let has_ray_query = missing.is_empty();
         match request {
             TraversalRequest::Auto => Ok(Self::auto_for(info, has_ray_query)),
             TraversalRequest::Compute => Ok(Self::Compute),
             TraversalRequest::RayQuery if has_ray_query => Ok(Self::RayQuery),
             TraversalRequest::RayQuery => bail!(
-                "--traversal ray-query: {} ({}) does not support ray queries (it lacks {}); use --traversal compute or auto",
+                "--traversal ray-query: {} ({}) does not support ray queries: it lacks {}; use --traversal compute or auto",
                 info.name,
-                if info.driver_info.is_empty() { info.api_version.clone() } else { info.driver_info.clone() },
-                RAY_QUERY_EXTENSIONS.iter().map(|e| e.to_string_lossy()).collect::<Vec<_>>().join(" and ")
+                if info.driver_info.is_empty() { format!("Vulkan {}", info.api_version) } else { info.driver_info.clone() },
+                missing.join(", ")
             ),
         }
     }
@@ -90,18 +92,18 @@ impl Traversal {
 pub(super) const RAY_QUERY_EXTENSIONS: [&CStr; 3] =
     [ash::khr::acceleration_structure::NAME, ash::khr::ray_query::NAME, ash::khr::deferred_host_operations::NAME];
 
-/// Whether `pd` can run ray queries: a Vulkan 1.2 device with the extensions and the
-/// accelerationStructure, rayQuery and bufferDeviceAddress features.
-pub(super) fn supports_ray_query(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> bool {
+/// What `pd` lacks of what ray queries need (empty: it can run them): Vulkan 1.2, the
+/// extensions, and the accelerationStructure, rayQuery and bufferDeviceAddress features.
+pub(super) fn missing_for_ray_query(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> Vec<String> {
     if api_version < vk::API_VERSION_1_2 {
-        return false;
+        return vec!["Vulkan 1.2".into()];
     }
-    let Ok(available) = (unsafe { instance.enumerate_device_extension_properties(pd) }) else {
-        return false;
-    };
+    let available = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     let has = |name: &CStr| available.iter().any(|e| e.extension_name_as_c_str().ok() == Some(name));
-    if !RAY_QUERY_EXTENSIONS.iter().all(|name| has(name)) {
-        return false;
+    let missing: Vec<String> =
+        RAY_QUERY_EXTENSIONS.iter().filter(|name| !has(name)).map(|name| name.to_string_lossy().into_owned()).collect();
+    if !missing.is_empty() {
+        return missing;
     }
     let mut structures = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let mut queries = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
@@ -111,9 +113,15 @@ pub(super) fn supports_ray_query(instance: &ash::Instance, pd: vk::PhysicalDevic
         .push_next(&mut queries)
         .push_next(&mut addresses);
     unsafe { instance.get_physical_device_features2(pd, &mut features) };
-    structures.acceleration_structure == vk::TRUE
-        && queries.ray_query == vk::TRUE
-        && addresses.buffer_device_address == vk::TRUE
+    [
+        (structures.acceleration_structure, "the accelerationStructure feature"),
+        (queries.ray_query, "the rayQuery feature"),
+        (addresses.buffer_device_address, "the bufferDeviceAddress feature"),
+    ]
+    .into_iter()
+    .filter(|&(on, _)| on != vk::TRUE)
+    .map(|(_, what)| what.to_owned())
+    .collect()
 }
 
 #[cfg(test)]
