@@ -100,13 +100,7 @@ fn assert_traversals_agree(compute: &GpuContext, ray_query: &GpuContext, scene: 
 #[test]
 fn every_checked_in_scene_renders_alike_with_either_traversal() {
     let Some((_lock, ray_query)) = gpu_with_traversal(TraversalRequest::RayQuery) else { return };
-    let compute = GpuContext::new(&caustica::gpu::ContextOptions {
-        device: None,
-        validation: true,
-        storage_binding_limit: None,
-        traversal: TraversalRequest::Compute,
-    })
-    .expect("a Vulkan device");
+    let compute = compute_context();
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let (mut compared, mut meshes) = (0, 0);
     for entry in suite_entries(&scenes, &caustica::scene::data_dir()).expect("the scenes folder lists") {
@@ -168,19 +162,42 @@ fn ray_query_is_refused_by_a_device_without_it() {
     assert!(stdout.contains("traversal compute"), "{stdout}");
 }
 
+/// A context of the compute walk, for comparison with a ray-query one.
+fn compute_context() -> GpuContext {
+    GpuContext::new(&caustica::gpu::ContextOptions {
+        device: None,
+        validation: true,
+        storage_binding_limit: None,
+        traversal: TraversalRequest::Compute,
+    })
+    .expect("a Vulkan device")
+}
+
+/// A placed mesh of BLEND alpha (opacity 0.4) beside an opaque glass one: the first's triangles are
+/// candidates that ray_query.glsl confirms by alpha's coin, the second's are flagged opaque. The
+/// coin is tossed with the object-space ray, which the device computes for ray queries and the
+/// kernel for its walk, so the two traversals' paths through the cut-out may differ in their last
+/// bits and part ways: the comparison allows for it (MAX_RATIO).
+#[test]
+fn alpha_cut_outs_render_alike_with_either_traversal() {
+    let Some((_lock, ray_query)) = gpu_with_traversal(TraversalRequest::RayQuery) else { return };
+    let compute = compute_context();
+    let mut scene = common::two_meshes::two_meshes_in_a_room();
+    let clay = scene.meshes[0].triangle_materials[0] as usize;
+    scene.materials[clay].maps.alpha =
+        Some(caustica::scene::Alpha { factor: 0.4, texture: None, mode: caustica::scene::AlphaMode::Blend });
+    (scene.film.width, scene.film.height) = (8 * BLOCK, 6 * BLOCK);
+    let catches = assert_traversals_agree(&compute, &ray_query, &scene).expect("a walk for ray queries to replace");
+    assert!(catches < 0.04, "the comparison catches only biases above {:.1} %", catches * 100.0);
+}
+
 /// More shapes than a scene tests in turn (FEW_PRIMITIVES), so that rays meet them through the
 /// acceleration structure as boxes whose candidates the kernel intersects exactly, beside two
 /// placed meshes, one of glass: the walked shapes' path of ray_query.glsl.
 #[test]
 fn walked_shapes_and_placed_meshes_render_alike_with_either_traversal() {
     let Some((_lock, ray_query)) = gpu_with_traversal(TraversalRequest::RayQuery) else { return };
-    let compute = GpuContext::new(&caustica::gpu::ContextOptions {
-        device: None,
-        validation: true,
-        storage_binding_limit: None,
-        traversal: TraversalRequest::Compute,
-    })
-    .expect("a Vulkan device");
+    let compute = compute_context();
     let mut scene = common::two_meshes::two_meshes_in_a_room();
     let clay = scene.meshes[0].triangle_materials[0];
     let floor = match scene.shapes[0] {

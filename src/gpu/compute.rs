@@ -20,8 +20,12 @@ pub struct Binding<'a> {
     pub as_texels: Option<TexelWords>,
     /// The acceleration structure bound here instead of a buffer (`buffer` is the one holding it):
     /// see [`Binding::acceleration_structure`].
-    structure: Option<vk::AccelerationStructureKHR>,
+    pub structure: Option<BoundStructure>,
 }
+
+/// An acceleration structure a [`Binding`] binds; only [`Binding::acceleration_structure`] makes one.
+#[derive(Clone, Copy)]
+pub struct BoundStructure(vk::AccelerationStructureKHR);
 
 /// How wide the texels of a buffer bound as texels are: 1, 2 or 4 32-bit unsigned words, formats
 /// every Vulkan device must support for uniform texel buffers.
@@ -68,7 +72,7 @@ impl<'a> Binding<'a> {
 
     /// The top level of `scene` (the kernel's `accelerationStructureEXT`).
     pub fn acceleration_structure(binding: u32, scene: &'a SceneStructure) -> Self {
-        Self { structure: Some(scene.top_handle()), ..Self::whole(binding, scene.top_buffer()) }
+        Self { structure: Some(BoundStructure(scene.top_handle())), ..Self::whole(binding, scene.top_buffer()) }
     }
 
     fn descriptor_type(&self) -> vk::DescriptorType {
@@ -197,7 +201,7 @@ impl ComputeKernel {
             .collect::<Result<Vec<_>>>()?;
         let texel_views = views.iter().map(|[view]| *view).filter(|view| *view != vk::BufferView::null()).collect();
         let structures: Vec<[vk::AccelerationStructureKHR; 1]> =
-            bindings.iter().map(|b| [b.structure.unwrap_or_default()]).collect();
+            bindings.iter().map(|b| [b.structure.map(|s| s.0).unwrap_or_default()]).collect();
         let mut structure_writes: Vec<_> = structures
             .iter()
             .map(|s| vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(s))
