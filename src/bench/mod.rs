@@ -195,6 +195,7 @@ impl Measurement {
             "repeated_dispatches": self.repeated_dispatches,
             "primitives": self.geometry.acceleration.primitives,
             "gpu_bytes": self.geometry.gpu_bytes,
+            "acceleration_structure_bytes": self.geometry.acceleration_structure_bytes,
             // The driver's own names and figures, e.g. {"Register Count": "96"}.
             "kernel_statistics": self.kernel_statistics.iter().map(|s| (s.name.clone(), Value::from(s.value.clone()))).collect::<serde_json::Map<_, _>>(),
         })

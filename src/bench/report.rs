@@ -104,6 +104,9 @@ fn print_geometry(g: &GeometryReport) {
         mib(g.texture_bytes),
         mib(g.gpu_bytes)
     );
+    if g.acceleration_structure_bytes > 0 {
+        println!("ray queries:  {:.1} MiB of acceleration structures", mib(g.acceleration_structure_bytes));
+    }
     if !g.split_arrays.is_empty() {
         let split: Vec<String> = g.split_arrays.iter().map(|(name, windows)| format!("{name} x{windows}")).collect();
         println!("split:        {} (larger than one storage binding of this device)", split.join(", "));

@@ -170,6 +170,9 @@ pub struct GeometryReport {
     pub gpu_bytes: u64,
     /// Arrays too large for one storage binding of this device, with the bindings each spans.
     pub split_arrays: Vec<(&'static str, u32)>,
+    /// Bytes of the acceleration structures ray queries trace (ray_query_scene.rs), beside
+    /// `gpu_bytes`; 0 where the kernel walks its own BVH.
+    pub acceleration_structure_bytes: u64,
 }
 
 /// Most texel bytes uploaded; larger texture sets are downsampled to fit (and say so).
@@ -560,6 +563,7 @@ impl<'a> Renderer<'a> {
             let statistics = k.statistics.clone();
             (Kernels::Megakernel(k), statistics)
         };
+        let acceleration_structure_bytes = structure.as_ref().map_or(0, SceneStructure::bytes);
         Ok(Self {
             ctx,
             kernels: Some(kernels),
@@ -591,6 +595,7 @@ impl<'a> Renderer<'a> {
                 lights: data.lights.len(),
                 gpu_bytes: data.gpu_bytes(),
                 split_arrays,
+                acceleration_structure_bytes,
             },
             cost_per_row_sample: None,
             loop_limit,
