@@ -60,16 +60,6 @@ impl<'a> Binding<'a> {
         Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE, as_texels: None, structure: None }
     }
 
-    /// `offset..offset + range` of `buffer`.
-    pub fn window(binding: u32, buffer: &'a Buffer, offset: u64, range: u64) -> Self {
-        Self { offset, range, ..Self::whole(binding, buffer) }
-    }
-
-    /// This binding read as texels this wide, where `words` says so.
-    pub fn with_texels(self, words: Option<TexelWords>) -> Self {
-        Self { as_texels: words, ..self }
-    }
-
     /// The top level of `scene` (the kernel's `accelerationStructureEXT`).
     pub fn acceleration_structure(binding: u32, scene: &'a SceneStructure) -> Self {
         Self { structure: Some(BoundStructure(scene.top_handle())), ..Self::whole(binding, scene.top_buffer()) }

@@ -517,13 +517,19 @@ impl<'a> Renderer<'a> {
             match binding.chunked_element() {
                 Some(element) if plan.chunks > 1 => {
                     for (c, (offset, range)) in plan.windows(element.bytes, initial.bytes()).into_iter().enumerate() {
-                        let window = chunks::window_binding(binding, c as u32);
-                        descriptors
-                            .push(Binding::window(window, buffer, offset, range).with_texels(binding.texel_words()));
+                        descriptors.push(Binding {
+                            binding: chunks::window_binding(binding, c as u32),
+                            buffer,
+                            offset,
+                            range,
+                            as_texels: binding.texel_words(),
+                            structure: None,
+                        });
                     }
                 }
                 // Unsplit arrays keep their own binding: window 0's is the array's.
-                _ => descriptors.push(Binding::whole(binding.binding, buffer).with_texels(binding.texel_words())),
+                _ => descriptors
+                    .push(Binding { as_texels: binding.texel_words(), ..Binding::whole(binding.binding, buffer) }),
             }
         }
         let structure = match traversal {
