@@ -222,3 +222,12 @@ fn walked_shapes_and_placed_meshes_render_alike_with_either_traversal() {
     let catches = assert_traversals_agree(&compute, &ray_query, &scene).expect("a walk for ray queries to replace");
     assert!(catches < 0.04, "the comparison catches only biases above {:.1} %", catches * 100.0);
 }
+
+/// `auto` takes the compute walk on a CPU device even where it has ray queries (Mesa 25's
+/// lavapipe): the walk measured 1.3-3.2x faster there (docs/benchmarks.md, 2026-12-07).
+#[test]
+fn auto_takes_the_compute_walk_on_lavapipe() {
+    let Some((_lock, ctx)) = gpu_with_traversal(TraversalRequest::Auto) else { return };
+    assert_eq!(ctx.info.kind, caustica::gpu::DeviceType::Cpu, "the tests run on lavapipe");
+    assert_eq!(ctx.traversal, Traversal::Compute, "{}", ctx.info.driver_info);
+}
