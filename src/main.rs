@@ -482,6 +482,7 @@ fn render(
             "scene": scene.name,
             "scene_hash": renderer.scene_hash,
             "device": ctx.info.name,
+            "traversal": renderer.traversal.name(),
             "width": scene.film.width,
             "height": scene.film.height,
             "seed": request.seed,
