@@ -94,8 +94,8 @@ fn scratch(ctx: &GpuContext, size: u64, alignment: u64) -> Result<(Buffer, vk::D
     Ok((buffer, address))
 }
 
-/// Builds one structure of `ty` from `geometries` (one a build, `counts` primitives each) and
-/// waits for it; the build's writes are made visible to later builds and to compute shaders.
+/// Builds one structure of `ty` from `geometry` of `count` primitives (`what` names it in errors)
+/// and waits for it; the build's writes are made visible to later builds and to compute shaders.
 fn build(
     ctx: &GpuContext,
     ty: vk::AccelerationStructureTypeKHR,
@@ -270,6 +270,8 @@ impl SceneStructure {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
+        // VkAccelerationStructureInstanceKHR is repr(C), 64 bytes with no padding: its bytes are
+        // the records the build reads.
         let bytes = unsafe {
             std::slice::from_raw_parts(instances.as_ptr().cast::<u8>(), std::mem::size_of_val(&instances[..]))
         };
