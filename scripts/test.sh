@@ -58,3 +58,18 @@ if [ ! -f "$VK_DRIVER_FILES" ]; then
 fi
 echo "scripts/test.sh: lavapipe from $VK_DRIVER_FILES" >&2
 cargo test --release "$@"
+
+# The whole suite runs with each traversal (src/gpu/traversal.rs): the tests that trace rays
+# (geometry against brute force, instancing, alpha, furnaces, images, and the specialized kernels'
+# sums bit for bit against the general kernel's) again with ray queries, where
+# the device has them (Mesa 24.1 or newer; tests/traversal.rs checks that Mesa 22.3 refuses them).
+if [ "$#" -eq 0 ]; then
+    if cargo run --release --quiet -- bench --spp 1 --width 8 --height 8 --traversal ray-query >/dev/null 2>&1; then
+        echo "scripts/test.sh: the tests that trace rays again, with ray queries" >&2
+        CAUSTICA_TRAVERSAL=ray-query cargo test --release \
+            --test geometry --test alpha --test physics --test bias --test textures --test convergence \
+            --test specialization
+    else
+        echo "scripts/test.sh: $VK_DRIVER_FILES has no ray queries: the compute walk alone was tested" >&2
+    fi
+fi

@@ -195,6 +195,9 @@ bool trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
     SCENE_FEW_SHAPES
     return hit.prim != NO_INDEX;
 }
+#elif SCENE_RAY_QUERY == 1
+// The device's ray queries in place of the walk below (src/gpu/traversal.rs).
+#include "ray_query.glsl"
 #else
 // Intersects a leaf's `count` records from `first` (triangles of a placed mesh, or shapes), with
 // the ray (ro, rd) in the instance's object space, keeping the nearest hit before hit.t. True

@@ -15,6 +15,10 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 // texelFetch of the texel buffers the walk and shading read their records from (bindings.rs).
 #extension GL_EXT_samplerless_texture_functions : require
+// The ray-query traversal (ray_query.glsl, src/gpu/traversal.rs): SCENE_RAY_QUERY 1.
+#if SCENE_RAY_QUERY
+#extension GL_EXT_ray_query : require
+#endif
 
 // The workgroup's shape is a kernel variant (src/render/workgroup.rs).
 layout(local_size_x = WORKGROUP_WIDTH, local_size_y = WORKGROUP_HEIGHT, local_size_z = 1) in;

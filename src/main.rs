@@ -3,7 +3,7 @@
 use anyhow::{Context as _, Result};
 use caustica::bench::{self, FilmOverrides, KernelSetup};
 use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Outcome, PartialRender, RenderJob};
-use caustica::gpu::{list_devices, ContextOptions, GpuContext};
+use caustica::gpu::{list_devices, ContextOptions, GpuContext, TraversalRequest};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
 use caustica::input_file::InputFiles;
 use caustica::render::{AovSet, GroupOrder, KernelChoice, KernelOptions, Renderer};
@@ -31,6 +31,15 @@ struct DeviceArgs {
     /// Enable the Khronos validation layer and fail on any message it reports.
     #[arg(long)]
     validation: bool,
+    /// How rays find what they hit: caustica's compute walk of its BVH, or the device's ray
+    /// queries (VK_KHR_ray_query); auto picks ray queries on GPUs that have them and the compute
+    /// walk on CPU devices (lavapipe), where it measured faster (docs/benchmarks.md).
+    #[arg(long, default_value = "auto", value_parser = traversal)]
+    traversal: TraversalRequest,
+}
+
+fn traversal(text: &str) -> Result<TraversalRequest, String> {
+    TraversalRequest::parse(text).map_err(|e| e.to_string())
 }
 
 impl DeviceArgs {
@@ -39,6 +48,7 @@ impl DeviceArgs {
             device: self.device.clone(),
             validation: self.validation,
             storage_binding_limit: None,
+            traversal: self.traversal,
         })
     }
 }
@@ -507,6 +517,7 @@ fn render(
             "scene": scene.name,
             "scene_hash": renderer.scene_hash,
             "device": ctx.info.name,
+            "traversal": renderer.traversal.name(),
             "width": scene.film.width,
             "height": scene.film.height,
             "seed": request.seed,
@@ -736,7 +747,12 @@ fn run() -> Result<()> {
                 exposure,
                 tonemap,
                 screenshot,
-                context: ContextOptions { device: gpu.device, validation: gpu.validation, storage_binding_limit: None },
+                context: ContextOptions {
+                    device: gpu.device,
+                    validation: gpu.validation,
+                    storage_binding_limit: None,
+                    traversal: gpu.traversal,
+                },
                 stop: &STOP,
             })
         }

@@ -409,6 +409,7 @@ fn bench_of_one_scene_keeps_its_json_keys() {
         "primitives",
         "gpu_bytes",
         "walk_queue",
+        "traversal",
     ];
     for key in keys {
         assert!(summary.get(key).is_some(), "{key} missing: {summary}");

@@ -13,7 +13,7 @@ pub use report::{print_left_out, print_measurement, print_suite, suite_json, SUI
 pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcome, SuiteSize};
 
 use crate::farm::per_second;
-use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic};
+use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic, Traversal};
 use crate::process_time::cpu_seconds;
 use crate::render::{
     AovSet, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, WalkQueue, WalkRecords,
@@ -71,6 +71,9 @@ pub struct Measurement {
     pub wavefront: bool,
     /// The kernel's workgroup shape.
     pub workgroup: Workgroup,
+    /// How its rays found what they hit: the compute walk or the device's ray queries
+    /// (`--traversal`).
+    pub traversal: Traversal,
     /// BVH build, upload and kernel compile (the scene's loading excluded).
     pub setup_seconds: f64,
     /// Wall time of the timed dispatches, fences included.
@@ -128,6 +131,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: &KernelSetu
         walk_records: renderer.walk_records,
         wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
+        traversal: renderer.traversal,
         setup_seconds,
         seconds,
         samples_per_second: per_second(samples, seconds),
@@ -179,6 +183,7 @@ impl Measurement {
             "walk_records": self.walk_records.label(),
             "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
+            "traversal": self.traversal.name(),
             "setup_seconds": self.setup_seconds,
             "seconds": self.seconds,
             "samples_per_second": self.samples_per_second,
@@ -193,6 +198,7 @@ impl Measurement {
             "repeated_dispatches": self.repeated_dispatches,
             "primitives": self.geometry.acceleration.primitives,
             "gpu_bytes": self.geometry.gpu_bytes,
+            "acceleration_structure_bytes": self.geometry.acceleration_structure_bytes,
             // The driver's own names and figures, e.g. {"Register Count": "96"}.
             "kernel_statistics": self.kernel_statistics.iter().map(|s| (s.name.clone(), Value::from(s.value.clone()))).collect::<serde_json::Map<_, _>>(),
         })

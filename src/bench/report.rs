@@ -43,10 +43,11 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
     };
     let wavefront = if m.wavefront { "; the wavefront's three kernels (CAUSTICA_WAVEFRONT)" } else { "" };
     println!(
-        "kernel:       {kernel}: {}; workgroups {}, rows {}{tiles}{records}{walks}{wavefront}",
+        "kernel:       {kernel}: {}; workgroups {}, rows {}, traversal {}{tiles}{records}{walks}{wavefront}",
         m.features.names().join(", "),
         m.workgroup.label(),
-        m.group_order.label()
+        m.group_order.label(),
+        m.traversal.name()
     );
     if !m.kernel_statistics.is_empty() {
         // The driver's own figures: on a GPU, registers and spills bound the invocations in flight.
@@ -103,6 +104,9 @@ fn print_geometry(g: &GeometryReport) {
         mib(g.texture_bytes),
         mib(g.gpu_bytes)
     );
+    if g.acceleration_structure_bytes > 0 {
+        println!("ray queries:  {:.1} MiB of acceleration structures", mib(g.acceleration_structure_bytes));
+    }
     if !g.split_arrays.is_empty() {
         let split: Vec<String> = g.split_arrays.iter().map(|(name, windows)| format!("{name} x{windows}")).collect();
         println!("split:        {} (larger than one storage binding of this device)", split.join(", "));

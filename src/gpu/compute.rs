@@ -2,8 +2,10 @@
 //! bound as a storage or uniform buffer, or as a uniform texel buffer of 1, 2 or 4 32-bit words a
 //! texel.
 
+use super::acceleration_structure::SceneStructure;
 use super::buffer::{Buffer, BufferKind};
-use super::context::{DeviceInfo, GpuContext};
+use super::context::GpuContext;
+use super::device_info::DeviceInfo;
 use super::pipeline_statistics::{self, KernelStatistic};
 use anyhow::{anyhow, Context as _, Result};
 use ash::vk;
@@ -17,7 +19,14 @@ pub struct Binding<'a> {
     /// Bound as a uniform texel buffer of texels this wide (the kernel's `utextureBuffer`) rather
     /// than as the buffer's kind says.
     pub as_texels: Option<TexelWords>,
+    /// The acceleration structure bound here instead of a buffer (`buffer` is the one holding it):
+    /// see [`Binding::acceleration_structure`].
+    pub structure: Option<BoundStructure>,
 }
+
+/// An acceleration structure a [`Binding`] binds; only [`Binding::acceleration_structure`] makes one.
+#[derive(Clone, Copy)]
+pub struct BoundStructure(vk::AccelerationStructureKHR);
 
 /// How wide the texels of a buffer bound as texels are: 1, 2 or 4 32-bit unsigned words, formats
 /// every Vulkan device must support for uniform texel buffers.
@@ -56,11 +65,17 @@ impl DeviceInfo {
 impl<'a> Binding<'a> {
     /// The whole buffer.
     pub fn whole(binding: u32, buffer: &'a Buffer) -> Self {
-        Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE, as_texels: None }
+        Self { binding, buffer, offset: 0, range: vk::WHOLE_SIZE, as_texels: None, structure: None }
+    }
+
+    /// The top level of `scene` (the kernel's `accelerationStructureEXT`).
+    pub fn acceleration_structure(binding: u32, scene: &'a SceneStructure) -> Self {
+        Self { structure: Some(BoundStructure(scene.top_handle())), ..Self::whole(binding, scene.top_buffer()) }
     }
 
     fn descriptor_type(&self) -> vk::DescriptorType {
         match self.buffer.kind {
+            _ if self.structure.is_some() => vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
             _ if self.as_texels.is_some() => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
             BufferKind::Uniform => vk::DescriptorType::UNIFORM_BUFFER,
             BufferKind::Storage | BufferKind::HostStorage => vk::DescriptorType::STORAGE_BUFFER,
@@ -153,6 +168,7 @@ impl ComputeKernel {
             vk::DescriptorType::UNIFORM_BUFFER,
             vk::DescriptorType::STORAGE_BUFFER,
             vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
         ]
         .into_iter()
         .map(|ty| vk::DescriptorPoolSize {
@@ -200,17 +216,25 @@ impl ComputeKernel {
             })
             .collect::<Result<Vec<_>>>()?;
         let texel_views = views.iter().map(|[view]| *view).filter(|view| *view != vk::BufferView::null()).collect();
+        let structures: Vec<[vk::AccelerationStructureKHR; 1]> =
+            bindings.iter().map(|b| [b.structure.map(|s| s.0).unwrap_or_default()]).collect();
+        let mut structure_writes: Vec<_> = structures
+            .iter()
+            .map(|s| vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(s))
+            .collect();
         let writes: Vec<_> = bindings
             .iter()
             .zip(infos.iter().zip(&views))
-            .map(|(b, (info, view))| {
+            .zip(&mut structure_writes)
+            .map(|((b, (info, view)), structure_write)| {
                 let write = vk::WriteDescriptorSet::default()
                     .dst_set(set)
                     .dst_binding(b.binding)
                     .descriptor_type(b.descriptor_type());
-                match b.as_texels {
-                    Some(_) => write.texel_buffer_view(view),
-                    None => write.buffer_info(info),
+                match (b.structure, b.as_texels) {
+                    (Some(_), _) => write.descriptor_count(1).push_next(structure_write),
+                    (None, Some(_)) => write.texel_buffer_view(view),
+                    (None, None) => write.buffer_info(info),
                 }
             })
             .collect();

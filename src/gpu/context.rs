@@ -1,6 +1,8 @@
 //! Vulkan instance, physical-device choice, logical device, queue and memory allocator.
 
+use super::device_info::{DeviceInfo, DeviceType};
 use super::failure::VulkanError;
+use super::traversal::{self, Traversal, TraversalRequest};
 use super::validation::{self, ValidationLog};
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
@@ -8,85 +10,6 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle, RawDisplayHandle, RawWindowHandle};
 use std::mem::ManuallyDrop;
 use std::sync::{Mutex, OnceLock};
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum DeviceType {
-    // Declared in order of preference: a discrete GPU first, a CPU implementation (lavapipe) last.
-    Discrete,
-    Integrated,
-    Virtual,
-    Other,
-    Cpu,
-}
-
-impl DeviceType {
-    fn from_vk(t: vk::PhysicalDeviceType) -> Self {
-        match t {
-            vk::PhysicalDeviceType::DISCRETE_GPU => Self::Discrete,
-            vk::PhysicalDeviceType::INTEGRATED_GPU => Self::Integrated,
-            vk::PhysicalDeviceType::VIRTUAL_GPU => Self::Virtual,
-            vk::PhysicalDeviceType::CPU => Self::Cpu,
-            _ => Self::Other,
-        }
-    }
-
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::Discrete => "discrete GPU",
-            Self::Integrated => "integrated GPU",
-            Self::Virtual => "virtual GPU",
-            Self::Other => "other",
-            Self::Cpu => "CPU",
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-pub struct DeviceInfo {
-    pub index: usize,
-    pub name: String,
-    pub kind: DeviceType,
-    pub api_version: String,
-    /// The driver's version number as the device reports it (its encoding is the vendor's).
-    pub driver: String,
-    /// The driver's name and its own description of its version (VK_KHR_driver_properties, core in
-    /// Vulkan 1.2), e.g. `llvmpipe` and `Mesa 25.0.7 (LLVM 19.1.7)`: which Mesa a lavapipe
-    /// measurement ran on, which the device name does not say. Empty on devices below Vulkan 1.2.
-    pub driver_name: String,
-    pub driver_info: String,
-    /// The driver's identity (VK_KHR_driver_properties; `None` below Vulkan 1.2), read through
-    /// [`DeviceInfo::is_lavapipe`]: kernels that rely on how one driver runs them ask it.
-    driver_id: Option<vk::DriverId>,
-    /// Bytes of shared memory a workgroup may use (`maxComputeSharedMemorySize`).
-    pub max_compute_shared_memory_size: u32,
-    /// Invocations in a subgroup (`subgroupSize`, Vulkan 1.1): lavapipe's SIMD width in lanes,
-    /// NVIDIA's warp. 0 below Vulkan 1.1.
-    pub subgroup_size: u32,
-    /// Bytes one storage-buffer binding can see (lowered by `ContextOptions::storage_binding_limit`).
-    pub max_storage_buffer_range: u64,
-    pub min_storage_buffer_offset_alignment: u64,
-    pub max_storage_buffers_per_stage: u32,
-    /// Texels one uniform texel buffer can see (`maxTexelBufferElements`, at most 2^31, which the
-    /// kernel's `int` texel index reaches).
-    pub max_texel_buffer_elements: u64,
-    /// Bytes one texel buffer may see at most, whatever its texels' width:
-    /// `ContextOptions::storage_binding_limit` (which lowers `max_storage_buffer_range` itself), or
-    /// no bound.
-    pub texel_binding_limit: u64,
-    pub min_texel_buffer_offset_alignment: u64,
-    /// Texel buffers count against the sampled images a stage may bind.
-    pub max_texel_buffers_per_stage: u32,
-    pub device_local_bytes: u64,
-    has_compute_queue: bool,
-}
-
-impl DeviceInfo {
-    /// Mesa's lavapipe (llvmpipe's Vulkan driver): its kernels run on the CPU, a subgroup one SIMD
-    /// loop, which several kernel choices are tuned for (render/walk_queue.rs, walk_records.rs).
-    pub fn is_lavapipe(&self) -> bool {
-        self.driver_id == Some(vk::DriverId::MESA_LLVMPIPE)
-    }
-}
 
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
@@ -97,6 +20,8 @@ pub struct ContextOptions {
     /// Act as if one storage or texel-buffer binding could see at most this many bytes (tests of the splitting of
     /// large arrays, and of the refusal of scenes too large, on any device).
     pub storage_binding_limit: Option<u64>,
+    /// Which traversal the kernel runs (traversal.rs); ray queries enable their extensions.
+    pub traversal: TraversalRequest,
 }
 
 pub struct GpuContext {
@@ -121,6 +46,11 @@ pub struct GpuContext {
     /// Reads what the driver says of each compiled kernel, where the device can
     /// (pipeline_statistics.rs).
     pub(super) pipeline_statistics: Option<ash::khr::pipeline_executable_properties::Device>,
+    /// The traversal the kernel runs on this device (what `ContextOptions::traversal` resolved to).
+    pub traversal: Traversal,
+    /// Builds acceleration structures where the traversal is ray queries
+    /// (acceleration_structure.rs), with the device's alignment of their scratch memory.
+    pub(super) acceleration_structures: Option<(ash::khr::acceleration_structure::Device, u64)>,
 }
 
 /// What presenting to a window needs beside the device: its surface and the extensions' loaders.
@@ -399,12 +329,33 @@ impl GpuContext {
         }
         let mut statistics_feature =
             vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(statistics);
+        let api_version = unsafe { instance.get_physical_device_properties(physical) }.api_version;
+        let traversal = Traversal::resolve(
+            options.traversal,
+            &info,
+            &traversal::missing_for_ray_query(&instance, physical, api_version),
+        )?;
+        let ray_query = traversal == Traversal::RayQuery;
+        if ray_query {
+            device_extensions.extend(traversal::RAY_QUERY_EXTENSIONS.iter().map(|name| name.as_ptr()));
+        }
+        let mut structures_feature =
+            vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+        let mut query_feature = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let mut address_feature = vk::PhysicalDeviceBufferDeviceAddressFeatures::default().buffer_device_address(true);
         let mut device_info =
             vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).enabled_extension_names(&device_extensions);
         if statistics {
             device_info = device_info.push_next(&mut statistics_feature);
         }
-        // SAFETY: `device_info` borrows `queue_info`, `priorities`, `device_extensions` and `statistics_feature`,
+        if ray_query {
+            device_info = device_info
+                .push_next(&mut structures_feature)
+                .push_next(&mut query_feature)
+                .push_next(&mut address_feature);
+        }
+        // SAFETY: `device_info` borrows `queue_info`, `priorities`, `device_extensions`, `statistics_feature` and the ray-query
+        // feature structs,
         // locals alive until the call returns; `family` is a queue family of `physical` that computes (and
         // presents, for a window); the extensions are supported (swapchain for a surface, statistics by supported()).
         let device = unsafe { instance.create_device(physical, &device_info, None) }
@@ -426,12 +377,19 @@ impl GpuContext {
             device: device.clone(),
             physical_device: physical,
             debug_settings: Default::default(),
-            buffer_device_address: false,
+            buffer_device_address: ray_query,
             allocation_sizes: Default::default(),
         })
         .context("creating the GPU memory allocator")?;
         let pipeline_statistics =
             statistics.then(|| ash::khr::pipeline_executable_properties::Device::new(&instance, &device));
+        let acceleration_structures = ray_query.then(|| {
+            let mut properties = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+            let mut all = vk::PhysicalDeviceProperties2::default().push_next(&mut properties);
+            unsafe { instance.get_physical_device_properties2(physical, &mut all) };
+            let scratch_alignment = u64::from(properties.min_acceleration_structure_scratch_offset_alignment).max(1);
+            (ash::khr::acceleration_structure::Device::new(&instance, &device), scratch_alignment)
+        });
         let presentation = surface.map(|(surface_loader, surface)| Presentation {
             surface_loader,
             surface,
@@ -452,6 +410,8 @@ impl GpuContext {
             timestamp_period_ns,
             loop_limit: OnceLock::new(),
             pipeline_statistics,
+            traversal,
+            acceleration_structures,
         })
     }
 

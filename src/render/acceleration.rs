@@ -15,6 +15,9 @@ pub struct Acceleration {
     pub nodes: Vec<WideNode>,
     /// In top-level leaf order.
     pub instances: Vec<GpuInstance>,
+    /// Per instance, in the same order: the index of the mesh it places (into `triangle_slots`),
+    /// `None` for the scene's own shapes. The ray-query traversal builds a structure a mesh from it.
+    pub instance_meshes: Vec<Option<u32>>,
     /// The scene's own shapes, in their bottom-level leaf order.
     pub primitives: Vec<GpuPrimitive>,
     /// Every mesh's triangles by value, each mesh in its bottom-level leaf order (see
@@ -257,6 +260,7 @@ impl Acceleration {
             })
             .collect::<Vec<_>>();
 
+        let instance_meshes = top.prim_order.iter().map(|&p| placements[p as usize].0.map(|m| m as u32)).collect();
         let stats = AccelerationStats {
             mesh_triangles: triangles.len(),
             instanced_triangles: scene.instances.iter().map(|i| scene.meshes[i.mesh as usize].triangles.len()).sum(),
@@ -271,6 +275,7 @@ impl Acceleration {
         Acceleration {
             nodes,
             instances,
+            instance_meshes,
             primitives,
             triangles,
             triangle_materials,

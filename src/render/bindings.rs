@@ -46,12 +46,13 @@ pub enum KernelBuffer {
     AovAlbedoDepth,
     AovNormalHits,
     PathStates,
+    SceneStructure,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::PathStates as usize + 1;
+    pub const COUNT: usize = KernelBuffer::SceneStructure as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -79,6 +80,10 @@ pub enum Shape {
     /// under lavapipe too: [`WALK_RECORDS`] become storage arrays where the device reads them so
     /// ([`BufferBinding::in_variant`], walk_records.rs).
     TexelBuffer { element: Element, texels: &'static [Texel] },
+    /// `uniform accelerationStructureEXT <name>;`: the scene's top-level acceleration structure,
+    /// which ray queries trace (ray_query.glsl); built from the scene's data, not uploaded as it
+    /// (ray_query_scene.rs).
+    AccelerationStructure,
 }
 
 /// A block's GLSL type name and members, from the host struct it is declared by.
@@ -124,6 +129,8 @@ pub enum BoundIn {
     AovKernels,
     /// Only the wavefront's kernels (wavefront.rs).
     WavefrontKernels,
+    /// Only kernels that trace with ray queries (`KernelVariant::traversal`).
+    RayQueryKernels,
 }
 
 /// One binding of the kernel's descriptor set 0.
@@ -146,6 +153,7 @@ impl BufferBinding {
             BoundIn::EveryKernel => true,
             BoundIn::AovKernels => variant.aovs,
             BoundIn::WavefrontKernels => variant.wavefront.is_some(),
+            BoundIn::RayQueryKernels => variant.traversal == crate::gpu::Traversal::RayQuery,
         }
     }
 
@@ -168,6 +176,11 @@ impl BufferBinding {
             Shape::TexelBuffer { texels, .. } => Some(texels[0].words()),
             _ => None,
         }
+    }
+
+    /// Whether it is an acceleration structure rather than a buffer.
+    pub fn is_acceleration_structure(&self) -> bool {
+        matches!(self.shape, Shape::AccelerationStructure)
     }
 
     /// Whether the kernel reads it as texels.
@@ -198,7 +211,7 @@ pub fn bound_in(variant: KernelVariant) -> impl Iterator<Item = BufferBinding> {
 }
 
 use Access::{Read, ReadWrite};
-use BoundIn::{AovKernels, EveryKernel, WavefrontKernels};
+use BoundIn::{AovKernels, EveryKernel, RayQueryKernels, WavefrontKernels};
 use KernelBuffer::*;
 
 /// An array of `T`s that always fits one binding.
@@ -284,6 +297,10 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     BufferBinding { buffer: AovNormalHits, binding: 21, name: "aov_normal_hits", shape: chunked::<[f32; 4]>(), access: ReadWrite, bound_in: AovKernels, what: "normal sums" },
     // Each pixel's path between the wavefront's kernels (wavefront.glsl), WAVEFRONT_STATE_VEC4S a pixel.
     BufferBinding { buffer: PathStates, binding: 22, name: "path_states", shape: array::<[u32; 4]>(), access: ReadWrite, bound_in: WavefrontKernels, what: "wavefront path states" },
+    // The top-level acceleration structure over the instances, in `instances` order, each
+    // instance's bottom level its mesh's triangles or the boxes of the scene's own shapes
+    // (ray_query_scene.rs): what ray queries trace in place of `nodes` (ray_query.glsl).
+    BufferBinding { buffer: SceneStructure, binding: 23, name: "scene_structure", shape: Shape::AccelerationStructure, access: Read, bound_in: RayQueryKernels, what: "acceleration structures" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,
@@ -313,7 +330,9 @@ mod tests {
     use crate::render::interface::glsl;
     use crate::render::kernel::kernel_spirv;
     use crate::render::layout::PassParams;
-    use crate::render::spirv_reflect::{block_variables, texel_buffer_variables, StorageClass};
+    use crate::render::spirv_reflect::{
+        acceleration_structure_variables, block_variables, texel_buffer_variables, StorageClass,
+    };
     use std::collections::BTreeMap;
 
     /// The general kernel without AOVs or loop counting, in 8x8 workgroups: what each of
@@ -327,6 +346,7 @@ mod tests {
         take_tiles: false,
         wavefront: None,
         walk_records: WalkRecords::Texels,
+        traversal: crate::gpu::Traversal::Compute,
     };
 
     /// The walk queue's kernel (walk_queue.rs): a top level of its root alone.
@@ -337,8 +357,16 @@ mod tests {
         ..GENERAL
     };
 
-    const VARIANTS: [KernelVariant; 12] = [
+    const VARIANTS: [KernelVariant; 14] = [
         GENERAL,
+        // The device's ray queries in place of the walk (ray_query.glsl), which bind the scene's
+        // acceleration structure; in the wavefront's kernels too.
+        KernelVariant { traversal: crate::gpu::Traversal::RayQuery, ..GENERAL },
+        KernelVariant {
+            traversal: crate::gpu::Traversal::RayQuery,
+            wavefront: Some(crate::render::WavefrontStage::Shadow),
+            ..GENERAL
+        },
         // The walk's records from storage buffers (walk_records.rs), in the plain and queued walks.
         KernelVariant { walk_records: WalkRecords::Storage, ..GENERAL },
         KernelVariant { walk_records: WalkRecords::Storage, ..QUEUE },
@@ -364,6 +392,7 @@ mod tests {
     enum Kind {
         Block(StorageClass),
         TexelBuffer,
+        AccelerationStructure,
     }
 
     /// A binding as a compiled kernel declares it: its kind, the block's instance name (or its
@@ -397,6 +426,9 @@ mod tests {
                         declared.insert(window_binding(&b, c), window);
                     }
                     None
+                }
+                Shape::AccelerationStructure => {
+                    declared.insert(b.binding, (Kind::AccelerationStructure, b.name.to_owned(), true, None))
                 }
                 Shape::TexelBuffer { .. } => {
                     for c in 0..plans[b.buffer].chunks {
@@ -432,6 +464,14 @@ mod tests {
             assert_eq!(v.set, Some(0), "binding {binding} is outside descriptor set 0");
             assert!(
                 declared.insert(binding, (Kind::TexelBuffer, v.name, true, None)).is_none(),
+                "binding {binding} is declared twice"
+            );
+        }
+        for v in acceleration_structure_variables(spirv) {
+            let Some(binding) = v.binding else { continue };
+            assert_eq!(v.set, Some(0), "binding {binding} is outside descriptor set 0");
+            assert!(
+                declared.insert(binding, (Kind::AccelerationStructure, v.name, true, None)).is_none(),
                 "binding {binding} is declared twice"
             );
         }

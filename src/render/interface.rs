@@ -45,6 +45,9 @@ pub fn glsl(plans: &SplitPlans, variant: KernelVariant) -> String {
             }
             Shape::Array { element, chunked: true } => chunks::glsl(&b, element, plans[b.buffer]),
             Shape::TexelBuffer { element, texels } => chunks::glsl_texels(&b, element, texels, plans[b.buffer]),
+            Shape::AccelerationStructure => {
+                format!("layout(set = 0, binding = {binding}) uniform accelerationStructureEXT {name};\n")
+            }
         };
     }
     out

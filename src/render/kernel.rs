@@ -11,7 +11,7 @@ use super::variant::KernelVariant;
 use super::walk_queue::WalkQueue;
 use super::wavefront::WavefrontStage;
 use super::workgroup::Workgroup;
-use crate::gpu::{assemble_source, compile_compute, ShaderSources};
+use crate::gpu::{assemble_source, compile_compute, ShaderSources, Traversal};
 use crate::input_file::{InputFiles, InputKind};
 use anyhow::{anyhow, Context as _, Result};
 use std::borrow::Cow;
@@ -32,6 +32,7 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("sampling.glsl", include_str!("../../shaders/sampling.glsl")),
     ("intersect.glsl", include_str!("../../shaders/intersect.glsl")),
     ("bvh.glsl", include_str!("../../shaders/bvh.glsl")),
+    ("ray_query.glsl", include_str!("../../shaders/ray_query.glsl")),
     ("textures.glsl", include_str!("../../shaders/textures.glsl")),
     ("alpha.glsl", include_str!("../../shaders/alpha.glsl")),
     ("surface.glsl", include_str!("../../shaders/surface.glsl")),
@@ -107,8 +108,14 @@ pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
         .chain(tile_taking::defines(false))
         .chain(WavefrontStage::defines(None))
         .chain(Workgroup::default().defines())
+        .chain(traversal_defines(Traversal::Compute))
         .collect();
     assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
+}
+
+/// `SCENE_RAY_QUERY`: 1 where the kernel traces its rays with ray queries (ray_query.glsl).
+fn traversal_defines(traversal: Traversal) -> [(&'static str, String); 1] {
+    [("SCENE_RAY_QUERY", u32::from(traversal == Traversal::RayQuery).to_string())]
 }
 
 /// The kernel's GLSL for this split of the arrays and variant.
@@ -128,6 +135,7 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
     defines.extend(tile_taking::defines(variant.take_tiles));
     defines.extend(WavefrontStage::defines(variant.wavefront));
     defines.extend(variant.workgroup.defines());
+    defines.extend(traversal_defines(variant.traversal));
     assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)
 }
 

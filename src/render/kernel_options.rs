@@ -303,6 +303,8 @@ pub struct SceneShape<'s> {
     pub features: &'s SceneFeatures,
     pub root: Option<&'s WideNode>,
     pub instances: &'s [GpuInstance],
+    /// Rays are traced by the device's ray queries: there is no walk to queue.
+    pub ray_queries: bool,
 }
 
 impl KernelOptions {
@@ -323,7 +325,7 @@ impl KernelOptions {
             None if defaults.walk_queue => QueueRequest::On,
             None => QueueRequest::Off,
         };
-        let walk_queue = match wavefront {
+        let walk_queue = match wavefront || scene.ray_queries {
             true => None,
             false => WalkQueue::for_scene(
                 queue_request,

@@ -15,7 +15,9 @@ use super::layout::{FrameParams, GpuStats, PassParams};
 use super::scene_data::SceneData;
 use super::variant::{KernelChoice, KernelVariant};
 use super::wavefront::{self, WavefrontKernels, WavefrontStage};
-use crate::gpu::{Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, GpuContext, KernelStatistic};
+use crate::gpu::{
+    Binding, Buffer, BufferKind, ComputeKernel, DeviceInfo, GpuContext, KernelStatistic, SceneStructure, Traversal,
+};
 use crate::scene::Scene;
 use anyhow::{Context as _, Result};
 
@@ -83,10 +85,14 @@ impl KernelPlan {
             KernelChoice::ForScene => SceneFeatures::of(&data),
             KernelChoice::General => SceneFeatures::ALL,
         };
+        // Ray queries (the device's choice, gpu/traversal.rs) replace the walk; a scene tested
+        // shape by shape has none to replace.
+        let traversal = if features.bvh() { ctx.traversal } else { Traversal::Compute };
         let shape = SceneShape {
             features: &features,
             root: data.acceleration.nodes.first(),
             instances: &data.acceleration.instances,
+            ray_queries: traversal == Traversal::RayQuery,
         };
         let choices = options.choose(&ctx.info, loop_limit.is_some(), shape)?;
         let variant = KernelVariant {
@@ -98,6 +104,7 @@ impl KernelPlan {
             take_tiles: choices.take_tiles,
             wavefront: choices.wavefront.then_some(WavefrontStage::Extend),
             walk_records: choices.walk_records,
+            traversal,
         };
         let mut plan = KernelPlan {
             scene_name: scene.name.clone(),
@@ -128,9 +135,10 @@ impl KernelPlan {
     }
 
     /// Every buffer the kernel variant binds, in binding order, as it declares them, with what it
-    /// starts as.
+    /// starts as; the acceleration structure is built apart ([`Self::build_structure`]).
     fn contents(&self) -> Vec<(BufferBinding, Initial<'_>)> {
         bindings::bound_in(self.variant)
+            .filter(|b| !b.is_acceleration_structure())
             .map(|b| {
                 let initial = initial_contents(b.buffer, &self.params, &self.data, self.image_bytes);
                 (b, initial)
@@ -163,9 +171,25 @@ impl KernelPlan {
         Ok(buffers)
     }
 
-    /// The kernel's descriptors for `buffers` (as [`Self::upload`] made them): each buffer at its
-    /// binding, a split array's windows at theirs.
-    pub fn bind<'b>(&self, buffers: &'b [(KernelBuffer, Buffer)]) -> Vec<Binding<'b>> {
+    /// The scene's acceleration structures, where the kernel traces with ray queries
+    /// (ray_query_scene.rs); `None` where it walks its own BVH.
+    pub fn build_structure(&self, ctx: &GpuContext, scene: &Scene) -> Result<Option<SceneStructure>> {
+        match self.variant.traversal {
+            Traversal::RayQuery => {
+                Ok(Some(super::ray_query_scene::build(ctx, scene, &self.data, &self.variant.features)?))
+            }
+            Traversal::Compute => Ok(None),
+        }
+    }
+
+    /// The kernel's descriptors for `buffers` (as [`Self::upload`] made them) and `structure`:
+    /// each buffer at its binding, a split array's windows at theirs, the acceleration structure
+    /// at its own.
+    pub fn bind<'b>(
+        &self,
+        buffers: &'b [(KernelBuffer, Buffer)],
+        structure: Option<&'b SceneStructure>,
+    ) -> Vec<Binding<'b>> {
         let mut descriptors = Vec::new();
         for ((binding, initial), (_, buffer)) in self.contents().iter().zip(buffers) {
             let plan = self.plans[binding.buffer];
@@ -178,6 +202,7 @@ impl KernelPlan {
                             offset,
                             range,
                             as_texels: binding.texel_words(),
+                            structure: None,
                         });
                     }
                 }
@@ -185,6 +210,9 @@ impl KernelPlan {
                 _ => descriptors
                     .push(Binding { as_texels: binding.texel_words(), ..Binding::whole(binding.binding, buffer) }),
             }
+        }
+        if let Some(structure) = structure {
+            descriptors.push(Binding::acceleration_structure(KernelBuffer::SceneStructure.entry().binding, structure));
         }
         descriptors
     }
@@ -272,6 +300,8 @@ pub(super) fn initial_contents<'d>(
         PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
         TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
         VertexTangents => bytemuck::cast_slice(&a.tangents),
+        // Built from the scene's data rather than uploaded (ray_query_scene.rs).
+        SceneStructure => &[],
     })
 }
 

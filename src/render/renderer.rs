@@ -19,7 +19,7 @@ use super::variant::KernelChoice;
 use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
 use super::workgroup::Workgroup;
-use crate::gpu::{Buffer, DeviceType, GpuContext, KernelStatistic};
+use crate::gpu::{Buffer, DeviceType, GpuContext, KernelStatistic, SceneStructure, Traversal};
 use crate::image::{mean_image, RgbImage};
 use crate::scene::{Camera, Scene};
 use anyhow::Result;
@@ -68,6 +68,11 @@ pub struct Renderer<'a> {
     pub walk_records: WalkRecords,
     /// The kernel's workgroup shape (workgroup.rs).
     pub workgroup: Workgroup,
+    /// How the kernel finds what rays hit: the device's choice (`GpuContext::traversal`), or the
+    /// compute walk's code for a scene with no walk at all (a few shapes tested in turn).
+    pub traversal: Traversal,
+    /// The scene's acceleration structures, where the kernel traces with ray queries.
+    structure: Option<SceneStructure>,
     /// Every buffer the kernel binds (the AOV sums only when the render has kernel AOVs).
     buffers: Vec<(KernelBuffer, Buffer)>,
     aovs: AovSet,
@@ -141,6 +146,9 @@ pub struct GeometryReport {
     pub gpu_bytes: u64,
     /// Arrays too large for one storage binding of this device, with the bindings each spans.
     pub split_arrays: Vec<(&'static str, u32)>,
+    /// Bytes of the acceleration structures ray queries trace (ray_query_scene.rs), beside
+    /// `gpu_bytes`; 0 where the kernel walks its own BVH.
+    pub acceleration_structure_bytes: u64,
 }
 
 impl<'a> Renderer<'a> {
@@ -181,11 +189,13 @@ impl<'a> Renderer<'a> {
     ) -> Result<Self> {
         let plan = KernelPlan::new(ctx, scene, seed, aovs, choice, options)?;
         let buffers = plan.upload(ctx)?;
-        let descriptors = plan.bind(&buffers);
+        let structure = plan.build_structure(ctx, scene)?;
+        let descriptors = plan.bind(&buffers, structure.as_ref());
         let (kernels, statistics) = plan.compile(ctx, &descriptors)?;
         let KernelPlan { data, params, loop_limit, choices, scene_hash, hashed_bytes, split_arrays, variant, .. } =
             plan;
         let plan_features = variant.features;
+        let acceleration_structure_bytes = structure.as_ref().map_or(0, SceneStructure::bytes);
         let (width, height) = (scene.film.width, scene.film.height);
         Ok(Self {
             ctx,
@@ -196,6 +206,8 @@ impl<'a> Renderer<'a> {
             take_tiles: choices.take_tiles,
             walk_records: choices.walk_records,
             workgroup: choices.workgroup,
+            traversal: variant.traversal,
+            structure,
             buffers,
             aovs,
             width,
@@ -216,6 +228,7 @@ impl<'a> Renderer<'a> {
                 lights: data.lights.len(),
                 gpu_bytes: data.gpu_bytes(),
                 split_arrays,
+                acceleration_structure_bytes,
             },
             cost_per_row_sample: None,
             loop_limit,
@@ -666,6 +679,9 @@ impl Drop for Renderer<'_> {
         }
         for (_, b) in self.buffers.drain(..) {
             b.destroy(self.ctx);
+        }
+        if let Some(structure) = self.structure.take() {
+            structure.destroy(self.ctx);
         }
     }
 }

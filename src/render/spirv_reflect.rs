@@ -14,6 +14,7 @@ const OP_MEMBER_NAME: u32 = 6;
 const OP_TYPE_IMAGE: u32 = 25;
 const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
 const OP_TYPE_STRUCT: u32 = 30;
+const OP_TYPE_ACCELERATION_STRUCTURE: u32 = 5341;
 const OP_TYPE_POINTER: u32 = 32;
 const OP_VARIABLE: u32 = 59;
 const OP_DECORATE: u32 = 71;
@@ -191,6 +192,37 @@ pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
                 if operands[1] == UNIFORM_CONSTANT
                     && (buffer_images.contains(&operands[2]) || sampled_buffers.contains(&operands[2])) =>
             {
+                pointers.push(operands[0])
+            }
+            OP_VARIABLE if pointers.contains(&operands[0]) => variables.push(operands[1]),
+            OP_DECORATE => {
+                decorations.insert((operands[0], operands[1]), operands.get(2).copied().unwrap_or(0));
+            }
+            _ => {}
+        }
+    }
+    variables
+        .into_iter()
+        .map(|id| TexelBufferVariable {
+            name: names.get(&id).cloned().unwrap_or_default(),
+            set: decorations.get(&(id, DESCRIPTOR_SET)).copied(),
+            binding: decorations.get(&(id, BINDING)).copied(),
+        })
+        .collect()
+}
+
+/// Every acceleration structure the module declares (`uniform accelerationStructureEXT`), with its
+/// name, set and binding (a [`TexelBufferVariable`] names the same three).
+pub fn acceleration_structure_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
+    let (mut names, mut decorations) = (HashMap::new(), HashMap::new());
+    let (mut structures, mut pointers, mut variables) = (Vec::new(), Vec::new(), Vec::new());
+    for (opcode, operands) in instructions(spirv) {
+        match opcode {
+            OP_NAME => {
+                names.insert(operands[0], string(&operands[1..]));
+            }
+            OP_TYPE_ACCELERATION_STRUCTURE => structures.push(operands[0]),
+            OP_TYPE_POINTER if operands[1] == UNIFORM_CONSTANT && structures.contains(&operands[2]) => {
                 pointers.push(operands[0])
             }
             OP_VARIABLE if pointers.contains(&operands[0]) => variables.push(operands[1]),

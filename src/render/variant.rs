@@ -7,6 +7,7 @@ use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
 use super::wavefront::WavefrontStage;
 use super::workgroup::Workgroup;
+use crate::gpu::Traversal;
 
 /// What a kernel is compiled with besides the split of the arrays: work that only some renders or
 /// devices need, so that the others pay nothing for it.
@@ -28,6 +29,9 @@ pub struct KernelVariant {
     pub wavefront: Option<WavefrontStage>,
     /// How it reads the walk's nodes and mesh triangles (walk_records.rs).
     pub walk_records: WalkRecords,
+    /// How it finds what rays hit: its own walk, or the device's ray queries (ray_query.glsl),
+    /// which bind the scene's acceleration structure.
+    pub traversal: Traversal,
 }
 
 /// Which kernel a renderer compiles (features.rs).

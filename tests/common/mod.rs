@@ -59,6 +59,33 @@ pub fn loops_end_early(ctx: &GpuContext, what: &str) -> bool {
     early
 }
 
+/// Names the environment variable that makes the GPU tests' contexts trace with this traversal
+/// (`compute`, `ray-query` or `auto`, as `--traversal`): scripts/test.sh runs the tests that
+/// trace rays (geometry, alpha, instancing, furnaces, images) once with each. Unset: `auto`.
+pub const TRAVERSAL_VAR: &str = "CAUSTICA_TRAVERSAL";
+
+/// What [`TRAVERSAL_VAR`] asks for.
+pub fn traversal_request() -> caustica::gpu::TraversalRequest {
+    match std::env::var(TRAVERSAL_VAR) {
+        Ok(name) => caustica::gpu::TraversalRequest::parse(&name).unwrap_or_else(|e| panic!("{TRAVERSAL_VAR}: {e}")),
+        Err(_) => caustica::gpu::TraversalRequest::Auto,
+    }
+}
+
+/// A lavapipe context as [`gpu`] makes, tracing with `traversal`; `None` (the caller's test says
+/// SKIPPED) where the device cannot.
+pub fn gpu_with_traversal(traversal: caustica::gpu::TraversalRequest) -> Option<(MutexGuard<'static, ()>, GpuContext)> {
+    let guard = gpu_lock();
+    let options = ContextOptions { device: None, validation: true, storage_binding_limit: None, traversal };
+    match GpuContext::new(&options) {
+        Ok(ctx) => Some((guard, ctx)),
+        Err(e) => {
+            eprintln!("SKIPPED: {e:#}");
+            None
+        }
+    }
+}
+
 /// The GPU tests run on lavapipe everywhere (the same checks on a machine with a GPU), one at a time:
 /// lavapipe already uses every core for one dispatch. With `CAUSTICA_LAVAPIPE=none` they run on the
 /// device the CLI takes by default.
@@ -66,8 +93,8 @@ pub fn gpu() -> (MutexGuard<'static, ()>, GpuContext) {
     gpu_with_storage_limit(None)
 }
 
-/// As [`gpu`], with the device's storage-binding range lowered to `limit` bytes when given.
-pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, GpuContext) {
+/// The GPU tests' turn at the device (one at a time), lavapipe chosen where the caller chose no driver.
+fn gpu_lock() -> MutexGuard<'static, ()> {
     static LOCK: Mutex<()> = Mutex::new(());
     static FORCE: Once = Once::new();
     let guard = LOCK.lock().unwrap_or_else(|e| e.into_inner());
@@ -76,8 +103,19 @@ pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, G
             std::env::set_var("VK_DRIVER_FILES", icd);
         }
     });
-    let ctx = GpuContext::new(&ContextOptions { device: None, validation: true, storage_binding_limit: limit })
-        .expect("a Vulkan device (install mesa-vulkan-drivers)");
+    guard
+}
+
+/// As [`gpu`], with the device's storage-binding range lowered to `limit` bytes when given.
+pub fn gpu_with_storage_limit(limit: Option<u64>) -> (MutexGuard<'static, ()>, GpuContext) {
+    let guard = gpu_lock();
+    let ctx = GpuContext::new(&ContextOptions {
+        device: None,
+        validation: true,
+        storage_binding_limit: limit,
+        traversal: traversal_request(),
+    })
+    .expect("a Vulkan device (install mesa-vulkan-drivers)");
     if std::env::var_os("CI").is_some() {
         assert!(ctx.validating(), "CI must run with the Khronos validation layer (vulkan-validationlayers)");
     }
