@@ -66,6 +66,8 @@ pub struct SceneStructure {
 }
 
 fn buffer_address(ctx: &GpuContext, buffer: &Buffer) -> vk::DeviceAddress {
+    // SAFETY: `buffer` is alive and was created with SHADER_DEVICE_ADDRESS usage on a device whose
+    // bufferDeviceAddress feature is enabled (ray queries only, which is when this is called).
     unsafe { ctx.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(buffer.buffer)) }
 }
 
@@ -114,6 +116,8 @@ fn build(
         .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
         .geometries(&geometries);
     let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    // SAFETY: `info` borrows `geometries`, a local alive until the call returns; the loader is the
+    // live device's, made where the acceleration-structure extension is enabled.
     unsafe {
         loader.get_acceleration_structure_build_sizes(
             vk::AccelerationStructureBuildTypeKHR::DEVICE,
@@ -134,6 +138,8 @@ fn build(
         .buffer(buffer.buffer)
         .size(sizes.acceleration_structure_size)
         .ty(ty);
+    // SAFETY: `buffer` is alive, device-local and at least the size the build asked for; the
+    // structure is destroyed (Structure::destroy) before its buffer.
     let handle = match unsafe { loader.create_acceleration_structure(&create, None) } {
         Ok(handle) => handle,
         Err(e) => {
@@ -147,6 +153,9 @@ fn build(
             .dst_acceleration_structure(handle)
             .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch_address });
         let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
+        // SAFETY: `cb` is recording; `info` and `range` are locals that outlive the recording, and
+        // the input, scratch and destination buffers stay alive until submit_and_wait has waited
+        // for the build's fence.
         let result = ctx.submit_and_wait(|device, cb| unsafe {
             loader.cmd_build_acceleration_structures(cb, &[info], &[&range]);
             // The build's writes reach the top level's build and the kernel's ray queries.
@@ -171,6 +180,7 @@ fn build(
         structure.destroy(ctx);
         return Err(e);
     }
+    // SAFETY: `handle` is the structure just built and alive; the device has bufferDeviceAddress.
     let address = unsafe {
         loader.get_acceleration_structure_device_address(
             &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(handle),
@@ -182,6 +192,8 @@ fn build(
 impl Structure {
     fn destroy(self, ctx: &GpuContext) {
         if let Some((loader, _)) = &ctx.acceleration_structures {
+            // SAFETY: the structure is this one's own; no submission that reads it is in flight
+            // (builds and dispatches are waited for), and its buffer is destroyed after it.
             unsafe { loader.destroy_acceleration_structure(self.handle, None) };
         }
         self.buffer.destroy(ctx);
@@ -270,8 +282,9 @@ impl SceneStructure {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
-        // VkAccelerationStructureInstanceKHR is repr(C), 64 bytes with no padding: its bytes are
-        // the records the build reads.
+        // SAFETY: the pointer and length come from the `instances` vector, alive for the slice's use;
+        // VkAccelerationStructureInstanceKHR is repr(C), 64 bytes with no padding, so every byte is
+        // initialised, and those bytes are the records the build reads.
         let bytes = unsafe {
             std::slice::from_raw_parts(instances.as_ptr().cast::<u8>(), std::mem::size_of_val(&instances[..]))
         };

@@ -329,6 +329,7 @@ impl GpuContext {
         }
         let mut statistics_feature =
             vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default().pipeline_executable_info(statistics);
+        // SAFETY: `physical` was enumerated from this live instance.
         let api_version = unsafe { instance.get_physical_device_properties(physical) }.api_version;
         let traversal = Traversal::resolve(
             options.traversal,
@@ -386,6 +387,8 @@ impl GpuContext {
         let acceleration_structures = ray_query.then(|| {
             let mut properties = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
             let mut all = vk::PhysicalDeviceProperties2::default().push_next(&mut properties);
+            // SAFETY: `all` borrows `properties`, a local alive until the call returns; `physical`
+            // was enumerated from this live instance.
             unsafe { instance.get_physical_device_properties2(physical, &mut all) };
             let scratch_alignment = u64::from(properties.min_acceleration_structure_scratch_offset_alignment).max(1);
             (ash::khr::acceleration_structure::Device::new(&instance, &device), scratch_alignment)

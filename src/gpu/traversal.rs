@@ -98,6 +98,7 @@ pub(super) fn missing_for_ray_query(instance: &ash::Instance, pd: vk::PhysicalDe
     if api_version < vk::API_VERSION_1_2 {
         return vec!["Vulkan 1.2".into()];
     }
+    // SAFETY: `pd` was enumerated from this live instance.
     let available = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     let has = |name: &CStr| available.iter().any(|e| e.extension_name_as_c_str().ok() == Some(name));
     let missing: Vec<String> =
@@ -112,6 +113,8 @@ pub(super) fn missing_for_ray_query(instance: &ash::Instance, pd: vk::PhysicalDe
         .push_next(&mut structures)
         .push_next(&mut queries)
         .push_next(&mut addresses);
+    // SAFETY: `features` borrows the three feature structs, locals alive until the call returns;
+    // `pd` was enumerated from this live instance.
     unsafe { instance.get_physical_device_features2(pd, &mut features) };
     [
         (structures.acceleration_structure, "the accelerationStructure feature"),
