@@ -614,7 +614,7 @@ fn bench(
 /// `bench --suite`: every scene of the suite on one device; fails (after the table) when a scene
 /// that should have run did not.
 fn bench_suite(
-    scenes: &Path,
+    scenes: Option<&Path>,
     overrides: FilmOverrides,
     aovs: AovSet,
     kernel: &KernelSetup,
@@ -791,8 +791,7 @@ fn run() -> Result<()> {
             let choice = if general_kernel { KernelChoice::General } else { KernelChoice::ForScene };
             let kernel = KernelSetup { choice, group_order, options };
             if suite {
-                let scenes = scenes.unwrap_or_else(|| PathBuf::from("scenes"));
-                return bench_suite(&scenes, film, aovs, &kernel, json, &scene_files, &gpu);
+                return bench_suite(scenes.as_deref(), film, aovs, &kernel, json, &scene_files, &gpu);
             }
             bench(scene_files.load_scene(scene.as_ref())?, film, aovs, &kernel, json, &gpu)
         }

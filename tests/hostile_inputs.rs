@@ -501,3 +501,85 @@ fn a_long_toml_line_gives_a_short_message() {
     assert!(o.stderr.contains("long.toml: line 4, column 7"), "{}", &o.stderr[..o.stderr.len().min(2000)]);
     assert!(o.stderr.len() < 2000, "{} bytes of stderr for one error", o.stderr.len());
 }
+
+/// A floor lit by a sun `diameter` degrees wide, low in the sky so that the disk is sampled.
+fn floor_under_sun(diameter: &str) -> Scene {
+    common::floor_point_scene(
+        &format!(
+            "[[lights]]\ntype = \"directional\"\ndirection = [0.3, -1.0, 0.2]\nirradiance = [2.0, 2.0, 2.0]\nangular_diameter = {diameter}"
+        ),
+        4,
+        true,
+    )
+}
+
+#[test]
+fn a_sun_too_narrow_to_sample_renders_as_a_delta_light_without_dropping_samples() {
+    let (_guard, ctx) = common::gpu();
+    let render = |diameter: &str| {
+        let scene = floor_under_sun(diameter);
+        let mut renderer = caustica::render::Renderer::new(&ctx, &scene, 1).expect("scene uploads");
+        renderer.render(scene.film.spp, |_| {}).expect("render");
+        assert_eq!(renderer.nonfinite_samples, 0, "a sun {diameter} degrees wide dropped samples");
+        renderer.image().expect("readback")
+    };
+    let delta = render("0");
+    assert_eq!(render("1e-8").pixels, delta.pixels, "a disk of 1e-8 degrees is the delta light");
+    let narrowest = render(&caustica::scene::MIN_DISK_DEGREES.to_string());
+    let mean = |image: &caustica::image::RgbImage| {
+        image.pixels.iter().map(|&p| common::luminance(p)).sum::<f64>() / image.pixels.len() as f64
+    };
+    let (narrow, delta) = (mean(&narrowest), mean(&delta));
+    assert!(
+        delta > 0.0 && (narrow / delta - 1.0).abs() < 1e-2,
+        "the narrowest disk {narrow} against the delta light {delta}"
+    );
+}
+
+/// A one-pixel partial render of samples `range` whose radiance sum is `value` in every channel.
+fn part(range: std::ops::Range<u32>, value: f32) -> caustica::farm::PartialRender {
+    let samples = range.end - range.start;
+    caustica::farm::PartialRender {
+        scene_hash: "ab12".into(),
+        seed: 1,
+        width: 1,
+        height: 1,
+        ranges: vec![range],
+        accumulation: vec![[value, value, value, samples as f32]],
+        aovs: Default::default(),
+        aov_sums: None,
+    }
+}
+
+#[test]
+fn merge_and_resume_refuse_non_finite_or_negative_sums_and_sums_that_overflow() {
+    let dir = common::temp_dir("hostile-sums");
+    let (a, b, out) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("merged.exr"));
+    part(0..2, 1.0).write(&a).unwrap();
+    let merge = |b: &Path| run(&["merge", a.to_str().unwrap(), b.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    for value in [f32::NAN, f32::INFINITY, -1.0] {
+        part(2..4, value).write(&b).unwrap();
+        let o = merge(&b);
+        assert_eq!(o.code, Some(1), "a sum of {value}: {}", o.stderr);
+        assert!(o.stderr.contains(&b.display().to_string()) && o.stderr.contains("must be finite"), "{}", o.stderr);
+        let scene = write(&dir.join("scene.toml"), CAMERA);
+        let (scene, b_path, out_path) = (scene.to_str().unwrap(), b.to_str().unwrap(), out.to_str().unwrap());
+        let resumed = run(&["render", scene, "--resume", "--checkpoint", b_path, "-o", out_path, "-q"]);
+        assert_eq!(resumed.code, Some(1), "resuming a sum of {value}: {}", resumed.stderr);
+        assert!(resumed.stderr.contains(&b.display().to_string()), "{}", resumed.stderr);
+    }
+    part(0..2, 3e38).write(&a).unwrap();
+    part(2..4, 3e38).write(&b).unwrap();
+    let o = merge(&b);
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    let both = format!("{}: its sums overflow when added to those of {}", b.display(), a.display());
+    assert!(o.stderr.contains(&both), "{}", o.stderr);
+    assert!(!out.exists(), "nothing is written");
+}
+
+#[test]
+fn bench_suite_refuses_a_scenes_folder_that_does_not_exist() {
+    let o = run(&["bench", "--suite", "--scenes", "/nonexistent/scenes"]);
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(o.stderr.contains("--scenes /nonexistent/scenes: not a folder"), "{}", o.stderr);
+}
