@@ -12,7 +12,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 #[derive(Parser)]
@@ -371,18 +371,94 @@ fn progress_bar(total: Option<u32>, quiet: bool) -> ProgressBar {
 /// Set by SIGINT or SIGTERM: the render stops after the pass in flight.
 static STOP: AtomicBool = AtomicBool::new(false);
 
-/// On SIGINT or SIGTERM: when `graceful`, the first signal sets [`STOP`] and a second quits; else
-/// the first quits. Quitting removes the temporary files of writes in flight, so that an image
-/// being written keeps its previous contents and leaves nothing else behind.
+/// SIGINTs received.
+static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
+
+/// On SIGINT, SIGTERM or SIGHUP: when `graceful`, the first sets [`STOP`] (the pass in flight is
+/// finished and the image written) and only a second SIGINT quits: GNU `timeout`, Slurm and
+/// Kubernetes send SIGTERM more than once (`timeout` to the process and its group), and a repeat
+/// must not throw the render away during its final write. Without `graceful` the first signal
+/// quits. Quitting removes the temporary files of writes in flight, so that an image being written
+/// keeps its previous contents and leaves nothing else behind.
 fn handle_signals(graceful: bool) -> Result<()> {
-    ctrlc::set_handler(move || {
-        if !graceful || STOP.swap(true, Ordering::SeqCst) {
+    signals::install(move |signal| {
+        let interrupted_before = signal == signals::INTERRUPT && INTERRUPTS.fetch_add(1, Ordering::SeqCst) > 0;
+        let stopping = STOP.swap(true, Ordering::SeqCst);
+        if !graceful || interrupted_before {
             caustica::image::remove_temp_files_in_flight();
             std::process::exit(130);
         }
-        eprintln!("caustica: finishing the pass in flight (interrupt again to quit at once)");
+        if !stopping {
+            eprintln!("caustica: finishing the pass in flight (interrupt again to quit at once)");
+        }
     })
     .context("installing the SIGINT/SIGTERM handler")
+}
+
+/// Signal handling: `install(on)` calls `on` on a thread of its own, where anything may be done
+/// (unlike in a signal handler), with each SIGINT, SIGTERM and SIGHUP the process receives.
+#[cfg(unix)]
+mod signals {
+    use std::io::{Error, ErrorKind};
+    use std::sync::atomic::{AtomicI32, Ordering};
+
+    pub const INTERRUPT: i32 = libc::SIGINT;
+
+    /// The write end of the pipe that carries signal numbers from the handler to the thread.
+    static PIPE: AtomicI32 = AtomicI32::new(-1);
+
+    extern "C" fn on_signal(signal: libc::c_int) {
+        let byte = signal as u8;
+        // SAFETY: write(2) is async-signal-safe and given one byte that lives across the call; the
+        // pipe stays open for the life of the process (a full pipe only loses a repeated signal).
+        let _ = unsafe { libc::write(PIPE.load(Ordering::SeqCst), (&byte as *const u8).cast(), 1) };
+    }
+
+    pub fn install(on: impl Fn(i32) + Send + 'static) -> std::io::Result<()> {
+        let mut ends = [-1; 2];
+        // SAFETY: pipe(2) writes two descriptors into the two-element array it is given.
+        if unsafe { libc::pipe(ends.as_mut_ptr()) } != 0 {
+            return Err(Error::last_os_error());
+        }
+        let [read_end, write_end] = ends;
+        PIPE.store(write_end, Ordering::SeqCst);
+        std::thread::spawn(move || loop {
+            let mut byte = 0u8;
+            // SAFETY: read(2) into one byte that lives across the call, from the pipe's read end,
+            // which stays open for the life of the process.
+            match unsafe { libc::read(read_end, (&mut byte as *mut u8).cast(), 1) } {
+                1 => on(i32::from(byte)),
+                _ if Error::last_os_error().kind() == ErrorKind::Interrupted => continue,
+                _ => return,
+            }
+        });
+        let handler = on_signal as extern "C" fn(libc::c_int);
+        for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+            // SAFETY: a zeroed sigaction is valid; it is given the handler, an empty mask and
+            // SA_RESTART, and on_signal does only async-signal-safe work.
+            let installed = unsafe {
+                let mut action: libc::sigaction = std::mem::zeroed();
+                action.sa_sigaction = handler as libc::sighandler_t;
+                action.sa_flags = libc::SA_RESTART;
+                libc::sigemptyset(&mut action.sa_mask);
+                libc::sigaction(signal, &action, std::ptr::null_mut())
+            };
+            if installed != 0 {
+                return Err(Error::last_os_error());
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Signal handling: Ctrl-C and the like call `on`, all as [`INTERRUPT`](signals::INTERRUPT).
+#[cfg(not(unix))]
+mod signals {
+    pub const INTERRUPT: i32 = 2;
+
+    pub fn install(on: impl Fn(i32) + Send + 'static) -> Result<(), ctrlc::Error> {
+        ctrlc::set_handler(move || on(INTERRUPT))
+    }
 }
 
 /// Clears what killed earlier writes of `targets` left behind, saying so unless `quiet`.
