@@ -583,3 +583,80 @@ fn bench_suite_refuses_a_scenes_folder_that_does_not_exist() {
     assert_eq!(o.code, Some(1), "{}", o.stderr);
     assert!(o.stderr.contains("--scenes /nonexistent/scenes: not a folder"), "{}", o.stderr);
 }
+
+/// A camera for Mitsuba scenes whose camera does not matter.
+const MITSUBA_SENSOR: &str = r#"<sensor type="perspective"><float name="fov" value="45"/>
+<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>"#;
+
+fn mitsuba(body: &str) -> String {
+    format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n")
+}
+
+/// The message importing the Mitsuba scene `text` gives, within `seconds`.
+fn mitsuba_error_within(tag: &str, text: &str, seconds: u64) -> String {
+    let started = Instant::now();
+    let message = common::import_text_error(tag, "scene.xml", text);
+    assert!(started.elapsed() < Duration::from_secs(seconds), "{tag} took {:?}", started.elapsed());
+    message
+}
+
+#[test]
+fn mitsuba_objects_nested_ten_thousand_deep_are_refused_naming_the_line() {
+    let body = format!("{}{}", "<bsdf type=\"twosided\">\n".repeat(10_000), "</bsdf>".repeat(10_000));
+    let message = mitsuba_error_within("hostile-nesting", &mitsuba(&body), 20);
+    // The object at nesting 256 is on line 258 (the <scene> is line 1).
+    assert!(message.contains("scene.xml:258: objects nest more than 256 deep"), "{message}");
+}
+
+#[test]
+fn a_mitsuba_bsdf_containing_itself_is_refused() {
+    for bsdfs in [
+        r#"<bsdf type="mask" id="a"><ref id="a"/></bsdf>"#,
+        r#"<bsdf type="normalmap" id="a"><ref id="a"/></bsdf>"#,
+        r#"<bsdf type="mask" id="a"><bsdf type="twosided"><ref id="b"/></bsdf></bsdf>
+<bsdf type="normalmap" id="b"><ref id="a"/></bsdf>"#,
+    ] {
+        let body = format!("{MITSUBA_SENSOR}\n{bsdfs}\n<shape type=\"sphere\"><ref id=\"a\"/></shape>");
+        let message = mitsuba_error_within("hostile-self-bsdf", &mitsuba(&body), 20);
+        assert!(message.contains("scene.xml:") && message.contains("contains itself"), "{bsdfs}: {message}");
+    }
+}
+
+#[test]
+fn mitsuba_substitution_cannot_make_more_text_than_a_scene_file_holds() {
+    let value = "1".repeat(1 << 20);
+    let many = "$v".repeat(20);
+    let body =
+        format!("<default name=\"v\" value=\"{value}\"/>\n{MITSUBA_SENSOR}\n<shape type=\"sphere\" id=\"{many}\"/>");
+    let message = mitsuba_error_within("hostile-substitution", &mitsuba(&body), 20);
+    assert!(message.contains("scene.xml:5: $name substitution makes more than 16 MiB of text"), "{message}");
+}
+
+#[test]
+fn mitsuba_include_fan_out_is_bounded() {
+    let includes = |name: &str| format!("<include filename=\"{name}\"/>\n").repeat(100);
+    let files = common::write_files(
+        "hostile-include-fan-out",
+        &[
+            ("scene.xml", &mitsuba(&includes("b.xml"))),
+            ("b.xml", &mitsuba(&includes("c.xml"))),
+            ("c.xml", &mitsuba(&includes("d.xml"))),
+            ("d.xml", &mitsuba("")),
+        ],
+    );
+    let started = Instant::now();
+    let anywhere = caustica::input_file::InputFiles::anywhere();
+    let error = caustica::scene::import::import(&anywhere, &files, &[]).err().expect("refused");
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    let message = format!("{error:#}");
+    assert!(message.contains(".xml: the scene reads more than 4096 files through <include>s"), "{message}");
+}
+
+#[test]
+fn mitsuba_import_is_linear_in_the_file_and_names_the_right_line() {
+    let spheres = "<shape type=\"sphere\"><float name=\"radius\" value=\"1\"/></shape>\n".repeat(40_000);
+    let body = format!("{MITSUBA_SENSOR}\n{spheres}<unknown/>");
+    // Line 1 <scene>, lines 2-3 the sensor, 4 to 40,003 the spheres.
+    let message = mitsuba_error_within("hostile-many-spheres", &mitsuba(&body), 20);
+    assert!(message.contains("scene.xml:40004: <unknown> is not supported at the scene level"), "{message}");
+}
