@@ -660,3 +660,70 @@ fn mitsuba_import_is_linear_in_the_file_and_names_the_right_line() {
     let message = mitsuba_error_within("hostile-many-spheres", &mitsuba(&body), 20);
     assert!(message.contains("scene.xml:40004: <unknown> is not supported at the scene level"), "{message}");
 }
+
+#[test]
+fn mitsuba_instances_of_a_shapegroup_are_bounded_in_shapes_before_any_is_made() {
+    let spheres = "<shape type=\"sphere\"/>\n".repeat(2000);
+    let instances = "<shape type=\"instance\"><ref id=\"g\"/></shape>\n".repeat(2001);
+    let body = format!("{MITSUBA_SENSOR}\n<shape type=\"shapegroup\" id=\"g\">\n{spheres}</shape>\n{instances}");
+    // Line 1 <scene>, 2-3 the sensor, 4 the group, 5-2004 its spheres, 2005 its end, then the
+    // instances: the 2001st (line 4006) makes 4,002,000 shapes.
+    let message = mitsuba_error_within("hostile-instances", &mitsuba(&body), 20);
+    assert!(
+        message.contains("scene.xml:4006: <shape type=\"instance\">: the scene places more than 4000000 shapes"),
+        "{message}"
+    );
+}
+
+const PBRT_OPTIONS: &str = "LookAt 0 1 4  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n";
+
+#[test]
+fn a_pbrt_texture_referred_to_many_times_is_evaluated_once() {
+    // Each mix refers to the one before twice: 2^30 evaluations of the first, read naively.
+    let mut world = "Texture \"t0\" \"spectrum\" \"constant\" \"rgb value\" [0.5 0.5 0.5]\n".to_owned();
+    for level in 1..=31 {
+        let before = level - 1;
+        world += &format!("Texture \"t{level}\" \"spectrum\" \"mix\" \"texture tex1\" \"t{before}\" \"texture tex2\" \"t{before}\" \"float amount\" 0.5\n");
+    }
+    world += "Material \"diffuse\" \"texture reflectance\" \"t31\"\nShape \"sphere\"\n";
+    let started = Instant::now();
+    let scene =
+        common::import_text_scene("hostile-pbrt-mix", "scene.pbrt", &format!("{PBRT_OPTIONS}WorldBegin\n{world}"))
+            .unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    let albedo = scene.materials[scene.shapes[0].material() as usize].albedo;
+    assert!(common::close(albedo, glam::Vec3::splat(0.5)), "{albedo}");
+}
+
+#[test]
+fn pbrt_directives_of_very_many_parameters_are_read_in_linear_time() {
+    let params: String = (0..200_000).map(|k| format!(" \"float p{k}\" 1")).collect();
+    let text = format!("{PBRT_OPTIONS}WorldBegin\nShape \"sphere\"{params}\n");
+    let started = Instant::now();
+    let message = common::import_text_error("hostile-pbrt-params", "scene.pbrt", &text);
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    assert!(
+        message.contains("scene.pbrt:5: 'float p0': Shape \"sphere\": the parameter 'p0' is not supported"),
+        "{message}"
+    );
+}
+
+#[test]
+fn pbrt_includes_of_empty_files_are_bounded_in_number() {
+    let includes = |name: &str| format!("Include \"{name}\"\n").repeat(100);
+    let files = common::write_files(
+        "hostile-pbrt-includes",
+        &[
+            ("scene.pbrt", &format!("{PBRT_OPTIONS}WorldBegin\n{}", includes("b.pbrt"))),
+            ("b.pbrt", &includes("c.pbrt")),
+            ("c.pbrt", &includes("empty.pbrt")),
+            ("empty.pbrt", ""),
+        ],
+    );
+    let started = Instant::now();
+    let anywhere = caustica::input_file::InputFiles::anywhere();
+    let error = caustica::scene::import::import(&anywhere, &files, &[]).err().expect("refused");
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    let message = format!("{error:#}");
+    assert!(message.contains(".pbrt: the scene reads more than 4096 files through includes"), "{message}");
+}

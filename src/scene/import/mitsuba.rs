@@ -11,7 +11,7 @@ use super::super::format::{
 use super::super::material_maps::needs_mesh;
 use super::mitsuba_xml::{self, Object, Resolver};
 use super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
-use super::{transform, Location, Notes};
+use super::{transform, Location, Notes, MAX_SHAPES};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
 use glam::{DMat3, DMat4, DVec3};
@@ -111,6 +111,15 @@ impl Mapper<'_> {
         let mut integrator = self.integrator(&of("integrator"))?;
         integrator.sampler = sampler;
         self.file = Some(SceneFile::empty(camera, film, integrator));
+        let mut placed = 0;
+        for shape in of("shape") {
+            placed += shapes_placed(&shape);
+            if placed > MAX_SHAPES {
+                return Err(shape.error(format!(
+                    "the scene places more than {MAX_SHAPES} shapes, counting each shape of a shapegroup once per instance"
+                )));
+            }
+        }
         for shape in of("shape") {
             match shape.plugin.as_str() {
                 // A definition, placed by the instances that <ref> it.
@@ -824,6 +833,19 @@ impl Mapper<'_> {
         }
         self.out().environment = Some(environment);
         Ok(())
+    }
+}
+
+/// How many shapes top-level `shape` places: a shapegroup's (when it is one) for an instance, none
+/// for the shapegroup itself, one for any other (a malformed instance is refused by its mapping).
+fn shapes_placed(shape: &Object) -> usize {
+    match shape.plugin.as_str() {
+        "shapegroup" => 0,
+        "instance" => match shape.children_tagged("shape").ok().as_deref() {
+            Some([group]) => group.children_tagged("shape").map_or(1, |shapes| shapes.len()),
+            _ => 1,
+        },
+        _ => 1,
     }
 }
 

@@ -23,6 +23,11 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
+/// The most shapes an imported scene may get (spheres, quads, triangles, mesh placements, each
+/// instance's copies counted): a small file that instances a large group many times over could
+/// otherwise ask for any amount of memory.
+const MAX_SHAPES: usize = 4_000_000;
+
 /// Where something was written: file and line (1-based).
 #[derive(Clone, Debug)]
 pub struct Location {

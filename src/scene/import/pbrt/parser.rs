@@ -21,6 +21,9 @@ const MAX_INCLUDE_DEPTH: usize = 16;
 /// The most scene text read in all, includes together: each file has its own cap
 /// (`InputKind::Scene`), and this bounds a file that includes another many times over.
 const MAX_TOTAL_BYTES: usize = 256 << 20;
+/// The most files read in all, each include counted as often as it is read: empty files would
+/// otherwise escape MAX_TOTAL_BYTES, however often they are included.
+const MAX_FILES: usize = 4096;
 
 /// The material a shape was declared with.
 #[derive(Clone, Debug)]
@@ -115,6 +118,7 @@ pub fn read(files: &InputFiles, path: &Path) -> Result<Model> {
         object: None,
         depth: 0,
         bytes: 0,
+        files_read: 0,
     };
     reader.file(path)?;
     if let Some((_, kind, at)) = reader.stack.last() {
@@ -147,6 +151,7 @@ struct Reader<'a> {
     object: Option<(String, Vec<ShapeUse>, Location)>,
     depth: usize,
     bytes: usize,
+    files_read: usize,
 }
 
 /// Directives that set up the render, allowed only before `WorldBegin`.
@@ -154,6 +159,10 @@ const OPTIONS: [&str; 6] = ["Camera", "Film", "Sampler", "Integrator", "PixelFil
 
 impl Reader<'_> {
     fn file(&mut self, path: &Path) -> Result<()> {
+        self.files_read += 1;
+        if self.files_read > MAX_FILES {
+            bail!("{}: the scene reads more than {MAX_FILES} files through includes", path.display());
+        }
         let text = self.files.read_to_string(path, InputKind::Scene)?;
         self.bytes += text.len();
         if self.bytes > MAX_TOTAL_BYTES {
@@ -517,6 +526,8 @@ fn string(t: &mut Tokens, at: &Location, what: &str) -> Result<String> {
 fn directive(t: &mut Tokens, at: Location, name: &'static str) -> Result<Directive> {
     let kind = string(t, &at, name)?;
     let mut params: Vec<Param> = vec![];
+    // The names given so far: a set, so that a directive of very many parameters is not quadratic.
+    let mut names = std::collections::HashSet::new();
     while let Some((Token::Quoted(_), _)) = t.peek()? {
         let Some((Token::Quoted(declaration), param_at)) = t.next()? else { unreachable!("peeked a quoted string") };
         let words: Vec<&str> = declaration.split_whitespace().collect();
@@ -524,7 +535,7 @@ fn directive(t: &mut Tokens, at: Location, name: &'static str) -> Result<Directi
             bail!("{param_at}: {name} \"{kind}\": \"{declaration}\" is not a parameter declaration (\"type name\")")
         };
         let values = values(t, &param_at, ty, &declaration)?;
-        if params.iter().any(|p| p.name == param_name) {
+        if !names.insert(param_name.to_owned()) {
             bail!("{param_at}: {name} \"{kind}\": the parameter '{param_name}' is given twice");
         }
         params.push(Param::new(ty.to_owned(), param_name.to_owned(), values, param_at)?);

@@ -72,11 +72,16 @@ impl Mapper<'_> {
             );
         }
         let model = self.model;
-        let Some(t) = model.textures.get(&(value_type.to_owned(), name.to_owned())) else {
+        let key = (value_type.to_owned(), name.to_owned());
+        if let Some(value) = self.textures_evaluated.get(&key) {
+            return Ok(value.clone());
+        }
+        let Some(t) = model.textures.get(&key) else {
             return Err(used_by.error(format!("no {value_type} texture named \"{name}\"")));
         };
         let value = self.texture_value(t, depth)?;
         t.class.check_all_used()?;
+        self.textures_evaluated.insert(key, value.clone());
         Ok(value)
     }
 
