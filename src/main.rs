@@ -490,8 +490,13 @@ fn render(
 ) -> Result<()> {
     let output = &request.output;
     let checkpoint = farm_args.checkpoint_path(output);
-    // Fail on a bad output or checkpoint path before spending minutes rendering.
-    farm::check_render_files(output, &checkpoint)?;
+    // Fail on a bad output or checkpoint path before spending minutes rendering; the checkpoint's
+    // only where one is written (the default's name is longer than the output's, maybe too long).
+    if farm_args.checkpointing() {
+        farm::check_render_files(output, &checkpoint)?;
+    } else {
+        caustica::image::check_output_path(output)?;
+    }
     if !request.aovs.is_empty() && !is_exr(output) {
         anyhow::bail!(
             "--aov {}: AOVs are layers of an EXR file, so the output must be .exr, not {}",

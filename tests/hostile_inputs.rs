@@ -727,3 +727,12 @@ fn pbrt_includes_of_empty_files_are_bounded_in_number() {
     let message = format!("{error:#}");
     assert!(message.contains(".pbrt: the scene reads more than 4096 files through includes"), "{message}");
 }
+
+#[test]
+fn an_output_name_of_255_bytes_is_written() {
+    let dir = common::temp_dir("hostile-long-name");
+    let out = dir.join(format!("{}.png", "x".repeat(251)));
+    let o = run(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "1", "-q"]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(out.is_file());
+}
