@@ -473,7 +473,8 @@ fn remove_leftovers(targets: &[&Path], quiet: bool) {
 struct RenderRequest {
     output: PathBuf,
     seed: u32,
-    aovs: AovSet,
+    /// `--aov`; absent, none, or when resuming the checkpoint's.
+    aovs: Option<AovSet>,
     /// Sample limit; `None` renders until the time budget or a stop.
     spp: Option<u32>,
     quiet: bool,
@@ -497,14 +498,16 @@ fn render(
     } else {
         caustica::image::check_output_path(output)?;
     }
-    if !request.aovs.is_empty() && !is_exr(output) {
+    let resume_from = if farm_args.resume { Some(PartialRender::read(&checkpoint)?) } else { None };
+    // A resumed render goes on with the checkpoint's AOVs, which need not be named again (an --aov
+    // naming others is refused by farm::resume).
+    let aovs = request.aovs.or(resume_from.as_ref().map(|p| p.aovs)).unwrap_or_default();
+    if !aovs.is_empty() && !is_exr(output) {
         anyhow::bail!(
-            "--aov {}: AOVs are layers of an EXR file, so the output must be .exr, not {}",
-            request.aovs,
+            "--aov {aovs}: AOVs are layers of an EXR file, so the output must be .exr, not {}",
             output.display()
         );
     }
-    let resume_from = if farm_args.resume { Some(PartialRender::read(&checkpoint)?) } else { None };
     if let Some(spp) = request.spp {
         match &resume_from {
             Some(partial) => farm::check_sample_range(farm::resumable_range(partial, &checkpoint)?.start, spp)
@@ -518,7 +521,7 @@ fn render(
     let ctx = gpu.context()?;
     let started = Instant::now();
     let mut renderer =
-        Renderer::with_options(&ctx, &scene, request.seed, request.aovs, KernelChoice::ForScene, &request.kernel)?;
+        Renderer::with_options(&ctx, &scene, request.seed, aovs, KernelChoice::ForScene, &request.kernel)?;
     renderer.set_sample_offset(farm_args.sample_offset);
     if let Some(partial) = &resume_from {
         farm::resume(&mut renderer, partial, &checkpoint)?;
@@ -593,7 +596,7 @@ fn render(
             "seed": request.seed,
             "samples": renderer.samples_done,
             "sample_ranges": format_ranges(&partial.ranges),
-            "aovs": request.aovs.to_string(),
+            "aovs": aovs.to_string(),
             "samples_this_run": rendered,
             "seconds": started.elapsed().as_secs_f64(),
             "render_seconds": renderer.seconds,
@@ -794,13 +797,7 @@ fn run() -> Result<()> {
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
-            render(
-                s,
-                RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json, kernel },
-                &output_args,
-                &farm,
-                &gpu,
-            )
+            render(s, RenderRequest { output, seed, aovs: aov, spp, quiet, json, kernel }, &output_args, &farm, &gpu)
         }
         Command::View { scene, spp, width, height, seed, exposure, tonemap, screenshot, scene_files, gpu } => {
             handle_signals(true)?;
