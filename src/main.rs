@@ -891,7 +891,29 @@ fn error_report(error: &anyhow::Error) -> String {
         }
         report.push_str(&text);
     }
-    report
+    printable(&report)
+}
+
+/// The most characters of an error report: messages quote tokens cut short, and this bounds any
+/// that does not.
+const REPORT_CHARS: usize = 8192;
+
+/// `text` for a terminal: control characters other than line breaks and tabs escaped (a hostile
+/// file's bytes must not reach the terminal raw), cut to [`REPORT_CHARS`].
+fn printable(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars().take(REPORT_CHARS) {
+        match c {
+            '\n' | '\t' => out.push(c),
+            c if c.is_control() => out.extend(c.escape_default()),
+            c => out.push(c),
+        }
+    }
+    let length = text.chars().count();
+    if length > REPORT_CHARS {
+        out.push_str(&format!("… ({} more characters)", length - REPORT_CHARS));
+    }
+    out
 }
 
 fn main() {
@@ -914,6 +936,14 @@ mod tests {
         assert_eq!(error_report(&repeating), "writing the image: out.exr: No such file or directory (os error 2)");
         let plain = anyhow::anyhow!("disk full").context("out.png");
         assert_eq!(error_report(&plain), "out.png: disk full");
+    }
+
+    #[test]
+    fn error_reports_escape_control_characters_and_are_bounded() {
+        let hostile = anyhow::anyhow!("'\u{1b}[2J\u{7}'\nline two");
+        assert_eq!(error_report(&hostile), "'\\u{1b}[2J\\u{7}'\nline two");
+        let long = anyhow::anyhow!("{}", "x".repeat(REPORT_CHARS + 5));
+        assert!(error_report(&long).ends_with("x… (5 more characters)"));
     }
 
     #[test]

@@ -736,3 +736,29 @@ fn an_output_name_of_255_bytes_is_written() {
     assert_eq!(o.code, Some(0), "{}", o.stderr);
     assert!(out.is_file());
 }
+
+#[test]
+fn importer_errors_quote_tokens_short_and_escape_control_characters() {
+    let dir = common::temp_dir("hostile-long-token");
+    let token = format!("{}\u{1b}c\u{8}", "9".repeat(1 << 20));
+    let cases = [
+        ("number.pbrt", format!("{PBRT_OPTIONS}WorldBegin\nShape \"sphere\" \"float radius\" [ {token} ]\n")),
+        ("directive.pbrt", format!("{PBRT_OPTIONS}WorldBegin\n\u{7}{token}\n")),
+        (
+            "number.xml",
+            mitsuba(&format!(
+                "{MITSUBA_SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"{}\"/></shape>",
+                "9x".repeat(1 << 19)
+            )),
+        ),
+    ];
+    for (name, text) in cases {
+        let scene = write(&dir.join(name), text);
+        let o = run(&["render", scene.to_str().unwrap(), "-o", dir.join("out.png").to_str().unwrap(), "-q"]);
+        assert_eq!(o.code, Some(1), "{name}");
+        let shown = &o.stderr[..o.stderr.len().min(2000)];
+        assert!(o.stderr.len() < 2000, "{name}: {} bytes of stderr: {shown}", o.stderr.len());
+        assert!(o.stderr.contains(name) && o.stderr.contains("more characters)"), "{name}: {shown}");
+        assert!(!o.stderr.contains(['\u{1b}', '\u{7}']), "{name}: raw control characters: {shown}");
+    }
+}

@@ -4,7 +4,7 @@
 //! reads the document faithfully and remembers where each thing was written, so that every later
 //! error can name the file and line.
 
-use super::Location;
+use super::{shown, Location};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{DMat4, DVec3};
 use std::cell::{Cell, RefCell};
@@ -307,16 +307,14 @@ impl Reader<'_> {
         let tag = node.tag_name().name();
         let value = || self.attr(source, node, "value");
         Ok(match tag {
-            "integer" => {
-                Value::Integer(value()?.trim().parse().map_err(|_| {
-                    anyhow!("{at}: <integer> value '{}' is not an integer", value().unwrap_or_default())
-                })?)
-            }
+            "integer" => Value::Integer(value()?.trim().parse().map_err(|_| {
+                anyhow!("{at}: <integer> value '{}' is not an integer", shown(&value().unwrap_or_default()))
+            })?),
             "float" => Value::Float(number(&value()?, &at)?),
             "boolean" => Value::Boolean(match value()?.trim() {
                 "true" => true,
                 "false" => false,
-                other => bail!("{at}: <boolean> value '{other}' is neither true nor false"),
+                other => bail!("{at}: <boolean> value '{}' is neither true nor false", shown(other)),
             }),
             "string" => Value::String(value()?),
             "rgb" => {
@@ -486,7 +484,7 @@ pub fn look_at(origin: DVec3, target: DVec3, up: DVec3) -> Result<DMat4> {
 fn number(text: &str, at: &Location) -> Result<f64> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => bail!("{at}: '{text}' is not a finite number"),
+        _ => bail!("{at}: '{}' is not a finite number", shown(text)),
     }
 }
 
@@ -498,7 +496,7 @@ fn numbers(text: &str, at: &Location) -> Result<Vec<f64>> {
 fn triple(text: &str, at: &Location) -> Result<DVec3> {
     match numbers(text, at)?.as_slice() {
         [x, y, z] => Ok(DVec3::new(*x, *y, *z)),
-        other => bail!("{at}: '{text}' needs 3 numbers, got {}", other.len()),
+        other => bail!("{at}: '{}' needs 3 numbers, got {}", shown(text), other.len()),
     }
 }
 
@@ -515,7 +513,8 @@ fn spectrum(text: &str, at: &Location) -> Result<Vec<(f64, f64)>> {
     let pairs: Vec<(f64, f64)> = text
         .split(',')
         .map(|pair| {
-            let (l, v) = pair.split_once(':').with_context(|| format!("{at}: '{pair}' is not wavelength:value"))?;
+            let (l, v) =
+                pair.split_once(':').with_context(|| format!("{at}: '{}' is not wavelength:value", shown(pair)))?;
             Ok((number(l, at)?, number(v, at)?))
         })
         .collect::<Result<_>>()?;

@@ -5,7 +5,7 @@
 //! for caustica is `mapping.rs`'s business; this module only reads them faithfully, in pbrt's
 //! order, remembering where each was written.
 
-use super::super::Location;
+use super::super::{shown, Location};
 use super::params::{Directive, Param, Values};
 use super::tokens::{Token, Tokens};
 use crate::input_file::{InputFiles, InputKind};
@@ -415,7 +415,7 @@ impl Reader<'_> {
             "ActiveTransform" | "TransformTimes" => {
                 bail!("{at}: {name}: animated transformations (motion blur) are not supported")
             }
-            _ => bail!("{at}: unknown directive '{name}'"),
+            _ => bail!("{at}: unknown directive '{}'", shown(name)),
         }
         Ok(())
     }
@@ -484,7 +484,7 @@ fn number(token: &Token, at: &Location, what: &str) -> Result<f64> {
     match token {
         Token::Word(w) => match w.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => bail!("{at}: {what}: '{w}' is not a finite number"),
+            _ => bail!("{at}: {what}: '{}' is not a finite number", shown(w)),
         },
         other => bail!("{at}: {what}: expected a number, found {}", other.describe()),
     }
@@ -532,7 +532,11 @@ fn directive(t: &mut Tokens, at: Location, name: &'static str) -> Result<Directi
         let Some((Token::Quoted(declaration), param_at)) = t.next()? else { unreachable!("peeked a quoted string") };
         let words: Vec<&str> = declaration.split_whitespace().collect();
         let [ty, param_name] = words[..] else {
-            bail!("{param_at}: {name} \"{kind}\": \"{declaration}\" is not a parameter declaration (\"type name\")")
+            bail!(
+                "{param_at}: {name} \"{}\": \"{}\" is not a parameter declaration (\"type name\")",
+                shown(&kind),
+                shown(&declaration)
+            )
         };
         let values = values(t, &param_at, ty, &declaration)?;
         if !names.insert(param_name.to_owned()) {
