@@ -16,7 +16,7 @@ use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, 
 use super::super::{spectrum, transform, Location, Notes, MAX_SHAPES};
 use super::params::Directive;
 use super::parser::{MaterialRef, Model, ShapeUse};
-use super::textures::TextureValue;
+use super::texture_value::TextureValue;
 use crate::image::RgbImage;
 use crate::input_file::InputFiles;
 use crate::scene::equal_area_map;
