@@ -503,10 +503,11 @@ fn render(
     // naming others is refused by farm::resume).
     let aovs = request.aovs.or(resume_from.as_ref().map(|p| p.aovs)).unwrap_or_default();
     if !aovs.is_empty() && !is_exr(output) {
-        anyhow::bail!(
-            "--aov {aovs}: AOVs are layers of an EXR file, so the output must be .exr, not {}",
-            output.display()
-        );
+        let named = match request.aovs {
+            Some(_) => format!("--aov {aovs}"),
+            None => format!("{}: the checkpoint's AOVs ({aovs})", checkpoint.display()),
+        };
+        anyhow::bail!("{named}: AOVs are layers of an EXR file, so the output must be .exr, not {}", output.display());
     }
     if let Some(spp) = request.spp {
         match &resume_from {

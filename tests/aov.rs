@@ -362,4 +362,10 @@ fn bad_aov_combinations_fail_with_a_message() {
         "albedo",
     ];
     fails_with(&caustica(&resume), "cannot resume: different AOVs (albedo,normal,depth,samples, not albedo)");
+    let png = path("more.png");
+    let to_png = ["render", "-o", &png, "--width", "8", "--height", "8", "--spp", "2", "--resume", "--checkpoint", &ck];
+    fails_with(
+        &caustica(&to_png),
+        "the checkpoint's AOVs (albedo,normal,depth,samples): AOVs are layers of an EXR file, so the output must be .exr",
+    );
 }
