@@ -12,7 +12,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 #[derive(Parser)]
@@ -381,18 +381,94 @@ fn progress_bar(total: Option<u32>, quiet: bool) -> ProgressBar {
 /// Set by SIGINT or SIGTERM: the render stops after the pass in flight.
 static STOP: AtomicBool = AtomicBool::new(false);
 
-/// On SIGINT or SIGTERM: when `graceful`, the first signal sets [`STOP`] and a second quits; else
-/// the first quits. Quitting removes the temporary files of writes in flight, so that an image
-/// being written keeps its previous contents and leaves nothing else behind.
+/// SIGINTs received.
+static INTERRUPTS: AtomicU32 = AtomicU32::new(0);
+
+/// On SIGINT, SIGTERM or SIGHUP: when `graceful`, the first sets [`STOP`] (the pass in flight is
+/// finished and the image written) and only a second SIGINT quits: GNU `timeout`, Slurm and
+/// Kubernetes send SIGTERM more than once (`timeout` to the process and its group), and a repeat
+/// must not throw the render away during its final write. Without `graceful` the first signal
+/// quits. Quitting removes the temporary files of writes in flight, so that an image being written
+/// keeps its previous contents and leaves nothing else behind.
 fn handle_signals(graceful: bool) -> Result<()> {
-    ctrlc::set_handler(move || {
-        if !graceful || STOP.swap(true, Ordering::SeqCst) {
+    signals::install(move |signal| {
+        let interrupted_before = signal == signals::INTERRUPT && INTERRUPTS.fetch_add(1, Ordering::SeqCst) > 0;
+        let stopping = STOP.swap(true, Ordering::SeqCst);
+        if !graceful || interrupted_before {
             caustica::image::remove_temp_files_in_flight();
             std::process::exit(130);
         }
-        eprintln!("caustica: finishing the pass in flight (interrupt again to quit at once)");
+        if !stopping {
+            eprintln!("caustica: finishing the pass in flight (interrupt again to quit at once)");
+        }
     })
     .context("installing the SIGINT/SIGTERM handler")
+}
+
+/// Signal handling: `install(on)` calls `on` on a thread of its own, where anything may be done
+/// (unlike in a signal handler), with each SIGINT, SIGTERM and SIGHUP the process receives.
+#[cfg(unix)]
+mod signals {
+    use std::io::{Error, ErrorKind};
+    use std::sync::atomic::{AtomicI32, Ordering};
+
+    pub const INTERRUPT: i32 = libc::SIGINT;
+
+    /// The write end of the pipe that carries signal numbers from the handler to the thread.
+    static PIPE: AtomicI32 = AtomicI32::new(-1);
+
+    extern "C" fn on_signal(signal: libc::c_int) {
+        let byte = signal as u8;
+        // SAFETY: write(2) is async-signal-safe and given one byte that lives across the call; the
+        // pipe stays open for the life of the process (a full pipe only loses a repeated signal).
+        let _ = unsafe { libc::write(PIPE.load(Ordering::SeqCst), (&byte as *const u8).cast(), 1) };
+    }
+
+    pub fn install(on: impl Fn(i32) + Send + 'static) -> std::io::Result<()> {
+        let mut ends = [-1; 2];
+        // SAFETY: pipe(2) writes two descriptors into the two-element array it is given.
+        if unsafe { libc::pipe(ends.as_mut_ptr()) } != 0 {
+            return Err(Error::last_os_error());
+        }
+        let [read_end, write_end] = ends;
+        PIPE.store(write_end, Ordering::SeqCst);
+        std::thread::spawn(move || loop {
+            let mut byte = 0u8;
+            // SAFETY: read(2) into one byte that lives across the call, from the pipe's read end,
+            // which stays open for the life of the process.
+            match unsafe { libc::read(read_end, (&mut byte as *mut u8).cast(), 1) } {
+                1 => on(i32::from(byte)),
+                _ if Error::last_os_error().kind() == ErrorKind::Interrupted => continue,
+                _ => return,
+            }
+        });
+        let handler = on_signal as extern "C" fn(libc::c_int);
+        for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+            // SAFETY: a zeroed sigaction is valid; it is given the handler, an empty mask and
+            // SA_RESTART, and on_signal does only async-signal-safe work.
+            let installed = unsafe {
+                let mut action: libc::sigaction = std::mem::zeroed();
+                action.sa_sigaction = handler as libc::sighandler_t;
+                action.sa_flags = libc::SA_RESTART;
+                libc::sigemptyset(&mut action.sa_mask);
+                libc::sigaction(signal, &action, std::ptr::null_mut())
+            };
+            if installed != 0 {
+                return Err(Error::last_os_error());
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Signal handling: Ctrl-C and the like call `on`, all as [`INTERRUPT`](signals::INTERRUPT).
+#[cfg(not(unix))]
+mod signals {
+    pub const INTERRUPT: i32 = 2;
+
+    pub fn install(on: impl Fn(i32) + Send + 'static) -> Result<(), ctrlc::Error> {
+        ctrlc::set_handler(move || on(INTERRUPT))
+    }
 }
 
 /// Clears what killed earlier writes of `targets` left behind, saying so unless `quiet`.
@@ -407,7 +483,8 @@ fn remove_leftovers(targets: &[&Path], quiet: bool) {
 struct RenderRequest {
     output: PathBuf,
     seed: u32,
-    aovs: AovSet,
+    /// `--aov`; absent, none, or when resuming the checkpoint's.
+    aovs: Option<AovSet>,
     /// Sample limit; `None` renders until the time budget or a stop.
     spp: Option<u32>,
     quiet: bool,
@@ -424,16 +501,24 @@ fn render(
 ) -> Result<()> {
     let output = &request.output;
     let checkpoint = farm_args.checkpoint_path(output);
-    // Fail on a bad output or checkpoint path before spending minutes rendering.
-    farm::check_render_files(output, &checkpoint)?;
-    if !request.aovs.is_empty() && !is_exr(output) {
-        anyhow::bail!(
-            "--aov {}: AOVs are layers of an EXR file, so the output must be .exr, not {}",
-            request.aovs,
-            output.display()
-        );
+    // Fail on a bad output or checkpoint path before spending minutes rendering; the checkpoint's
+    // only where one is written (the default's name is longer than the output's, maybe too long).
+    if farm_args.checkpointing() {
+        farm::check_render_files(output, &checkpoint)?;
+    } else {
+        caustica::image::check_output_path(output)?;
     }
     let resume_from = if farm_args.resume { Some(PartialRender::read(&checkpoint)?) } else { None };
+    // A resumed render goes on with the checkpoint's AOVs, which need not be named again (an --aov
+    // naming others is refused by farm::resume).
+    let aovs = request.aovs.or(resume_from.as_ref().map(|p| p.aovs)).unwrap_or_default();
+    if !aovs.is_empty() && !is_exr(output) {
+        let named = match request.aovs {
+            Some(_) => format!("--aov {aovs}"),
+            None => format!("{}: the checkpoint's AOVs ({aovs})", checkpoint.display()),
+        };
+        anyhow::bail!("{named}: AOVs are layers of an EXR file, so the output must be .exr, not {}", output.display());
+    }
     if let Some(spp) = request.spp {
         match &resume_from {
             Some(partial) => farm::check_sample_range(farm::resumable_range(partial, &checkpoint)?.start, spp)
@@ -447,7 +532,7 @@ fn render(
     let ctx = gpu.context()?;
     let started = Instant::now();
     let mut renderer =
-        Renderer::with_options(&ctx, &scene, request.seed, request.aovs, KernelChoice::ForScene, &request.kernel)?;
+        Renderer::with_options(&ctx, &scene, request.seed, aovs, KernelChoice::ForScene, &request.kernel)?;
     renderer.set_sample_offset(farm_args.sample_offset);
     if let Some(partial) = &resume_from {
         farm::resume(&mut renderer, partial, &checkpoint)?;
@@ -523,7 +608,7 @@ fn render(
             "seed": request.seed,
             "samples": renderer.samples_done,
             "sample_ranges": format_ranges(&partial.ranges),
-            "aovs": request.aovs.to_string(),
+            "aovs": aovs.to_string(),
             "samples_this_run": rendered,
             "seconds": started.elapsed().as_secs_f64(),
             "render_seconds": renderer.seconds,
@@ -625,7 +710,7 @@ fn bench(
 /// `bench --suite`: every scene of the suite on one device; fails (after the table) when a scene
 /// that should have run did not.
 fn bench_suite(
-    scenes: &Path,
+    scenes: Option<&Path>,
     overrides: FilmOverrides,
     aovs: AovSet,
     kernel: &KernelSetup,
@@ -724,13 +809,7 @@ fn run() -> Result<()> {
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
-            render(
-                s,
-                RenderRequest { output, seed, aovs: aov.unwrap_or_default(), spp, quiet, json, kernel },
-                &output_args,
-                &farm,
-                &gpu,
-            )
+            render(s, RenderRequest { output, seed, aovs: aov, spp, quiet, json, kernel }, &output_args, &farm, &gpu)
         }
         Command::View { scene, spp, width, height, seed, exposure, tonemap, screenshot, scene_files, gpu } => {
             handle_signals(true)?;
@@ -807,8 +886,7 @@ fn run() -> Result<()> {
             let choice = if general_kernel { KernelChoice::General } else { KernelChoice::ForScene };
             let kernel = KernelSetup { choice, group_order, options };
             if suite {
-                let scenes = scenes.unwrap_or_else(|| PathBuf::from("scenes"));
-                return bench_suite(&scenes, film, aovs, &kernel, json, &scene_files, &gpu);
+                return bench_suite(scenes.as_deref(), film, aovs, &kernel, json, &scene_files, &gpu);
             }
             bench(scene_files.load_scene(scene.as_ref())?, film, aovs, &kernel, json, &gpu)
         }
@@ -830,7 +908,29 @@ fn error_report(error: &anyhow::Error) -> String {
         }
         report.push_str(&text);
     }
-    report
+    printable(&report)
+}
+
+/// The most characters of an error report: messages quote tokens cut short, and this bounds any
+/// that does not.
+const REPORT_CHARS: usize = 8192;
+
+/// `text` for a terminal: control characters other than line breaks and tabs escaped (a hostile
+/// file's bytes must not reach the terminal raw), cut to [`REPORT_CHARS`].
+fn printable(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars().take(REPORT_CHARS) {
+        match c {
+            '\n' | '\t' => out.push(c),
+            c if c.is_control() => out.extend(c.escape_default()),
+            c => out.push(c),
+        }
+    }
+    let length = text.chars().count();
+    if length > REPORT_CHARS {
+        out.push_str(&format!("… ({} more characters)", length - REPORT_CHARS));
+    }
+    out
 }
 
 fn main() {
@@ -853,6 +953,14 @@ mod tests {
         assert_eq!(error_report(&repeating), "writing the image: out.exr: No such file or directory (os error 2)");
         let plain = anyhow::anyhow!("disk full").context("out.png");
         assert_eq!(error_report(&plain), "out.png: disk full");
+    }
+
+    #[test]
+    fn error_reports_escape_control_characters_and_are_bounded() {
+        let hostile = anyhow::anyhow!("'\u{1b}[2J\u{7}'\nline two");
+        assert_eq!(error_report(&hostile), "'\\u{1b}[2J\\u{7}'\nline two");
+        let long = anyhow::anyhow!("{}", "x".repeat(REPORT_CHARS + 5));
+        assert!(error_report(&long).ends_with("x… (5 more characters)"));
     }
 
     #[test]

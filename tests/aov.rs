@@ -301,7 +301,8 @@ fn resumed_and_merged_renders_keep_the_aovs_bit_for_bit() {
     let ck = checkpoint.to_str().unwrap();
     render_cli(&full, &["--spp", "5", "--seed", "5", "--aov", "all"]);
     render_cli(&part, &["--spp", "2", "--seed", "5", "--aov", "all", "--checkpoint", ck]);
-    render_cli(&resumed, &["--spp", "5", "--seed", "5", "--aov", "all", "--resume", "--checkpoint", ck]);
+    // No --aov: the checkpoint says which AOVs it holds.
+    render_cli(&resumed, &["--spp", "5", "--seed", "5", "--resume", "--checkpoint", ck]);
     let (a, b) = (PartialRender::read(&full).unwrap(), PartialRender::read(&resumed).unwrap());
     assert!(a.aov_sums.is_some());
     assert!(a == b, "2 spp resumed to 5 differs from 5 in one go");
@@ -361,4 +362,10 @@ fn bad_aov_combinations_fail_with_a_message() {
         "albedo",
     ];
     fails_with(&caustica(&resume), "cannot resume: different AOVs (albedo,normal,depth,samples, not albedo)");
+    let png = path("more.png");
+    let to_png = ["render", "-o", &png, "--width", "8", "--height", "8", "--spp", "2", "--resume", "--checkpoint", &ck];
+    fails_with(
+        &caustica(&to_png),
+        "the checkpoint's AOVs (albedo,normal,depth,samples): AOVs are layers of an EXR file, so the output must be .exr",
+    );
 }

@@ -238,6 +238,51 @@ fn sigint_and_sigterm_finish_the_pass_and_write_the_image() {
     }
 }
 
+/// GNU `timeout`, Slurm and Kubernetes may signal more than once: repeated SIGTERMs, some arriving
+/// during the final write, are the first one (the image is written, exit 0).
+#[cfg(unix)]
+#[test]
+fn repeated_sigterms_still_write_the_image() {
+    let dir = temp_dir("farm-repeated-sigterm");
+    let (out, checkpoint) = (dir.join("out.exr"), dir.join("out.checkpoint.exr"));
+    let mut child = render_under_way(&out, &checkpoint);
+    let deadline = Instant::now() + Duration::from_secs(60);
+    // SIGTERM every 10 ms until the render exits.
+    // SAFETY: kill(2) of a child not yet waited for, whose pid therefore cannot be reused.
+    while child.try_wait().unwrap().is_none() && unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) } == 0 {
+        assert!(Instant::now() < deadline, "the render did not stop");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = PartialRender::read(&out).unwrap();
+    assert_eq!(PartialRender::read(&checkpoint).unwrap(), written, "the checkpoint holds the final samples");
+}
+
+/// A second SIGINT, sent once the first is taken (two sent at once may arrive as one), quits at
+/// once: exit 130, no image.
+#[cfg(unix)]
+#[test]
+fn a_second_sigint_quits_at_once() {
+    use std::io::BufRead as _;
+    let dir = temp_dir("farm-second-sigint");
+    let (out, checkpoint) = (dir.join("out.exr"), dir.join("out.checkpoint.exr"));
+    let mut child = render_under_way(&out, &checkpoint);
+    let pid = child.id() as libc::pid_t;
+    // SAFETY: kill(2) of a child not yet waited for, whose pid therefore cannot be reused.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    while !line.contains("finishing the pass in flight") {
+        line.clear();
+        assert!(stderr.read_line(&mut line).unwrap() > 0, "no word of the first SIGINT");
+    }
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+    assert!(!out.exists(), "quitting at once writes no image");
+}
+
 #[test]
 fn scene_hash_is_stable_and_covers_the_scene_and_size_not_the_seed() {
     let (_lock, ctx) = gpu();

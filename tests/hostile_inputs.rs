@@ -501,3 +501,264 @@ fn a_long_toml_line_gives_a_short_message() {
     assert!(o.stderr.contains("long.toml: line 4, column 7"), "{}", &o.stderr[..o.stderr.len().min(2000)]);
     assert!(o.stderr.len() < 2000, "{} bytes of stderr for one error", o.stderr.len());
 }
+
+/// A floor lit by a sun `diameter` degrees wide, low in the sky so that the disk is sampled.
+fn floor_under_sun(diameter: &str) -> Scene {
+    common::floor_point_scene(
+        &format!(
+            "[[lights]]\ntype = \"directional\"\ndirection = [0.3, -1.0, 0.2]\nirradiance = [2.0, 2.0, 2.0]\nangular_diameter = {diameter}"
+        ),
+        4,
+        true,
+    )
+}
+
+#[test]
+fn a_sun_too_narrow_to_sample_renders_as_a_delta_light_without_dropping_samples() {
+    let (_guard, ctx) = common::gpu();
+    let render = |diameter: &str| {
+        let scene = floor_under_sun(diameter);
+        let mut renderer = caustica::render::Renderer::new(&ctx, &scene, 1).expect("scene uploads");
+        renderer.render(scene.film.spp, |_| {}).expect("render");
+        assert_eq!(renderer.nonfinite_samples, 0, "a sun {diameter} degrees wide dropped samples");
+        renderer.image().expect("readback")
+    };
+    let delta = render("0");
+    assert_eq!(render("1e-8").pixels, delta.pixels, "a disk of 1e-8 degrees is the delta light");
+    let narrowest = render(&caustica::scene::MIN_DISK_DEGREES.to_string());
+    let mean = |image: &caustica::image::RgbImage| {
+        image.pixels.iter().map(|&p| common::luminance(p)).sum::<f64>() / image.pixels.len() as f64
+    };
+    let (narrow, delta) = (mean(&narrowest), mean(&delta));
+    assert!(
+        delta > 0.0 && (narrow / delta - 1.0).abs() < 1e-2,
+        "the narrowest disk {narrow} against the delta light {delta}"
+    );
+}
+
+/// A one-pixel partial render of samples `range` whose radiance sum is `value` in every channel.
+fn part(range: std::ops::Range<u32>, value: f32) -> caustica::farm::PartialRender {
+    let samples = range.end - range.start;
+    caustica::farm::PartialRender {
+        scene_hash: "ab12".into(),
+        seed: 1,
+        width: 1,
+        height: 1,
+        ranges: vec![range],
+        accumulation: vec![[value, value, value, samples as f32]],
+        aovs: Default::default(),
+        aov_sums: None,
+    }
+}
+
+#[test]
+fn merge_and_resume_refuse_non_finite_or_negative_sums_and_sums_that_overflow() {
+    let dir = common::temp_dir("hostile-sums");
+    let (a, b, out) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("merged.exr"));
+    part(0..2, 1.0).write(&a).unwrap();
+    let merge = |b: &Path| run(&["merge", a.to_str().unwrap(), b.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    for value in [f32::NAN, f32::INFINITY, -1.0] {
+        part(2..4, value).write(&b).unwrap();
+        let o = merge(&b);
+        assert_eq!(o.code, Some(1), "a sum of {value}: {}", o.stderr);
+        assert!(o.stderr.contains(&b.display().to_string()) && o.stderr.contains("must be finite"), "{}", o.stderr);
+        let scene = write(&dir.join("scene.toml"), CAMERA);
+        let (scene, b_path, out_path) = (scene.to_str().unwrap(), b.to_str().unwrap(), out.to_str().unwrap());
+        let resumed = run(&["render", scene, "--resume", "--checkpoint", b_path, "-o", out_path, "-q"]);
+        assert_eq!(resumed.code, Some(1), "resuming a sum of {value}: {}", resumed.stderr);
+        assert!(resumed.stderr.contains(&b.display().to_string()), "{}", resumed.stderr);
+    }
+    part(0..2, 3e38).write(&a).unwrap();
+    part(2..4, 3e38).write(&b).unwrap();
+    let o = merge(&b);
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    let both = format!("{}: its sums overflow when added to those of {}", b.display(), a.display());
+    assert!(o.stderr.contains(&both), "{}", o.stderr);
+    assert!(!out.exists(), "nothing is written");
+}
+
+#[test]
+fn bench_suite_refuses_a_scenes_folder_that_does_not_exist() {
+    let o = run(&["bench", "--suite", "--scenes", "/nonexistent/scenes"]);
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(o.stderr.contains("--scenes /nonexistent/scenes: not a folder"), "{}", o.stderr);
+}
+
+/// A camera for Mitsuba scenes whose camera does not matter.
+const MITSUBA_SENSOR: &str = r#"<sensor type="perspective"><float name="fov" value="45"/>
+<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>"#;
+
+fn mitsuba(body: &str) -> String {
+    format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n")
+}
+
+/// The message importing the Mitsuba scene `text` gives, within `seconds`.
+fn mitsuba_error_within(tag: &str, text: &str, seconds: u64) -> String {
+    let started = Instant::now();
+    let message = common::import_text_error(tag, "scene.xml", text);
+    assert!(started.elapsed() < Duration::from_secs(seconds), "{tag} took {:?}", started.elapsed());
+    message
+}
+
+#[test]
+fn mitsuba_objects_nested_ten_thousand_deep_are_refused_naming_the_line() {
+    let body = format!("{}{}", "<bsdf type=\"twosided\">\n".repeat(10_000), "</bsdf>".repeat(10_000));
+    let message = mitsuba_error_within("hostile-nesting", &mitsuba(&body), 20);
+    // The object at nesting 256 is on line 258 (the <scene> is line 1).
+    assert!(message.contains("scene.xml:258: objects nest more than 256 deep"), "{message}");
+}
+
+#[test]
+fn a_mitsuba_bsdf_containing_itself_is_refused() {
+    for bsdfs in [
+        r#"<bsdf type="mask" id="a"><ref id="a"/></bsdf>"#,
+        r#"<bsdf type="normalmap" id="a"><ref id="a"/></bsdf>"#,
+        r#"<bsdf type="mask" id="a"><bsdf type="twosided"><ref id="b"/></bsdf></bsdf>
+<bsdf type="normalmap" id="b"><ref id="a"/></bsdf>"#,
+    ] {
+        let body = format!("{MITSUBA_SENSOR}\n{bsdfs}\n<shape type=\"sphere\"><ref id=\"a\"/></shape>");
+        let message = mitsuba_error_within("hostile-self-bsdf", &mitsuba(&body), 20);
+        assert!(message.contains("scene.xml:") && message.contains("contains itself"), "{bsdfs}: {message}");
+    }
+}
+
+#[test]
+fn mitsuba_substitution_cannot_make_more_text_than_a_scene_file_holds() {
+    let value = "1".repeat(1 << 20);
+    let many = "$v".repeat(20);
+    let body =
+        format!("<default name=\"v\" value=\"{value}\"/>\n{MITSUBA_SENSOR}\n<shape type=\"sphere\" id=\"{many}\"/>");
+    let message = mitsuba_error_within("hostile-substitution", &mitsuba(&body), 20);
+    assert!(message.contains("scene.xml:5: $name substitution makes more than 16 MiB of text"), "{message}");
+}
+
+#[test]
+fn mitsuba_include_fan_out_is_bounded() {
+    let includes = |name: &str| format!("<include filename=\"{name}\"/>\n").repeat(100);
+    let files = common::write_files(
+        "hostile-include-fan-out",
+        &[
+            ("scene.xml", &mitsuba(&includes("b.xml"))),
+            ("b.xml", &mitsuba(&includes("c.xml"))),
+            ("c.xml", &mitsuba(&includes("d.xml"))),
+            ("d.xml", &mitsuba("")),
+        ],
+    );
+    let started = Instant::now();
+    let anywhere = caustica::input_file::InputFiles::anywhere();
+    let error = caustica::scene::import::import(&anywhere, &files, &[]).err().expect("refused");
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    let message = format!("{error:#}");
+    assert!(message.contains(".xml: the scene reads more than 4096 files through <include>s"), "{message}");
+}
+
+#[test]
+fn mitsuba_import_is_linear_in_the_file_and_names_the_right_line() {
+    let spheres = "<shape type=\"sphere\"><float name=\"radius\" value=\"1\"/></shape>\n".repeat(40_000);
+    let body = format!("{MITSUBA_SENSOR}\n{spheres}<unknown/>");
+    // Line 1 <scene>, lines 2-3 the sensor, 4 to 40,003 the spheres.
+    let message = mitsuba_error_within("hostile-many-spheres", &mitsuba(&body), 20);
+    assert!(message.contains("scene.xml:40004: <unknown> is not supported at the scene level"), "{message}");
+}
+
+#[test]
+fn mitsuba_instances_of_a_shapegroup_are_bounded_in_shapes_before_any_is_made() {
+    let spheres = "<shape type=\"sphere\"/>\n".repeat(2000);
+    let instances = "<shape type=\"instance\"><ref id=\"g\"/></shape>\n".repeat(2001);
+    let body = format!("{MITSUBA_SENSOR}\n<shape type=\"shapegroup\" id=\"g\">\n{spheres}</shape>\n{instances}");
+    // Line 1 <scene>, 2-3 the sensor, 4 the group, 5-2004 its spheres, 2005 its end, then the
+    // instances: the 2001st (line 4006) makes 4,002,000 shapes.
+    let message = mitsuba_error_within("hostile-instances", &mitsuba(&body), 20);
+    assert!(
+        message.contains("scene.xml:4006: <shape type=\"instance\">: the scene places more than 4000000 shapes"),
+        "{message}"
+    );
+}
+
+const PBRT_OPTIONS: &str = "LookAt 0 1 4  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n";
+
+#[test]
+fn a_pbrt_texture_referred_to_many_times_is_evaluated_once() {
+    // Each mix refers to the one before twice: 2^30 evaluations of the first, read naively.
+    let mut world = "Texture \"t0\" \"spectrum\" \"constant\" \"rgb value\" [0.5 0.5 0.5]\n".to_owned();
+    for level in 1..=31 {
+        let before = level - 1;
+        world += &format!("Texture \"t{level}\" \"spectrum\" \"mix\" \"texture tex1\" \"t{before}\" \"texture tex2\" \"t{before}\" \"float amount\" 0.5\n");
+    }
+    world += "Material \"diffuse\" \"texture reflectance\" \"t31\"\nShape \"sphere\"\n";
+    let started = Instant::now();
+    let scene =
+        common::import_text_scene("hostile-pbrt-mix", "scene.pbrt", &format!("{PBRT_OPTIONS}WorldBegin\n{world}"))
+            .unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    let albedo = scene.materials[scene.shapes[0].material() as usize].albedo;
+    assert!(common::close(albedo, glam::Vec3::splat(0.5)), "{albedo}");
+}
+
+#[test]
+fn pbrt_directives_of_very_many_parameters_are_read_in_linear_time() {
+    let params: String = (0..200_000).map(|k| format!(" \"float p{k}\" 1")).collect();
+    let text = format!("{PBRT_OPTIONS}WorldBegin\nShape \"sphere\"{params}\n");
+    let started = Instant::now();
+    let message = common::import_text_error("hostile-pbrt-params", "scene.pbrt", &text);
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    assert!(
+        message.contains("scene.pbrt:5: 'float p0': Shape \"sphere\": the parameter 'p0' is not supported"),
+        "{message}"
+    );
+}
+
+#[test]
+fn pbrt_includes_of_empty_files_are_bounded_in_number() {
+    let includes = |name: &str| format!("Include \"{name}\"\n").repeat(100);
+    let files = common::write_files(
+        "hostile-pbrt-includes",
+        &[
+            ("scene.pbrt", &format!("{PBRT_OPTIONS}WorldBegin\n{}", includes("b.pbrt"))),
+            ("b.pbrt", &includes("c.pbrt")),
+            ("c.pbrt", &includes("empty.pbrt")),
+            ("empty.pbrt", ""),
+        ],
+    );
+    let started = Instant::now();
+    let anywhere = caustica::input_file::InputFiles::anywhere();
+    let error = caustica::scene::import::import(&anywhere, &files, &[]).err().expect("refused");
+    assert!(started.elapsed() < Duration::from_secs(20), "took {:?}", started.elapsed());
+    let message = format!("{error:#}");
+    assert!(message.contains(".pbrt: the scene reads more than 4096 files through includes"), "{message}");
+}
+
+#[test]
+fn an_output_name_of_255_bytes_is_written() {
+    let dir = common::temp_dir("hostile-long-name");
+    let out = dir.join(format!("{}.png", "x".repeat(251)));
+    let o = run(&["render", "-o", out.to_str().unwrap(), "--width", "8", "--height", "8", "--spp", "1", "-q"]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(out.is_file());
+}
+
+#[test]
+fn importer_errors_quote_tokens_short_and_escape_control_characters() {
+    let dir = common::temp_dir("hostile-long-token");
+    let token = format!("{}\u{1b}c\u{8}", "9".repeat(1 << 20));
+    let cases = [
+        ("number.pbrt", format!("{PBRT_OPTIONS}WorldBegin\nShape \"sphere\" \"float radius\" [ {token} ]\n")),
+        ("directive.pbrt", format!("{PBRT_OPTIONS}WorldBegin\n\u{7}{token}\n")),
+        (
+            "number.xml",
+            mitsuba(&format!(
+                "{MITSUBA_SENSOR}\n<shape type=\"sphere\"><float name=\"radius\" value=\"{}\"/></shape>",
+                "9x".repeat(1 << 19)
+            )),
+        ),
+    ];
+    for (name, text) in cases {
+        let scene = write(&dir.join(name), text);
+        let o = run(&["render", scene.to_str().unwrap(), "-o", dir.join("out.png").to_str().unwrap(), "-q"]);
+        assert_eq!(o.code, Some(1), "{name}");
+        let shown = &o.stderr[..o.stderr.len().min(2000)];
+        assert!(o.stderr.len() < 2000, "{name}: {} bytes of stderr: {shown}", o.stderr.len());
+        assert!(o.stderr.contains(name) && o.stderr.contains("more characters)"), "{name}: {shown}");
+        assert!(!o.stderr.contains(['\u{1b}', '\u{7}']), "{name}: raw control characters: {shown}");
+    }
+}

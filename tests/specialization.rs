@@ -57,7 +57,7 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
     let (_lock, ctx) = gpu();
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let mut specialized = 0;
-    for entry in suite_entries(&scenes, &caustica::scene::data_dir()).expect("the scenes folder lists") {
+    for entry in suite_entries(Some(&scenes), &caustica::scene::data_dir()).expect("the scenes folder lists") {
         let (name, path) = match entry {
             SuiteEntry::Skip { name, reason } => {
                 eprintln!("SKIPPED {name}: {reason}");

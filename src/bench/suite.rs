@@ -11,7 +11,7 @@ use crate::gpu::GpuContext;
 use crate::input_file::{InputFiles, InputKind};
 use crate::render::AovSet;
 use crate::scene::{check_film, Scene, DEFAULT_SCENE_TOML};
-use anyhow::{Context as _, Result};
+use anyhow::{bail, Context as _, Result};
 use std::path::{Path, PathBuf};
 
 /// Image size and samples per pixel of one suite scene.
@@ -63,6 +63,9 @@ const SIZES: &[(&str, SuiteSize)] = &[
 /// suite up for long.
 const UNLISTED: SuiteSize = SuiteSize { width: 96, height: 96, spp: 8 };
 
+/// The suite's scenes folder when `--scenes` is not given, relative to the working directory.
+pub const DEFAULT_SCENES: &str = "scenes";
+
 /// The name the built-in scene is listed under (it is `scenes/cornell.toml`, compiled in).
 const BUILT_IN: &str = "cornell.toml (built-in)";
 
@@ -87,8 +90,18 @@ pub enum SuiteEntry {
 
 /// The suite's scenes in the order they run: the built-in Cornell box, then `scenes_dir/*.toml` by
 /// name (`cornell.toml` only if it differs from the built-in copy). Scenes naming
-/// `$CAUSTICA_DATA/` files are skipped when `data_dir` is not a folder.
-pub fn suite_entries(scenes_dir: &Path, data_dir: &Path) -> Result<Vec<SuiteEntry>> {
+/// `$CAUSTICA_DATA/` files are skipped when `data_dir` is not a folder. `scenes_dir` None is the
+/// default, `scenes` in the working directory, whose absence is a skip (a run outside the
+/// repository); a folder given (`--scenes`) that is not one is an error.
+pub fn suite_entries(scenes_dir: Option<&Path>, data_dir: &Path) -> Result<Vec<SuiteEntry>> {
+    if let Some(given) = scenes_dir.filter(|dir| !dir.is_dir()) {
+        bail!("--scenes {}: not a folder of scene files", given.display());
+    }
+    entries_of(scenes_dir.unwrap_or(Path::new(DEFAULT_SCENES)), data_dir)
+}
+
+/// [`suite_entries`] of `scenes_dir`, skipped when it is not a folder.
+fn entries_of(scenes_dir: &Path, data_dir: &Path) -> Result<Vec<SuiteEntry>> {
     let mut entries =
         vec![SuiteEntry::Run { name: BUILT_IN.to_owned(), path: None, size: default_size("cornell.toml") }];
     if !scenes_dir.is_dir() {
@@ -206,7 +219,7 @@ mod tests {
         std::fs::write(scenes.join("a_shared.toml"), "file = \"$CAUSTICA_DATA/meshes/x.ply\"\n").unwrap();
         std::fs::write(scenes.join("notes.txt"), "not a scene").unwrap();
 
-        let without = suite_entries(&scenes, &data).unwrap();
+        let without = suite_entries(Some(&scenes), &data).unwrap();
         assert_eq!(
             names(&without),
             [(BUILT_IN, true), ("a_shared.toml", false), ("b_local.toml", true)],
@@ -216,14 +229,20 @@ mod tests {
         assert!(reason.contains("shared data") && reason.contains(&data.display().to_string()), "{reason}");
 
         std::fs::create_dir_all(&data).unwrap();
-        let with = suite_entries(&scenes, &data).unwrap();
+        let with = suite_entries(Some(&scenes), &data).unwrap();
         assert_eq!(names(&with), [(BUILT_IN, true), ("a_shared.toml", true), ("b_local.toml", true)]);
     }
 
     #[test]
-    fn a_missing_scenes_folder_leaves_the_built_in_box_and_says_why() {
-        let entries = suite_entries(Path::new("/nonexistent/scenes"), Path::new("/nonexistent/data")).unwrap();
+    fn a_missing_default_scenes_folder_leaves_the_built_in_box_and_says_why() {
+        let entries = entries_of(Path::new("/nonexistent/scenes"), Path::new("/nonexistent/data")).unwrap();
         assert_eq!(names(&entries), [(BUILT_IN, true), ("/nonexistent/scenes/*.toml", false)]);
+    }
+
+    #[test]
+    fn a_scenes_folder_given_that_is_not_one_is_an_error() {
+        let error = suite_entries(Some(Path::new("/nonexistent/scenes")), Path::new("/nonexistent/data")).unwrap_err();
+        assert_eq!(error.to_string(), "--scenes /nonexistent/scenes: not a folder of scene files");
     }
 
     #[test]

@@ -46,7 +46,7 @@ pub fn merge(mut partials: Vec<(&Path, PartialRender)>) -> Result<PartialRender>
         aov_sums: first.aov_sums.as_ref().map(|_| AovSums::zeroed(pixels)),
         ..first.clone()
     };
-    for (_, partial) in &partials {
+    for (added, (path, partial)) in partials.iter().enumerate() {
         for (sum, add) in merged.accumulation.iter_mut().zip(&partial.accumulation) {
             for c in 0..4 {
                 sum[c] += add[c];
@@ -55,6 +55,16 @@ pub fn merge(mut partials: Vec<(&Path, PartialRender)>) -> Result<PartialRender>
         // check_same_render made the AOV sets equal, so both have sums or neither has.
         if let (Some(sum), Some(add)) = (&mut merged.aov_sums, &partial.aov_sums) {
             sum.add(add);
+        }
+        // Each part's sums are finite (PartialRender::read checks), but two can add to infinity.
+        if let Err(e) = merged.check_sums() {
+            let before: Vec<String> = partials[..added].iter().map(|(p, _)| p.display().to_string()).collect();
+            match before.is_empty() {
+                true => bail!("{}: {e:#}", path.display()),
+                false => {
+                    bail!("{}: its sums overflow when added to those of {}: {e:#}", path.display(), before.join(", "))
+                }
+            }
         }
     }
     Ok(merged)
@@ -112,5 +122,19 @@ mod tests {
         other.seed = 2;
         let err = merge(vec![(Path::new("a.exr"), partial(vec![0..4], 1.0)), (Path::new("b.exr"), other)]).unwrap_err();
         assert_eq!(format!("{err:#}"), "b.exr: cannot merge with a.exr: different seed (2, not 1)");
+    }
+
+    #[test]
+    fn sums_that_overflow_when_added_are_refused_naming_both_parts() {
+        let err = merge(vec![
+            (Path::new("a.exr"), partial(vec![0..2], 3e38)),
+            (Path::new("b.exr"), partial(vec![2..4], 3e38)),
+        ])
+        .unwrap_err();
+        let message = format!("{err:#}");
+        assert!(
+            message.starts_with("b.exr: its sums overflow when added to those of a.exr: pixel (0, 0)"),
+            "{message}"
+        );
     }
 }

@@ -162,6 +162,7 @@ impl PartialRender {
         })?;
         let partial = Self::from_document(doc).map_err(|e| not_ours(format!("{e:#}")))?;
         partial.check_consistent().map_err(|e| not_ours(format!("{e:#}")))?;
+        partial.check_sums().map_err(|e| not_ours(format!("{e:#}")))?;
         Ok(partial)
     }
 
@@ -220,6 +221,31 @@ impl PartialRender {
             },
             format_ranges(&self.ranges)
         )
+    }
+
+    /// Fails unless every sum is finite and no radiance sum is negative: the kernel drops
+    /// non-finite samples and radiance is never negative, so anything else would resume or merge
+    /// into a wrong image. Names the first such pixel.
+    pub fn check_sums(&self) -> Result<()> {
+        let radiance = self.accumulation.iter().position(|a| a[..3].iter().any(|c| !c.is_finite() || *c < 0.0));
+        if let Some(i) = radiance {
+            let (x, y) = self.pixel_at(i);
+            let [r, g, b, _] = self.accumulation[i];
+            bail!("pixel ({x}, {y}) holds the radiance sums ({r}, {g}, {b}); they must be finite and not negative");
+        }
+        let Some(sums) = &self.aov_sums else { return Ok(()) };
+        let non_finite = |a: &[f32; 4]| a.iter().any(|c| !c.is_finite());
+        let aov = sums.albedo_depth.iter().zip(&sums.normal_hits).position(|(a, n)| non_finite(a) || non_finite(n));
+        if let Some(i) = aov {
+            let (x, y) = self.pixel_at(i);
+            bail!("pixel ({x}, {y}) holds a non-finite AOV sum");
+        }
+        Ok(())
+    }
+
+    /// The (x, y) of the pixel at `index`, top row first.
+    pub fn pixel_at(&self, index: usize) -> (usize, usize) {
+        (index % self.width as usize, index / self.width as usize)
     }
 
     /// Fails unless `other` is of the same size, seed and scene, naming the first difference (size
@@ -377,6 +403,43 @@ mod tests {
         write_exr_document(&path, &plain).unwrap();
         let plain = PartialRender::read(&path).unwrap_err().to_string();
         assert!(plain.starts_with(&not_ours) && plain.contains("is missing"), "{plain}");
+    }
+
+    #[test]
+    fn non_finite_or_negative_sums_are_refused_naming_the_file() {
+        let dir = crate::test_files::temp_dir("partial-sums");
+        let path = dir.join("part.exr");
+        let not_ours = format!("{} is not a caustica EXR checkpoint/partial (", path.display());
+        for (value, shown) in [(f32::NAN, "NaN"), (f32::INFINITY, "inf"), (-1.0, "-1")] {
+            let mut partial = PartialRender {
+                scene_hash: "ab12".into(),
+                seed: 7,
+                width: 2,
+                height: 1,
+                ranges: vec![0..2],
+                accumulation: vec![[1.0, 1.0, 1.0, 2.0]; 2],
+                aovs: AovSet::default(),
+                aov_sums: None,
+            };
+            partial.accumulation[1][1] = value;
+            partial.write(&path).unwrap();
+            let error = format!("{:#}", PartialRender::read(&path).unwrap_err());
+            let expected = format!("pixel (1, 0) holds the radiance sums (1, {shown}, 1); they must be finite");
+            assert!(error.starts_with(&not_ours) && error.contains(&expected), "{error}");
+        }
+        let partial = PartialRender {
+            scene_hash: "ab12".into(),
+            seed: 7,
+            width: 1,
+            height: 1,
+            ranges: vec![0..1],
+            accumulation: vec![[1.0, 1.0, 1.0, 1.0]],
+            aovs: AovSet { depth: true, ..AovSet::default() },
+            aov_sums: Some(AovSums { albedo_depth: vec![[0.5, 0.5, 0.5, f32::INFINITY]], normal_hits: vec![[0.0; 4]] }),
+        };
+        partial.write(&path).unwrap();
+        let error = format!("{:#}", PartialRender::read(&path).unwrap_err());
+        assert!(error.starts_with(&not_ours) && error.contains("pixel (0, 0) holds a non-finite AOV sum"), "{error}");
     }
 
     #[test]

@@ -2,7 +2,8 @@
 //! it, then rename it over the target. A reader (or a later run after a crash)
 //! sees either the old file or the complete new one, never a torn one.
 //!
-//! The temporary files are named `.{target}.tmp-{pid}-{n}`. A process that is
+//! The temporary files are named `.{target}.tmp-{pid}-{n}` (with `{target}` shortened, see
+//! [`temp_stem`], where that would pass the 255 bytes a file name may have). A process that is
 //! killed mid-write leaves one behind; [`remove_stale_temp_files`] clears those
 //! of a target before the next run writes it, and [`remove_temp_files_in_flight`]
 //! lets a process that quits on a signal remove its own first.
@@ -131,8 +132,7 @@ pub fn remove_stale_temp_files(target: &Path) -> std::io::Result<Vec<PathBuf>> {
     };
     let dir = target.parent().filter(|d| !d.as_os_str().is_empty());
     let dir = dir.unwrap_or(Path::new("."));
-    let mut prefix = OsString::from(".");
-    prefix.push(name);
+    let mut prefix = temp_stem(name);
     prefix.push(".tmp-");
     let prefix = prefix.to_string_lossy().into_owned();
     let mut removed = vec![];
@@ -185,10 +185,32 @@ fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
         .file_name()
         .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "path does not name a file"))?;
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let mut temp = OsString::from(".");
-    temp.push(name);
+    let mut temp = temp_stem(name);
     temp.push(format!(".tmp-{}-{n}", std::process::id()));
     Ok(path.with_file_name(temp))
+}
+
+/// The longest file name most file systems take (NAME_MAX), in bytes.
+const NAME_MAX: usize = 255;
+/// The longest `.tmp-{pid}-{n}`: a u32 and a u64 in decimal.
+const TEMP_SUFFIX_MAX: usize = ".tmp-".len() + 10 + 1 + 20;
+
+/// What a temporary file's name starts with for target file name `name`: `.{name}`, or, where that
+/// and the suffix would pass [`NAME_MAX`] (a target of 220 bytes or more), the start of the name,
+/// `~` and 16 hex digits of its BLAKE3 hash, which keeps the targets' temporary files apart.
+fn temp_stem(name: &std::ffi::OsStr) -> OsString {
+    let mut stem = OsString::from(".");
+    if 1 + name.len() + TEMP_SUFFIX_MAX <= NAME_MAX {
+        stem.push(name);
+        return stem;
+    }
+    let hash = blake3::hash(name.as_encoded_bytes()).to_hex();
+    let room = NAME_MAX - TEMP_SUFFIX_MAX - 1 - 1 - 16;
+    let lossy = name.to_string_lossy();
+    let cut = (0..=room.min(lossy.len())).rev().find(|&k| lossy.is_char_boundary(k)).unwrap_or(0);
+    stem.push(&lossy[..cut]);
+    stem.push(format!("~{}", &hash[..16]));
+    stem
 }
 
 #[cfg(test)]
@@ -306,6 +328,32 @@ mod tests {
         assert!(names.is_empty(), "{names:?}");
         assert!(on_dir.ends_with("cannot be written: it is a directory"), "{on_dir}");
         assert!(missing.contains("missing/out.exr: cannot be written: cannot create a file in"), "{missing}");
+    }
+
+    #[test]
+    fn targets_of_up_to_255_bytes_are_written_and_their_leftovers_found() {
+        let dir = temp_dir("atomic-long-name");
+        for length in [200, 219, 220, 241, 255] {
+            let name = format!("{}.png", "é".repeat((length - 4) / 2) + &"x".repeat((length - 4) % 2));
+            assert_eq!(name.len(), length);
+            let path = dir.join(&name);
+            let temp = temp_path(&path).unwrap();
+            assert!(temp.file_name().unwrap().len() <= NAME_MAX, "{length}: {}", temp.display());
+            check_writable(&path).unwrap_or_else(|e| panic!("{length}: {e}"));
+            write_atomically(&path, |out| out.write_all(b"data").map_err(|e| io_error(&path, e))).unwrap();
+            assert_eq!(std::fs::read(&path).unwrap(), b"data");
+            // A leftover of a writer that is gone (no process has pid 0 ... u32::MAX here).
+            let leftover = temp.with_file_name(
+                temp.file_name()
+                    .unwrap()
+                    .to_string_lossy()
+                    .replace(&format!("-{}-", std::process::id()), "-4294967295-"),
+            );
+            std::fs::write(&leftover, b"x").unwrap();
+            let old = SystemTime::now() - 2 * STALE_AFTER;
+            File::options().write(true).open(&leftover).unwrap().set_modified(old).unwrap();
+            assert_eq!(remove_stale_temp_files(&path).unwrap(), vec![leftover], "{length}");
+        }
     }
 
     #[test]

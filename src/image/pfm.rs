@@ -54,11 +54,21 @@ pub fn decode(bytes: &[u8], file: &str) -> Result<RgbImage, ImageError> {
         Some(b"Pf") => 1,
         found => return Err(bad(format!("expected 'PF' or 'Pf', found {}", describe(found)))),
     };
+    // A header written in lines (the usual form) keeps the scale on the line after the size: a third
+    // number beside the width and height is not the scale, whose line would then be taken as pixels.
+    let in_lines = header.newline_before_token();
     let width = header.dimension("width").map_err(bad)?;
     let height = header.dimension("height").map_err(bad)?;
     // Before the scale and before allocating: a huge header fails fast.
     check_size(file, width, height)?;
 
+    if in_lines && !header.newline_before_token() {
+        let stray = header.token();
+        return Err(bad(format!(
+            "expected the scale on the line after the width and height, found {} beside them",
+            describe(stray)
+        )));
+    }
     let scale_token = header.token();
     let scale = scale_token
         .and_then(|t| std::str::from_utf8(t).ok())
@@ -131,6 +141,13 @@ impl<'a> Header<'a> {
             self.pos += 1;
         }
         (self.pos > start).then(|| &self.bytes[start..self.pos])
+    }
+
+    /// Whether the whitespace before the next token holds a line break (true at end of input).
+    fn newline_before_token(&self) -> bool {
+        let rest = &self.bytes[self.pos..];
+        let gap = rest.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(rest.len());
+        gap == rest.len() || rest[..gap].iter().any(|&b| b == b'\n' || b == b'\r')
     }
 
     /// A positive decimal integer. Parsed as u64 so that values beyond u32
@@ -320,6 +337,10 @@ mod tests {
 
     #[test]
     fn rejects_bad_scale() {
+        assert_eq!(
+            err(b"PF\n2 2 3\n-1.0\n"),
+            "probe.pfm: bad PFM header: expected the scale on the line after the width and height, found '3' beside them"
+        );
         assert_eq!(err(b"PF\n1 1\n0\n"), "probe.pfm: bad PFM header: expected a non-zero finite scale, found '0'");
         assert!(err(b"PF\n1 1\n-0.0\n").contains("scale, found '-0.0'"));
         assert!(err(b"PF\n1 1\nnan\n").contains("scale, found 'nan'"));

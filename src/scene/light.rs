@@ -101,6 +101,10 @@ fn spot_from(s: &SpotLightFile, key: &dyn Fn(&str) -> String) -> Result<Light> {
     })
 }
 
+/// The narrowest directional light disk, in degrees (the sun is 0.53): anything narrower is a
+/// delta light.
+pub const MIN_DISK_DEGREES: f32 = 1e-3;
+
 fn directional_from(d: &DirectionalLightFile, key: &dyn Fn(&str) -> String) -> Result<Light> {
     let direction = vec3(&key("direction"), d.direction)?;
     if direction.length() == 0.0 {
@@ -110,6 +114,19 @@ fn directional_from(d: &DirectionalLightFile, key: &dyn Fn(&str) -> String) -> R
     if !(0.0..180.0).contains(&angular_diameter) {
         bail!("{} must be in [0, 180) degrees, got {angular_diameter}", key("angular_diameter"));
     }
+    // Narrower disks' sampling pdfs (1 / (2 pi (1 - cos))) overflow f32 when squared by the MIS
+    // weight, and their shadows cannot be told from a delta light's: they are taken as one.
+    let angular_diameter = if angular_diameter < MIN_DISK_DEGREES {
+        if angular_diameter > 0.0 {
+            log::warn!(
+                "{} = {angular_diameter} degrees is below {MIN_DISK_DEGREES}: taken as 0, a delta light",
+                key("angular_diameter")
+            );
+        }
+        0.0
+    } else {
+        angular_diameter
+    };
     Ok(Light::Directional {
         direction: direction.normalize(),
         irradiance: non_negative3(&key("irradiance"), d.irradiance)?,
@@ -166,6 +183,23 @@ mod tests {
         let expected = 3.0 / (std::f64::consts::PI * (0.5 * 0.53f64.to_radians()).sin().powi(2));
         assert!((radiance / expected - 1.0).abs() < 1e-6, "{radiance} against {expected}");
         assert_eq!(scene.lights[0].disk_radiance(), None);
+    }
+
+    #[test]
+    fn disks_narrower_than_the_bound_are_delta_lights() {
+        let sun = |diameter: &str| {
+            let text = format!(
+                "[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\nirradiance = [1, 1, 1]\nangular_diameter = {diameter}"
+            );
+            let Light::Directional { angular_diameter, .. } = scene_with(&text).unwrap().lights[0] else {
+                panic!("a directional light")
+            };
+            angular_diameter
+        };
+        for tiny in ["1e-8", "1e-30", "0.0009"] {
+            assert_eq!(sun(tiny), 0.0, "{tiny} degrees");
+        }
+        assert_eq!(sun("0.001"), 0.001f32.to_radians());
     }
 
     #[test]

@@ -20,7 +20,7 @@ pub use asset::{
 pub use camera_toml::camera_toml;
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use format::{Filter, LightSelection, Microfacet, Sampler};
-pub use light::Light;
+pub use light::{Light, MIN_DISK_DEGREES};
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Sides, Texture};
 pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 

@@ -27,8 +27,11 @@ const HAS_COLORS: u32 = 0x0008;
 const DOUBLE_PRECISION: u32 = 0x2000;
 /// The longest mesh name read (version 4): names are labels, never this long in a real file.
 const MAX_NAME_BYTES: usize = 1 << 16;
-/// DEFLATE expands at most about 1032 times; counts promising more data than that are lies.
-const MAX_DEFLATE_RATIO: u64 = 1032;
+/// How many times its compressed size a mesh's data may be. DEFLATE expands at most about 1032
+/// times, but only data as repetitive as a zlib bomb's comes near that: meshes' floats and
+/// indices compress a few times at most, so counts promising more are refused before any of it is
+/// decompressed (1.2 MB declaring 50M triangles, all one triangle, exhausted the memory).
+const MAX_MESH_RATIO: u64 = 100;
 
 /// Mesh `shape_index` of the file at `path`, with the default grey material.
 pub(super) fn load(files: &InputFiles, path: &Path, shape_index: u32) -> Result<Asset, AssetError> {
@@ -49,7 +52,7 @@ pub fn decode(bytes: &[u8], shape_index: u32) -> Result<MeshData, String> {
     }
     let compressed = &bytes[start + 4..];
     // What the counts may promise: no more than the rest of the file can inflate to.
-    let budget = (compressed.len() as u64).saturating_mul(MAX_DEFLATE_RATIO);
+    let budget = (compressed.len() as u64).saturating_mul(MAX_MESH_RATIO);
     let mut stream = Stream(ZlibDecoder::new(compressed));
     let flags = u32::from_le_bytes(stream.array()?);
     if version == 4 {
@@ -64,7 +67,7 @@ pub fn decode(bytes: &[u8], shape_index: u32) -> Result<MeshData, String> {
         + 3 * u64::from(flags & HAS_COLORS != 0);
     let promised = u128::from(vertex_count) * u128::from(per_vertex * scalar as u64) + u128::from(triangle_count) * 12;
     if vertex_count > u64::from(u32::MAX) || promised > u128::from(budget) {
-        return Err(format!("{vertex_count} vertices and {triangle_count} triangles cannot fit in the {} compressed bytes that follow (corrupt file)", compressed.len()));
+        return Err(format!("{vertex_count} vertices and {triangle_count} triangles are more than {MAX_MESH_RATIO} times the {} compressed bytes that follow (a corrupt file or a zlib bomb)", compressed.len()));
     }
     let vertex_count = vertex_count as usize;
     let positions = stream.floats(vertex_count * 3, scalar)?;
@@ -247,6 +250,26 @@ mod tests {
                 let _ = decode(&bytes[..cut], index);
             }
         }
+    }
+
+    #[test]
+    fn counts_far_beyond_the_compressed_bytes_are_refused_before_decompressing() {
+        // One triangle, then 5M copies of it: 60 MB of indices, compressed about 1000 times.
+        let mut raw = 0u32.to_le_bytes().to_vec();
+        raw.extend(3u64.to_le_bytes());
+        let triangles = 5_000_000u64;
+        raw.extend(triangles.to_le_bytes());
+        raw.extend([0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()));
+        let mut z = flate2::write::ZlibEncoder::new(vec![0x1C, 0x04, 3, 0], flate2::Compression::best());
+        z.write_all(&raw).unwrap();
+        let triangle: Vec<u8> = [0u32, 1, 2].iter().flat_map(|i| i.to_le_bytes()).collect();
+        for _ in 0..triangles {
+            z.write_all(&triangle).unwrap();
+        }
+        let file = z.finish().unwrap();
+        assert!(file.len() < 200_000, "{} bytes", file.len());
+        let error = decode(&file, 0).unwrap_err();
+        assert!(error.starts_with("3 vertices and 5000000 triangles are more than 100 times the"), "{error}");
     }
 
     #[test]

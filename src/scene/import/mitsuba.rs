@@ -11,7 +11,7 @@ use super::super::format::{
 use super::super::material_maps::needs_mesh;
 use super::mitsuba_xml::{self, Object, Resolver};
 use super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
-use super::{transform, Location, Notes};
+use super::{transform, Location, Notes, MAX_SHAPES};
 use crate::input_file::InputFiles;
 use anyhow::{bail, Result};
 use glam::{DMat3, DMat4, DVec3};
@@ -69,6 +69,7 @@ pub fn import(
         scene_file: path.to_path_buf(),
         materials: BTreeMap::new(),
         material_names: HashMap::new(),
+        open_adapters: vec![],
         file: None,
     };
     let file = mapper.scene(&document.objects)?;
@@ -83,6 +84,9 @@ struct Mapper<'a> {
     materials: BTreeMap<String, MaterialFile>,
     /// (BSDF, area emitter) objects, by address, to the material made of them.
     material_names: HashMap<(usize, usize), String>,
+    /// The adapter BSDFs (twosided, mask, normalmap) whose nested BSDF is being read, outermost
+    /// first, so that one containing itself through a `<ref>` is refused instead of recursing.
+    open_adapters: Vec<*const Object>,
     file: Option<SceneFile>,
 }
 
@@ -107,6 +111,15 @@ impl Mapper<'_> {
         let mut integrator = self.integrator(&of("integrator"))?;
         integrator.sampler = sampler;
         self.file = Some(SceneFile::empty(camera, film, integrator));
+        let mut placed = 0;
+        for shape in of("shape") {
+            placed += shapes_placed(&shape);
+            if placed > MAX_SHAPES {
+                return Err(shape.error(format!(
+                    "the scene places more than {MAX_SHAPES} shapes, counting each shape of a shapegroup once per instance"
+                )));
+            }
+        }
         for shape in of("shape") {
             match shape.plugin.as_str() {
                 // A definition, placed by the instances that <ref> it.
@@ -511,6 +524,20 @@ impl Mapper<'_> {
         Ok(name)
     }
 
+    /// The material of the one BSDF nested in adapter `b` (`error` if not one), refusing a BSDF
+    /// that contains itself (`<bsdf type="mask" id="a"><ref id="a"/></bsdf>`).
+    fn nested_material(&mut self, b: &Object, error: &str, two_sided: bool) -> Result<MaterialFile> {
+        let inner = nested_bsdf(b, error)?;
+        self.open_adapters.push(b);
+        if self.open_adapters.contains(&Rc::as_ptr(&inner)) {
+            self.open_adapters.clear();
+            return Err(b.error(format!("contains itself (its nested BSDF is {})", inner.describe())));
+        }
+        let material = self.bsdf(&inner, two_sided);
+        self.open_adapters.pop();
+        material
+    }
+
     /// A BSDF as a caustica material; `two_sided`: inside a `twosided`. Mitsuba's reflecting
     /// BSDFs are black from behind unless wrapped in `twosided` (caustica's `one_sided`); its
     /// dielectrics scatter from both sides.
@@ -519,9 +546,9 @@ impl Mapper<'_> {
         let see_through = MaterialFile::default();
         let material = match b.plugin.as_str() {
             "twosided" if two_sided => return Err(b.error("a twosided inside a twosided")),
-            "twosided" => self.bsdf(&*nested_bsdf(b, "only a twosided with one nested BSDF (the same on both sides) is supported")?, true)?,
+            "twosided" => self.nested_material(b, "only a twosided with one nested BSDF (the same on both sides) is supported", true)?,
             "mask" => {
-                let mut material = self.bsdf(&*nested_bsdf(b, "a mask needs one nested BSDF")?, two_sided)?;
+                let mut material = self.nested_material(b, "a mask needs one nested BSDF", two_sided)?;
                 if material.opacity.is_some() || material.opacity_texture.is_some() {
                     return Err(b.error("a mask inside a mask is not supported"));
                 }
@@ -532,7 +559,7 @@ impl Mapper<'_> {
                 material
             }
             "normalmap" => {
-                let mut material = self.bsdf(&*nested_bsdf(b, "a normalmap needs one nested BSDF")?, two_sided)?;
+                let mut material = self.nested_material(b, "a normalmap needs one nested BSDF", two_sided)?;
                 if material.normal_texture.is_some() {
                     return Err(b.error("a normalmap inside a normalmap is not supported"));
                 }
@@ -806,6 +833,19 @@ impl Mapper<'_> {
         }
         self.out().environment = Some(environment);
         Ok(())
+    }
+}
+
+/// How many shapes top-level `shape` places: a shapegroup's (when it is one) for an instance, none
+/// for the shapegroup itself, one for any other (a malformed instance is refused by its mapping).
+fn shapes_placed(shape: &Object) -> usize {
+    match shape.plugin.as_str() {
+        "shapegroup" => 0,
+        "instance" => match shape.children_tagged("shape").ok().as_deref() {
+            Some([group]) => group.children_tagged("shape").map_or(1, |shapes| shapes.len()),
+            _ => 1,
+        },
+        _ => 1,
     }
 }
 

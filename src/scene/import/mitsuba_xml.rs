@@ -4,7 +4,7 @@
 //! reads the document faithfully and remembers where each thing was written, so that every later
 //! error can name the file and line.
 
-use super::Location;
+use super::{shown, Location};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{DMat4, DVec3};
 use std::cell::{Cell, RefCell};
@@ -17,6 +17,15 @@ use crate::input_file::{InputFiles, InputKind};
 
 /// An `<include>` chain deeper than this is a cycle (or a hostile file).
 const MAX_INCLUDE_DEPTH: usize = 16;
+/// Files read for one scene, the scene and its includes, counting a file as often as it is included.
+const MAX_FILES: usize = 4096;
+/// Bytes of XML read for one scene, over all its files: four scene files at their size cap.
+const MAX_TOTAL_BYTES: u64 = 4 * InputKind::Scene.cap();
+/// Objects nested in objects deeper than this (each level is a recursion of the reader and of the
+/// mapping) make a hostile file, not a scene.
+const MAX_NESTING: usize = 256;
+/// Text made by `$name` substitution in one scene, over all its attributes: a scene file's cap.
+const MAX_SUBSTITUTED_BYTES: usize = InputKind::Scene.cap() as usize;
 
 /// A typed property value, as written.
 #[derive(Clone, Debug)]
@@ -91,8 +100,16 @@ pub fn read(
     defines: &[(String, String)],
     resolver: &mut Resolver,
 ) -> Result<Document> {
-    let mut reader =
-        Reader { files, params: defines.iter().cloned().collect(), ids: Ids::default(), objects: vec![], depth: 0 };
+    let mut reader = Reader {
+        files,
+        params: defines.iter().cloned().collect(),
+        ids: Ids::default(),
+        objects: vec![],
+        depth: 0,
+        files_read: 0,
+        bytes_read: 0,
+        substituted: Cell::new(0),
+    };
     reader.read_file(path, resolver)?;
     Ok(Document { objects: reader.objects })
 }
@@ -128,18 +145,31 @@ struct Reader<'a> {
     ids: Ids,
     objects: Vec<Rc<Object>>,
     depth: usize,
+    /// Files and bytes read so far, bounded by [`MAX_FILES`] and [`MAX_TOTAL_BYTES`].
+    files_read: usize,
+    bytes_read: u64,
+    /// Bytes `$name` substitution has made so far, bounded by [`MAX_SUBSTITUTED_BYTES`].
+    substituted: Cell<usize>,
 }
 
-/// One XML file being read: its name for messages and its text positions.
-struct Source<'d, 'i> {
+/// One XML file being read: its name for messages and where its lines start.
+struct Source {
     path: PathBuf,
     file: Rc<str>,
-    doc: &'d roxmltree::Document<'i>,
+    /// The byte offset of each line's start, in order: a node's line is found by binary search (a
+    /// scan from the start per node would make reading quadratic in the file's size).
+    line_starts: Vec<usize>,
 }
 
-impl Source<'_, '_> {
+impl Source {
+    fn new(path: &Path, name: &str, text: &str) -> Source {
+        let line_starts = std::iter::once(0).chain(text.match_indices('\n').map(|(at, _)| at + 1)).collect();
+        Source { path: path.to_path_buf(), file: Rc::from(name), line_starts }
+    }
+
     fn at(&self, node: roxmltree::Node) -> Location {
-        Location { file: self.file.clone(), line: self.doc.text_pos_at(node.range().start).row }
+        let line = self.line_starts.partition_point(|&start| start <= node.range().start) as u32;
+        Location { file: self.file.clone(), line }
     }
 }
 
@@ -152,10 +182,22 @@ impl Reader<'_> {
         if self.depth > MAX_INCLUDE_DEPTH {
             bail!("{}: includes nest more than {MAX_INCLUDE_DEPTH} deep (an include cycle?)", path.display());
         }
+        self.files_read += 1;
+        if self.files_read > MAX_FILES {
+            bail!("{}: the scene reads more than {MAX_FILES} files through <include>s", path.display());
+        }
         let text = self.files.read_to_string(path, InputKind::Scene)?;
+        self.bytes_read += text.len() as u64;
+        if self.bytes_read > MAX_TOTAL_BYTES {
+            bail!(
+                "{}: the scene reads more than {} of XML through <include>s",
+                path.display(),
+                crate::input_file::describe_bytes(MAX_TOTAL_BYTES)
+            );
+        }
         let name = path.display().to_string();
         let doc = roxmltree::Document::parse(&text).map_err(|e| anyhow!("{name}: not well-formed XML: {e}"))?;
-        let source = Source { path: path.to_path_buf(), file: Rc::from(name.as_str()), doc: &doc };
+        let source = Source::new(path, &name, &text);
         let root = doc.root_element();
         if root.tag_name().name() != "scene" {
             bail!("{}: the root element is <{}>, not <scene>", source.at(root), root.tag_name().name());
@@ -200,7 +242,7 @@ impl Reader<'_> {
                 resolver.folders.push(folder);
             }
             tag if OBJECT_TAGS.contains(&tag) => {
-                let object = self.object(source, node)?;
+                let object = self.object(source, node, 0)?;
                 self.objects.push(object);
             }
             tag => bail!("{at}: <{tag}> is not supported at the scene level"),
@@ -208,9 +250,12 @@ impl Reader<'_> {
         Ok(())
     }
 
-    /// An object element, its id registered for later `<ref>`s.
-    fn object(&mut self, source: &Source, node: roxmltree::Node) -> Result<Rc<Object>> {
+    /// An object element, its id registered for later `<ref>`s; `nesting`: the objects around it.
+    fn object(&mut self, source: &Source, node: roxmltree::Node, nesting: usize) -> Result<Rc<Object>> {
         let at = source.at(node);
+        if nesting >= MAX_NESTING {
+            bail!("{at}: objects nest more than {MAX_NESTING} deep");
+        }
         let tag = node.tag_name().name().to_owned();
         let plugin = self.attr(source, node, "type")?;
         let id = node.attribute("id").map(|i| self.substitute(source, node, i)).transpose()?;
@@ -232,7 +277,7 @@ impl Reader<'_> {
                     object.children.push((child_name, Child::Ref { id, at: source.at(child) }));
                 }
                 t if OBJECT_TAGS.contains(&t) => {
-                    let nested = self.object(source, child)?;
+                    let nested = self.object(source, child, nesting + 1)?;
                     object.children.push((child_name, Child::Nested(nested)));
                 }
                 _ => {
@@ -262,16 +307,14 @@ impl Reader<'_> {
         let tag = node.tag_name().name();
         let value = || self.attr(source, node, "value");
         Ok(match tag {
-            "integer" => {
-                Value::Integer(value()?.trim().parse().map_err(|_| {
-                    anyhow!("{at}: <integer> value '{}' is not an integer", value().unwrap_or_default())
-                })?)
-            }
+            "integer" => Value::Integer(value()?.trim().parse().map_err(|_| {
+                anyhow!("{at}: <integer> value '{}' is not an integer", shown(&value().unwrap_or_default()))
+            })?),
             "float" => Value::Float(number(&value()?, &at)?),
             "boolean" => Value::Boolean(match value()?.trim() {
                 "true" => true,
                 "false" => false,
-                other => bail!("{at}: <boolean> value '{other}' is neither true nor false"),
+                other => bail!("{at}: <boolean> value '{}' is neither true nor false", shown(other)),
             }),
             "string" => Value::String(value()?),
             "rgb" => {
@@ -393,7 +436,13 @@ impl Reader<'_> {
         self.substitute(source, node, raw)
     }
 
+    /// `raw` with every `$name` replaced by its value; the text this makes over the whole scene is
+    /// bounded by [`MAX_SUBSTITUTED_BYTES`] (a short value named many times could otherwise fill
+    /// the memory).
     fn substitute(&self, source: &Source, node: roxmltree::Node, raw: &str) -> Result<String> {
+        if !raw.contains('$') {
+            return Ok(raw.to_owned());
+        }
         let mut out = String::with_capacity(raw.len());
         let mut rest = raw;
         while let Some(k) = rest.find('$') {
@@ -407,10 +456,18 @@ impl Reader<'_> {
                     source.at(node)
                 )
             })?;
+            if self.substituted.get() + out.len() + value.len() > MAX_SUBSTITUTED_BYTES {
+                bail!(
+                    "{}: $name substitution makes more than {} of text",
+                    source.at(node),
+                    crate::input_file::describe_bytes(MAX_SUBSTITUTED_BYTES as u64)
+                );
+            }
             out.push_str(value);
             rest = &after[len..];
         }
         out.push_str(rest);
+        self.substituted.set(self.substituted.get() + out.len());
         Ok(out)
     }
 }
@@ -427,7 +484,7 @@ pub fn look_at(origin: DVec3, target: DVec3, up: DVec3) -> Result<DMat4> {
 fn number(text: &str, at: &Location) -> Result<f64> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => bail!("{at}: '{text}' is not a finite number"),
+        _ => bail!("{at}: '{}' is not a finite number", shown(text)),
     }
 }
 
@@ -439,7 +496,7 @@ fn numbers(text: &str, at: &Location) -> Result<Vec<f64>> {
 fn triple(text: &str, at: &Location) -> Result<DVec3> {
     match numbers(text, at)?.as_slice() {
         [x, y, z] => Ok(DVec3::new(*x, *y, *z)),
-        other => bail!("{at}: '{text}' needs 3 numbers, got {}", other.len()),
+        other => bail!("{at}: '{}' needs 3 numbers, got {}", shown(text), other.len()),
     }
 }
 
@@ -456,7 +513,8 @@ fn spectrum(text: &str, at: &Location) -> Result<Vec<(f64, f64)>> {
     let pairs: Vec<(f64, f64)> = text
         .split(',')
         .map(|pair| {
-            let (l, v) = pair.split_once(':').with_context(|| format!("{at}: '{pair}' is not wavelength:value"))?;
+            let (l, v) =
+                pair.split_once(':').with_context(|| format!("{at}: '{}' is not wavelength:value", shown(pair)))?;
             Ok((number(l, at)?, number(v, at)?))
         })
         .collect::<Result<_>>()?;

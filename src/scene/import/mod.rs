@@ -23,6 +23,32 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
+/// The most shapes an imported scene may get (spheres, quads, triangles, mesh placements, each
+/// instance's copies counted): a small file that instances a large group many times over could
+/// otherwise ask for any amount of memory.
+const MAX_SHAPES: usize = 4_000_000;
+
+/// The most characters of a token a message quotes.
+const SHOWN_CHARS: usize = 80;
+
+/// `text` (a token of the file) as a message quotes it: at most [`SHOWN_CHARS`] characters, then
+/// `…` and how many more there were, with control characters escaped, so that a hostile token
+/// can neither flood the terminal nor write to it.
+pub(super) fn shown(text: &str) -> String {
+    let escaped = |c: char| -> String {
+        match c.is_control() {
+            true => c.escape_default().collect(),
+            false => c.to_string(),
+        }
+    };
+    let length = text.chars().count();
+    let kept: String = text.chars().take(SHOWN_CHARS).map(escaped).collect();
+    match length > SHOWN_CHARS {
+        true => format!("{kept}… ({} more characters)", length - SHOWN_CHARS),
+        false => kept,
+    }
+}
+
 /// Where something was written: file and line (1-based).
 #[derive(Clone, Debug)]
 pub struct Location {

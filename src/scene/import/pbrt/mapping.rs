@@ -13,9 +13,10 @@
 
 use super::super::super::material_maps::needs_mesh;
 use super::super::scene_parts::{f32x3, relative_to, uniform_scale, unique_name, UNBOUNDED_DEPTH};
-use super::super::{spectrum, transform, Location, Notes};
+use super::super::{spectrum, transform, Location, Notes, MAX_SHAPES};
 use super::params::Directive;
 use super::parser::{MaterialRef, Model, ShapeUse};
+use super::texture_value::TextureValue;
 use crate::image::RgbImage;
 use crate::input_file::InputFiles;
 use crate::scene::equal_area_map;
@@ -31,10 +32,8 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
-/// The most shapes the scene file may get (spheres, quads, triangles, mesh placements), and the
-/// most bytes their entries may take with their material names: a small file that instances a
-/// large object many times over could otherwise ask for any amount of memory.
-const MAX_SHAPES: usize = 4_000_000;
+/// The most bytes the scene file's shape entries may take with their material names, beside
+/// their number (MAX_SHAPES).
 const MAX_SHAPE_BYTES: usize = 1 << 30;
 
 /// A mesh written in the scene: vertices, polygon corners (indices into them), normals and
@@ -68,6 +67,9 @@ pub struct Mapper<'a> {
     /// Shapes written so far, and an estimate of their bytes (for MAX_SHAPES, MAX_SHAPE_BYTES).
     shapes: usize,
     shape_bytes: usize,
+    /// Textures evaluated, by (value type, name): a texture referred to many times (a `mix` of
+    /// one texture twice, chained) is evaluated once, not once per reference.
+    pub(super) textures_evaluated: HashMap<(String, String), TextureValue>,
 }
 
 /// The scene file of `model`, read from `scene` (for messages).
@@ -93,6 +95,7 @@ pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: 
         powered_names: HashMap::new(),
         shapes: 0,
         shape_bytes: 0,
+        textures_evaluated: HashMap::new(),
     };
     let start = Location { file: Rc::from(scene.display().to_string().as_str()), line: 1 };
     let absent = |directive: &'static str, kind: &str| Directive {

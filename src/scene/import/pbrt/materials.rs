@@ -7,7 +7,7 @@ use super::super::spectrum;
 use super::mapping::Mapper;
 use super::params::{Directive, Param};
 use super::parser::MaterialDef;
-use super::textures::TextureValue;
+use super::texture_value::TextureValue;
 use crate::scene::format::{AlbedoTextureFile, Array, Encoding, ImageTextureFile, MaterialFile, Triple};
 use crate::scene::METALS;
 use anyhow::{anyhow, Result};

@@ -1,5 +1,6 @@
 //! pbrt-v4 scenes: `tokens` splits the text, `parser` reads the directives with pbrt's graphics
-//! state into a `Model`, `mapping` (with `materials` and `textures`) maps that onto caustica's scene file.
+//! state into a `Model`, `mapping` (with `materials` and `textures`, whose values are
+//! `texture_value`'s) maps that onto caustica's scene file.
 //!
 //! The `pbrt4` crate was evaluated for the reading and not taken: its errors carry no position,
 //! and every error here names the file and line.
@@ -8,6 +9,7 @@ mod mapping;
 mod materials;
 mod params;
 mod parser;
+mod texture_value;
 mod textures;
 mod tokens;
 

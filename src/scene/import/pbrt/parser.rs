@@ -5,7 +5,7 @@
 //! for caustica is `mapping.rs`'s business; this module only reads them faithfully, in pbrt's
 //! order, remembering where each was written.
 
-use super::super::Location;
+use super::super::{shown, Location};
 use super::params::{Directive, Param, Values};
 use super::tokens::{Token, Tokens};
 use crate::input_file::{InputFiles, InputKind};
@@ -21,6 +21,9 @@ const MAX_INCLUDE_DEPTH: usize = 16;
 /// The most scene text read in all, includes together: each file has its own cap
 /// (`InputKind::Scene`), and this bounds a file that includes another many times over.
 const MAX_TOTAL_BYTES: usize = 256 << 20;
+/// The most files read in all, each include counted as often as it is read: empty files would
+/// otherwise escape MAX_TOTAL_BYTES, however often they are included.
+const MAX_FILES: usize = 4096;
 
 /// The material a shape was declared with.
 #[derive(Clone, Debug)]
@@ -115,6 +118,7 @@ pub fn read(files: &InputFiles, path: &Path) -> Result<Model> {
         object: None,
         depth: 0,
         bytes: 0,
+        files_read: 0,
     };
     reader.file(path)?;
     if let Some((_, kind, at)) = reader.stack.last() {
@@ -147,6 +151,7 @@ struct Reader<'a> {
     object: Option<(String, Vec<ShapeUse>, Location)>,
     depth: usize,
     bytes: usize,
+    files_read: usize,
 }
 
 /// Directives that set up the render, allowed only before `WorldBegin`.
@@ -154,6 +159,10 @@ const OPTIONS: [&str; 6] = ["Camera", "Film", "Sampler", "Integrator", "PixelFil
 
 impl Reader<'_> {
     fn file(&mut self, path: &Path) -> Result<()> {
+        self.files_read += 1;
+        if self.files_read > MAX_FILES {
+            bail!("{}: the scene reads more than {MAX_FILES} files through includes", path.display());
+        }
         let text = self.files.read_to_string(path, InputKind::Scene)?;
         self.bytes += text.len();
         if self.bytes > MAX_TOTAL_BYTES {
@@ -406,7 +415,7 @@ impl Reader<'_> {
             "ActiveTransform" | "TransformTimes" => {
                 bail!("{at}: {name}: animated transformations (motion blur) are not supported")
             }
-            _ => bail!("{at}: unknown directive '{name}'"),
+            _ => bail!("{at}: unknown directive '{}'", shown(name)),
         }
         Ok(())
     }
@@ -475,7 +484,7 @@ fn number(token: &Token, at: &Location, what: &str) -> Result<f64> {
     match token {
         Token::Word(w) => match w.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => bail!("{at}: {what}: '{w}' is not a finite number"),
+            _ => bail!("{at}: {what}: '{}' is not a finite number", shown(w)),
         },
         other => bail!("{at}: {what}: expected a number, found {}", other.describe()),
     }
@@ -517,14 +526,20 @@ fn string(t: &mut Tokens, at: &Location, what: &str) -> Result<String> {
 fn directive(t: &mut Tokens, at: Location, name: &'static str) -> Result<Directive> {
     let kind = string(t, &at, name)?;
     let mut params: Vec<Param> = vec![];
+    // The names given so far: a set, so that a directive of very many parameters is not quadratic.
+    let mut names = std::collections::HashSet::new();
     while let Some((Token::Quoted(_), _)) = t.peek()? {
         let Some((Token::Quoted(declaration), param_at)) = t.next()? else { unreachable!("peeked a quoted string") };
         let words: Vec<&str> = declaration.split_whitespace().collect();
         let [ty, param_name] = words[..] else {
-            bail!("{param_at}: {name} \"{kind}\": \"{declaration}\" is not a parameter declaration (\"type name\")")
+            bail!(
+                "{param_at}: {name} \"{}\": \"{}\" is not a parameter declaration (\"type name\")",
+                shown(&kind),
+                shown(&declaration)
+            )
         };
         let values = values(t, &param_at, ty, &declaration)?;
-        if params.iter().any(|p| p.name == param_name) {
+        if !names.insert(param_name.to_owned()) {
             bail!("{param_at}: {name} \"{kind}\": the parameter '{param_name}' is given twice");
         }
         params.push(Param::new(ty.to_owned(), param_name.to_owned(), values, param_at)?);

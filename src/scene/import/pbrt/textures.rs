@@ -12,6 +12,7 @@ use super::super::scene_parts::{f32x3, relative_to};
 use super::mapping::Mapper;
 use super::params::{Directive, Param};
 use super::parser::TextureDef;
+use super::texture_value::TextureValue;
 use crate::scene::format::{AlbedoTextureFile, Array};
 use anyhow::{anyhow, Result};
 use glam::DVec3;
@@ -19,34 +20,6 @@ use std::path::PathBuf;
 
 /// Texture references deeper than this are a cycle.
 const MAX_TEXTURE_DEPTH: usize = 32;
-
-/// A texture's value over the surface.
-#[derive(Clone, Debug)]
-pub(super) enum TextureValue {
-    Constant(DVec3),
-    /// `texture` times `factor` (a checkerboard carries its scaled colours, with factor 1).
-    Varying {
-        texture: AlbedoTextureFile,
-        factor: DVec3,
-    },
-}
-
-impl TextureValue {
-    fn scaled(self, s: DVec3) -> TextureValue {
-        match self {
-            TextureValue::Constant(c) => TextureValue::Constant(c * s),
-            TextureValue::Varying { mut texture, factor } => match &mut texture.checkerboard {
-                Some(Array(colors)) => {
-                    for c in colors.iter_mut() {
-                        *c = f32x3(DVec3::from(c.0.map(f64::from)) * s);
-                    }
-                    TextureValue::Varying { texture, factor }
-                }
-                None => TextureValue::Varying { texture, factor: factor * s },
-            },
-        }
-    }
-}
 
 impl Mapper<'_> {
     /// The value of `p` (of `value_type`, spectrum or float): a constant as written, or a texture's.
@@ -72,11 +45,16 @@ impl Mapper<'_> {
             );
         }
         let model = self.model;
-        let Some(t) = model.textures.get(&(value_type.to_owned(), name.to_owned())) else {
+        let key = (value_type.to_owned(), name.to_owned());
+        if let Some(value) = self.textures_evaluated.get(&key) {
+            return Ok(value.clone());
+        }
+        let Some(t) = model.textures.get(&key) else {
             return Err(used_by.error(format!("no {value_type} texture named \"{name}\"")));
         };
         let value = self.texture_value(t, depth)?;
         t.class.check_all_used()?;
+        self.textures_evaluated.insert(key, value.clone());
         Ok(value)
     }
 

@@ -3,7 +3,7 @@
 //! a time from the file's text (nothing is collected, so a large mesh costs no token list), each
 //! with the line it starts on, so every later error can name it.
 
-use super::super::Location;
+use super::super::{shown, Location};
 use anyhow::{bail, Result};
 use std::rc::Rc;
 
@@ -21,8 +21,8 @@ impl Token {
     /// How the token reads in a message.
     pub fn describe(&self) -> String {
         match self {
-            Token::Word(w) => format!("'{w}'"),
-            Token::Quoted(s) => format!("\"{s}\""),
+            Token::Word(w) => format!("'{}'", shown(w)),
+            Token::Quoted(s) => format!("\"{}\"", shown(s)),
             Token::Open => "'['".to_owned(),
             Token::Close => "']'".to_owned(),
         }
