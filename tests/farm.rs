@@ -260,27 +260,38 @@ fn repeated_sigterms_still_write_the_image() {
 }
 
 /// A second SIGINT, sent once the first is taken (two sent at once may arrive as one), quits at
-/// once: exit 130, no image.
+/// once: exit 130, no image. The second signal races the pass in flight (a CPU device's passes
+/// last about a second): where the render finished first (exit 0, its image written), which a
+/// loaded machine can make happen, the run says nothing of the second signal and is repeated.
 #[cfg(unix)]
 #[test]
 fn a_second_sigint_quits_at_once() {
     use std::io::BufRead as _;
-    let dir = temp_dir("farm-second-sigint");
-    let (out, checkpoint) = (dir.join("out.exr"), dir.join("out.checkpoint.exr"));
-    let mut child = render_under_way(&out, &checkpoint);
-    let pid = child.id() as libc::pid_t;
-    // SAFETY: kill(2) of a child not yet waited for, whose pid therefore cannot be reused.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
-    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    while !line.contains("finishing the pass in flight") {
-        line.clear();
-        assert!(stderr.read_line(&mut line).unwrap() > 0, "no word of the first SIGINT");
+    for attempt in 1..=5 {
+        let dir = temp_dir("farm-second-sigint");
+        let (out, checkpoint) = (dir.join("out.exr"), dir.join("out.checkpoint.exr"));
+        let mut child = render_under_way(&out, &checkpoint);
+        let pid = child.id() as libc::pid_t;
+        // SAFETY: kill(2) of a child not yet waited for, whose pid therefore cannot be reused.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+        let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+        let mut line = String::new();
+        while !line.contains("finishing the pass in flight") {
+            line.clear();
+            assert!(stderr.read_line(&mut line).unwrap() > 0, "no word of the first SIGINT");
+        }
+        // SAFETY: as above.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+        let code = child.wait().unwrap().code();
+        if code == Some(0) && out.exists() {
+            eprintln!("attempt {attempt}: the pass in flight ended before the second SIGINT came; again");
+            continue;
+        }
+        assert_eq!(code, Some(130));
+        assert!(!out.exists(), "quitting at once writes no image");
+        return;
     }
-    // SAFETY: as above.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
-    assert_eq!(child.wait().unwrap().code(), Some(130));
-    assert!(!out.exists(), "quitting at once writes no image");
+    panic!("in 5 attempts the render always finished before the second SIGINT arrived");
 }
 
 #[test]

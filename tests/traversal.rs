@@ -103,7 +103,7 @@ fn every_checked_in_scene_renders_alike_with_either_traversal() {
     let compute = compute_context();
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let (mut compared, mut meshes) = (0, 0);
-    for entry in suite_entries(&scenes, &caustica::scene::data_dir()).expect("the scenes folder lists") {
+    for entry in suite_entries(Some(&scenes), &caustica::scene::data_dir()).expect("the scenes folder lists") {
         let (name, path) = match entry {
             SuiteEntry::Skip { name, reason } => {
                 eprintln!("SKIPPED {name}: {reason}");
