@@ -176,53 +176,46 @@ pub struct TexelBufferVariable {
 
 /// Every uniform texel buffer of `spirv` (not the storage texel buffers of `imageBuffer`).
 pub fn texel_buffer_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
-    let (mut names, mut decorations) = (HashMap::new(), HashMap::new());
-    let (mut buffer_images, mut sampled_buffers, mut pointers) = (Vec::new(), Vec::new(), Vec::new());
-    let mut variables = Vec::new();
-    for (opcode, operands) in instructions(spirv) {
-        match opcode {
-            OP_NAME => {
-                names.insert(operands[0], string(&operands[1..]));
-            }
-            // Result, sampled type, Dim, Depth, Arrayed, MS, Sampled (1: read without a sampler's
-            // help, as a uniform texel buffer; 2: a storage image), ...
-            OP_TYPE_IMAGE if operands[2] == DIM_BUFFER && operands[6] == 1 => buffer_images.push(operands[0]),
-            OP_TYPE_SAMPLED_IMAGE if buffer_images.contains(&operands[1]) => sampled_buffers.push(operands[0]),
-            OP_TYPE_POINTER
-                if operands[1] == UNIFORM_CONSTANT
-                    && (buffer_images.contains(&operands[2]) || sampled_buffers.contains(&operands[2])) =>
-            {
-                pointers.push(operands[0])
-            }
-            OP_VARIABLE if pointers.contains(&operands[0]) => variables.push(operands[1]),
-            OP_DECORATE => {
-                decorations.insert((operands[0], operands[1]), operands.get(2).copied().unwrap_or(0));
-            }
-            _ => {}
+    let mut buffer_images = Vec::new();
+    uniform_constant_variables(spirv, |opcode, operands| match opcode {
+        // Result, sampled type, Dim, Depth, Arrayed, MS, Sampled (1: read without a sampler's
+        // help, as a uniform texel buffer; 2: a storage image), ...
+        OP_TYPE_IMAGE if operands[2] == DIM_BUFFER && operands[6] == 1 => {
+            buffer_images.push(operands[0]);
+            Some(operands[0])
         }
-    }
-    variables
-        .into_iter()
-        .map(|id| TexelBufferVariable {
-            name: names.get(&id).cloned().unwrap_or_default(),
-            set: decorations.get(&(id, DESCRIPTOR_SET)).copied(),
-            binding: decorations.get(&(id, BINDING)).copied(),
-        })
-        .collect()
+        OP_TYPE_SAMPLED_IMAGE if buffer_images.contains(&operands[1]) => Some(operands[0]),
+        _ => None,
+    })
 }
 
 /// Every acceleration structure the module declares (`uniform accelerationStructureEXT`), with its
 /// name, set and binding (a [`TexelBufferVariable`] names the same three).
 pub fn acceleration_structure_variables(spirv: &[u32]) -> Vec<TexelBufferVariable> {
+    uniform_constant_variables(spirv, |opcode, operands| {
+        (opcode == OP_TYPE_ACCELERATION_STRUCTURE).then(|| operands[0])
+    })
+}
+
+/// The variables of UniformConstant pointers to the types `pointee` picks out, with their names,
+/// sets and bindings. `pointee` sees every instruction in order and returns the id of a type it
+/// declares that counts (it may keep state: a sampled image counts when its image does).
+fn uniform_constant_variables(
+    spirv: &[u32],
+    mut pointee: impl FnMut(u32, &[u32]) -> Option<u32>,
+) -> Vec<TexelBufferVariable> {
     let (mut names, mut decorations) = (HashMap::new(), HashMap::new());
-    let (mut structures, mut pointers, mut variables) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut types, mut pointers, mut variables) = (Vec::new(), Vec::new(), Vec::new());
     for (opcode, operands) in instructions(spirv) {
+        if let Some(id) = pointee(opcode, operands) {
+            types.push(id);
+            continue;
+        }
         match opcode {
             OP_NAME => {
                 names.insert(operands[0], string(&operands[1..]));
             }
-            OP_TYPE_ACCELERATION_STRUCTURE => structures.push(operands[0]),
-            OP_TYPE_POINTER if operands[1] == UNIFORM_CONSTANT && structures.contains(&operands[2]) => {
+            OP_TYPE_POINTER if operands[1] == UNIFORM_CONSTANT && types.contains(&operands[2]) => {
                 pointers.push(operands[0])
             }
             OP_VARIABLE if pointers.contains(&operands[0]) => variables.push(operands[1]),
