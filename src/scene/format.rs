@@ -518,6 +518,21 @@ pub struct EnvironmentFile {
     pub rotation: f32,
 }
 
+/// No sky at all, at intensity 1: what importers fill in the one field they set.
+impl Default for EnvironmentFile {
+    fn default() -> Self {
+        EnvironmentFile {
+            color: None,
+            probe: None,
+            latlong: None,
+            octahedral: None,
+            axes: None,
+            intensity: 1.0,
+            rotation: 0.0,
+        }
+    }
+}
+
 fn is_false(b: &bool) -> bool {
     !b
 }

@@ -768,18 +768,7 @@ impl Mapper<'_> {
                     return Err(e.error("a constant emitter has no to_world"));
                 }
                 let color = f32x3(self.color(e, "radiance", 1.0)?);
-                self.environment(
-                    e,
-                    EnvironmentFile {
-                        color: Some(color),
-                        probe: None,
-                        latlong: None,
-                        octahedral: None,
-                        axes: None,
-                        intensity: 1.0,
-                        rotation: 0.0,
-                    },
-                )?;
+                self.environment(e, EnvironmentFile { color: Some(color), ..Default::default() })?;
                 None
             }
             "envmap" => {
@@ -805,13 +794,11 @@ impl Mapper<'_> {
                 self.environment(
                     e,
                     EnvironmentFile {
-                        color: None,
-                        probe: None,
                         latlong: Some(latlong),
-                        octahedral: None,
                         axes,
                         intensity: scale as f32,
                         rotation,
+                        ..Default::default()
                     },
                 )?;
                 None

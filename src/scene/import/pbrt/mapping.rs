@@ -877,15 +877,7 @@ impl Mapper<'_> {
                         if let Some(illuminance) = Self::light_target(d, "illuminance")? {
                             color *= illuminance / PI;
                         }
-                        EnvironmentFile {
-                            color: Some(f32x3(color)),
-                            probe: None,
-                            latlong: None,
-                            octahedral: None,
-                            axes: None,
-                            intensity: 1.0,
-                            rotation: 0.0,
-                        }
+                        EnvironmentFile { color: Some(f32x3(color)), ..Default::default() }
                     }
                     Some(name) => {
                         if d.param("L").is_some() {
@@ -921,13 +913,10 @@ impl Mapper<'_> {
                         }
                         let axes = Array(axes.map(|a| f32x3(a / size)));
                         EnvironmentFile {
-                            color: None,
-                            probe: None,
-                            latlong: None,
                             octahedral: Some(relative_to(&path, self.base)),
                             axes: Some(axes),
                             intensity: scale as f32,
-                            rotation: 0.0,
+                            ..Default::default()
                         }
                     }
                 };
