@@ -6,14 +6,12 @@
 
 mod common;
 
-use caustica::bench::{suite_entries, SuiteEntry};
 use caustica::render::{
     AovSet, GroupOrder, KernelChoice, Renderer, SceneFeatures, Workgroup, FEW_PRIMITIVES, WORKGROUP_VAR,
 };
 use caustica::scene::{Alpha, AlphaMode, Clearcoat, Instance, Mesh, NormalMap, Scene, Shape, Texture};
-use common::{floor_point_scene, gpu, parse};
+use common::{checked_in_scenes, floor_point_scene, gpu, parse};
 use glam::{Mat4, Vec2, Vec3, Vec4};
-use std::path::Path;
 
 /// The accumulated sums of `scene` (seed 3, its own spp), as bits, and the features its kernel had.
 fn sums(ctx: &caustica::gpu::GpuContext, scene: &Scene, choice: KernelChoice) -> (Vec<[u32; 4]>, SceneFeatures) {
@@ -55,20 +53,8 @@ fn assert_specialized_kernel_agrees(ctx: &caustica::gpu::GpuContext, mut scene: 
 #[test]
 fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
     let (_lock, ctx) = gpu();
-    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let mut specialized = 0;
-    for entry in suite_entries(Some(&scenes), &caustica::scene::data_dir()).expect("the scenes folder lists") {
-        let (name, path) = match entry {
-            SuiteEntry::Skip { name, reason } => {
-                eprintln!("SKIPPED {name}: {reason}");
-                continue;
-            }
-            SuiteEntry::Run { name, path, .. } => (name, path),
-        };
-        let scene = match path {
-            Some(path) => Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e:#}")),
-            None => Scene::default_scene(),
-        };
+    for (_, scene) in checked_in_scenes() {
         if assert_specialized_kernel_agrees(&ctx, scene) != SceneFeatures::ALL {
             specialized += 1;
         }

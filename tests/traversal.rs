@@ -9,11 +9,10 @@
 
 mod common;
 
-use caustica::bench::{suite_entries, SuiteEntry};
 use caustica::gpu::{GpuContext, Traversal, TraversalRequest};
 use caustica::render::{AovSet, KernelChoice, Renderer};
 use caustica::scene::Scene;
-use common::{gpu_with_traversal, LAVAPIPE_ICD};
+use common::{checked_in_scenes, gpu_with_traversal, LAVAPIPE_ICD};
 use std::path::Path;
 
 /// Side of the square blocks of pixels whose means are compared.
@@ -101,20 +100,8 @@ fn assert_traversals_agree(compute: &GpuContext, ray_query: &GpuContext, scene: 
 fn every_checked_in_scene_renders_alike_with_either_traversal() {
     let Some((_lock, ray_query)) = gpu_with_traversal(TraversalRequest::RayQuery) else { return };
     let compute = compute_context();
-    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let (mut compared, mut meshes) = (0, 0);
-    for entry in suite_entries(Some(&scenes), &caustica::scene::data_dir()).expect("the scenes folder lists") {
-        let (name, path) = match entry {
-            SuiteEntry::Skip { name, reason } => {
-                eprintln!("SKIPPED {name}: {reason}");
-                continue;
-            }
-            SuiteEntry::Run { name, path, .. } => (name, path),
-        };
-        let mut scene = match path {
-            Some(path) => Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e:#}")),
-            None => Scene::default_scene(),
-        };
+    for (name, mut scene) in checked_in_scenes() {
         (scene.film.width, scene.film.height) = (8 * BLOCK, 6 * BLOCK);
         let Some(catches) = assert_traversals_agree(&compute, &ray_query, &scene) else { continue };
         assert!(catches < 0.04, "{name}: the comparison catches only biases above {:.1} %", catches * 100.0);

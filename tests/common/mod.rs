@@ -323,3 +323,25 @@ pub fn srgb_to_linear(c: u8) -> f32 {
         ((c + 0.055) / 1.055).powf(2.4)
     }
 }
+
+/// The suite's checked-in scenes (`caustica bench --suite`'s list: the built-in Cornell box and
+/// scenes/*.toml), each loaded, by name; those that need the missing shared data folder are said
+/// SKIPPED and left out.
+pub fn checked_in_scenes() -> Vec<(String, Scene)> {
+    use caustica::bench::{suite_entries, SuiteEntry};
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut loaded = Vec::new();
+    for entry in suite_entries(Some(&scenes), &caustica::scene::data_dir()).expect("the scenes folder lists") {
+        match entry {
+            SuiteEntry::Skip { name, reason } => eprintln!("SKIPPED {name}: {reason}"),
+            SuiteEntry::Run { name, path, .. } => {
+                let scene = match path {
+                    Some(path) => Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e:#}")),
+                    None => Scene::default_scene(),
+                };
+                loaded.push((name, scene));
+            }
+        }
+    }
+    loaded
+}
