@@ -120,6 +120,8 @@ pub struct GlslMember {
 pub trait GlslBlock: bytemuck::Pod {
     /// The block's type name in GLSL (the host struct's name unless declared `as "Name"`).
     const NAME: &'static str;
+    /// The struct's doc comment, a line an entry.
+    const DOC: &'static [&'static str];
     /// Every field, in declaration order.
     const MEMBERS: &'static [GlslMember];
 }
@@ -137,9 +139,9 @@ pub fn glsl_members(members: &[GlslMember]) -> String {
 }
 
 /// `struct NAME { ... };` for a record, after its doc comment: what the kernel declares it as.
-pub fn glsl_struct<T: GlslBlock>(doc: &[&str]) -> String {
+pub fn glsl_struct<T: GlslBlock>() -> String {
     let mut out = String::new();
-    for line in doc {
+    for line in T::DOC {
         out += &format!("//{line}\n");
     }
     out + &format!("struct {} {{\n{}}};\n", T::NAME, glsl_members(T::MEMBERS))
@@ -150,12 +152,12 @@ pub fn glsl_struct<T: GlslBlock>(doc: &[&str]) -> String {
 /// Fields take doc comments only (they are copied into the GLSL).
 macro_rules! glsl_block {
     (
-        $(#[$attr:meta])*
+        $(#[doc = $struct_doc:literal])*
         pub struct $name:ident $(as $glsl_name:literal)? {
             $($(#[doc = $doc:literal])* pub $field:ident: $ty:ty,)*
         }
     ) => {
-        $(#[$attr])*
+        $(#[doc = $struct_doc])*
         #[repr(C)]
         #[derive(Clone, Copy, Debug, PartialEq, ::bytemuck::Pod, ::bytemuck::Zeroable)]
         pub struct $name {
@@ -165,6 +167,7 @@ macro_rules! glsl_block {
         impl $crate::render::glsl_block::GlslBlock for $name {
             // The name after `as` where there is one, else the struct's.
             const NAME: &'static str = [$($glsl_name,)? stringify!($name)][0];
+            const DOC: &'static [&'static str] = &[$($struct_doc),*];
             const MEMBERS: &'static [$crate::render::glsl_block::GlslMember] = &[$(
                 $crate::render::glsl_block::GlslMember {
                     name: stringify!($field),

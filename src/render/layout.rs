@@ -204,13 +204,13 @@ pub fn records_glsl() -> String {
         }
     }
     for declaration in [
-        glsl_struct::<GpuPrimitive>(&[" A sphere, quad or triangle (area lights and the scene's own shapes)."]),
-        glsl_struct::<GpuMaterial>(&[" A material (scene::Material's kernel form)."]),
-        glsl_struct::<GpuInstance>(&[" One placement of a bottom-level BVH."]),
-        glsl_struct::<GpuMeshTriangle>(&[" A mesh triangle by value, in its BVH's leaf order."]),
-        glsl_struct::<GpuTexture>(&[" Texture descriptor."]),
-        glsl_struct::<GpuPunctualLight>(&[" A point, spot or directional light."]),
-        glsl_struct::<GpuAliasEntry>(&[" One entry of the alias table that picks area lights by power."]),
+        glsl_struct::<GpuPrimitive>(),
+        glsl_struct::<GpuMaterial>(),
+        glsl_struct::<GpuInstance>(),
+        glsl_struct::<GpuMeshTriangle>(),
+        glsl_struct::<GpuTexture>(),
+        glsl_struct::<GpuPunctualLight>(),
+        glsl_struct::<GpuAliasEntry>(),
     ] {
         out += "\n";
         out += &declaration;
