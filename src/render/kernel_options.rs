@@ -337,14 +337,8 @@ impl KernelOptions {
                 scene.instances,
             )?,
         };
-        let take_tiles = tile_taking::takes_tiles(
-            self.take_tiles.unwrap_or(defaults.take_tiles),
-            self.take_tiles.is_some(),
-            device,
-            loop_limit,
-            wavefront,
-            workgroup,
-        )?;
+        let take_tiles =
+            tile_taking::takes_tiles(self.take_tiles, defaults.take_tiles, device, loop_limit, wavefront, workgroup)?;
         let walk_records = self.walk_records.unwrap_or(defaults.walk_records);
         Ok(KernelChoices { wavefront, walk_queue, walk_records, take_tiles, workgroup })
     }

@@ -194,14 +194,13 @@ impl<'a> Renderer<'a> {
         let (kernels, statistics) = plan.compile(ctx, &descriptors)?;
         let KernelPlan { data, params, loop_limit, choices, scene_hash, hashed_bytes, split_arrays, variant, .. } =
             plan;
-        let plan_features = variant.features;
         let acceleration_structure_bytes = structure.as_ref().map_or(0, SceneStructure::bytes);
         let (width, height) = (scene.film.width, scene.film.height);
         Ok(Self {
             ctx,
             kernels: Some(kernels),
             statistics,
-            features: plan_features,
+            features: variant.features,
             walk_queue: choices.walk_queue,
             take_tiles: choices.take_tiles,
             walk_records: choices.walk_records,

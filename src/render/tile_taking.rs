@@ -27,12 +27,12 @@ use crate::gpu::DeviceInfo;
 use anyhow::{bail, Result};
 
 /// Whether the kernel for `device` (whose loops are cut short where `loop_limit`), the wavefront's
-/// kernels where `wavefront`, in workgroups of `workgroup`, takes its tiles from the counter, where
-/// it is `wanted` (the device's default, or the `take-tiles` option where `asked`). An error where
-/// the option asks for what cannot run.
+/// kernels where `wavefront`, in workgroups of `workgroup`, takes its tiles from the counter: as
+/// the `take-tiles` option `asked` says, else as the device class's `default`. An error where the
+/// option asks for what cannot run.
 pub fn takes_tiles(
-    wanted: bool,
-    asked: bool,
+    asked: Option<bool>,
+    default: bool,
     device: &DeviceInfo,
     loop_limit: bool,
     wavefront: bool,
@@ -40,7 +40,7 @@ pub fn takes_tiles(
 ) -> Result<bool> {
     let whole_subgroups = device.subgroup_size > 0 && workgroup.invocations().is_multiple_of(device.subgroup_size);
     let possible = !loop_limit && !wavefront && whole_subgroups;
-    decide(wanted, asked, possible).map_err(|why| {
+    decide(asked, default, possible).map_err(|why| {
         anyhow::anyhow!(
             "{why} ({}: loop limit {loop_limit}, wavefront {wavefront}, {} invocations a workgroup, subgroups of {})",
             device.name,
@@ -51,10 +51,10 @@ pub fn takes_tiles(
 }
 
 /// [`takes_tiles`] where taking tiles is `possible`.
-fn decide(wanted: bool, asked: bool, possible: bool) -> Result<bool> {
-    match (wanted, possible) {
+fn decide(asked: Option<bool>, default: bool, possible: bool) -> Result<bool> {
+    match (asked.unwrap_or(default), possible) {
         (true, true) => Ok(true),
-        (true, false) if asked => bail!("take-tiles=1: tiles are taken only by the megakernel, on a device whose loops run to their end, in workgroups of whole subgroups"),
+        (true, false) if asked.is_some() => bail!("take-tiles=1: tiles are taken only by the megakernel, on a device whose loops run to their end, in workgroups of whole subgroups"),
         _ => Ok(false),
     }
 }
@@ -70,10 +70,10 @@ mod tests {
 
     #[test]
     fn tiles_are_taken_where_wanted_and_possible_and_asking_for_the_impossible_fails() {
-        assert!(decide(true, false, true).unwrap());
-        assert!(!decide(true, false, false).unwrap(), "a default took tiles where it cannot");
-        assert!(!decide(false, true, true).unwrap());
-        let impossible = decide(true, true, false).unwrap_err().to_string();
+        assert!(decide(None, true, true).unwrap());
+        assert!(!decide(None, true, false).unwrap(), "a default took tiles where it cannot");
+        assert!(!decide(Some(false), true, true).unwrap());
+        let impossible = decide(Some(true), false, false).unwrap_err().to_string();
         assert!(impossible.contains("loops run to their end"), "{impossible}");
     }
 }
