@@ -2,6 +2,7 @@
 
 use anyhow::{Context as _, Result};
 use caustica::bench::{self, FilmOverrides, KernelSetup};
+use caustica::denoise::{DeviceChoice, Quality};
 use caustica::farm::{self, format_ranges, is_exr, parse_duration, per_second, Outcome, PartialRender, RenderJob};
 use caustica::gpu::{list_devices, ContextOptions, GpuContext, TraversalRequest};
 use caustica::image::{write_image_with, OutputOptions, PngDepth, Tonemap};
@@ -156,6 +157,12 @@ enum Command {
         /// Image Denoise take), depth, samples; or all. Needs .exr output.
         #[arg(long, value_parser = aov_set)]
         aov: Option<AovSet>,
+        /// Denoise the image with Intel Open Image Denoise 2 (scripts/install-oidn.sh installs it),
+        /// guided by the albedo and normal of the first non-mirror, non-glass surface, at this
+        /// quality (default high). An .exr output keeps the noisy image (layer "noisy") and the
+        /// guides (layers "albedo", "normal") beside the denoised one.
+        #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "high", value_name = "QUALITY")]
+        denoise: Option<Quality>,
         #[command(flatten)]
         output_args: OutputArgs,
         #[command(flatten)]
@@ -217,6 +224,10 @@ enum Command {
         /// Merged image: .exr keeps the accumulation (mergeable and resumable again); .pfm, .png.
         #[arg(short, long)]
         output: PathBuf,
+        /// Denoise the merged image (as `render --denoise`), with the partials' albedo and normal
+        /// guides where they have them.
+        #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "high", value_name = "QUALITY")]
+        denoise: Option<Quality>,
         #[command(flatten)]
         output_args: OutputArgs,
         /// No summary, and of the messages only warnings and errors.
@@ -225,6 +236,24 @@ enum Command {
         /// Detail messages too (the log's debug level).
         #[arg(short, long)]
         verbose: bool,
+    },
+    /// Denoise a render (an EXR checkpoint, partial render or merge caustica wrote) with Intel
+    /// Open Image Denoise 2, with its albedo and normal layers as guides where it has them.
+    Denoise {
+        /// The render: an .exr file caustica wrote.
+        input: PathBuf,
+        /// The denoised image: .exr (keeps the accumulation, the noisy image and the AOVs, as
+        /// `render --denoise`), .pfm or .png.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// fast, balanced or high.
+        #[arg(long, value_enum, default_value_t = Quality::High)]
+        quality: Quality,
+        #[command(flatten)]
+        output_args: OutputArgs,
+        /// Only warnings and errors.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// List the Vulkan devices.
     Devices,
@@ -485,6 +514,8 @@ struct RenderRequest {
     seed: u32,
     /// `--aov`; absent, none, or when resuming the checkpoint's.
     aovs: Option<AovSet>,
+    /// `--denoise`.
+    denoise: Option<Quality>,
     /// Sample limit; `None` renders until the time budget or a stop.
     spp: Option<u32>,
     quiet: bool,
@@ -511,7 +542,7 @@ fn render(
     let resume_from = if farm_args.resume { Some(PartialRender::read(&checkpoint)?) } else { None };
     // A resumed render goes on with the checkpoint's AOVs, which need not be named again (an --aov
     // naming others is refused by farm::resume).
-    let aovs = request.aovs.or(resume_from.as_ref().map(|p| p.aovs)).unwrap_or_default();
+    let mut aovs = request.aovs.or(resume_from.as_ref().map(|p| p.aovs)).unwrap_or_default();
     if !aovs.is_empty() && !is_exr(output) {
         let named = match request.aovs {
             Some(_) => format!("--aov {aovs}"),
@@ -527,9 +558,30 @@ fn render(
                 .with_context(|| format!("--sample-offset {} --spp {spp}", farm_args.sample_offset))?,
         }
     }
+    // Denoising renders its guides in the same pass (a resumed render keeps its checkpoint's AOVs:
+    // without them the image is denoised on its colour alone). OIDN is loaded now, so that a
+    // missing or wrong library fails before any rendering.
+    let oidn = match request.denoise {
+        Some(_) => {
+            if resume_from.is_none() {
+                aovs.albedo = true;
+                aovs.normal = true;
+            }
+            Some(caustica::denoise::Library::load()?)
+        }
+        None => None,
+    };
     remove_leftovers(&[output, &checkpoint], request.quiet);
     handle_signals(true)?;
     let ctx = gpu.context()?;
+    let denoiser = match &oidn {
+        Some(library) => {
+            let denoiser = library.denoiser(DeviceChoice::SameAs(ctx.info.device_uuid))?;
+            log::info!("caustica: denoising with {} ({})", denoiser.describe(), library.origin);
+            Some(denoiser)
+        }
+        None => None,
+    };
     let started = Instant::now();
     let mut renderer =
         Renderer::with_options(&ctx, &scene, request.seed, aovs, KernelChoice::ForScene, &request.kernel)?;
@@ -551,7 +603,11 @@ fn render(
         farm::run(&mut renderer, &job, |done| bar.set_position(done as u64)).with_context(|| scene.name.clone())?;
     bar.finish_and_clear();
     let partial = farm::snapshot(&renderer)?.context("no samples were rendered")?;
-    if let Err(e) = write_render(output, &partial, output_args) {
+    let denoised = match (&denoiser, request.denoise) {
+        (Some(denoiser), Some(quality)) => Some(farm::denoise(denoiser, &partial, quality)?),
+        _ => None,
+    };
+    if let Err(e) = write_render(output, &partial, output_args, denoised.as_ref()) {
         // The samples are worth more than the image: keep them where --resume finds them.
         return Err(match partial.write(&checkpoint) {
             Ok(()) => anyhow::anyhow!(
@@ -587,8 +643,12 @@ fn render(
             (_, Some(samples), Some(rays)) => format!("{:.2} Msamples/s, {:.1} Mrays/s", samples / 1e6, rays / 1e6),
             _ => "too quick to time".to_owned(),
         };
+        let denoised_note = match &denoised {
+            Some(d) => format!(", denoised in {:.2} s", d.seconds),
+            None => String::new(),
+        };
         eprintln!(
-            "wrote {} ({}x{}, {} spp{why}) in {:.2} s on {}: {speed}{dropped}",
+            "wrote {} ({}x{}, {} spp{why}{denoised_note}) in {:.2} s on {}: {speed}{dropped}",
             output.display(),
             scene.film.width,
             scene.film.height,
@@ -618,6 +678,7 @@ fn render(
             "loop_limit": renderer.loop_limit(),
             "repeated_dispatches": renderer.repeated_dispatches,
             "outcome": outcome,
+            "denoised": denoised.as_ref().map(|d| json!({ "how": d.how, "seconds": d.seconds })),
             "output": output,
             "checkpoint": farm_args.checkpointing().then_some(&checkpoint),
         });
@@ -627,21 +688,44 @@ fn render(
 }
 
 /// EXR output is a partial render (mean, accumulation and attributes: mergeable and resumable);
-/// other formats get the mean.
-fn write_render(output: &Path, partial: &PartialRender, output_args: &OutputArgs) -> Result<()> {
-    if is_exr(output) {
+/// other formats get the mean. A denoised render's image is the denoised one (an EXR keeps the
+/// mean as its "noisy" layer).
+fn write_render(
+    output: &Path,
+    partial: &PartialRender,
+    output_args: &OutputArgs,
+    denoised: Option<&farm::Denoised>,
+) -> Result<()> {
+    if let Some(denoised) = denoised {
+        farm::write_denoised(output, partial, denoised, &output_args.options())
+    } else if is_exr(output) {
         partial.write(output)
     } else {
         Ok(write_image_with(output, &partial.image(), &output_args.options())?)
     }
 }
 
-fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: bool) -> Result<()> {
+fn merge(
+    inputs: &[PathBuf],
+    output: &Path,
+    output_args: &OutputArgs,
+    quiet: bool,
+    denoise: Option<Quality>,
+) -> Result<()> {
     caustica::image::check_output_path(output)?;
+    // OIDN before the inputs are read: a missing library fails first.
+    let denoiser = denoise.map(|_| caustica::denoise::Denoiser::new(DeviceChoice::AnyGpu)).transpose()?;
     remove_leftovers(&[output], quiet);
     handle_signals(false)?;
     let merged = farm::merge_files(inputs)?;
-    write_render(output, &merged, output_args)?;
+    let denoised = match (&denoiser, denoise) {
+        (Some(denoiser), Some(quality)) => Some(farm::denoise(denoiser, &merged, quality)?),
+        _ => None,
+    };
+    write_render(output, &merged, output_args, denoised.as_ref())?;
+    if let (Some(d), false) = (&denoised, quiet) {
+        eprintln!("caustica: denoised in {:.2} s with {}", d.seconds, d.how);
+    }
     if !quiet && !merged.aovs.is_empty() && !is_exr(output) {
         eprintln!("caustica: note: the AOV layers ({}) are kept only by .exr output", merged.aovs);
     }
@@ -652,6 +736,34 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
             inputs.len(),
             merged.samples(),
             format_ranges(&merged.ranges)
+        );
+    }
+    Ok(())
+}
+
+/// `denoise IN.exr -o OUT`: a render caustica wrote, denoised with the guides it has.
+fn denoise(input: &Path, output: &Path, quality: Quality, output_args: &OutputArgs, quiet: bool) -> Result<()> {
+    caustica::image::check_output_path(output)?;
+    let denoiser = caustica::denoise::Denoiser::new(DeviceChoice::AnyGpu)?;
+    let partial = PartialRender::read(input)?;
+    remove_leftovers(&[output], quiet);
+    let denoised = farm::denoise(&denoiser, &partial, quality)?;
+    if !denoised.guided {
+        eprintln!(
+            "caustica: warning: {} has no albedo and normal layers (render with --aov albedo,normal or --denoise): denoised on its colour alone",
+            input.display()
+        );
+    }
+    farm::write_denoised(output, &partial, &denoised, &output_args.options())?;
+    if !quiet {
+        eprintln!(
+            "wrote {} ({}x{}, {} spp, denoised in {:.2} s with {})",
+            output.display(),
+            partial.width,
+            partial.height,
+            partial.samples(),
+            denoised.seconds,
+            denoised.how
         );
     }
     Ok(())
@@ -795,6 +907,7 @@ fn run() -> Result<()> {
             height,
             seed,
             aov,
+            denoise,
             output_args,
             farm,
             quiet,
@@ -809,7 +922,13 @@ fn run() -> Result<()> {
             apply_overrides(&mut s, width, height, spp)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
-            render(s, RenderRequest { output, seed, aovs: aov, spp, quiet, json, kernel }, &output_args, &farm, &gpu)
+            render(
+                s,
+                RenderRequest { output, seed, aovs: aov, denoise, spp, quiet, json, kernel },
+                &output_args,
+                &farm,
+                &gpu,
+            )
         }
         Command::View { scene, spp, width, height, seed, exposure, tonemap, screenshot, scene_files, gpu } => {
             handle_signals(true)?;
@@ -835,7 +954,12 @@ fn run() -> Result<()> {
                 stop: &STOP,
             })
         }
-        Command::Merge { inputs, output, output_args, quiet, .. } => merge(&inputs, &output, &output_args, quiet),
+        Command::Merge { inputs, output, output_args, quiet, denoise, .. } => {
+            merge(&inputs, &output, &output_args, quiet, denoise)
+        }
+        Command::Denoise { input, output, quality, output_args, quiet } => {
+            denoise(&input, &output, quality, &output_args, quiet)
+        }
         Command::Compare { image, reference } => {
             let (a, b) = (caustica::image::read_image(&image)?, caustica::image::read_image(&reference)?);
             let c = caustica::image::compare(&a, &b, (&image.display().to_string(), &reference.display().to_string()))?;

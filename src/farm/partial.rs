@@ -7,6 +7,10 @@
 //! number of samples in it, exactly as the kernel keeps them, so resuming is bit for bit. Text
 //! attributes ([`SCENE_HASH`] and the rest) say which scene, seed and samples it holds.
 //!
+//! A denoised render ([`PartialRender::write_denoised`]) has the denoised image as the top-level
+//! "R", "G", "B", the noisy mean as "noisy.R/G/B" and the attribute [`DENOISED`] saying how; the
+//! accumulation is the same, so it still resumes and merges (the denoised image is made anew).
+//!
 //! AOVs ([`AOVS`] lists them) add, as means: "albedo.R/G/B", "normal.X/Y/Z", the depth as the
 //! top-level "Z" (OpenEXR's name for depth) and the sample count as "samples.Y"; and, as the
 //! kernel's raw sums, "accumulation.albedo.R/G/B", "accumulation.normal.X/Y/Z" and
@@ -34,6 +38,11 @@ pub const WIDTH: &str = "caustica.width";
 pub const HEIGHT: &str = "caustica.height";
 /// The AOVs the file carries, as `--aov` takes them ("albedo,normal,depth,samples"); absent: none.
 pub const AOVS: &str = "caustica.aovs";
+/// How the top-level image was denoised, e.g. "Open Image Denoise 2.5.1, quality high, guides
+/// albedo and normal"; absent: the top-level image is the noisy mean.
+pub const DENOISED: &str = "caustica.denoised";
+/// The layer that keeps the noisy mean of a denoised render.
+pub const NOISY_LAYER: &str = "noisy";
 
 const ACCUMULATION: &str = "accumulation";
 const ACCUMULATION_ALBEDO: &str = "accumulation.albedo";
@@ -94,6 +103,24 @@ impl PartialRender {
     /// Writes the file atomically (a temporary file renamed over `path`), so a crash leaves either
     /// the previous file or this one.
     pub fn write(&self, path: &Path) -> Result<()> {
+        self.write_with(path, None)
+    }
+
+    /// Writes the file as [`Self::write`] with `denoised` as the top-level image and the noisy
+    /// mean as the layer [`NOISY_LAYER`]; `how` is the [`DENOISED`] attribute.
+    pub fn write_denoised(&self, path: &Path, denoised: &RgbImage, how: &str) -> Result<()> {
+        ensure!(
+            (denoised.width, denoised.height) == (self.width, self.height),
+            "the denoised image is {}x{}, the render {}x{}",
+            denoised.width,
+            denoised.height,
+            self.width,
+            self.height
+        );
+        self.write_with(path, Some((denoised, how)))
+    }
+
+    fn write_with(&self, path: &Path, denoised: Option<(&RgbImage, &str)>) -> Result<()> {
         let mut attributes = BTreeMap::from([
             (SCENE_HASH.to_owned(), self.scene_hash.clone()),
             (SEED.to_owned(), self.seed.to_string()),
@@ -110,7 +137,14 @@ impl PartialRender {
             channels: ["R", "G", "B", "count"].map(String::from).to_vec(),
             data: self.accumulation.iter().flatten().copied().collect(),
         };
-        let mut layers = vec![ExrLayer::rgb("", &self.image()), accumulation];
+        let mut layers = match denoised {
+            Some((image, how)) => {
+                attributes.insert(DENOISED.to_owned(), how.to_owned());
+                vec![ExrLayer::rgb("", image), ExrLayer::rgb(NOISY_LAYER, &self.image())]
+            }
+            None => vec![ExrLayer::rgb("", &self.image())],
+        };
+        layers.push(accumulation);
         layers.extend(self.aov_layers());
         let doc = ExrDocument { width: self.width, height: self.height, layers, attributes };
         Ok(write_exr_document(path, &doc)?)

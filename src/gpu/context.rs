@@ -147,6 +147,7 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         min_texel_buffer_offset_alignment: props.limits.min_texel_buffer_offset_alignment,
         max_texel_buffers_per_stage: props.limits.max_per_stage_descriptor_sampled_images,
         device_local_bytes,
+        device_uuid: device_uuid(instance, pd, v),
         has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
     }
 }
@@ -169,6 +170,19 @@ fn driver_properties(
     unsafe { instance.get_physical_device_properties2(pd, &mut props) };
     let text = |c: Result<&std::ffi::CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
     (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()), Some(driver.driver_id))
+}
+
+/// The device's UUID, or `None` below Vulkan 1.1, which made the structure core.
+fn device_uuid(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> Option<[u8; 16]> {
+    if api_version < vk::API_VERSION_1_1 {
+        return None;
+    }
+    let mut id = vk::PhysicalDeviceIDProperties::default();
+    let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut id);
+    // SAFETY: `pd` belongs to the live `instance` (created for Vulkan 1.2) and the device reports at least 1.1,
+    // where PhysicalDeviceIDProperties is core; `id` is a local that outlives the call.
+    unsafe { instance.get_physical_device_properties2(pd, &mut props) };
+    Some(id.device_uuid)
 }
 
 /// The device's subgroup size, or 0 below Vulkan 1.1, which made the structure core.

@@ -71,6 +71,9 @@ pub struct DeviceInfo {
     /// Texel buffers count against the sampled images a stage may bind.
     pub max_texel_buffers_per_stage: u32,
     pub device_local_bytes: u64,
+    /// The device's UUID (`VkPhysicalDeviceIDProperties::deviceUUID`, Vulkan 1.1), which CUDA
+    /// and Open Image Denoise report for the same GPU; `None` below Vulkan 1.1.
+    pub device_uuid: Option<[u8; 16]>,
     pub(super) has_compute_queue: bool,
 }
 
