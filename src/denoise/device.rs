@@ -86,15 +86,7 @@ impl Device {
         let mut device = Self { oidn, handle, kind, name, version: 0 };
         // The version first, before the device is committed: a library that exports OIDN 2's names
         // but is another major version is refused before it does any work.
-        device.version = device.int("version");
-        let major = device.int("versionMajor");
-        if major != 2 {
-            bail!(
-                "it is Open Image Denoise version {}, not 2 (caustica needs {}, major version 2)",
-                device.version_text(),
-                super::LIBRARY_NAME
-            );
-        }
+        device.version = device.checked_version()?;
         // SAFETY: `handle` is a live device this struct owns.
         unsafe { (device.oidn.api.oidnCommitDevice)(device.handle) };
         device.check(&format!("starting its {} device", kind.label()))?;
@@ -103,7 +95,33 @@ impl Device {
 
     /// "2.5.1".
     pub fn version_text(&self) -> String {
-        format!("{}.{}.{}", self.version / 10000, self.version / 100 % 100, self.version % 100)
+        version_text(self.version)
+    }
+
+    /// OIDN's version (20501 for 2.5.1), or an error where its major version is not 2.
+    fn checked_version(&self) -> Result<i32> {
+        let (version, major) = (self.int("version"), self.int("versionMajor"));
+        if major != 2 {
+            bail!(
+                "it is Open Image Denoise version {}, not 2 (caustica needs {}, major version 2)",
+                version_text(version),
+                super::LIBRARY_NAME
+            );
+        }
+        Ok(version)
+    }
+
+    /// Checks that `oidn` is major version 2 on a CPU device created for the purpose and never
+    /// committed (creating one does no work): loading calls this, so that a wrong library fails
+    /// before anything else is done.
+    pub fn check_version(oidn: &Arc<Oidn>) -> Result<()> {
+        // SAFETY: a plain call with a device type of oidn.h.
+        let handle = unsafe { (oidn.api.oidnNewDevice)(ffi::DEVICE_TYPE_CPU) };
+        if handle.is_null() {
+            bail!("Open Image Denoise could not create its CPU device");
+        }
+        let probe = Self { oidn: oidn.clone(), handle, kind: DeviceKind::Cpu, name: String::new(), version: 0 };
+        probe.checked_version().map(|_| ())
     }
 
     /// "CUDA (NVIDIA H100 80GB HBM3)", "CPU (AMD EPYC 9B14)".
@@ -144,6 +162,11 @@ impl Drop for Device {
         // before (they borrow the device).
         unsafe { (self.oidn.api.oidnReleaseDevice)(self.handle) };
     }
+}
+
+/// "2.5.1" for OIDN's 20501.
+fn version_text(version: i32) -> String {
+    format!("{}.{}.{}", version / 10000, version / 100 % 100, version % 100)
 }
 
 /// The first OIDN physical device, not the CPU, whose UUID (where it reports one) `accept`s: its

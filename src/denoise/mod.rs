@@ -88,7 +88,9 @@ impl Library {
     /// or the install script when OIDN is nowhere.
     pub fn load() -> Result<Self> {
         let (oidn, origin) = locate::load()?;
-        Ok(Self { oidn: Arc::new(oidn), origin })
+        let oidn = Arc::new(oidn);
+        Device::check_version(&oidn).map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
+        Ok(Self { oidn, origin })
     }
 
     /// A denoiser on the OIDN device `choice` asks for, the CPU where OIDN has none such. Fails,
