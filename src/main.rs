@@ -298,6 +298,10 @@ enum Command {
         /// Accumulate these AOVs too (as `render --aov`), to measure what they cost.
         #[arg(long, value_parser = aov_set)]
         aov: Option<AovSet>,
+        /// Also time denoising an image of this size with Open Image Denoise at this quality
+        /// (default high), on the device `render --denoise` would use.
+        #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "high", value_name = "QUALITY", conflicts_with = "suite")]
+        denoise: Option<Quality>,
         /// Print the results as JSON (with --suite, one document: the device and a row per scene).
         #[arg(long)]
         json: bool,
@@ -795,10 +799,12 @@ fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<
 
 /// `bench SCENE`: one scene, by default at 256x256 and 64 spp (not the scene's own film, so that
 /// figures of different scenes compare).
+#[allow(clippy::too_many_arguments)]
 fn bench(
     mut scene: Scene,
     film: FilmOverrides,
     aovs: AovSet,
+    denoise: Option<Quality>,
     kernel: &KernelSetup,
     json: bool,
     gpu: &DeviceArgs,
@@ -809,12 +815,28 @@ fn bench(
         Some(film.height.unwrap_or(256)),
         Some(film.spp.unwrap_or(64)),
     )?;
+    // OIDN first: a missing library fails before the measurement.
+    let oidn = denoise.map(|_| caustica::denoise::Library::load()).transpose()?;
     let ctx = gpu.context()?;
     let measured = bench::measure(&ctx, &scene, aovs, kernel)?;
+    let denoised = match (&oidn, denoise) {
+        (Some(library), Some(quality)) => {
+            let denoiser = library.denoiser(DeviceChoice::SameAs(ctx.info.device_uuid))?;
+            Some(bench::time_denoise(&denoiser, scene.film.width, scene.film.height, quality)?)
+        }
+        _ => None,
+    };
     if json {
-        println!("{}", measured.json_with_device(&ctx.info));
+        let mut summary = measured.json_with_device(&ctx.info);
+        if let (Some(timing), serde_json::Value::Object(fields)) = (&denoised, &mut summary) {
+            fields.insert("denoise".to_owned(), timing.json());
+        }
+        println!("{summary}");
     } else {
         bench::print_measurement(&measured, &ctx.info);
+        if let Some(timing) = &denoised {
+            println!("{}", timing.line());
+        }
     }
     Ok(())
 }
@@ -998,6 +1020,7 @@ fn run() -> Result<()> {
             suite,
             scenes,
             aov,
+            denoise,
             json,
             general_kernel,
             group_order,
@@ -1012,7 +1035,7 @@ fn run() -> Result<()> {
             if suite {
                 return bench_suite(scenes.as_deref(), film, aovs, &kernel, json, &scene_files, &gpu);
             }
-            bench(scene_files.load_scene(scene.as_ref())?, film, aovs, &kernel, json, &gpu)
+            bench(scene_files.load_scene(scene.as_ref())?, film, aovs, denoise, &kernel, json, &gpu)
         }
     }
 }

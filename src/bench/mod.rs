@@ -6,9 +6,11 @@
 //! `suite` says which scenes the suite runs and at what size; `report` prints measurements as text
 //! and JSON.
 
+mod denoise_timing;
 mod report;
 mod suite;
 
+pub use denoise_timing::{time_denoise, DenoiseTiming};
 pub use report::{print_left_out, print_measurement, print_suite, suite_json, SUITE_COLUMNS};
 pub use suite::{run_suite, suite_entries, FilmOverrides, SuiteEntry, SuiteOutcome, SuiteSize};
 

@@ -105,6 +105,9 @@ impl Library {
 #[derive(Clone, Copy, Debug)]
 pub struct Timing {
     pub seconds: f64,
+    /// Of which, copying the images into OIDN's buffers and the result back (device memory on a
+    /// GPU device, reached through the host).
+    pub copy_seconds: f64,
 }
 
 impl Denoiser {
@@ -135,10 +138,12 @@ impl Denoiser {
         }
         let device = &self.device;
         let (w, h) = (color.width, color.height);
+        let uploads = Instant::now();
         let color_buffer = Buffer::with(device, &color.pixels)?;
         let output = Buffer::with(device, &color.pixels)?;
         let albedo = guides.map(|g| Buffer::with(device, g.albedo)).transpose()?;
         let normal = guides.and_then(|g| g.normal).map(|n| Buffer::with(device, n)).transpose()?;
+        let mut copy_seconds = uploads.elapsed().as_secs_f64();
         let clean_guides = albedo.is_some() && quality.prefilters_guides();
         if clean_guides {
             // Each guide through the RT filter on its own, in place (OIDN's documented prefilter).
@@ -164,7 +169,9 @@ impl Denoiser {
         beauty.set_bool("cleanAux", clean_guides);
         beauty.set_int("quality", quality.oidn());
         beauty.run("the denoising filter")?;
+        let download = Instant::now();
         let denoised = RgbImage { width: w, height: h, pixels: output.read()? };
-        Ok((denoised, Timing { seconds: started.elapsed().as_secs_f64() }))
+        copy_seconds += download.elapsed().as_secs_f64();
+        Ok((denoised, Timing { seconds: started.elapsed().as_secs_f64(), copy_seconds }))
     }
 }
