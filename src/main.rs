@@ -24,8 +24,8 @@ struct Cli {
 
 #[derive(clap::Args, Clone)]
 struct DeviceArgs {
-    /// Vulkan device: index from `caustica devices` or part of its name. Default: a discrete GPU,
-    /// else any GPU, CPU implementations (lavapipe) last.
+    /// Vulkan device: index or UUID from `caustica devices`, or part of its name. Default: a
+    /// discrete GPU, else any GPU, CPU implementations (lavapipe) last.
     #[arg(long)]
     device: Option<String>,
     /// Enable the Khronos validation layer and fail on any message it reports.
@@ -227,7 +227,12 @@ enum Command {
         verbose: bool,
     },
     /// List the Vulkan devices.
-    Devices,
+    Devices {
+        /// One JSON array on standard output: each device's index, UUID, name, kind, Vulkan and
+        /// driver versions and memory (how a farm task picks its GPU: docs/farm.md).
+        #[arg(long)]
+        json: bool,
+    },
     /// Write a Mitsuba 3 XML or pbrt-v4 scene as the equivalent caustica TOML scene (meshes referenced by path).
     Convert {
         /// The scene to convert (.xml or .pbrt).
@@ -636,6 +641,20 @@ fn write_render(output: &Path, partial: &PartialRender, output_args: &OutputArgs
     }
 }
 
+/// One device as `devices --json` prints it.
+fn device_json(d: &caustica::gpu::DeviceInfo) -> serde_json::Value {
+    serde_json::json!({
+        "index": d.index,
+        "uuid": d.uuid_text(),
+        "name": d.name,
+        "kind": d.kind.label(),
+        "vulkan": d.api_version,
+        "driver_name": d.driver_name,
+        "driver_info": d.driver_info,
+        "device_local_bytes": d.device_local_bytes,
+    })
+}
+
 fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: bool) -> Result<()> {
     caustica::image::check_output_path(output)?;
     remove_leftovers(&[output], quiet);
@@ -848,20 +867,25 @@ fn run() -> Result<()> {
             Ok(())
         }
         Command::Convert { input, output, define } => convert(&input, &output, &define),
-        Command::Devices => {
+        Command::Devices { json } => {
             let devices = list_devices()?;
+            if json {
+                println!("{}", serde_json::to_string(&devices.iter().map(device_json).collect::<Vec<_>>())?);
+                return Ok(());
+            }
             if devices.is_empty() {
                 println!("no Vulkan devices found");
             }
             for d in devices {
                 println!(
-                    "{}: {} ({}, Vulkan {}, {:.0} MiB device-local, max storage buffer {:.0} MiB)",
+                    "{}: {} ({}, Vulkan {}, {:.0} MiB device-local, max storage buffer {:.0} MiB){}",
                     d.index,
                     d.name,
                     d.kind.label(),
                     d.api_version,
                     d.device_local_bytes as f64 / 1048576.0,
-                    d.max_storage_buffer_range as f64 / 1048576.0
+                    d.max_storage_buffer_range as f64 / 1048576.0,
+                    d.uuid_text().map(|u| format!(", UUID {u}")).unwrap_or_default()
                 );
             }
             Ok(())

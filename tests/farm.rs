@@ -465,3 +465,34 @@ fn a_failed_image_write_keeps_the_samples_in_the_checkpoint() {
     let kept = PartialRender::read(&checkpoint).unwrap();
     fails_with(&o, &format!("images/out.png: No such file or directory (os error 2); the {} samples per pixel are saved in {}: rerun with --resume", kept.samples(), checkpoint.display()));
 }
+
+/// A farm task picks its GPU by UUID (docs/farm.md): `devices --json` lists each device's, and
+/// `--device` takes it; a UUID no device has is refused naming the devices.
+#[test]
+fn devices_json_lists_uuids_that_device_selects() {
+    let o = caustica(&["devices", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let devices: Vec<serde_json::Value> = serde_json::from_slice(&o.stdout).expect("one JSON array");
+    assert!(!devices.is_empty(), "no devices listed");
+    for (i, d) in devices.iter().enumerate() {
+        assert_eq!(d["index"], i);
+        let uuid = d["uuid"].as_str().expect("a UUID (every device here is Vulkan 1.1 or newer)");
+        let groups: Vec<usize> = uuid.split('-').map(str::len).collect();
+        assert_eq!(groups, [8, 4, 4, 4, 12], "{uuid}");
+        assert!(uuid.chars().all(|c| c == '-' || c.is_ascii_hexdigit() && !c.is_ascii_uppercase()), "{uuid}");
+    }
+    let dir = temp_dir("farm-device-uuid");
+    let out = dir.join("by-uuid.png");
+    let uuid = devices[0]["uuid"].as_str().unwrap();
+    render(&out, &["--spp", "1", "--device", uuid]);
+    let o = caustica(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--device",
+        "00000000-0000-0000-0000-000000000000",
+    ]);
+    fails_with(&o, "no Vulkan device matches --device '00000000-0000-0000-0000-000000000000'");
+}

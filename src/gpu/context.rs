@@ -139,6 +139,7 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         driver_id,
         max_compute_shared_memory_size: props.limits.max_compute_shared_memory_size,
         subgroup_size: subgroup_size(instance, pd, v),
+        uuid: device_uuid(instance, pd, v),
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
@@ -169,6 +170,22 @@ fn driver_properties(
     unsafe { instance.get_physical_device_properties2(pd, &mut props) };
     let text = |c: Result<&std::ffi::CStr, _>| c.map(|c| c.to_string_lossy().into_owned()).unwrap_or_default();
     (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()), Some(driver.driver_id))
+}
+
+/// The device's UUID (`VkPhysicalDeviceIDProperties::deviceUUID`), or None below Vulkan 1.1,
+/// which made the structure core. The same physical GPU reports the same UUID to every process
+/// (NVIDIA's equals the `GPU-…` UUID of nvidia-smi), unlike the device index, which follows the
+/// loader's order.
+fn device_uuid(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> Option<[u8; 16]> {
+    if api_version < vk::API_VERSION_1_1 {
+        return None;
+    }
+    let mut id = vk::PhysicalDeviceIDProperties::default();
+    let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut id);
+    // SAFETY: `pd` belongs to the live `instance` and the device reports Vulkan 1.1 or newer (checked above), where
+    // PhysicalDeviceIDProperties is core; `id` is a local that outlives the call.
+    unsafe { instance.get_physical_device_properties2(pd, &mut props) };
+    Some(id.device_uuid)
 }
 
 /// The device's subgroup size, or 0 below Vulkan 1.1, which made the structure core.
@@ -212,7 +229,11 @@ fn choose(
         Some(w) => {
             let w_lower = w.to_lowercase();
             usable
-                .filter(|(_, d)| d.index.to_string() == w || d.name.to_lowercase().contains(&w_lower))
+                .filter(|(_, d)| {
+                    d.index.to_string() == w
+                        || d.uuid_text().is_some_and(|u| u == w_lower)
+                        || d.name.to_lowercase().contains(&w_lower)
+                })
                 .min_by_key(|(_, d)| d.index)
                 .ok_or_else(|| anyhow!("no Vulkan device matches --device '{w}' (devices: {names})"))
         }
