@@ -212,8 +212,17 @@ enum Command {
     /// of one scene and seed with disjoint sample ranges.
     Merge {
         /// Partial renders.
-        #[arg(required = true)]
+        #[arg(required_unless_present = "watch", conflicts_with = "watch")]
         inputs: Vec<PathBuf>,
+        /// Preview a farm while it runs: merge the parts and checkpoints that appear in DIR into
+        /// the output as they come (of files sharing samples, the one holding more), saying how
+        /// many of the --spp planned samples per pixel are in; end when all are, or on SIGINT or
+        /// SIGTERM, with what is in written.
+        #[arg(long, value_name = "DIR", requires = "spp")]
+        watch: Option<PathBuf>,
+        /// With --watch: the samples per pixel the farm renders in all (tasks x samples each).
+        #[arg(long, requires = "watch")]
+        spp: Option<u32>,
         /// Merged image: .exr keeps the accumulation (mergeable and resumable again); .pfm, .png.
         #[arg(short, long)]
         output: PathBuf,
@@ -676,6 +685,72 @@ fn merge(inputs: &[PathBuf], output: &Path, output_args: &OutputArgs, quiet: boo
     Ok(())
 }
 
+/// `merge --watch DIR --spp N -o OUT`: folds in the parts and checkpoints appearing in DIR (see
+/// farm::pick_watched), rewriting OUT whenever more samples are in, until N samples per pixel are
+/// or a SIGINT/SIGTERM comes; then OUT holds what is in. Polls twice a second: farms write their
+/// files over network file systems, where change notification is not to be relied on.
+fn merge_watch(dir: &Path, spp: u32, output: &Path, output_args: &OutputArgs, quiet: bool) -> Result<()> {
+    anyhow::ensure!(dir.is_dir(), "{}: --watch takes a folder (the farm's parts)", dir.display());
+    anyhow::ensure!(spp > 0, "--spp: the farm plans no samples");
+    caustica::image::check_output_path(output)?;
+    remove_leftovers(&[output], quiet);
+    signals::install(|signal| {
+        if signal == signals::INTERRUPT && INTERRUPTS.fetch_add(1, Ordering::SeqCst) > 0 {
+            caustica::image::remove_temp_files_in_flight();
+            std::process::exit(130);
+        }
+        if !STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("caustica: writing what is in (interrupt again to quit at once)");
+        }
+    })
+    .context("installing the SIGINT/SIGTERM handler")?;
+    let mut said_skipped = std::collections::HashSet::new();
+    let mut written = 0;
+    loop {
+        // Read STOP before looking, so that the files there when the signal came are all in.
+        let stopping = STOP.load(Ordering::SeqCst);
+        let (chosen, skipped) =
+            farm::pick_watched(dir, output).with_context(|| format!("reading {}", dir.display()))?;
+        for s in skipped {
+            if said_skipped.insert((s.path.clone(), s.reason.clone())) {
+                eprintln!("caustica: warning: {}: left out of the preview: {}", s.path.display(), s.reason);
+            }
+        }
+        let samples: u32 = chosen.iter().map(|(_, p)| p.samples()).sum();
+        if samples != written && !chosen.is_empty() {
+            let files = chosen.len();
+            let merged = farm::merge(chosen.iter().map(|(path, p)| (path.as_path(), p.clone())).collect())?;
+            write_render(output, &merged, output_args)?;
+            written = samples;
+            if !quiet {
+                eprintln!(
+                    "{}: {samples} of {spp} planned spp in ({:.0} %), from {files} file{}: samples {}",
+                    output.display(),
+                    100.0 * f64::from(samples) / f64::from(spp),
+                    if files == 1 { "" } else { "s" },
+                    format_ranges(&merged.ranges)
+                );
+            }
+        }
+        if samples >= spp || stopping {
+            if !quiet {
+                match (samples >= spp, written) {
+                    (true, _) => eprintln!("{}: all {spp} planned spp are in", output.display()),
+                    (false, 0) => eprintln!("{}: stopped with no parts in; nothing written", output.display()),
+                    (false, _) => eprintln!("{}: stopped with {samples} of {spp} planned spp", output.display()),
+                }
+            }
+            return Ok(());
+        }
+        for _ in 0..10 {
+            if STOP.load(Ordering::SeqCst) {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
 /// `convert IN -o OUT.toml`: the imported scene as TOML, checked to load before it is written.
 fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<()> {
     use caustica::scene::import;
@@ -853,6 +928,9 @@ fn run() -> Result<()> {
                 },
                 stop: &STOP,
             })
+        }
+        Command::Merge { watch: Some(dir), spp: Some(spp), output, output_args, quiet, .. } => {
+            merge_watch(&dir, spp, &output, &output_args, quiet)
         }
         Command::Merge { inputs, output, output_args, quiet, .. } => merge(&inputs, &output, &output_args, quiet),
         Command::Compare { image, reference } => {

@@ -496,3 +496,66 @@ fn devices_json_lists_uuids_that_device_selects() {
     ]);
     fails_with(&o, "no Vulkan device matches --device '00000000-0000-0000-0000-000000000000'");
 }
+
+/// `merge --watch` folds in parts and checkpoints as they appear (a checkpoint and its part hold
+/// the same samples: counted once), ends when the planned samples are in with the merge's own
+/// file, and on SIGINT writes what is in and exits 0.
+#[test]
+fn merge_watch_previews_the_parts_as_they_come_and_stops_when_all_are_in() {
+    let dir = temp_dir("farm-watch");
+    let parts = dir.join("parts");
+    std::fs::create_dir(&parts).unwrap();
+    let preview = dir.join("preview.exr");
+    let watch = |spp: &str, out: &Path| {
+        caustica_command(&["merge", "--watch", parts.to_str().unwrap(), "--spp", spp, "-o", out.to_str().unwrap()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let mut watcher = watch("6", &preview);
+    let mut files = vec![];
+    for k in 0..3 {
+        let (part, checkpoint) = (parts.join(format!("part-{k}.exr")), parts.join(format!("part-{k}.checkpoint.exr")));
+        let offset = (2 * k).to_string();
+        render(&part, &["--spp", "2", "--sample-offset", &offset, "--checkpoint", checkpoint.to_str().unwrap()]);
+        files.push(part);
+    }
+    let waited = Instant::now();
+    while watcher.try_wait().unwrap().is_none() {
+        if waited.elapsed() > Duration::from_secs(30) {
+            watcher.kill().unwrap();
+            panic!("the watcher did not end when all samples were in");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = watcher.wait_with_output().unwrap();
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{said}");
+    assert!(said.contains("6 of 6 planned spp in (100 %)") && said.contains("all 6 planned spp are in"), "{said}");
+    let merged = dir.join("merged.exr");
+    let o = merge(&files.iter().collect::<Vec<_>>(), &merged);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read(&preview).unwrap() == std::fs::read(&merged).unwrap(), "preview differs from the merge");
+
+    // Planned 100: SIGINT once the preview holds what is there, and it stays written.
+    let partial_preview = dir.join("partial-preview.exr");
+    let mut watcher = watch("100", &partial_preview);
+    let started = Instant::now();
+    while !partial_preview.exists() {
+        assert!(started.elapsed() < Duration::from_secs(30), "no preview written");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(Command::new("kill").args(["-INT", &watcher.id().to_string()]).status().unwrap().success());
+    let stopped = Instant::now();
+    while watcher.try_wait().unwrap().is_none() {
+        if stopped.elapsed() > Duration::from_secs(30) {
+            watcher.kill().unwrap();
+            panic!("the watcher did not end on SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let status = watcher.wait().unwrap();
+    assert!(status.success(), "{status}");
+    assert_eq!(PartialRender::read(&partial_preview).unwrap().samples(), 6);
+}

@@ -10,6 +10,7 @@ mod outputs;
 mod partial;
 mod rate;
 mod session;
+mod watch;
 
 pub use duration::parse_duration;
 pub use merge::{merge, merge_files};
@@ -19,3 +20,4 @@ pub use partial::{
 };
 pub use rate::per_second;
 pub use session::{check_sample_range, resumable_range, resume, run, snapshot, Outcome, RenderJob, SAMPLE_INDEX_END};
+pub use watch::{pick as pick_watched, Skipped};
