@@ -709,7 +709,7 @@ fn merge_watch(dir: &Path, spp: u32, output: &Path, output_args: &OutputArgs, qu
     loop {
         // Read STOP before looking, so that the files there when the signal came are all in.
         let stopping = STOP.load(Ordering::SeqCst);
-        let (chosen, skipped) =
+        let farm::Picked { chosen, skipped } =
             farm::pick_watched(dir, output).with_context(|| format!("reading {}", dir.display()))?;
         for s in skipped {
             if said_skipped.insert((s.path.clone(), s.reason.clone())) {

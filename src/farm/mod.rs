@@ -20,4 +20,4 @@ pub use partial::{
 };
 pub use rate::per_second;
 pub use session::{check_sample_range, resumable_range, resume, run, snapshot, Outcome, RenderJob, SAMPLE_INDEX_END};
-pub use watch::{pick as pick_watched, Skipped};
+pub use watch::{pick as pick_watched, Picked, Skipped};

@@ -14,11 +14,19 @@ pub struct Skipped {
     pub reason: String,
 }
 
+/// What [`pick`] found in the folder.
+#[derive(Debug, Default)]
+pub struct Picked {
+    /// The files to merge, with what they hold: no two share a sample.
+    pub chosen: Vec<(PathBuf, PartialRender)>,
+    pub skipped: Vec<Skipped>,
+}
+
 /// Reads the `.exr` files directly in `dir` (not `leave_out`, the preview itself, nor the
 /// temporary files of writes in flight), and picks those to merge: of files that share samples,
 /// the one holding more; files of another render than the largest one (scene, seed, size, AOVs)
 /// and files that do not read are skipped, with the reason.
-pub fn pick(dir: &Path, leave_out: &Path) -> std::io::Result<(Vec<(PathBuf, PartialRender)>, Vec<Skipped>)> {
+pub fn pick(dir: &Path, leave_out: &Path) -> std::io::Result<Picked> {
     let mut skipped = vec![];
     let mut found = vec![];
     let mut names: Vec<PathBuf> = std::fs::read_dir(dir)?
@@ -50,7 +58,7 @@ pub fn pick(dir: &Path, leave_out: &Path) -> std::io::Result<(Vec<(PathBuf, Part
             chosen.push((path, partial));
         }
     }
-    Ok((chosen, skipped))
+    Ok(Picked { chosen, skipped })
 }
 
 /// Whether two sorted lists of half-open ranges share an index.
