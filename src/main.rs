@@ -25,8 +25,8 @@ struct Cli {
 
 #[derive(clap::Args, Clone)]
 struct DeviceArgs {
-    /// Vulkan device: index from `caustica devices` or part of its name. Default: a discrete GPU,
-    /// else any GPU, CPU implementations (lavapipe) last.
+    /// Vulkan device: index or UUID from `caustica devices`, or part of its name. Default: a
+    /// discrete GPU, else any GPU, CPU implementations (lavapipe) last.
     #[arg(long)]
     device: Option<String>,
     /// Enable the Khronos validation layer and fail on any message it reports.
@@ -219,14 +219,23 @@ enum Command {
     /// of one scene and seed with disjoint sample ranges.
     Merge {
         /// Partial renders.
-        #[arg(required = true)]
+        #[arg(required_unless_present = "watch", conflicts_with = "watch")]
         inputs: Vec<PathBuf>,
+        /// Preview a farm while it runs: merge the parts and checkpoints that appear in DIR into
+        /// the output as they come (of files sharing samples, the one holding more), saying how
+        /// many of the --spp planned samples per pixel are in; end when all are, or on SIGINT or
+        /// SIGTERM, with what is in written.
+        #[arg(long, value_name = "DIR", requires = "spp")]
+        watch: Option<PathBuf>,
+        /// With --watch: the samples per pixel the farm renders in all (tasks x samples each).
+        #[arg(long, requires = "watch")]
+        spp: Option<u32>,
         /// Merged image: .exr keeps the accumulation (mergeable and resumable again); .pfm, .png.
         #[arg(short, long)]
         output: PathBuf,
         /// Denoise the merged image (as `render --denoise`), with the partials' albedo and normal
         /// guides where they have them.
-        #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "high", value_name = "QUALITY")]
+        #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "high", value_name = "QUALITY", conflicts_with = "watch")]
         denoise: Option<Quality>,
         #[command(flatten)]
         output_args: OutputArgs,
@@ -256,7 +265,12 @@ enum Command {
         quiet: bool,
     },
     /// List the Vulkan devices.
-    Devices,
+    Devices {
+        /// One JSON array on standard output: each device's index, UUID, name, kind, Vulkan and
+        /// driver versions and memory (how a farm task picks its GPU: docs/farm.md).
+        #[arg(long)]
+        json: bool,
+    },
     /// Write a Mitsuba 3 XML or pbrt-v4 scene as the equivalent caustica TOML scene (meshes referenced by path).
     Convert {
         /// The scene to convert (.xml or .pbrt).
@@ -580,7 +594,7 @@ fn render(
     let ctx = gpu.context()?;
     let denoiser = match &oidn {
         Some(library) => {
-            let denoiser = library.denoiser(DeviceChoice::SameAs(ctx.info.device_uuid))?;
+            let denoiser = library.denoiser(DeviceChoice::SameAs(ctx.info.uuid))?;
             log::info!("caustica: denoising with {} ({})", denoiser.describe(), library.origin);
             Some(denoiser)
         }
@@ -709,6 +723,20 @@ fn write_render(
     }
 }
 
+/// One device as `devices --json` prints it.
+fn device_json(d: &caustica::gpu::DeviceInfo) -> serde_json::Value {
+    serde_json::json!({
+        "index": d.index,
+        "uuid": d.uuid_text(),
+        "name": d.name,
+        "kind": d.kind.label(),
+        "vulkan": d.api_version,
+        "driver_name": d.driver_name,
+        "driver_info": d.driver_info,
+        "device_local_bytes": d.device_local_bytes,
+    })
+}
+
 fn merge(
     inputs: &[PathBuf],
     output: &Path,
@@ -773,6 +801,72 @@ fn denoise(input: &Path, output: &Path, quality: Quality, output_args: &OutputAr
     Ok(())
 }
 
+/// `merge --watch DIR --spp N -o OUT`: folds in the parts and checkpoints appearing in DIR (see
+/// farm::pick_watched), rewriting OUT whenever more samples are in, until N samples per pixel are
+/// or a SIGINT/SIGTERM comes; then OUT holds what is in. Polls twice a second: farms write their
+/// files over network file systems, where change notification is not to be relied on.
+fn merge_watch(dir: &Path, spp: u32, output: &Path, output_args: &OutputArgs, quiet: bool) -> Result<()> {
+    anyhow::ensure!(dir.is_dir(), "{}: --watch takes a folder (the farm's parts)", dir.display());
+    anyhow::ensure!(spp > 0, "--spp: the farm plans no samples");
+    caustica::image::check_output_path(output)?;
+    remove_leftovers(&[output], quiet);
+    signals::install(|signal| {
+        if signal == signals::INTERRUPT && INTERRUPTS.fetch_add(1, Ordering::SeqCst) > 0 {
+            caustica::image::remove_temp_files_in_flight();
+            std::process::exit(130);
+        }
+        if !STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("caustica: writing what is in (interrupt again to quit at once)");
+        }
+    })
+    .context("installing the SIGINT/SIGTERM handler")?;
+    let mut said_skipped = std::collections::HashSet::new();
+    let mut written = 0;
+    loop {
+        // Read STOP before looking, so that the files there when the signal came are all in.
+        let stopping = STOP.load(Ordering::SeqCst);
+        let farm::Picked { chosen, skipped } =
+            farm::pick_watched(dir, output).with_context(|| format!("reading {}", dir.display()))?;
+        for s in skipped {
+            if said_skipped.insert((s.path.clone(), s.reason.clone())) {
+                eprintln!("caustica: warning: {}: left out of the preview: {}", s.path.display(), s.reason);
+            }
+        }
+        let samples: u32 = chosen.iter().map(|(_, p)| p.samples()).sum();
+        if samples != written && !chosen.is_empty() {
+            let files = chosen.len();
+            let merged = farm::merge(chosen.iter().map(|(path, p)| (path.as_path(), p.clone())).collect())?;
+            write_render(output, &merged, output_args, None)?;
+            written = samples;
+            if !quiet {
+                eprintln!(
+                    "{}: {samples} of {spp} planned spp in ({:.0} %), from {files} file{}: samples {}",
+                    output.display(),
+                    100.0 * f64::from(samples) / f64::from(spp),
+                    if files == 1 { "" } else { "s" },
+                    format_ranges(&merged.ranges)
+                );
+            }
+        }
+        if samples >= spp || stopping {
+            if !quiet {
+                match (samples >= spp, written) {
+                    (true, _) => eprintln!("{}: all {spp} planned spp are in", output.display()),
+                    (false, 0) => eprintln!("{}: stopped with no parts in; nothing written", output.display()),
+                    (false, _) => eprintln!("{}: stopped with {samples} of {spp} planned spp", output.display()),
+                }
+            }
+            return Ok(());
+        }
+        for _ in 0..10 {
+            if STOP.load(Ordering::SeqCst) {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
 /// `convert IN -o OUT.toml`: the imported scene as TOML, checked to load before it is written.
 fn convert(input: &Path, output: &Path, defines: &[(String, String)]) -> Result<()> {
     use caustica::scene::import;
@@ -821,7 +915,7 @@ fn bench(
     let measured = bench::measure(&ctx, &scene, aovs, kernel)?;
     let denoised = match (&oidn, denoise) {
         (Some(library), Some(quality)) => {
-            let denoiser = library.denoiser(DeviceChoice::SameAs(ctx.info.device_uuid))?;
+            let denoiser = library.denoiser(DeviceChoice::SameAs(ctx.info.uuid))?;
             Some(bench::time_denoise(&denoiser, scene.film.width, scene.film.height, quality)?)
         }
         _ => None,
@@ -976,6 +1070,9 @@ fn run() -> Result<()> {
                 stop: &STOP,
             })
         }
+        Command::Merge { watch: Some(dir), spp: Some(spp), output, output_args, quiet, .. } => {
+            merge_watch(&dir, spp, &output, &output_args, quiet)
+        }
         Command::Merge { inputs, output, output_args, quiet, denoise, .. } => {
             merge(&inputs, &output, &output_args, quiet, denoise)
         }
@@ -994,20 +1091,25 @@ fn run() -> Result<()> {
             Ok(())
         }
         Command::Convert { input, output, define } => convert(&input, &output, &define),
-        Command::Devices => {
+        Command::Devices { json } => {
             let devices = list_devices()?;
+            if json {
+                println!("{}", serde_json::to_string(&devices.iter().map(device_json).collect::<Vec<_>>())?);
+                return Ok(());
+            }
             if devices.is_empty() {
                 println!("no Vulkan devices found");
             }
             for d in devices {
                 println!(
-                    "{}: {} ({}, Vulkan {}, {:.0} MiB device-local, max storage buffer {:.0} MiB)",
+                    "{}: {} ({}, Vulkan {}, {:.0} MiB device-local, max storage buffer {:.0} MiB){}",
                     d.index,
                     d.name,
                     d.kind.label(),
                     d.api_version,
                     d.device_local_bytes as f64 / 1048576.0,
-                    d.max_storage_buffer_range as f64 / 1048576.0
+                    d.max_storage_buffer_range as f64 / 1048576.0,
+                    d.uuid_text().map(|u| format!(", UUID {u}")).unwrap_or_default()
                 );
             }
             Ok(())

@@ -465,3 +465,119 @@ fn a_failed_image_write_keeps_the_samples_in_the_checkpoint() {
     let kept = PartialRender::read(&checkpoint).unwrap();
     fails_with(&o, &format!("images/out.png: No such file or directory (os error 2); the {} samples per pixel are saved in {}: rerun with --resume", kept.samples(), checkpoint.display()));
 }
+
+/// A farm task picks its GPU by UUID (docs/farm.md): `devices --json` lists each device's, and
+/// `--device` takes it; a UUID no device has is refused naming the devices.
+#[test]
+fn devices_json_lists_uuids_that_device_selects() {
+    let o = caustica(&["devices", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let devices: Vec<serde_json::Value> = serde_json::from_slice(&o.stdout).expect("one JSON array");
+    assert!(!devices.is_empty(), "no devices listed");
+    for (i, d) in devices.iter().enumerate() {
+        assert_eq!(d["index"], i);
+        let uuid = d["uuid"].as_str().expect("a UUID (every device here is Vulkan 1.1 or newer)");
+        let groups: Vec<usize> = uuid.split('-').map(str::len).collect();
+        assert_eq!(groups, [8, 4, 4, 4, 12], "{uuid}");
+        assert!(uuid.chars().all(|c| c == '-' || c.is_ascii_hexdigit() && !c.is_ascii_uppercase()), "{uuid}");
+    }
+    let dir = temp_dir("farm-device-uuid");
+    let out = dir.join("by-uuid.png");
+    let uuid = devices[0]["uuid"].as_str().unwrap();
+    render(&out, &["--spp", "1", "--device", uuid]);
+    let o = caustica(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--device",
+        "00000000-0000-0000-0000-000000000000",
+    ]);
+    fails_with(&o, "no Vulkan device matches --device '00000000-0000-0000-0000-000000000000'");
+}
+
+/// `merge --watch` folds in parts and checkpoints as they appear (a checkpoint and its part hold
+/// the same samples: counted once), ends when the planned samples are in with the merge's own
+/// file, and on SIGINT writes what is in and exits 0.
+#[test]
+fn merge_watch_previews_the_parts_as_they_come_and_stops_when_all_are_in() {
+    let dir = temp_dir("farm-watch");
+    let parts = dir.join("parts");
+    std::fs::create_dir(&parts).unwrap();
+    let preview = dir.join("preview.exr");
+    let watch = |spp: &str, out: &Path| {
+        caustica_command(&["merge", "--watch", parts.to_str().unwrap(), "--spp", spp, "-o", out.to_str().unwrap()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let mut watcher = watch("6", &preview);
+    let mut files = vec![];
+    for k in 0..3 {
+        let (part, checkpoint) = (parts.join(format!("part-{k}.exr")), parts.join(format!("part-{k}.checkpoint.exr")));
+        let offset = (2 * k).to_string();
+        render(&part, &["--spp", "2", "--sample-offset", &offset, "--checkpoint", checkpoint.to_str().unwrap()]);
+        files.push(part);
+    }
+    let waited = Instant::now();
+    while watcher.try_wait().unwrap().is_none() {
+        if waited.elapsed() > Duration::from_secs(30) {
+            watcher.kill().unwrap();
+            panic!("the watcher did not end when all samples were in");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = watcher.wait_with_output().unwrap();
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{said}");
+    assert!(said.contains("6 of 6 planned spp in (100 %)") && said.contains("all 6 planned spp are in"), "{said}");
+    let merged = dir.join("merged.exr");
+    let o = merge(&files.iter().collect::<Vec<_>>(), &merged);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read(&preview).unwrap() == std::fs::read(&merged).unwrap(), "preview differs from the merge");
+
+    // Planned 100: SIGINT once the preview holds what is there, and it stays written.
+    let partial_preview = dir.join("partial-preview.exr");
+    let mut watcher = watch("100", &partial_preview);
+    let started = Instant::now();
+    while !partial_preview.exists() {
+        assert!(started.elapsed() < Duration::from_secs(30), "no preview written");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(Command::new("kill").args(["-INT", &watcher.id().to_string()]).status().unwrap().success());
+    let stopped = Instant::now();
+    while watcher.try_wait().unwrap().is_none() {
+        if stopped.elapsed() > Duration::from_secs(30) {
+            watcher.kill().unwrap();
+            panic!("the watcher did not end on SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let status = watcher.wait().unwrap();
+    assert!(status.success(), "{status}");
+    assert_eq!(PartialRender::read(&partial_preview).unwrap().samples(), 6);
+}
+
+/// Merges of the same parts, given in any order and run in separate processes, are the same file
+/// byte for byte: a farm's results can be compared with `cmp` or a checksum (the EXR header's
+/// attributes are written sorted, not in a per-process hash order).
+#[test]
+fn merges_of_the_same_parts_in_any_order_are_the_same_file() {
+    let dir = temp_dir("farm-merge-order");
+    let parts: Vec<PathBuf> = (0..3).map(|k| dir.join(format!("part-{k}.exr"))).collect();
+    for (k, part) in parts.iter().enumerate() {
+        render(part, &["--spp", "1", "--sample-offset", &k.to_string()]);
+    }
+    let orders = [[0, 1, 2], [2, 0, 1], [1, 2, 0]];
+    let mut files = vec![];
+    for (i, order) in orders.iter().enumerate() {
+        let out = dir.join(format!("merged-{i}.exr"));
+        let inputs: Vec<&PathBuf> = order.iter().map(|&k| &parts[k]).collect();
+        let o = merge(&inputs, &out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        files.push(std::fs::read(&out).unwrap());
+    }
+    assert!(files[1] == files[0] && files[2] == files[0], "merges in other orders are different files");
+}

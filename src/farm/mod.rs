@@ -11,6 +11,7 @@ mod outputs;
 mod partial;
 mod rate;
 mod session;
+mod watch;
 
 pub use denoised::{denoise, write_denoised, Denoised};
 pub use duration::parse_duration;
@@ -22,3 +23,4 @@ pub use partial::{
 };
 pub use rate::per_second;
 pub use session::{check_sample_range, resumable_range, resume, run, snapshot, Outcome, RenderJob, SAMPLE_INDEX_END};
+pub use watch::{pick as pick_watched, Picked, Skipped};

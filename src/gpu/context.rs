@@ -139,6 +139,7 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         driver_id,
         max_compute_shared_memory_size: props.limits.max_compute_shared_memory_size,
         subgroup_size: subgroup_size(instance, pd, v),
+        uuid: device_uuid(instance, pd, v),
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
         max_storage_buffers_per_stage: props.limits.max_per_stage_descriptor_storage_buffers,
@@ -147,7 +148,6 @@ fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> D
         min_texel_buffer_offset_alignment: props.limits.min_texel_buffer_offset_alignment,
         max_texel_buffers_per_stage: props.limits.max_per_stage_descriptor_sampled_images,
         device_local_bytes,
-        device_uuid: device_uuid(instance, pd, v),
         has_compute_queue: queues.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE)),
     }
 }
@@ -172,15 +172,18 @@ fn driver_properties(
     (text(driver.driver_name_as_c_str()), text(driver.driver_info_as_c_str()), Some(driver.driver_id))
 }
 
-/// The device's UUID, or `None` below Vulkan 1.1, which made the structure core.
+/// The device's UUID (`VkPhysicalDeviceIDProperties::deviceUUID`), or None below Vulkan 1.1,
+/// which made the structure core. The same physical GPU reports the same UUID to every process
+/// (NVIDIA's equals the `GPU-…` UUID of nvidia-smi), unlike the device index, which follows the
+/// loader's order.
 fn device_uuid(instance: &ash::Instance, pd: vk::PhysicalDevice, api_version: u32) -> Option<[u8; 16]> {
     if api_version < vk::API_VERSION_1_1 {
         return None;
     }
     let mut id = vk::PhysicalDeviceIDProperties::default();
     let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut id);
-    // SAFETY: `pd` belongs to the live `instance` (created for Vulkan 1.2) and the device reports at least 1.1,
-    // where PhysicalDeviceIDProperties is core; `id` is a local that outlives the call.
+    // SAFETY: `pd` belongs to the live `instance` and the device reports Vulkan 1.1 or newer (checked above), where
+    // PhysicalDeviceIDProperties is core; `id` is a local that outlives the call.
     unsafe { instance.get_physical_device_properties2(pd, &mut props) };
     Some(id.device_uuid)
 }
@@ -226,7 +229,11 @@ fn choose(
         Some(w) => {
             let w_lower = w.to_lowercase();
             usable
-                .filter(|(_, d)| d.index.to_string() == w || d.name.to_lowercase().contains(&w_lower))
+                .filter(|(_, d)| {
+                    d.index.to_string() == w
+                        || d.uuid_text().is_some_and(|u| u == w_lower)
+                        || d.name.to_lowercase().contains(&w_lower)
+                })
                 .min_by_key(|(_, d)| d.index)
                 .ok_or_else(|| anyhow!("no Vulkan device matches --device '{w}' (devices: {names})"))
         }

@@ -56,6 +56,10 @@ pub struct DeviceInfo {
     /// Invocations in a subgroup (`subgroupSize`, Vulkan 1.1): lavapipe's SIMD width in lanes,
     /// NVIDIA's warp. 0 below Vulkan 1.1.
     pub subgroup_size: u32,
+    /// `deviceUUID` (Vulkan 1.1): the same GPU has the same UUID in every process, whatever the
+    /// loader's order; `--device` takes it (docs/farm.md, "Which GPU a task uses"), and CUDA and
+    /// Open Image Denoise report it for the same GPU (the denoiser's device). None below 1.1.
+    pub uuid: Option<[u8; 16]>,
     /// Bytes one storage-buffer binding can see (lowered by `ContextOptions::storage_binding_limit`).
     pub max_storage_buffer_range: u64,
     pub min_storage_buffer_offset_alignment: u64,
@@ -71,13 +75,17 @@ pub struct DeviceInfo {
     /// Texel buffers count against the sampled images a stage may bind.
     pub max_texel_buffers_per_stage: u32,
     pub device_local_bytes: u64,
-    /// The device's UUID (`VkPhysicalDeviceIDProperties::deviceUUID`, Vulkan 1.1), which CUDA
-    /// and Open Image Denoise report for the same GPU; `None` below Vulkan 1.1.
-    pub device_uuid: Option<[u8; 16]>,
     pub(super) has_compute_queue: bool,
 }
 
 impl DeviceInfo {
+    /// The UUID as text, lower-case hex grouped 8-4-4-4-12 (`nvidia-smi -L` prints NVIDIA's the
+    /// same way after `GPU-`).
+    pub fn uuid_text(&self) -> Option<String> {
+        let hex: String = self.uuid?.iter().map(|b| format!("{b:02x}")).collect();
+        Some(format!("{}-{}-{}-{}-{}", &hex[..8], &hex[8..12], &hex[12..16], &hex[16..20], &hex[20..]))
+    }
+
     /// Mesa's lavapipe (llvmpipe's Vulkan driver): its kernels run on the CPU, a subgroup one SIMD
     /// loop, which several kernel choices are tuned for (render/walk_queue.rs, walk_records.rs).
     pub fn is_lavapipe(&self) -> bool {

@@ -20,6 +20,7 @@ use ::exr::prelude::{
 
 use super::atomic::write_atomically;
 use super::exr::{check_header_sizes, exr_error};
+use super::exr_header_order::sort_header_attributes;
 use super::{check_size, file_name, ImageError, RgbImage};
 use crate::input_file::{InputFiles, InputKind};
 
@@ -74,7 +75,15 @@ pub fn write_exr_document(path: &Path, doc: &ExrDocument) -> Result<(), ImageErr
     check_size(&file_name(path), doc.width.into(), doc.height.into())?;
     let layer = encode(doc).map_err(|reason| ImageError::ExrLayout { file: file_name(path), reason })?;
     let image = Image::from_layer(layer);
-    write_atomically(path, |out| image.write().to_buffered(out).map_err(|e| exr_error(path, e)))
+    // Encoded in memory first, so the header's attributes can be put in one order (equal images,
+    // equal files: see exr_header_order).
+    let mut encoded = std::io::Cursor::new(Vec::new());
+    image.write().to_buffered(&mut encoded).map_err(|e| exr_error(path, e))?;
+    let mut bytes = encoded.into_inner();
+    sort_header_attributes(&mut bytes);
+    write_atomically(path, |out| {
+        std::io::Write::write_all(out, &bytes).map_err(|cause| ImageError::Io { file: file_name(path), cause })
+    })
 }
 
 /// Reads every channel of every layer (half and u32 samples converted to

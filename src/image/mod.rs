@@ -6,6 +6,7 @@ mod atomic;
 pub mod compare;
 pub mod display_codes;
 pub mod exr;
+mod exr_header_order;
 pub mod exr_layers;
 pub mod pfm;
 pub mod png;
