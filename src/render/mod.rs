@@ -16,6 +16,8 @@ mod kernel_options;
 mod kernel_setup;
 pub mod layout;
 mod light_selection;
+pub mod light_tree;
+pub mod light_tree_index;
 mod ray_query_scene;
 mod renderer;
 mod scene_data;
