@@ -10,10 +10,16 @@
 // tests/light_tree.rs compares the two.
 //
 // Compiled in only where SCENE_LIGHT_TREE: a scene with one light, or that picks by power or
-// uniformly, has no tree walk. Needs layout.glsl (the `light_tree` and `light_tree_index` arrays,
+// uniformly, has no tree walk (but the general kernel, which asks light_tree_picks()). Needs layout.glsl (the `light_tree` and `light_tree_index` arrays,
 // `punctual_lights`, `frame`) and loop_limit.glsl.
 
 #if SCENE_LIGHT_TREE
+
+// Whether this scene picks by the tree: always in a kernel built for a scene that does; the
+// general kernel, compiled with every feature, asks the frame.
+bool light_tree_picks() {
+    return frame.light_tree != 0u;
+}
 
 // The largest float below 1 (light_tree.rs ONE_MINUS_EPSILON).
 const float LIGHT_TREE_ONE_MINUS_EPSILON = 0.99999994;

@@ -204,11 +204,12 @@ float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
 float hit_light_pdf(Hit hit, vec3 ref, vec3 dir, float dist) {
     Primitive p = world_primitive(hit);
 #if SCENE_LIGHT_TREE
-    float pick = (1.0 - frame.env_selection_probability) * light_tree_pmf(ref, hit_light(hit.instance, hit.prim));
-    return light_pdf_picked(p, pick, ref, dir, dist);
-#else
-    return light_pdf(p, ref, dir, dist);
+    if (light_tree_picks()) {
+        float pick = (1.0 - frame.env_selection_probability) * light_tree_pmf(ref, hit_light(hit.instance, hit.prim));
+        return light_pdf_picked(p, pick, ref, dir, dist);
+    }
 #endif
+    return light_pdf(p, ref, dir, dist);
 }
 
 // Index of the area light to sample: a uniform entry of the alias table, kept or swapped for its
@@ -330,12 +331,17 @@ bool sample_punctual_light(PunctualLight l, vec3 ref, vec2 u, inout LightSample 
 vec3 light_disks_radiance(vec3 dir, float bsdf_pdf) {
     vec3 sum = vec3(0.0);
     if (SCENE_LIGHT_DISKS == 0) return sum;
+#if SCENE_LIGHT_TREE
+    bool tree = light_tree_picks();
+#else
+    bool tree = false;
+#endif
     for (uint i = 0u; i < frame.punctual_light_count; ++i) {
         LOOP_ITERATION();
         PunctualLight l = punctual_lights[i];
         if (punctual_kind(l) != LIGHT_DIRECTIONAL || l.shape.z <= 0.0 || !in_light_disk(l, dir)) continue;
         // Its pick: beside the light tree, its share there; else by power or uniformly.
-        float pick = SCENE_LIGHT_TREE == 1 ? (1.0 - frame.env_selection_probability) * l.shape.w : pick_probability(l.value_power.w);
+        float pick = tree ? (1.0 - frame.env_selection_probability) * l.shape.w : pick_probability(l.value_power.w);
         float light_pdf = pick / (2.0 * PI * l.shape.z);
         sum += l.value_power.rgb * (bsdf_pdf > 0.0 ? power_heuristic(bsdf_pdf, light_pdf) : 1.0);
     }
@@ -350,21 +356,27 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     if (count == 0u) return false;
     // The light tree's pick probability of the light it picks (the map's share taken out).
     float tree_pick = 0.0;
-#if SCENE_LIGHT_TREE
+    bool tree = false;
     uint index;
-    if (!light_tree_pick(ref, rng_next(rng), index, tree_pick)) return false;
-    tree_pick *= 1.0 - frame.env_selection_probability;
-#else
-    uint index = pick_light(count, rng);
-    // One light (area or punctual): index 0, a constant, so that it and its material are loaded
-    // once for the subgroup. The pick still draws its numbers: the general kernel's sample streams.
-    if (SCENE_LIGHT_PICK == 0) index = 0u;
+#if SCENE_LIGHT_TREE
+    tree = light_tree_picks();
+    if (tree) {
+        if (!light_tree_pick(ref, rng_next(rng), index, tree_pick)) return false;
+        tree_pick *= 1.0 - frame.env_selection_probability;
+    } else
 #endif
+    {
+        index = pick_light(count, rng);
+        // One light (area or punctual): index 0, a constant, so that it and its material are
+        // loaded once for the subgroup. The pick still draws its numbers: the general kernel's
+        // sample streams.
+        if (SCENE_LIGHT_PICK == 0) index = 0u;
+    }
     vec2 u = rng_next2(rng);
     if (SCENE_PUNCTUAL_LIGHTS == 1 && index >= area_count) {
         PunctualLight l = punctual_lights[index - area_count];
         if (!sample_punctual_light(l, ref, u, ls)) return false;
-        ls.pdf *= SCENE_LIGHT_TREE == 1 ? tree_pick : pick_probability(l.value_power.w);
+        ls.pdf *= tree ? tree_pick : pick_probability(l.value_power.w);
         return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
     }
     Primitive p = load_lights(index);
@@ -384,7 +396,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
 #if SCENE_ALPHA
     ls.radiance *= light_presence(p, m, point);
 #endif
-    ls.pdf = SCENE_LIGHT_TREE == 1 ? light_pdf_picked(p, tree_pick, ref, ls.dir, ls.dist) : light_pdf(p, ref, ls.dir, ls.dist);
+    ls.pdf = tree ? light_pdf_picked(p, tree_pick, ref, ls.dir, ls.dist) : light_pdf(p, ref, ls.dir, ls.dist);
     return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
 }
 

@@ -323,7 +323,10 @@ glsl_block! {
         /// directional light beside it (light_tree.rs; the environment map's share not counted);
         /// 0 without a tree.
         pub light_tree_share: f32,
-        pub pad9: f32,
+        /// 1: next-event estimation picks by the light tree (the scene's `light_tree`), 0: by
+        /// the alias table or uniformly. A kernel built for one scene knows it (SCENE_LIGHT_TREE);
+        /// the general kernel, which has the tree walk compiled in, reads it here.
+        pub light_tree: u32,
         pub pad10: f32,
     }
 }
