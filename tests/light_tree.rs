@@ -422,7 +422,9 @@ fn the_tree_agrees_in_the_mean_with_bsdf_sampling_and_power_selection() {
     let mut bsdf_scene = scene_of_every_light(512, false, LightSelection::Bvh);
     let mut nee_scene = scene_of_every_light(128, true, LightSelection::Bvh);
     for s in [&mut bsdf_scene, &mut nee_scene] {
-        s.lights.retain(|l| matches!(l, caustica::scene::Light::Directional { angular_diameter, .. } if *angular_diameter > 0.0));
+        s.lights.retain(
+            |l| matches!(l, caustica::scene::Light::Directional { angular_diameter, .. } if *angular_diameter > 0.0),
+        );
     }
     let bsdf = render(&ctx, &bsdf_scene, 22);
     let nee = render(&ctx, &nee_scene, 23);

@@ -20,6 +20,7 @@
 
 use super::layout::{GpuLightTreeNode, LIGHT_TREE_LEAF, LIGHT_TREE_NONE, LIGHT_TREE_TWO_SIDED};
 use glam::{DVec3, Vec3};
+use std::cmp::Ordering;
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -327,7 +328,8 @@ impl LightTree {
                 return (self.node_importance(node, p) > 0.0).then_some((n.links[0], pmf));
             }
             let (c0, c1) = (self.node_importance(node + 1, p), self.node_importance(n.links[0], p));
-            if !(c0 + c1 > 0.0) {
+            // Neither child lights p (or a NaN crept in): nothing to pick, as in the kernel.
+            if (c0 + c1).partial_cmp(&0.0) != Some(Ordering::Greater) {
                 return None;
             }
             let p0 = c0 / (c0 + c1);
@@ -362,7 +364,7 @@ impl LightTree {
                 continue;
             }
             let (c0, c1) = (self.node_importance(node + 1, p) as f64, self.node_importance(n.links[0], p) as f64);
-            if !(c0 + c1 > 0.0) {
+            if (c0 + c1).partial_cmp(&0.0) != Some(Ordering::Greater) {
                 none += reach;
                 continue;
             }
@@ -417,7 +419,7 @@ fn split(lights: &mut [(u32, LightBounds)], bounds: &LightBounds) -> usize {
     };
     let mut best: Option<(f64, usize, usize)> = None;
     for dim in 0..3 {
-        if !(extent[dim] > 0.0) {
+        if extent[dim] <= 0.0 {
             continue;
         }
         let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
