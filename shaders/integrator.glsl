@@ -153,7 +153,7 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
     if (max3(le) > 0.0) {
         float weight = 1.0;
         if (nee && path.bsdf_pdf > 0.0) {
-            weight = power_heuristic(path.bsdf_pdf, light_pdf(world_primitive(hit), path.prev_point, path.dir, hit.t));
+            weight = power_heuristic(path.bsdf_pdf, hit_light_pdf(hit, path.prev_point, path.dir, hit.t));
         }
         path.radiance += path.throughput * le * weight;
     }

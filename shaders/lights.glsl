@@ -1,8 +1,9 @@
 // Direct lighting: the environment map (when importance sampled) with probability
 // frame.env_selection_probability, otherwise a light: an area light (every emissive primitive and
 // mesh triangle, in world space: the `lights` buffer) or a point, spot or directional light
-// (`punctual_lights`). A light is picked in proportion to its power through an alias table (or
-// uniformly: integrator.light_selection), then a point on an area light (or, for spheres, a
+// (`punctual_lights`). A light is picked by the light tree (light_tree.glsl; where the scene
+// selects "bvh" and has more than one light), in proportion to its power through an alias table,
+// or uniformly (integrator.light_selection), then a point on an area light (or, for spheres, a
 // direction in the cone they subtend; for triangles, in their spherical triangle), or a direction
 // in a sun disk, is sampled. Pdfs are per unit solid angle at `ref` and include the probability of
 // the pick. Point, spot and delta directional lights are delta lights: only next-event estimation
@@ -13,6 +14,8 @@
 // and the MIS weight of an emitter hit by BSDF sampling both evaluate it, so the two weights of a
 // path come from the same pdfs and sum to 1, with no light index needed at a hit; the alias table,
 // built from the same powers in double precision, picks with that probability up to f32 rounding.
+// With the light tree the pick probability depends on the shading point too, and a hit finds its
+// light's index (hit_light in light_tree.glsl) to evaluate it.
 //
 // Each kind of light the scene lacks is compiled out (SCENE_SPHERE_LIGHTS, SCENE_TRIANGLE_LIGHTS,
 // SCENE_PUNCTUAL_LIGHTS, SCENE_LIGHT_DISKS: src/render/features.rs): a quad-lit box samples no
@@ -167,9 +170,8 @@ bool sphere_cone(Primitive p, vec3 ref, out SphereCone c) {
 }
 
 // Solid-angle pdf of sampling `p` from `ref` (sphere by cone when outside, triangle by solid
-// angle where it can, otherwise by area).
-float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
-    float pick = light_pick_probability(p);
+// angle where it can, otherwise by area), once picked with probability `pick`.
+float light_pdf_picked(Primitive p, float pick, vec3 ref, vec3 dir, float dist) {
     switch (prim_kind(p)) {
         case PRIM_SPHERE: {
             SphereCone cone;
@@ -189,6 +191,25 @@ float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
     float cos_light = abs(dot(primitive_normal(p, point), dir));
     if (cos_light <= 0.0) return 0.0;
     return pick * dist * dist / (cos_light * primitive_area(p));
+}
+
+// Solid-angle pdf of picking and sampling `p` from `ref` by power or uniformly.
+float light_pdf(Primitive p, vec3 ref, vec3 dir, float dist) {
+    return light_pdf_picked(p, light_pick_probability(p), ref, dir, dist);
+}
+
+// Solid-angle pdf with which next-event estimation at `ref` samples the emitter `hit` that a ray
+// along `dir` met `dist` away: with the light tree, its pick probability depends on `ref` and
+// on which light it is (light_tree.glsl); otherwise on its power alone.
+float hit_light_pdf(Hit hit, vec3 ref, vec3 dir, float dist) {
+    Primitive p = world_primitive(hit);
+#if SCENE_LIGHT_TREE
+    if (light_tree_picks()) {
+        float pick = (1.0 - frame.env_selection_probability) * light_tree_pmf(ref, hit_light(hit.instance, hit.prim));
+        return light_pdf_picked(p, pick, ref, dir, dist);
+    }
+#endif
+    return light_pdf(p, ref, dir, dist);
 }
 
 // Index of the area light to sample: a uniform entry of the alias table, kept or swapped for its
@@ -310,11 +331,18 @@ bool sample_punctual_light(PunctualLight l, vec3 ref, vec2 u, inout LightSample 
 vec3 light_disks_radiance(vec3 dir, float bsdf_pdf) {
     vec3 sum = vec3(0.0);
     if (SCENE_LIGHT_DISKS == 0) return sum;
+#if SCENE_LIGHT_TREE
+    bool tree = light_tree_picks();
+#else
+    bool tree = false;
+#endif
     for (uint i = 0u; i < frame.punctual_light_count; ++i) {
         LOOP_ITERATION();
         PunctualLight l = punctual_lights[i];
         if (punctual_kind(l) != LIGHT_DIRECTIONAL || l.shape.z <= 0.0 || !in_light_disk(l, dir)) continue;
-        float light_pdf = pick_probability(l.value_power.w) / (2.0 * PI * l.shape.z);
+        // Its pick: beside the light tree, its share there; else by power or uniformly.
+        float pick = tree ? (1.0 - frame.env_selection_probability) * l.shape.w : pick_probability(l.value_power.w);
+        float light_pdf = pick / (2.0 * PI * l.shape.z);
         sum += l.value_power.rgb * (bsdf_pdf > 0.0 ? power_heuristic(bsdf_pdf, light_pdf) : 1.0);
     }
     return sum;
@@ -326,15 +354,29 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
     ls.pdf = 0.0;
     ls.delta = false;
     if (count == 0u) return false;
-    uint index = pick_light(count, rng);
-    // One light (area or punctual): index 0, a constant, so that it and its material are loaded
-    // once for the subgroup. The pick still draws its numbers: the general kernel's sample streams.
-    if (SCENE_LIGHT_PICK == 0) index = 0u;
+    // The light tree's pick probability of the light it picks (the map's share taken out).
+    float tree_pick = 0.0;
+    bool tree = false;
+    uint index;
+#if SCENE_LIGHT_TREE
+    tree = light_tree_picks();
+    if (tree) {
+        if (!light_tree_pick(ref, rng_next(rng), index, tree_pick)) return false;
+        tree_pick *= 1.0 - frame.env_selection_probability;
+    } else
+#endif
+    {
+        index = pick_light(count, rng);
+        // One light (area or punctual): index 0, a constant, so that it and its material are
+        // loaded once for the subgroup. The pick still draws its numbers: the general kernel's
+        // sample streams.
+        if (SCENE_LIGHT_PICK == 0) index = 0u;
+    }
     vec2 u = rng_next2(rng);
     if (SCENE_PUNCTUAL_LIGHTS == 1 && index >= area_count) {
         PunctualLight l = punctual_lights[index - area_count];
         if (!sample_punctual_light(l, ref, u, ls)) return false;
-        ls.pdf *= pick_probability(l.value_power.w);
+        ls.pdf *= tree ? tree_pick : pick_probability(l.value_power.w);
         return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
     }
     Primitive p = load_lights(index);
@@ -354,7 +396,7 @@ bool sample_light(vec3 ref, inout Rng rng, out LightSample ls) {
 #if SCENE_ALPHA
     ls.radiance *= light_presence(p, m, point);
 #endif
-    ls.pdf = light_pdf(p, ref, ls.dir, ls.dist);
+    ls.pdf = tree ? light_pdf_picked(p, tree_pick, ref, ls.dir, ls.dist) : light_pdf(p, ref, ls.dir, ls.dist);
     return ls.pdf > 0.0 && max3(ls.radiance) > 0.0;
 }
 

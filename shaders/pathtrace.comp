@@ -41,6 +41,7 @@ layout(local_size_x = WORKGROUP_WIDTH, local_size_y = WORKGROUP_HEIGHT, local_si
 #include "surface.glsl"
 #include "materials.glsl"
 #include "environment.glsl"
+#include "light_tree.glsl"
 #include "lights.glsl"
 #include "camera.glsl"
 #include "integrator.glsl"

@@ -135,6 +135,13 @@ fn two_lights_picked_uniformly_add_up_exactly() {
     assert_two_lights_sum_exactly(LightSelection::Uniform, 7);
 }
 
+/// The same two lights picked by the light tree, where the pick probability depends on the point
+/// and the hit emitter's pdf is walked up the tree from its leaf.
+#[test]
+fn two_lights_picked_by_the_light_tree_add_up_exactly() {
+    assert_two_lights_sum_exactly(LightSelection::Bvh, 8);
+}
+
 /// A triangle light large and near enough to be sampled by solid angle (spherical triangle).
 /// Fails a 0.1 % bias.
 #[test]

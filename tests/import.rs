@@ -138,8 +138,8 @@ fn max_depth_is_the_longest_path_in_segments_and_rr_depth_where_roulette_starts(
     assert_eq!(depth(""), (1024, 5), "a scene without an integrator gets path's defaults");
     assert_eq!(
         scene("selection", SENSOR).integrator.light_selection,
-        LightSelection::Uniform,
-        "Mitsuba picks emitters uniformly"
+        LightSelection::Bvh,
+        "Mitsuba scenes get caustica's default, the light tree"
     );
     assert!(error(
         "depth0",
@@ -384,7 +384,7 @@ filter = "box"
 max_bounces = 5
 rr_start = 5
 sampler = "independent"
-light_selection = "uniform"
+light_selection = "bvh"
 [materials.white]
 albedo = [0.8, 0.7, 0.6]
 one_sided = true

@@ -201,12 +201,13 @@ fn maxdepth_counts_bounces_one_less_than_caustica_segments() {
         let s = scene_of("depth", &format!("Camera \"perspective\"\n{text}\nWorldBegin\n"));
         (s.integrator.max_bounces, s.integrator.rr_start, s.integrator.light_selection)
     };
-    assert_eq!(integrator("Integrator \"path\" \"integer maxdepth\" 0"), (1, 1, LightSelection::Power));
+    assert_eq!(integrator("Integrator \"path\" \"integer maxdepth\" 0"), (1, 1, LightSelection::Bvh));
     assert_eq!(
         integrator("Integrator \"volpath\" \"integer maxdepth\" 3 \"string lightsampler\" \"uniform\""),
         (4, 1, LightSelection::Uniform)
     );
-    assert_eq!(integrator(""), (6, 1, LightSelection::Power), "pbrt's default maxdepth is 5");
+    assert_eq!(integrator(""), (6, 1, LightSelection::Bvh), "pbrt's default maxdepth is 5, its lightsampler bvh");
+    assert_eq!(integrator("Integrator \"path\" \"string lightsampler\" \"power\"").2, LightSelection::Power);
     assert_eq!(integrator("Integrator \"path\" \"integer maxdepth\" -1").0, 1024);
     assert!(error("bdpt", "Camera \"perspective\"\nIntegrator \"bdpt\"\nWorldBegin\n")
         .contains("scene.pbrt:2: Integrator \"bdpt\""));

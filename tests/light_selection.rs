@@ -220,9 +220,13 @@ fn large_triangle_light_gives_the_analytic_direct_light() {
 }
 
 #[test]
-fn light_selection_defaults_to_power_and_rejects_unknown_choices() {
+fn light_selection_defaults_to_the_light_tree_and_rejects_unknown_choices() {
     let camera = "camera = { position = [0, 0, 3], look_at = [0, 0, 0] }\n";
-    assert_eq!(parse(camera).integrator.light_selection, LightSelection::Power);
+    assert_eq!(parse(camera).integrator.light_selection, LightSelection::Bvh);
+    assert_eq!(
+        parse(&format!("{camera}[integrator]\nlight_selection = \"power\"\n")).integrator.light_selection,
+        LightSelection::Power
+    );
     assert_eq!(
         parse(&format!("{camera}[integrator]\nlight_selection = \"uniform\"\n")).integrator.light_selection,
         LightSelection::Uniform
@@ -237,7 +241,11 @@ fn light_selection_defaults_to_power_and_rejects_unknown_choices() {
         .expect_err("rejected")
     );
     assert!(
-        e.contains("light_selection") && e.contains("random") && e.contains("power") && e.contains("uniform"),
+        e.contains("light_selection")
+            && e.contains("random")
+            && e.contains("bvh")
+            && e.contains("power")
+            && e.contains("uniform"),
         "{e}"
     );
 }

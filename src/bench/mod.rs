@@ -201,6 +201,9 @@ impl Measurement {
             "primitives": self.geometry.acceleration.primitives,
             "gpu_bytes": self.geometry.gpu_bytes,
             "acceleration_structure_bytes": self.geometry.acceleration_structure_bytes,
+            "light_tree_nodes": self.geometry.light_tree.as_ref().map(|t| t.nodes),
+            "light_tree_bytes": self.geometry.light_tree.as_ref().map(|t| t.bytes),
+            "light_tree_build_seconds": self.geometry.light_tree.as_ref().map(|t| t.build_seconds),
             // The driver's own names and figures, e.g. {"Register Count": "96"}.
             "kernel_statistics": self.kernel_statistics.iter().map(|s| (s.name.clone(), Value::from(s.value.clone()))).collect::<serde_json::Map<_, _>>(),
         })

@@ -104,6 +104,14 @@ fn print_geometry(g: &GeometryReport) {
         mib(g.texture_bytes),
         mib(g.gpu_bytes)
     );
+    if let Some(t) = &g.light_tree {
+        println!(
+            "light tree:   {} nodes, {:.1} KiB, built in {:.4} s",
+            t.nodes,
+            t.bytes as f64 / 1024.0,
+            t.build_seconds
+        );
+    }
     if g.acceleration_structure_bytes > 0 {
         println!("ray queries:  {:.1} MiB of acceleration structures", mib(g.acceleration_structure_bytes));
     }

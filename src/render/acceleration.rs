@@ -18,8 +18,13 @@ pub struct Acceleration {
     /// Per instance, in the same order: the index of the mesh it places (into `triangle_slots`),
     /// `None` for the scene's own shapes. The ray-query traversal builds a structure a mesh from it.
     pub instance_meshes: Vec<Option<u32>>,
+    /// Per instance, in the same order: the scene instance it is (`Scene::instances`), `None`
+    /// for the scene's own shapes. The light tree's index finds a hit emitter's light by it.
+    pub instance_sources: Vec<Option<u32>>,
     /// The scene's own shapes, in their bottom-level leaf order.
     pub primitives: Vec<GpuPrimitive>,
+    /// Per entry of `primitives`: its index in `Scene::shapes`.
+    pub shape_order: Vec<u32>,
     /// Every mesh's triangles by value, each mesh in its bottom-level leaf order (see
     /// [`GpuMeshTriangle`]), and their materials in the same order.
     pub triangles: Vec<GpuMeshTriangle>,
@@ -261,6 +266,14 @@ impl Acceleration {
             .collect::<Vec<_>>();
 
         let instance_meshes = top.prim_order.iter().map(|&p| placements[p as usize].0.map(|m| m as u32)).collect();
+        // Placements list the shape group (when there is one) before the scene's instances.
+        let first_instance = usize::from(group.is_some());
+        let instance_sources = top
+            .prim_order
+            .iter()
+            .map(|&p| placements[p as usize].0.map(|_| (p as usize - first_instance) as u32))
+            .collect();
+        let shape_order = group.as_ref().map_or(Vec::new(), |g| g.bvh.prim_order.clone());
         let stats = AccelerationStats {
             mesh_triangles: triangles.len(),
             instanced_triangles: scene.instances.iter().map(|i| scene.meshes[i.mesh as usize].triangles.len()).sum(),
@@ -276,7 +289,9 @@ impl Acceleration {
             nodes,
             instances,
             instance_meshes,
+            instance_sources,
             primitives,
+            shape_order,
             triangles,
             triangle_materials,
             triangle_slots,

@@ -7,8 +7,8 @@
 
 use super::glsl_block::{GlslBlock, GlslMember, GlslTexels, GlslType, Texel};
 use super::layout::{
-    FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuPunctualLight, GpuStats,
-    GpuTexture,
+    FrameParams, GpuAliasEntry, GpuInstance, GpuLightTreeNode, GpuMaterial, GpuMeshTriangle, GpuPrimitive,
+    GpuPunctualLight, GpuStats, GpuTexture,
 };
 use super::variant::KernelVariant;
 use super::walk_records::WalkRecords;
@@ -47,12 +47,14 @@ pub enum KernelBuffer {
     AovNormalHits,
     PathStates,
     SceneStructure,
+    LightTree,
+    LightTreeIndex,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::SceneStructure as usize + 1;
+    pub const COUNT: usize = KernelBuffer::LightTreeIndex as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -301,6 +303,13 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // instance's bottom level its mesh's triangles or the boxes of the scene's own shapes
     // (ray_query_scene.rs): what ray queries trace in place of `nodes` (ray_query.glsl).
     BufferBinding { buffer: SceneStructure, binding: 23, name: "scene_structure", shape: Shape::AccelerationStructure, access: Read, bound_in: RayQueryKernels, what: "acceleration structures" },
+    // The light tree's nodes (light_tree.rs, GpuLightTreeNode), root first; empty unless the
+    // scene picks its lights by the tree (SCENE_LIGHT_TREE).
+    BufferBinding { buffer: LightTree, binding: 24, name: "light_tree", shape: array::<GpuLightTreeNode>(), access: Read, bound_in: EveryKernel, what: "light tree" },
+    // Where the light tree meets the lights (light_tree_index.rs): per light its leaf, per
+    // instance where its hits find their lights, per shape its light, per mesh triangle its rank
+    // among its mesh's emitters. Empty with the tree.
+    BufferBinding { buffer: LightTreeIndex, binding: 25, name: "light_tree_index", shape: texel_buffer::<u32>(), access: Read, bound_in: EveryKernel, what: "light tree index" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,

@@ -173,6 +173,9 @@ pub struct SceneFeatures {
     /// Directional lights with an angular size (a sun's disk): what a path that escapes sees of
     /// them.
     pub light_disks: bool,
+    /// Lights picked by the light tree (shaders/light_tree.glsl): `light_selection = "bvh"` and
+    /// more than one light. Else the alias table or a uniform pick, and no tree walk.
+    pub light_tree: bool,
 }
 
 impl SceneFeatures {
@@ -208,6 +211,7 @@ impl SceneFeatures {
         punctual_lights: true,
         light_pick: true,
         light_disks: true,
+        light_tree: true,
     };
 
     /// What `data` uses.
@@ -278,6 +282,7 @@ impl SceneFeatures {
                 .punctual_lights
                 .iter()
                 .any(|l| l.position_kind[3].to_bits() == LIGHT_DIRECTIONAL && l.shape[2] > 0.0),
+            light_tree: data.light_tree.is_some(),
         }
     }
 
@@ -295,7 +300,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 30] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 31] {
         [
             ("bvh", "SCENE_BVH", self.bvh()),
             ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes()),
@@ -327,6 +332,7 @@ impl SceneFeatures {
             ("punctual_lights", "SCENE_PUNCTUAL_LIGHTS", self.punctual_lights),
             ("light_pick", "SCENE_LIGHT_PICK", self.light_pick),
             ("light_disks", "SCENE_LIGHT_DISKS", self.light_disks),
+            ("light_tree", "SCENE_LIGHT_TREE", self.light_tree),
         ]
     }
 

@@ -70,6 +70,8 @@ fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> Fr
         pixel_filter: filter,
         sampler_kind: sampler,
         light_total_power: data.light_distribution.total_power,
+        light_tree_share: data.light_tree.as_ref().map_or(0.0, |t| t.tree.tree_share),
+        light_tree: u32::from(data.light_tree.is_some()),
         punctual_light_count: data.punctual_lights.len() as u32,
         shape_instance: data
             .acceleration

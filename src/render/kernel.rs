@@ -44,6 +44,7 @@ pub const SHADERS: ShaderSources<'static> = &[
     ("lobe_reflect.glsl", include_str!("../../shaders/lobe_reflect.glsl")),
     ("lobe_dielectric.glsl", include_str!("../../shaders/lobe_dielectric.glsl")),
     ("lobe_thin_dielectric.glsl", include_str!("../../shaders/lobe_thin_dielectric.glsl")),
+    ("light_tree.glsl", include_str!("../../shaders/light_tree.glsl")),
     ("lights.glsl", include_str!("../../shaders/lights.glsl")),
     ("environment.glsl", include_str!("../../shaders/environment.glsl")),
     ("camera.glsl", include_str!("../../shaders/camera.glsl")),

@@ -302,6 +302,8 @@ pub(super) fn initial_contents<'d>(
         VertexTangents => bytemuck::cast_slice(&a.tangents),
         // Built from the scene's data rather than uploaded (ray_query_scene.rs).
         SceneStructure => &[],
+        LightTree => data.light_tree.as_ref().map_or(&[][..], |t| bytemuck::cast_slice(&t.tree.nodes)),
+        LightTreeIndex => data.light_tree.as_ref().map_or(&[][..], |t| bytemuck::cast_slice(&t.index)),
     })
 }
 

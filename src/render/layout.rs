@@ -57,6 +57,9 @@ glsl_constants! {
     CONDUCTORS { CONDUCTOR_MIRROR = 0, CONDUCTOR_COMPLEX = 1, CONDUCTOR_ALBEDO = 2 }
     /// Lights without a surface (src/scene/light.rs).
     LIGHT_KINDS { LIGHT_POINT = 0, LIGHT_SPOT = 1, LIGHT_DIRECTIONAL = 2 }
+    /// The light tree (light_tree.rs): flags in a node's links.z (a leaf, whose links.x is its
+    /// light; bounds of a two-sided emitter), and the index that names no node or light.
+    LIGHT_TREE { LIGHT_TREE_LEAF = 1, LIGHT_TREE_TWO_SIDED = 2, LIGHT_TREE_NONE = u32::MAX }
     /// Environment kinds.
     ENV_KINDS { ENV_CONSTANT = 0, ENV_ANGULAR = 1, ENV_LATLONG = 2 }
     /// Pixel reconstruction filters.
@@ -174,7 +177,9 @@ glsl_block! {
         /// (light_selection.rs).
         pub value_power: [f32; 4],
         /// x / y = the spot's cone_angle / falloff_start in radians; z = 1 - cos of a disk's
-        /// angular radius, to full precision for sun-sized disks (0: a delta light); w unused.
+        /// angular radius, to full precision for sun-sized disks (0: a delta light); w = a
+        /// directional light's probability of being picked beside the light tree (light_tree.rs;
+        /// 0 without one).
         pub shape: [f32; 4],
     }
 }
@@ -186,6 +191,22 @@ glsl_block! {
         /// Probability of keeping this entry's own light rather than taking `alias`.
         pub threshold: f32,
         pub alias: u32,
+    }
+}
+
+glsl_block! {
+    /// `struct LightTreeNode`: a node of the light tree (light_tree.rs), what its lights offer the
+    /// importance estimate. An interior node's first child is the next node.
+    pub struct GpuLightTreeNode as "LightTreeNode" {
+        /// xyz = the min corner of the box around the lights, w = their total power.
+        pub min_phi: [f32; 4],
+        /// xyz = the max corner, w = cos of the half-angle of the cone around their normals.
+        pub max_cos_theta_o: [f32; 4],
+        /// xyz = that cone's unit axis, w = cos of how far past a normal they still emit.
+        pub axis_cos_theta_e: [f32; 4],
+        /// x = the second child (interior) or the light (leaf), y = the parent (LIGHT_TREE_NONE
+        /// at the root), z = LIGHT_TREE_* flags, w unused.
+        pub links: [u32; 4],
     }
 }
 
@@ -211,6 +232,7 @@ pub fn records_glsl() -> String {
         glsl_struct::<GpuTexture>(),
         glsl_struct::<GpuPunctualLight>(),
         glsl_struct::<GpuAliasEntry>(),
+        glsl_struct::<GpuLightTreeNode>(),
     ] {
         out += "\n";
         out += &declaration;
@@ -297,8 +319,14 @@ glsl_block! {
         /// Total power of the lights (area and punctual) when they are picked by power (0: picked
         /// uniformly).
         pub light_total_power: f32,
-        pub pad8: f32,
-        pub pad9: f32,
+        /// Probability that next-event estimation descends the light tree rather than picking a
+        /// directional light beside it (light_tree.rs; the environment map's share not counted);
+        /// 0 without a tree.
+        pub light_tree_share: f32,
+        /// 1: next-event estimation picks by the light tree (the scene's `light_tree`), 0: by
+        /// the alias table or uniformly. A kernel built for one scene knows it (SCENE_LIGHT_TREE);
+        /// the general kernel, which has the tree walk compiled in, reads it here.
+        pub light_tree: u32,
         pub pad10: f32,
     }
 }
@@ -367,6 +395,9 @@ impl GlslType for GpuPunctualLight {
     const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for GpuAliasEntry {
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
+}
+impl GlslType for GpuLightTreeNode {
     const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
 impl GlslType for WideNode {
@@ -451,6 +482,14 @@ mod tests {
     fn alias_entry_matches_glsl_std430() {
         assert_eq!(size_of::<GpuAliasEntry>(), 8);
         assert_eq!(offset_of!(GpuAliasEntry, alias), 4);
+    }
+
+    #[test]
+    fn light_tree_node_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuLightTreeNode>(), 64);
+        assert_eq!(offset_of!(GpuLightTreeNode, max_cos_theta_o), 16);
+        assert_eq!(offset_of!(GpuLightTreeNode, axis_cos_theta_e), 32);
+        assert_eq!(offset_of!(GpuLightTreeNode, links), 48);
     }
 
     #[test]
@@ -567,6 +606,9 @@ mod tests {
             ("LIGHT_POINT", LIGHT_POINT),
             ("LIGHT_SPOT", LIGHT_SPOT),
             ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+            ("LIGHT_TREE_LEAF", LIGHT_TREE_LEAF),
+            ("LIGHT_TREE_TWO_SIDED", LIGHT_TREE_TWO_SIDED),
+            ("LIGHT_TREE_NONE", LIGHT_TREE_NONE),
             ("ENV_CONSTANT", ENV_CONSTANT),
             ("ENV_ANGULAR", ENV_ANGULAR),
             ("ENV_LATLONG", ENV_LATLONG),
@@ -593,8 +635,16 @@ mod tests {
     fn records_glsl_declares_every_record_and_constant_once() {
         let records = records_glsl();
         let layout = include_str!("../../shaders/layout.glsl");
-        for name in ["Primitive", "Material", "Instance", "MeshTriangle", "TextureInfo", "PunctualLight", "LightAlias"]
-        {
+        for name in [
+            "Primitive",
+            "Material",
+            "Instance",
+            "MeshTriangle",
+            "TextureInfo",
+            "PunctualLight",
+            "LightAlias",
+            "LightTreeNode",
+        ] {
             assert_eq!(records.matches(&format!("struct {name} {{")).count(), 1, "{name}");
             assert!(!layout.contains(&format!("struct {name} {{")), "layout.glsl declares {name} by hand");
         }

@@ -16,6 +16,8 @@ mod kernel_options;
 mod kernel_setup;
 pub mod layout;
 mod light_selection;
+pub mod light_tree;
+pub mod light_tree_index;
 mod ray_query_scene;
 mod renderer;
 mod scene_data;
@@ -40,7 +42,7 @@ pub use kernel_options::{
     help as kernel_options_help, DeviceClass, KernelChoices, KernelOption, KernelOptions, OPTIONS as KERNEL_OPTIONS,
     TAKE_TILES_VAR, WALK_QUEUE_VAR, WALK_RECORDS_VAR, WAVEFRONT_VAR, WORKGROUP_VAR,
 };
-pub use renderer::{GeometryReport, Renderer, MAX_SAMPLES_PER_PIXEL};
+pub use renderer::{GeometryReport, LightTreeReport, Renderer, MAX_SAMPLES_PER_PIXEL};
 pub use scene_data::SceneData;
 pub use variant::{KernelChoice, KernelVariant};
 pub use walk_queue::{QueueRequest, WalkQueue};

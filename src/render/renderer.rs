@@ -149,6 +149,17 @@ pub struct GeometryReport {
     /// Bytes of the acceleration structures ray queries trace (ray_query_scene.rs), beside
     /// `gpu_bytes`; 0 where the kernel walks its own BVH.
     pub acceleration_structure_bytes: u64,
+    /// The light tree (light_tree.rs), where the scene picks its lights by one.
+    pub light_tree: Option<LightTreeReport>,
+}
+
+/// The light tree's size and build time, for `bench`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightTreeReport {
+    pub nodes: usize,
+    /// Its nodes and its index (light_tree_index.rs) on the device.
+    pub bytes: u64,
+    pub build_seconds: f64,
 }
 
 impl<'a> Renderer<'a> {
@@ -228,6 +239,11 @@ impl<'a> Renderer<'a> {
                 gpu_bytes: data.gpu_bytes(),
                 split_arrays,
                 acceleration_structure_bytes,
+                light_tree: data.light_tree.as_ref().map(|t| LightTreeReport {
+                    nodes: t.tree.nodes.len(),
+                    bytes: t.gpu_bytes(),
+                    build_seconds: t.tree.build_seconds,
+                }),
             },
             cost_per_row_sample: None,
             loop_limit,

@@ -5,6 +5,8 @@ use super::acceleration::{gpu_primitive, Acceleration};
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
 use super::light_selection::{area_light_power, emission_luminance, punctual_light_power, LightDistribution};
+use super::light_tree::{LightBounds, LightTree, TreeLight};
+use super::light_tree_index::KernelLightTree;
 use super::textured_emission::mean_triangle_luminance;
 use crate::scene::{
     average_fresnel, downsample_to_fit, Alpha, AlphaMode, Conductor, Environment, Light, LightSelection, MapProjection,
@@ -22,6 +24,9 @@ pub struct SceneData {
     /// How next-event estimation picks among `lights` and then `punctual_lights`
     /// (light_selection.rs).
     pub light_distribution: LightDistribution,
+    /// The light tree that picks instead (light_tree.rs), where the scene asks for it and has
+    /// more than one light; `None` otherwise.
+    pub light_tree: Option<KernelLightTree>,
     /// Per entry of `acceleration.triangles`: a textured emitter's mean luminance (see
     /// `triangle_emission`); empty when no material has an emission texture.
     pub triangle_emission: Vec<f32>,
@@ -123,6 +128,34 @@ fn triangle_emission(scene: &Scene, acceleration: &Acceleration, textures: &[Tex
         }
     }
     emission
+}
+
+/// What the light tree knows of an area light of power `power`: its bounds and emission cone.
+fn area_light_bounds(shape: &Shape, material: &Material, power: f64) -> TreeLight {
+    let flat = |corners: &[Vec3], normal: Vec3| {
+        LightBounds::flat(corners, normal.normalize_or_zero(), power, material.two_sided)
+    };
+    TreeLight::Bounded(match *shape {
+        Shape::Sphere { center, radius, .. } => {
+            LightBounds::omnidirectional(center - Vec3::splat(radius), center + Vec3::splat(radius), power)
+        }
+        Shape::Quad { origin, u, v, .. } => flat(&[origin, origin + u, origin + v, origin + u + v], u.cross(v)),
+        Shape::Triangle { v, .. } => flat(&v, (v[1] - v[0]).cross(v[2] - v[0])),
+    })
+}
+
+/// What the light tree knows of a point, spot or directional light of power `power`
+/// (light_selection.rs): a spot's bounds carry the power of the point light it cuts its cone
+/// from, 4 pi x intensity, since its cone bounds where that power goes (as pbrt-v4).
+fn punctual_light_bounds(light: &Light, power: f64) -> TreeLight {
+    match *light {
+        Light::Point { position, .. } => TreeLight::Bounded(LightBounds::omnidirectional(position, position, power)),
+        Light::Spot { position, axis, intensity, cone_angle, falloff_start } => {
+            let phi = 4.0 * std::f64::consts::PI * super::luminance(&intensity.to_array());
+            TreeLight::Bounded(LightBounds::spot(position, axis.normalize_or_zero(), cone_angle, falloff_start, phi))
+        }
+        Light::Directional { .. } => TreeLight::Infinite { power },
+    }
 }
 
 /// A point, spot or directional light in the kernel's form (layout.glsl), with its power.
@@ -269,8 +302,27 @@ impl SceneData {
         // An empty scene has empty (infinite) bounds.
         let scene_radius = if scene_radius.is_finite() { scene_radius } else { 0.0 };
         let punctual_powers: Vec<f64> = scene.lights.iter().map(|l| punctual_light_power(l, scene_radius)).collect();
-        let punctual_lights =
+        let mut punctual_lights: Vec<GpuPunctualLight> =
             scene.lights.iter().zip(&punctual_powers).map(|(l, &p)| gpu_punctual_light(l, p)).collect();
+        let light_tree = (scene.integrator.light_selection == LightSelection::Bvh
+            && area_lights.len() + scene.lights.len() > 1)
+            .then(|| {
+                let materials = &scene.materials;
+                let bounds: Vec<TreeLight> = area_lights
+                    .iter()
+                    .zip(&powers)
+                    .map(|(l, &p)| area_light_bounds(&l.shape, &materials[l.shape.material() as usize], p))
+                    .chain(scene.lights.iter().zip(&punctual_powers).map(|(l, &p)| punctual_light_bounds(l, p)))
+                    .collect();
+                let tree = LightTree::build(&bounds);
+                KernelLightTree::new(tree, scene, &acceleration, |m| materials[m as usize].is_emissive())
+            });
+        // A directional light's share beside the tree travels in its record (layout.rs).
+        if let Some(t) = &light_tree {
+            for (light, share) in punctual_lights.iter_mut().zip(&t.tree.infinite_share[area_lights.len()..]) {
+                light.shape[3] = *share;
+            }
+        }
         powers.extend(&punctual_powers);
         let light_distribution =
             LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
@@ -280,6 +332,7 @@ impl SceneData {
             lights,
             punctual_lights,
             light_distribution,
+            light_tree,
             triangle_emission,
             acceleration,
             materials,
@@ -305,6 +358,7 @@ impl SceneData {
                 + std::mem::size_of_val(&self.triangle_emission[..])
                 + std::mem::size_of_val(&self.env_texels[..])
                 + std::mem::size_of_val(&self.env_cdf[..])) as u64
+            + self.light_tree.as_ref().map_or(0, KernelLightTree::gpu_bytes)
     }
 
     /// Probability that next-event estimation samples the environment map rather than an emitter:

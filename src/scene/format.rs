@@ -166,6 +166,10 @@ impl Default for FilmFile {
 #[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum LightSelection {
+    /// By a light tree (src/render/light_tree.rs): each light in proportion to an estimate of
+    /// what it gives the shading point (power, distance, emission cone), directional lights
+    /// beside it.
+    Bvh,
     /// In proportion to each light's power (an alias table).
     Power,
     /// Every light equally likely (for comparisons).
@@ -216,7 +220,7 @@ impl Default for IntegratorFile {
             sample_environment: true,
             clamp: None,
             sampler: Sampler::Sobol,
-            light_selection: LightSelection::Power,
+            light_selection: LightSelection::Bvh,
         }
     }
 }

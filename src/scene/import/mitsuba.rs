@@ -5,8 +5,8 @@
 
 use super::super::format::{
     AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, Encoding, EnvironmentFile, FilmFile, Filter,
-    ImageTextureFile, IntegratorFile, LightFile, LightSelection, MaterialFile, MeshFile, Microfacet, PointLightFile,
-    QuadFile, Sampler, SceneFile, SphereFile, SpotLightFile, TriangleFile, Triple,
+    ImageTextureFile, IntegratorFile, LightFile, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler,
+    SceneFile, SphereFile, SpotLightFile, TriangleFile, Triple,
 };
 use super::super::material_maps::needs_mesh;
 use super::mitsuba_xml::{self, Object, Resolver};
@@ -333,16 +333,12 @@ impl Mapper<'_> {
     /// `max_bounces`: 1 shows the emitters seen directly, 2 adds direct lighting, -1 is unbounded.
     /// `rr_depth` becomes `rr_start`: roulette first plays on reaching that vertex (Mitsuba
     /// before counting its emission, caustica after; both unbiased). Next-event estimation picks
-    /// an emitter uniformly, as Mitsuba does (every emitter's `sampling_weight` defaults to 1):
-    /// caustica's own default, by power, starves small bright lights, and on mitsuba-data's Veach
-    /// scene (five spheres, one holding 98 % of the power) left 5x the error of the uniform pick.
+    /// an emitter by caustica's default, the light tree (Mitsuba picks uniformly, by each
+    /// emitter's `sampling_weight`): selection by power alone starved small bright lights, and on
+    /// mitsuba-data's Veach scene (five spheres, one holding 98 % of the power) left 5x the error
+    /// of the uniform pick, which the tree's distance and orientation terms avoid.
     fn integrator(&mut self, integrators: &[Rc<Object>]) -> Result<IntegratorFile> {
-        let mut file = IntegratorFile {
-            rr_start: 5,
-            max_bounces: UNBOUNDED_DEPTH,
-            light_selection: LightSelection::Uniform,
-            ..IntegratorFile::default()
-        };
+        let mut file = IntegratorFile { rr_start: 5, max_bounces: UNBOUNDED_DEPTH, ..IntegratorFile::default() };
         let i = match integrators {
             [] => return Ok(file),
             [i] => i,

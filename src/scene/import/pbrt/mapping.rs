@@ -314,7 +314,8 @@ impl Mapper<'_> {
         let max_bounces =
             if depth < 0 { UNBOUNDED_DEPTH } else { u32::try_from(depth + 1).unwrap_or(u32::MAX).min(UNBOUNDED_DEPTH) };
         let light_selection = match d.string("lightsampler")?.unwrap_or("bvh") {
-            "bvh" | "power" => LightSelection::Power,
+            "bvh" => LightSelection::Bvh,
+            "power" => LightSelection::Power,
             "uniform" => LightSelection::Uniform,
             other => return Err(d.error(format!("lightsampler \"{other}\" is not supported (bvh, power, uniform)"))),
         };
