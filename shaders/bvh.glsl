@@ -6,8 +6,9 @@
 // (SCENE_TOP_LEVEL 0); a scene whose top level is its root alone tests the instances as that
 // node's children and walks them in turn (SCENE_TOP_LEVEL_TREE 0); any other walks the top level
 // with a stack of its own, its leaves' instances tagged.
-// Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
-// level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
+// Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl), or with
+// BVH_WIDTH 8 the bottom levels are eight-wide (bvh_eight_wide.glsl). The top level has one
+// instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
 // the binary tree; each wide level takes at least one binary level (src/bvh/wide_node.rs).
 // A scene's few shapes (SCENE_FEW_SHAPES, at most FEW_PRIMITIVES of src/render/features.rs) are
 // tested in turn, as straight-line code, before any walk: a scene of nothing else compiles no walk
@@ -288,6 +289,11 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
     return false;
 }
 
+#if BVH_WIDTH == 8
+// The meshes' and shapes' own BVHs as eight-wide nodes (bvh-width=8): walk_instance_eight_wide.
+#include "bvh_eight_wide.glsl"
+#endif
+
 // Walks instance `instance` with the world ray o + t d, as walk_instance: in its object space
 // where it is a placed mesh (the object-space ray keeps the world parameter t: its direction is
 // transformed, not renormalised). The scene's own shapes are placed by the identity and keep the
@@ -318,7 +324,11 @@ bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
     if (!instance_walked(info)) return false;
     vec3 ro, rd;
     uint instance_kind = placed_ray(instance, info, o, d, ro, rd);
+#if BVH_WIDTH == 8
+    return walk_instance_eight_wide(info.y, instance, instance_kind, ro, rd, any_hit, hit);
+#else
     return walk_instance(info.y, instance, instance_kind, ro, rd, any_hit, hit);
+#endif
 }
 
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found

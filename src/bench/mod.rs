@@ -16,8 +16,8 @@ use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic, Traversal};
 use crate::process_time::cpu_seconds;
 use crate::render::{
-    AovSet, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, WalkQueue, WalkRecords,
-    Workgroup,
+    AovSet, BvhWidth, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, WalkQueue,
+    WalkRecords, Workgroup,
 };
 use crate::scene::Scene;
 use anyhow::Result;
@@ -67,6 +67,8 @@ pub struct Measurement {
     pub take_tiles: bool,
     /// How it read the walk's nodes and triangles (`CAUSTICA_WALK_RECORDS`).
     pub walk_records: WalkRecords,
+    /// The node format of the meshes' and shapes' BVHs (`CAUSTICA_BVH_WIDTH`).
+    pub bvh_width: BvhWidth,
     /// Whether the wavefront's kernels ran instead of the megakernel (`CAUSTICA_WAVEFRONT`).
     pub wavefront: bool,
     /// The kernel's workgroup shape.
@@ -129,6 +131,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: &KernelSetu
         walk_queue: renderer.walk_queue,
         take_tiles: renderer.take_tiles,
         walk_records: renderer.walk_records,
+        bvh_width: renderer.bvh_width,
         wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
         traversal: renderer.traversal,
@@ -181,6 +184,7 @@ impl Measurement {
             "walk_queue_barriers": self.walk_queue.map(|q| q.subgroup_barriers),
             "take_tiles": self.take_tiles,
             "walk_records": self.walk_records.label(),
+            "bvh_width": self.bvh_width.label(),
             "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
             "traversal": self.traversal.name(),

@@ -7,10 +7,12 @@
 //! A user or a script overrides a default for an A/B of one binary with `--kernel-option
 //! KEY=VALUE` on `render` and `bench` ([`KernelOptions::set_assignment`]), or with the matching
 //! `CAUSTICA_*` environment variable ([`KernelOptions::from_env`]; the command line wins). The
-//! keys ([`OPTIONS`]): `wavefront`, `walk-queue`, `walk-records`, `take-tiles`, `workgroup`.
+//! keys ([`OPTIONS`]): `wavefront`, `walk-queue`, `walk-records`, `take-tiles`, `workgroup`,
+//! `bvh-width`.
 //! Values that run nowhere by default are labelled experimental in [`OPTIONS`]: they are built
 //! and tested, but no device class has measured a gain from them.
 
+use super::bvh_width::BvhWidth;
 use super::features::SceneFeatures;
 use super::layout::GpuInstance;
 use super::tile_taking;
@@ -26,6 +28,7 @@ pub const WALK_QUEUE_VAR: &str = "CAUSTICA_WALK_QUEUE";
 pub const WALK_RECORDS_VAR: &str = "CAUSTICA_WALK_RECORDS";
 pub const TAKE_TILES_VAR: &str = "CAUSTICA_TAKE_TILES";
 pub const WORKGROUP_VAR: &str = "CAUSTICA_WORKGROUP";
+pub const BVH_WIDTH_VAR: &str = "CAUSTICA_BVH_WIDTH";
 
 /// One run-time choice of the kernel: its key on the command line, its environment variable,
 /// the values it takes and which of them are experimental.
@@ -39,7 +42,7 @@ pub struct KernelOption {
 }
 
 /// Every kernel option, in the order `--kernel-option help` lists them.
-pub const OPTIONS: [KernelOption; 5] = [
+pub const OPTIONS: [KernelOption; 6] = [
     KernelOption {
         key: "wavefront",
         variable: WAVEFRONT_VAR,
@@ -71,6 +74,13 @@ pub const OPTIONS: [KernelOption; 5] = [
         values: "WxH: the kernel's workgroup shape, powers of two, at most 128 invocations (workgroup.rs)",
         experimental: "every shape but 8x8: no device measured gains more than 3 % from another",
     },
+    KernelOption {
+        key: "bvh-width",
+        variable: BVH_WIDTH_VAR,
+        values: "4: four-wide nodes sorted at each visit; 8: eight-wide compressed nodes in the ray's octant order \
+                 (bvh_width.rs), without the walk queue",
+        experimental: "8 everywhere: built for GPUs without ray-tracing hardware, unmeasured there; slower on lavapipe",
+    },
 ];
 
 /// What was asked of the kernel, option by option; `None` leaves the choice to the device
@@ -82,6 +92,7 @@ pub struct KernelOptions {
     pub walk_records: Option<WalkRecords>,
     pub take_tiles: Option<bool>,
     pub workgroup: Option<Workgroup>,
+    pub bvh_width: Option<BvhWidth>,
 }
 
 impl KernelOptions {
@@ -143,6 +154,13 @@ impl KernelOptions {
                 )?)
             }
             "workgroup" => self.workgroup = Some(Workgroup::parse(value)?),
+            "bvh-width" => {
+                self.bvh_width = Some(match value {
+                    "4" => BvhWidth::Four,
+                    "8" => BvhWidth::Eight,
+                    _ => bail!("expected 4 (four-wide nodes) or 8 (eight-wide compressed nodes)"),
+                })
+            }
             _ => bail!("no kernel option '{key}'; {}", keys_hint()),
         }
         Ok(())
@@ -176,13 +194,14 @@ pub fn help() -> String {
     for class in DeviceClass::ALL {
         let d = Defaults::for_class(class);
         out += &format!(
-            "  {}: wavefront {}, walk-queue {}, walk-records {}, take-tiles {}, workgroup {}\n",
+            "  {}: wavefront {}, walk-queue {}, walk-records {}, take-tiles {}, workgroup {}, bvh-width {}\n",
             class.label(),
             u32::from(d.wavefront),
             if d.walk_queue { "1 (where the scene qualifies)" } else { "0" },
             d.walk_records.label(),
             if d.take_tiles { "1 (where possible)" } else { "0" },
-            d.workgroup.label()
+            d.workgroup.label(),
+            d.bvh_width.label()
         );
     }
     out
@@ -265,6 +284,9 @@ pub struct Defaults {
     /// is laid out for eight of them; on an NVIDIA H200 no other shape gained more than 3 %
     /// (2026-12-04, `3e96a5c`).
     pub workgroup: Workgroup,
+    /// Four-wide nodes everywhere: the eight-wide walk lost on lavapipe (docs/benchmarks.md,
+    /// 2026-12-07) and is unmeasured on a GPU.
+    pub bvh_width: BvhWidth,
 }
 
 impl Defaults {
@@ -275,6 +297,7 @@ impl Defaults {
             walk_records: WalkRecords::Texels,
             take_tiles: false,
             workgroup: Workgroup::EIGHT_BY_EIGHT,
+            bvh_width: BvhWidth::Four,
         };
         match class {
             DeviceClass::Gpu | DeviceClass::LavapipeWithLoopLimit => base,
@@ -296,6 +319,7 @@ pub struct KernelChoices {
     pub walk_records: WalkRecords,
     pub take_tiles: bool,
     pub workgroup: Workgroup,
+    pub bvh_width: BvhWidth,
 }
 
 /// The scene facts the choices depend on: the kernel's features and the top level of its BVH.
@@ -308,6 +332,13 @@ pub struct SceneShape<'s> {
 }
 
 impl KernelOptions {
+    /// The node format of the meshes' and shapes' BVHs on `device` (whose loops are cut short
+    /// where `loop_limit`): needed before the scene's data is built, which [`Self::choose`]
+    /// reads.
+    pub fn bvh_width(&self, device: &DeviceInfo, loop_limit: bool) -> BvhWidth {
+        self.bvh_width.unwrap_or(Defaults::for_class(DeviceClass::of(device, loop_limit)).bvh_width)
+    }
+
     /// The choices for `scene` on `device` (whose loops are cut short where `loop_limit`). An
     /// error where an option asks for what cannot run there.
     pub fn choose(&self, device: &DeviceInfo, loop_limit: bool, scene: SceneShape) -> Result<KernelChoices> {
@@ -320,10 +351,17 @@ impl KernelOptions {
                 device.name
             );
         }
-        let queue_request = match self.walk_queue {
-            Some(request) => request,
-            None if defaults.walk_queue => QueueRequest::On,
-            None => QueueRequest::Off,
+        let bvh_width = self.bvh_width(device, loop_limit);
+        // The queue walks four-wide nodes alone (walk_queue.glsl): the eight-wide walk goes
+        // without it.
+        let queue_request = match (self.walk_queue, bvh_width) {
+            (Some(QueueRequest::Off), _) | (None, BvhWidth::Eight) => QueueRequest::Off,
+            (Some(_), BvhWidth::Eight) => {
+                bail!("walk-queue: the walk queue walks four-wide nodes alone; bvh-width=8 walks without it (walk-queue=0)")
+            }
+            (Some(request), BvhWidth::Four) => request,
+            (None, BvhWidth::Four) if defaults.walk_queue => QueueRequest::On,
+            (None, BvhWidth::Four) => QueueRequest::Off,
         };
         let walk_queue = match wavefront || scene.ray_queries {
             true => None,
@@ -340,7 +378,7 @@ impl KernelOptions {
         let take_tiles =
             tile_taking::takes_tiles(self.take_tiles, defaults.take_tiles, device, loop_limit, wavefront, workgroup)?;
         let walk_records = self.walk_records.unwrap_or(defaults.walk_records);
-        Ok(KernelChoices { wavefront, walk_queue, walk_records, take_tiles, workgroup })
+        Ok(KernelChoices { wavefront, walk_queue, walk_records, take_tiles, workgroup, bvh_width })
     }
 }
 
@@ -379,6 +417,7 @@ mod tests {
         o.set_assignment("walk-records=storage").unwrap();
         o.set_assignment("take-tiles=0").unwrap();
         o.set_assignment("workgroup=16x8").unwrap();
+        o.set_assignment("bvh-width=8").unwrap();
         assert_eq!(
             o,
             KernelOptions {
@@ -387,6 +426,7 @@ mod tests {
                 walk_records: Some(WalkRecords::Storage),
                 take_tiles: Some(false),
                 workgroup: Some(Workgroup { width: 16, height: 8 }),
+                bvh_width: Some(BvhWidth::Eight),
             }
         );
         for (bad, says) in [
@@ -395,6 +435,7 @@ mod tests {
             ("walk-records=ssbo", "expected texels"),
             ("take-tiles=on", "expected 0"),
             ("workgroup=12x8", "powers of two"),
+            ("bvh-width=16", "expected 4"),
             ("walkqueue=1", "no kernel option 'walkqueue'"),
             ("wavefront", "expected KEY=VALUE"),
         ] {
@@ -426,6 +467,7 @@ mod tests {
         let amd = Defaults::for_class(DeviceClass::LavapipeMesa25Amd);
         assert!(amd.walk_queue && amd.take_tiles && amd.walk_records == WalkRecords::Storage);
         assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).workgroup == Workgroup::EIGHT_BY_EIGHT));
+        assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).bvh_width == BvhWidth::Four));
     }
 
     #[test]

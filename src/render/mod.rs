@@ -4,6 +4,7 @@
 mod acceleration;
 mod aov;
 pub mod bindings;
+mod bvh_width;
 mod chunks;
 mod env_sampling;
 mod features;
@@ -31,6 +32,7 @@ mod workgroup;
 
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
+pub use bvh_width::BvhWidth;
 pub use chunks::UNSPLIT;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use frame::{frame_params, TEXTURE_BUDGET_BYTES};

@@ -9,6 +9,7 @@
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::bindings::{BufferBinding, KernelBuffer};
+use super::bvh_width::BvhWidth;
 use super::features::SceneFeatures;
 use super::frame::set_camera_params;
 use super::group_order::GroupOrder;
@@ -66,6 +67,8 @@ pub struct Renderer<'a> {
     pub take_tiles: bool,
     /// How the kernel reads the walk's nodes and triangles (walk_records.rs).
     pub walk_records: WalkRecords,
+    /// The node format of the meshes' and shapes' BVHs the kernel walks (bvh_width.rs).
+    pub bvh_width: BvhWidth,
     /// The kernel's workgroup shape (workgroup.rs).
     pub workgroup: Workgroup,
     /// How the kernel finds what rays hit: the device's choice (`GpuContext::traversal`), or the
@@ -204,6 +207,7 @@ impl<'a> Renderer<'a> {
             walk_queue: choices.walk_queue,
             take_tiles: choices.take_tiles,
             walk_records: choices.walk_records,
+            bvh_width: choices.bvh_width,
             workgroup: choices.workgroup,
             traversal: variant.traversal,
             structure,
