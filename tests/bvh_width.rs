@@ -6,12 +6,15 @@
 //! most MAX_DIFFERING_SHARE of a scene's pixels may differ at all, and the rest must be equal bit
 //! for bit. A walk that loses one child slot in eight (tests/mutations.toml), or a node box
 //! quantized inwards, misses hits on whole regions of the image and fails this.
+//! The four-wide walk with shadow rays' children unsorted (`shadow-walk=unsorted`,
+//! src/render/shadow_walk.rs) renders the sorted walk's images bit for bit: a shadow ray's answer
+//! does not depend on the order it finds an occluder in.
 //! The rest of the tests that trace rays run with the eight-wide walk too: scripts/test.sh runs
 //! them again under CAUSTICA_BVH_WIDTH=8.
 
 mod common;
 
-use caustica::render::{AovSet, BvhWidth, KernelChoice, KernelOptions, QueueRequest, Renderer};
+use caustica::render::{AovSet, BvhWidth, KernelChoice, KernelOptions, QueueRequest, Renderer, ShadowWalk};
 use caustica::scene::Scene;
 use common::{checked_in_scenes, gpu};
 
@@ -24,13 +27,24 @@ const SPP: u32 = 2;
 /// same distance are rare (none on most scenes); a lost child slot changes far more.
 const MAX_DIFFERING_SHARE: f64 = 0.01;
 
-/// The image's pixels as bits, rendered with `width`'s walk and no walk queue (which walks
-/// four-wide nodes alone); `None` for a scene with no walk (a few shapes tested in turn).
-fn pixels(ctx: &caustica::gpu::GpuContext, scene: &Scene, width: BvhWidth) -> Option<Vec<[u32; 3]>> {
-    let options = KernelOptions { bvh_width: Some(width), walk_queue: Some(QueueRequest::Off), ..Default::default() };
+/// The image's pixels as bits, rendered with `width`'s walk, shadow rays' children as `shadows`
+/// says, and no walk queue (which walks four-wide nodes alone); `None` for a scene with no walk
+/// (a few shapes tested in turn).
+fn pixels(
+    ctx: &caustica::gpu::GpuContext,
+    scene: &Scene,
+    width: BvhWidth,
+    shadows: ShadowWalk,
+) -> Option<Vec<[u32; 3]>> {
+    let options = KernelOptions {
+        bvh_width: Some(width),
+        shadow_walk: Some(shadows),
+        walk_queue: Some(QueueRequest::Off),
+        ..Default::default()
+    };
     let mut renderer = Renderer::with_options(ctx, scene, 3, AovSet::default(), KernelChoice::ForScene, &options)
         .expect("scene uploads");
-    assert_eq!(renderer.bvh_width, width);
+    assert_eq!((renderer.bvh_width, renderer.shadow_walk), (width, shadows));
     if !renderer.features.bvh() {
         return None;
     }
@@ -44,8 +58,10 @@ fn the_eight_wide_walk_renders_the_four_wide_walk_s_images() {
     let mut walked = 0;
     for (name, mut scene) in checked_in_scenes() {
         (scene.film.width, scene.film.height) = (WIDTH, HEIGHT);
-        let Some(four) = pixels(&ctx, &scene, BvhWidth::Four) else { continue };
-        let eight = pixels(&ctx, &scene, BvhWidth::Eight).expect("the same scene walks");
+        let Some(four) = pixels(&ctx, &scene, BvhWidth::Four, ShadowWalk::Sorted) else { continue };
+        let eight = pixels(&ctx, &scene, BvhWidth::Eight, ShadowWalk::Sorted).expect("the same scene walks");
+        let unsorted = pixels(&ctx, &scene, BvhWidth::Four, ShadowWalk::Unsorted).expect("the same scene walks");
+        assert!(unsorted == four, "{name}: shadow rays' children unsorted change the image");
         assert!(four.iter().any(|p| p.iter().any(|&c| c != 0)), "{name}: nothing rendered");
         let differing = four.iter().zip(&eight).filter(|(a, b)| a != b).count();
         eprintln!("{name}: {differing} of {} pixels differ", four.len());

@@ -16,8 +16,8 @@ use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic, Traversal};
 use crate::process_time::cpu_seconds;
 use crate::render::{
-    AovSet, BvhWidth, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, WalkQueue,
-    WalkRecords, Workgroup,
+    AovSet, BvhWidth, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, ShadowWalk,
+    WalkQueue, WalkRecords, Workgroup,
 };
 use crate::scene::Scene;
 use anyhow::Result;
@@ -69,6 +69,8 @@ pub struct Measurement {
     pub walk_records: WalkRecords,
     /// The node format of the meshes' and shapes' BVHs (`CAUSTICA_BVH_WIDTH`).
     pub bvh_width: BvhWidth,
+    /// How a shadow ray's four-wide walk ordered a node's children (`CAUSTICA_SHADOW_WALK`).
+    pub shadow_walk: ShadowWalk,
     /// Whether the wavefront's kernels ran instead of the megakernel (`CAUSTICA_WAVEFRONT`).
     pub wavefront: bool,
     /// The kernel's workgroup shape.
@@ -132,6 +134,7 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: &KernelSetu
         take_tiles: renderer.take_tiles,
         walk_records: renderer.walk_records,
         bvh_width: renderer.bvh_width,
+        shadow_walk: renderer.shadow_walk,
         wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
         traversal: renderer.traversal,
@@ -185,6 +188,7 @@ impl Measurement {
             "take_tiles": self.take_tiles,
             "walk_records": self.walk_records.label(),
             "bvh_width": self.bvh_width.label(),
+            "shadow_walk": self.shadow_walk.label(),
             "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
             "traversal": self.traversal.name(),

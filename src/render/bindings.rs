@@ -347,6 +347,7 @@ mod tests {
         wavefront: None,
         walk_records: WalkRecords::Texels,
         bvh_width: crate::render::BvhWidth::Four,
+        shadow_walk: crate::render::ShadowWalk::Sorted,
         traversal: crate::gpu::Traversal::Compute,
     };
 
@@ -358,7 +359,7 @@ mod tests {
         ..GENERAL
     };
 
-    const VARIANTS: [KernelVariant; 16] = [
+    const VARIANTS: [KernelVariant; 17] = [
         GENERAL,
         // The device's ray queries in place of the walk (ray_query.glsl), which bind the scene's
         // acceleration structure; in the wavefront's kernels too.
@@ -374,6 +375,8 @@ mod tests {
         // The eight-wide walk (bvh_width.rs), its nodes read as texels and from storage buffers.
         KernelVariant { bvh_width: crate::render::BvhWidth::Eight, ..GENERAL },
         KernelVariant { bvh_width: crate::render::BvhWidth::Eight, walk_records: WalkRecords::Storage, ..GENERAL },
+        // Shadow rays' four-wide walk without sorting (shadow_walk.rs).
+        KernelVariant { shadow_walk: crate::render::ShadowWalk::Unsorted, ..GENERAL },
         KernelVariant { aovs: true, ..GENERAL },
         KernelVariant { count_loop_iterations: true, ..GENERAL },
         KernelVariant { aovs: true, count_loop_iterations: true, ..GENERAL },

@@ -7,6 +7,7 @@ use super::chunks::{SplitPlans, UNSPLIT};
 use super::features::SceneFeatures;
 use super::interface;
 use super::layout::records_glsl;
+use super::shadow_walk::ShadowWalk;
 use super::tile_taking;
 use super::variant::KernelVariant;
 use super::walk_queue::WalkQueue;
@@ -112,6 +113,7 @@ pub fn assemble_with_kernel_files(main: &str) -> Result<String> {
         .chain(Workgroup::default().defines())
         .chain(traversal_defines(Traversal::Compute))
         .chain(BvhWidth::Four.defines())
+        .chain(ShadowWalk::Sorted.defines())
         .collect();
     assemble_with(&[("main.comp", main), (INTERFACE_FILE, &interface)], "main.comp", &defines)
 }
@@ -140,6 +142,7 @@ pub fn kernel_source(plans: &SplitPlans, variant: KernelVariant) -> Result<Strin
     defines.extend(variant.workgroup.defines());
     defines.extend(traversal_defines(variant.traversal));
     defines.extend(variant.bvh_width.defines());
+    defines.extend(variant.shadow_walk.defines());
     assemble_with(&[(INTERFACE_FILE, &interface)], "pathtrace.comp", &defines)
 }
 

@@ -8,13 +8,14 @@
 //! KEY=VALUE` on `render` and `bench` ([`KernelOptions::set_assignment`]), or with the matching
 //! `CAUSTICA_*` environment variable ([`KernelOptions::from_env`]; the command line wins). The
 //! keys ([`OPTIONS`]): `wavefront`, `walk-queue`, `walk-records`, `take-tiles`, `workgroup`,
-//! `bvh-width`.
+//! `bvh-width`, `shadow-walk`.
 //! Values that run nowhere by default are labelled experimental in [`OPTIONS`]: they are built
 //! and tested, but no device class has measured a gain from them.
 
 use super::bvh_width::BvhWidth;
 use super::features::SceneFeatures;
 use super::layout::GpuInstance;
+use super::shadow_walk::ShadowWalk;
 use super::tile_taking;
 use super::walk_queue::{QueueRequest, WalkQueue};
 use super::walk_records::WalkRecords;
@@ -29,6 +30,7 @@ pub const WALK_RECORDS_VAR: &str = "CAUSTICA_WALK_RECORDS";
 pub const TAKE_TILES_VAR: &str = "CAUSTICA_TAKE_TILES";
 pub const WORKGROUP_VAR: &str = "CAUSTICA_WORKGROUP";
 pub const BVH_WIDTH_VAR: &str = "CAUSTICA_BVH_WIDTH";
+pub const SHADOW_WALK_VAR: &str = "CAUSTICA_SHADOW_WALK";
 
 /// One run-time choice of the kernel: its key on the command line, its environment variable,
 /// the values it takes and which of them are experimental.
@@ -42,7 +44,7 @@ pub struct KernelOption {
 }
 
 /// Every kernel option, in the order `--kernel-option help` lists them.
-pub const OPTIONS: [KernelOption; 6] = [
+pub const OPTIONS: [KernelOption; 7] = [
     KernelOption {
         key: "wavefront",
         variable: WAVEFRONT_VAR,
@@ -81,6 +83,13 @@ pub const OPTIONS: [KernelOption; 6] = [
                  (bvh_width.rs), without the walk queue",
         experimental: "8 everywhere: built for GPUs without ray-tracing hardware, unmeasured there; slower on lavapipe",
     },
+    KernelOption {
+        key: "shadow-walk",
+        variable: SHADOW_WALK_VAR,
+        values: "sorted: a shadow ray's four-wide walk sorts each node's children as the closest hit's does; \
+                 unsorted: it takes them in stored order (shadow_walk.rs)",
+        experimental: "unsorted everywhere: unmeasured on a GPU",
+    },
 ];
 
 /// What was asked of the kernel, option by option; `None` leaves the choice to the device
@@ -93,6 +102,7 @@ pub struct KernelOptions {
     pub take_tiles: Option<bool>,
     pub workgroup: Option<Workgroup>,
     pub bvh_width: Option<BvhWidth>,
+    pub shadow_walk: Option<ShadowWalk>,
 }
 
 impl KernelOptions {
@@ -161,6 +171,13 @@ impl KernelOptions {
                     _ => bail!("expected 4 (four-wide nodes) or 8 (eight-wide compressed nodes)"),
                 })
             }
+            "shadow-walk" => {
+                self.shadow_walk = Some(match value {
+                    "sorted" => ShadowWalk::Sorted,
+                    "unsorted" => ShadowWalk::Unsorted,
+                    _ => bail!("expected sorted (children nearest first) or unsorted (in stored order)"),
+                })
+            }
             _ => bail!("no kernel option '{key}'; {}", keys_hint()),
         }
         Ok(())
@@ -194,14 +211,15 @@ pub fn help() -> String {
     for class in DeviceClass::ALL {
         let d = Defaults::for_class(class);
         out += &format!(
-            "  {}: wavefront {}, walk-queue {}, walk-records {}, take-tiles {}, workgroup {}, bvh-width {}\n",
+            "  {}: wavefront {}, walk-queue {}, walk-records {}, take-tiles {}, workgroup {}, bvh-width {}, shadow-walk {}\n",
             class.label(),
             u32::from(d.wavefront),
             if d.walk_queue { "1 (where the scene qualifies)" } else { "0" },
             d.walk_records.label(),
             if d.take_tiles { "1 (where possible)" } else { "0" },
             d.workgroup.label(),
-            d.bvh_width.label()
+            d.bvh_width.label(),
+            d.shadow_walk.label()
         );
     }
     out
@@ -287,6 +305,9 @@ pub struct Defaults {
     /// Four-wide nodes everywhere: the eight-wide walk lost on lavapipe (docs/benchmarks.md,
     /// 2026-12-07) and is unmeasured on a GPU.
     pub bvh_width: BvhWidth,
+    /// Sorted everywhere: the unsorted shadow walk is unmeasured on a GPU (docs/benchmarks.md
+    /// has lavapipe's figure).
+    pub shadow_walk: ShadowWalk,
 }
 
 impl Defaults {
@@ -298,6 +319,7 @@ impl Defaults {
             take_tiles: false,
             workgroup: Workgroup::EIGHT_BY_EIGHT,
             bvh_width: BvhWidth::Four,
+            shadow_walk: ShadowWalk::Sorted,
         };
         match class {
             DeviceClass::Gpu | DeviceClass::LavapipeWithLoopLimit => base,
@@ -320,6 +342,7 @@ pub struct KernelChoices {
     pub take_tiles: bool,
     pub workgroup: Workgroup,
     pub bvh_width: BvhWidth,
+    pub shadow_walk: ShadowWalk,
 }
 
 /// The scene facts the choices depend on: the kernel's features and the top level of its BVH.
@@ -378,7 +401,8 @@ impl KernelOptions {
         let take_tiles =
             tile_taking::takes_tiles(self.take_tiles, defaults.take_tiles, device, loop_limit, wavefront, workgroup)?;
         let walk_records = self.walk_records.unwrap_or(defaults.walk_records);
-        Ok(KernelChoices { wavefront, walk_queue, walk_records, take_tiles, workgroup, bvh_width })
+        let shadow_walk = self.shadow_walk.unwrap_or(defaults.shadow_walk);
+        Ok(KernelChoices { wavefront, walk_queue, walk_records, take_tiles, workgroup, bvh_width, shadow_walk })
     }
 }
 
@@ -418,6 +442,7 @@ mod tests {
         o.set_assignment("take-tiles=0").unwrap();
         o.set_assignment("workgroup=16x8").unwrap();
         o.set_assignment("bvh-width=8").unwrap();
+        o.set_assignment("shadow-walk=unsorted").unwrap();
         assert_eq!(
             o,
             KernelOptions {
@@ -427,6 +452,7 @@ mod tests {
                 take_tiles: Some(false),
                 workgroup: Some(Workgroup { width: 16, height: 8 }),
                 bvh_width: Some(BvhWidth::Eight),
+                shadow_walk: Some(ShadowWalk::Unsorted),
             }
         );
         for (bad, says) in [
@@ -436,6 +462,7 @@ mod tests {
             ("take-tiles=on", "expected 0"),
             ("workgroup=12x8", "powers of two"),
             ("bvh-width=16", "expected 4"),
+            ("shadow-walk=any", "expected sorted"),
             ("walkqueue=1", "no kernel option 'walkqueue'"),
             ("wavefront", "expected KEY=VALUE"),
         ] {
@@ -468,6 +495,7 @@ mod tests {
         assert!(amd.walk_queue && amd.take_tiles && amd.walk_records == WalkRecords::Storage);
         assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).workgroup == Workgroup::EIGHT_BY_EIGHT));
         assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).bvh_width == BvhWidth::Four));
+        assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).shadow_walk == ShadowWalk::Sorted));
     }
 
     #[test]

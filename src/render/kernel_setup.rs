@@ -105,6 +105,7 @@ impl KernelPlan {
             wavefront: choices.wavefront.then_some(WavefrontStage::Extend),
             walk_records: choices.walk_records,
             bvh_width: choices.bvh_width,
+            shadow_walk: choices.shadow_walk,
             traversal,
         };
         let mut plan = KernelPlan {

@@ -20,6 +20,7 @@ mod light_selection;
 mod ray_query_scene;
 mod renderer;
 mod scene_data;
+mod shadow_walk;
 #[cfg(test)]
 mod spirv_reflect;
 mod textured_emission;
@@ -44,6 +45,7 @@ pub use kernel_options::{
 };
 pub use renderer::{GeometryReport, Renderer, MAX_SAMPLES_PER_PIXEL};
 pub use scene_data::SceneData;
+pub use shadow_walk::ShadowWalk;
 pub use variant::{KernelChoice, KernelVariant};
 pub use walk_queue::{QueueRequest, WalkQueue};
 pub use walk_records::WalkRecords;

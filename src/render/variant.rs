@@ -4,6 +4,7 @@
 
 use super::bvh_width::BvhWidth;
 use super::features::SceneFeatures;
+use super::shadow_walk::ShadowWalk;
 use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
 use super::wavefront::WavefrontStage;
@@ -32,6 +33,8 @@ pub struct KernelVariant {
     pub walk_records: WalkRecords,
     /// The node format of the meshes' and shapes' BVHs it walks (bvh_width.rs).
     pub bvh_width: BvhWidth,
+    /// How a shadow ray's four-wide walk orders a node's children (shadow_walk.rs).
+    pub shadow_walk: ShadowWalk,
     /// How it finds what rays hit: its own walk, or the device's ray queries (ray_query.glsl),
     /// which bind the scene's acceleration structure.
     pub traversal: Traversal,
