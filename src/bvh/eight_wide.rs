@@ -163,8 +163,9 @@ pub struct EightWideTree {
 }
 
 impl EightWideTree {
-    /// The eight-wide tree of `bvh`, its children chosen as the four-wide tree's are (`wide_tree`)
-    /// with leaves of at most `max_leaf_size` primitives, its nodes to lie in the node array from
+    /// The eight-wide tree of `bvh`, its children chosen as the four-wide tree's are (`wide_tree`,
+    /// with the four-wide tree's node cost, measured on lavapipe for four-wide nodes and not
+    /// tuned for eight) with leaves of at most `max_leaf_size` primitives, its nodes to lie in the node array from
     /// record `record_base` on and its primitives from `prim_base` on.
     pub fn new(bvh: &Bvh, max_leaf_size: usize, record_base: u32, prim_base: u32) -> EightWideTree {
         let wide = wide_tree(&bvh.nodes, max_leaf_size, EIGHT_WIDTH);
