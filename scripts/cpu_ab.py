@@ -2,10 +2,13 @@
 """A/B of two kernels on a CPU device (lavapipe), measured so that the machine's drift cancels.
 
     python3 scripts/cpu_ab.py B_SHADERS [--a A_SHADERS] [--a-bin BIN] [--b-bin BIN]
+        [--a-option KEY=VALUE ...] [--b-option KEY=VALUE ...]
         [--scene mesh|sky|box|FILE.toml ...] [--rounds N] [--seconds S] [--width W] [--height H]
 
 Each side is a caustica binary (default target/release/caustica) and a kernel: a folder of the
-kernel's shader files (read through $CAUSTICA_SHADER_DIR) or `embedded`, the binary's own. In
+kernel's shader files (read through $CAUSTICA_SHADER_DIR) or `embedded`, the binary's own, with the
+kernel options given for that side (`--kernel-option KEY=VALUE`, e.g. `--b-option bvh-width=8`:
+the A/B of one binary's run-time choices, src/render/kernel_options.rs). In
 each round the two sides render the same scene at the same time, each for the same wall time
 (`caustica render --time`), sharing the machine's cores; a side's rate is the samples it rendered,
 and a round's figure the ratio B / A. The script prints each round's ratio and their median and
@@ -51,10 +54,13 @@ def side_env(shaders):
 
 
 def start(side, scene, args):
-    """Starts a render of `scene` by `side` (binary, shaders, output image) for args.seconds."""
-    binary, shaders, output = side
+    """Starts a render of `scene` by `side` (binary, shaders, kernel options, output image) for
+    args.seconds."""
+    binary, shaders, options, output = side
     command = [binary, "render", scene, "--width", str(args.width), "--height", str(args.height),
                "--spp", "1000000", "--time", f"{args.seconds}s", "--output", output]
+    for option in options:
+        command += ["--kernel-option", option]
     return subprocess.Popen(command, cwd=REPO, env=side_env(shaders), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
 
@@ -72,6 +78,8 @@ def main():
     parser.add_argument("--a", default="embedded", help="side A's shader folder (default: embedded)")
     parser.add_argument("--a-bin", default="target/release/caustica")
     parser.add_argument("--b-bin", default=None, help="side B's binary (default: --a-bin)")
+    parser.add_argument("--a-option", action="append", default=[], help="a kernel option KEY=VALUE for side A (repeatable)")
+    parser.add_argument("--b-option", action="append", default=[], help="a kernel option KEY=VALUE for side B (repeatable)")
     parser.add_argument("--scene", action="append", help="mesh, sky, box or a scene file (default: mesh and sky)")
     parser.add_argument("--rounds", type=int, default=6)
     parser.add_argument("--seconds", type=float, default=12)
@@ -82,7 +90,8 @@ def main():
     out = Path(os.environ.get("TMPDIR", "/tmp"))
     for name in args.scene or ["mesh", "sky"]:
         scene = SCENES.get(name, name)
-        sides = [(args.a_bin, args.a, str(out / "cpu_ab-a.pfm")), (b_bin, args.b, str(out / "cpu_ab-b.pfm"))]
+        sides = [(args.a_bin, args.a, args.a_option, str(out / "cpu_ab-a.pfm")),
+                 (b_bin, args.b, args.b_option, str(out / "cpu_ab-b.pfm"))]
         # Unmeasured, both at once: fills lavapipe's disk cache with each side's kernel.
         warm_up = [start(side, scene, args) for side in sides]
         for process, label in zip(warm_up, "AB"):

@@ -33,7 +33,12 @@
 # the queue, to check against lavapipe's; "wavefront" the same A/B of the wavefront's kernels
 # (CAUSTICA_WAVEFRONT=1) against the megakernel; "tiles" the same A/B of subgroups taking their
 # tiles from a counter (CAUSTICA_TAKE_TILES=1); "shaders" runs each .run/shaders-NAME/ folder
-# (CAUSTICA_SHADER_DIR).
+# (CAUSTICA_SHADER_DIR); "traversal" the whole matrix of the BVH walk's candidates on the suite, one
+# run each (the compute walk with four- and eight-wide nodes, CAUSTICA_BVH_WIDTH; shadow rays'
+# children unsorted, CAUSTICA_SHADOW_WALK; the walk queue, CAUSTICA_WALK_QUEUE; the device's ray
+# queries, --traversal ray-query, where it has them; the default again, for the run's noise), and
+# writes them as one table, traversal.md (scripts/traversal_table.py), and the viewer's frame rate
+# and samples/s at 1280x720 under a virtual display (xvfb-run), where there is one.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out="${OUT:-gpu-out}"
@@ -152,6 +157,46 @@ if [[ "$steps" == *" shaders "* ]]; then
         measure_side "sh-$name"
     done
     unset CAUSTICA_SHADER_DIR
+fi
+if [[ "$steps" == *" traversal "* ]]; then
+    # Each candidate is a run-time choice of this one binary (src/render/kernel_options.rs); the
+    # files trav-NAME.json become the table's columns, the default first and last.
+    opt() { echo "--kernel-option $1"; }
+    candidates=(
+        "compute-default|--traversal compute"
+        "compute-bvh8|--traversal compute $(opt bvh-width=8)"
+        "compute-shadow-unsorted|--traversal compute $(opt shadow-walk=unsorted)"
+        "compute-bvh8-records-storage|--traversal compute $(opt bvh-width=8) $(opt walk-records=storage)"
+        "compute-queue|--traversal compute $(opt walk-queue=1)"
+    )
+    if "$caustica" bench --spp 1 --width 8 --height 8 --traversal ray-query >/dev/null 2>>"$results/log.txt"; then
+        candidates+=("ray-query|--traversal ray-query")
+    else
+        log "the device has no ray queries: the table has the compute walk's candidates alone"
+    fi
+    candidates+=("compute-default-again|--traversal compute")
+    tables=()
+    for candidate in "${candidates[@]}"; do
+        name=${candidate%%|*}
+        # shellcheck disable=SC2086 # the options are words
+        measure "trav-$name" --suite --width "$width" --height "$height" --spp "$quarter" ${candidate#*|}
+        tables+=("$results/trav-$name.json")
+    done
+    if python3 scripts/traversal_table.py "${tables[@]}" >"$results/traversal.md" 2>>"$results/log.txt"; then
+        tee -a "$results/log.txt" <"$results/traversal.md"
+    else
+        log "traversal table FAILED"
+    fi
+    # The viewer at 1280x720 on the mesh box: its frame rate and samples/s as it logs them with the
+    # screenshot it was asked for (a window on a virtual display; the GPU renders, X only shows it).
+    if command -v xvfb-run >/dev/null; then
+        log "viewer: caustica view scenes/bunny_cornell.toml 1280x720 under xvfb-run"
+        timeout "$limit" xvfb-run -a -s "-screen 0 1280x720x24" "$caustica" view scenes/bunny_cornell.toml \
+            --width 1280 --height 720 --spp "$quarter" --screenshot "$results/viewer.png" 2>&1 \
+            | grep -E "wrote|rror" | tee -a "$results/log.txt" || log "viewer FAILED"
+    else
+        log "no xvfb-run: the viewer's frame rate is left out"
+    fi
 fi
 if [[ "$steps" == *" mitsuba "* ]]; then
     if [ -f .run/mitsuba.tar.xz ]; then

@@ -6,8 +6,9 @@
 // (SCENE_TOP_LEVEL 0); a scene whose top level is its root alone tests the instances as that
 // node's children and walks them in turn (SCENE_TOP_LEVEL_TREE 0); any other walks the top level
 // with a stack of its own, its leaves' instances tagged.
-// Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl). The top
-// level has one instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
+// Both levels are wide nodes (up to four children's quantized boxes a node, layout.glsl), or with
+// BVH_WIDTH 8 the bottom levels are eight-wide (bvh_eight_wide.glsl). The top level has one
+// instance a leaf. BVH_MAX_DEPTH is injected by the host from the builder's bound on
 // the binary tree; each wide level takes at least one binary level (src/bvh/wide_node.rs).
 // A scene's few shapes (SCENE_FEW_SHAPES, at most FEW_PRIMITIVES of src/render/features.rs) are
 // tested in turn, as straight-line code, before any walk: a scene of nothing else compiles no walk
@@ -139,6 +140,20 @@ uint sorted_children(uint node_index, vec3 ro, vec3 inv_d, float t_max, out floa
     return uint(t0 != MISSED_BOX) + uint(t1 != MISSED_BOX) + uint(t2 != MISSED_BOX) + uint(t3 != MISSED_BOX);
 }
 
+// Node `node_index`'s children as sorted_children gives them, but in their stored order: entries
+// (+infinity for a child missed or an empty slot) and (link, kind) pairs, for a shadow ray's walk
+// with SHADOW_WALK_UNSORTED (src/render/shadow_walk.rs). Returns 4: a missed child is told by its
+// entry, not by its place.
+uint unsorted_children(uint node_index, vec3 ro, vec3 inv_d, float t_max, out float t0, out float t1, out float t2, out float t3, out uvec2 c0, out uvec2 c1, out uvec2 c2, out uvec2 c3) {
+    WideNode node = load_nodes(node_index);
+    vec4 entries = wide_child_entries(node, ro, inv_d, t_max);
+    uvec4 kinds = child_bytes(node.quantized_z_kinds.z);
+    t0 = entries.x, t1 = entries.y, t2 = entries.z, t3 = entries.w;
+    c0 = uvec2(node.links.x, kinds.x), c1 = uvec2(node.links.y, kinds.y);
+    c2 = uvec2(node.links.z, kinds.z), c3 = uvec2(node.links.w, kinds.w);
+    return 4u;
+}
+
 // Zero direction components would make 0 * inf = NaN in the slab test; nudge them.
 vec3 safe_inverse(vec3 d) {
     const float tiny = 1e-30;
@@ -243,7 +258,15 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
             LOOP_ITERATION();
             float t0, t1, t2, t3;
             uvec2 c0, c1, c2, c3;
+#if SHADOW_WALK_UNSORTED
+            // A shadow ray takes the children as stored (shadow_walk.rs); a missed child's entry
+            // is +infinity, past its hit.t unless that is infinite too, where a missed child is
+            // visited for nothing (its own boxes are missed in turn) but never gives a hit.
+            uint entered = any_hit ? unsorted_children(node_index, ro, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3)
+                                   : sorted_children(node_index, ro, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
+#else
             uint entered = sorted_children(node_index, ro, inv_d, hit.t, t0, t1, t2, t3, c0, c1, c2, c3);
+#endif
             // Children farthest first: leaves are intersected, interior children left on the
             // stack, so that the nearest becomes the next node and the nearer of the rest lie on
             // top. One loop over the children in this order measured faster on lavapipe than a
@@ -288,6 +311,11 @@ bool walk_instance(uint root, uint instance, uint instance_kind, vec3 ro, vec3 r
     return false;
 }
 
+#if BVH_WIDTH == 8
+// The meshes' and shapes' own BVHs as eight-wide nodes (bvh-width=8): walk_instance_eight_wide.
+#include "bvh_eight_wide.glsl"
+#endif
+
 // Walks instance `instance` with the world ray o + t d, as walk_instance: in its object space
 // where it is a placed mesh (the object-space ray keeps the world parameter t: its direction is
 // transformed, not renormalised). The scene's own shapes are placed by the identity and keep the
@@ -318,7 +346,11 @@ bool walk_placed(uint instance, vec3 o, vec3 d, bool any_hit, inout Hit hit) {
     if (!instance_walked(info)) return false;
     vec3 ro, rd;
     uint instance_kind = placed_ray(instance, info, o, d, ro, rd);
+#if BVH_WIDTH == 8
+    return walk_instance_eight_wide(info.y, instance, instance_kind, ro, rd, any_hit, hit);
+#else
     return walk_instance(info.y, instance, instance_kind, ro, rd, any_hit, hit);
+#endif
 }
 
 // Closest hit along o + t d with 0 < t < t_max. With any_hit, returns at the first hit found

@@ -441,7 +441,17 @@ fn kernel_options_are_checked_listed_applied_and_leave_the_image_alone() {
     let help = caustica(&["bench", "--kernel-option", "help"]);
     assert!(help.status.success());
     let text = String::from_utf8_lossy(&help.stdout);
-    for key in ["wavefront", "walk-queue", "walk-records", "take-tiles", "workgroup", "experimental", "GPU"] {
+    for key in [
+        "wavefront",
+        "walk-queue",
+        "walk-records",
+        "take-tiles",
+        "workgroup",
+        "bvh-width",
+        "shadow-walk",
+        "experimental",
+        "GPU",
+    ] {
         assert!(text.contains(key), "help does not list {key}: {text}");
     }
     let records = |extra: &[&str], env: Option<&str>| {
@@ -459,6 +469,16 @@ fn kernel_options_are_checked_listed_applied_and_leave_the_image_alone() {
     assert_eq!(records(&["--kernel-option", "walk-records=storage"], None), "storage");
     assert_eq!(records(&["--kernel-option", "walk-records=texels"], Some("storage")), "texels", "the flag wins");
     assert_eq!(records(&[], Some("storage")), "storage");
+    // The walk's candidates for GPUs (scripts/gpu-measure.sh, STEPS=traversal) reach the kernel too.
+    let chosen = |option: &str, key: &str| {
+        let args = ["bench", "--width", "8", "--height", "8", "--spp", "1", "--json", "--kernel-option", option];
+        let o = caustica(&args);
+        assert!(o.status.success(), "{option}: {}", String::from_utf8_lossy(&o.stderr));
+        let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        summary[key].as_str().unwrap().to_owned()
+    };
+    assert_eq!(chosen("bvh-width=8", "bvh_width"), "8");
+    assert_eq!(chosen("shadow-walk=unsorted", "shadow_walk"), "unsorted");
     let dir = temp_dir("cli-kernel-options");
     let render = |name: &str, option: &str| {
         let out = dir.join(name);

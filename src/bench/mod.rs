@@ -18,8 +18,8 @@ use crate::farm::per_second;
 use crate::gpu::{DeviceInfo, GpuContext, KernelStatistic, Traversal};
 use crate::process_time::cpu_seconds;
 use crate::render::{
-    AovSet, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, WalkQueue, WalkRecords,
-    Workgroup,
+    AovSet, BvhWidth, GeometryReport, GroupOrder, KernelChoice, KernelOptions, Renderer, SceneFeatures, ShadowWalk,
+    WalkQueue, WalkRecords, Workgroup,
 };
 use crate::scene::Scene;
 use anyhow::Result;
@@ -69,6 +69,10 @@ pub struct Measurement {
     pub take_tiles: bool,
     /// How it read the walk's nodes and triangles (`CAUSTICA_WALK_RECORDS`).
     pub walk_records: WalkRecords,
+    /// The node format of the meshes' and shapes' BVHs (`CAUSTICA_BVH_WIDTH`).
+    pub bvh_width: BvhWidth,
+    /// How a shadow ray's four-wide walk ordered a node's children (`CAUSTICA_SHADOW_WALK`).
+    pub shadow_walk: ShadowWalk,
     /// Whether the wavefront's kernels ran instead of the megakernel (`CAUSTICA_WAVEFRONT`).
     pub wavefront: bool,
     /// The kernel's workgroup shape.
@@ -131,6 +135,8 @@ pub fn measure(ctx: &GpuContext, scene: &Scene, aovs: AovSet, setup: &KernelSetu
         walk_queue: renderer.walk_queue,
         take_tiles: renderer.take_tiles,
         walk_records: renderer.walk_records,
+        bvh_width: renderer.bvh_width,
+        shadow_walk: renderer.shadow_walk,
         wavefront: renderer.runs_wavefront(),
         workgroup: renderer.workgroup,
         traversal: renderer.traversal,
@@ -183,6 +189,8 @@ impl Measurement {
             "walk_queue_barriers": self.walk_queue.map(|q| q.subgroup_barriers),
             "take_tiles": self.take_tiles,
             "walk_records": self.walk_records.label(),
+            "bvh_width": self.bvh_width.label(),
+            "shadow_walk": self.shadow_walk.label(),
             "wavefront": self.wavefront,
             "workgroup": self.workgroup.label(),
             "traversal": self.traversal.name(),

@@ -3,7 +3,7 @@
 
 use super::{device_json, Measurement, SuiteOutcome};
 use crate::gpu::DeviceInfo;
-use crate::render::{GeometryReport, KernelChoice, WalkRecords};
+use crate::render::{BvhWidth, GeometryReport, KernelChoice, ShadowWalk, WalkRecords};
 use serde_json::{json, Value};
 
 /// `value / scale` to `digits` decimals, or "-" when nothing was timed (a render too quick to
@@ -41,9 +41,17 @@ pub fn print_measurement(m: &Measurement, device: &DeviceInfo) {
         WalkRecords::Texels => "",
         WalkRecords::Storage => "; nodes and triangles from storage buffers",
     };
+    let width = match m.bvh_width {
+        BvhWidth::Four => "",
+        BvhWidth::Eight => "; eight-wide nodes in octant order (CAUSTICA_BVH_WIDTH)",
+    };
+    let shadows = match m.shadow_walk {
+        ShadowWalk::Sorted => "",
+        ShadowWalk::Unsorted => "; shadow rays' children unsorted (CAUSTICA_SHADOW_WALK)",
+    };
     let wavefront = if m.wavefront { "; the wavefront's three kernels (CAUSTICA_WAVEFRONT)" } else { "" };
     println!(
-        "kernel:       {kernel}: {}; workgroups {}, rows {}, traversal {}{tiles}{records}{walks}{wavefront}",
+        "kernel:       {kernel}: {}; workgroups {}, rows {}, traversal {}{tiles}{records}{width}{shadows}{walks}{wavefront}",
         m.features.names().join(", "),
         m.workgroup.label(),
         m.group_order.label(),

@@ -1,6 +1,8 @@
 //! Bounding volume hierarchy over primitive bounds: built on the CPU with binned SAH (in parallel)
 //! as binary 32-byte `BvhNode`s in depth-first order, walkable on the CPU, and turned into the
-//! 64-byte four-wide, quantized `WideNode`s the GLSL kernel walks (wide_node.rs).
+//! 64-byte four-wide, quantized `WideNode`s the GLSL kernel walks (wide_node.rs), or, for the
+//! meshes' and shapes' own BVHs, into the 80-byte eight-wide nodes of eight_wide.rs
+//! (`bvh-width=8`).
 //!
 //! A BVH over zero primitives is the single node `BvhNode::EMPTY_ROOT`: an inverted box that the
 //! sign-ordered slab test of `ray_box` never hits. As wide nodes it is a root of no children,
@@ -11,6 +13,7 @@ mod aabb;
 mod binning;
 mod blocks;
 mod box_a;
+mod eight_wide;
 mod flatten;
 mod node;
 mod partition;
@@ -26,6 +29,7 @@ use rayon::prelude::*;
 use box_a::BoxA;
 
 pub use aabb::Aabb;
+pub use eight_wide::{EightWideNode, EightWideTree, EIGHT_WIDTH, RECORDS_PER_EIGHT_WIDE_NODE};
 pub use node::BvhNode;
 pub use stats::BuildStats;
 pub use traverse::{any_hit, closest_hit, ray_box, Ray};

@@ -53,15 +53,16 @@ pub struct WideNode {
     pub links: [u32; WIDTH],
 }
 
-/// One child of a [`WideNode`] before quantization.
+/// One child of a wide node before quantization: an interior child names its node by its index
+/// in the list [`wide_tree`] returns.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum WideChild {
+pub(super) enum WideChild {
     Interior { bounds: Aabb, node: u32 },
     Leaf { bounds: Aabb, first: u32, count: u32 },
 }
 
 impl WideChild {
-    fn bounds(&self) -> Aabb {
+    pub(super) fn bounds(&self) -> Aabb {
         match *self {
             WideChild::Interior { bounds, .. } | WideChild::Leaf { bounds, .. } => bounds,
         }
@@ -98,10 +99,7 @@ impl WideNode {
             node.links[k] = link;
             let b = child.bounds();
             for (axis, &exponent) in exponents.iter().enumerate() {
-                let quantum = quantum(exponent);
-                let from_origin = |v: f32| (v as f64 - node.origin[axis] as f64) / quantum;
-                let low = (from_origin(b.min[axis]) - MARGIN).floor().clamp(0.0, QUANTA) as u32;
-                let high = (from_origin(b.max[axis]) + MARGIN).ceil().clamp(0.0, QUANTA) as u32;
+                let (low, high) = quantize(b.min[axis], b.max[axis], node.origin[axis], exponent);
                 node.quantized[2 * axis] |= low << shift;
                 node.quantized[2 * axis + 1] |= high << shift;
             }
@@ -132,20 +130,30 @@ impl WideNode {
     }
 }
 
+/// A child's bounds `min..max` along one axis in steps of 2^(`exponent` - 127) from `origin`: the
+/// min rounded down and the max up, each at least [`MARGIN`] of a step outside the exact bound.
+pub(super) fn quantize(min: f32, max: f32, origin: f32, exponent: u32) -> (u32, u32) {
+    let quantum = quantum(exponent);
+    let from_origin = |v: f32| (v as f64 - origin as f64) / quantum;
+    let low = (from_origin(min) - MARGIN).floor().clamp(0.0, QUANTA) as u32;
+    let high = (from_origin(max) + MARGIN).ceil().clamp(0.0, QUANTA) as u32;
+    (low, high)
+}
+
 /// Byte `k` of a packed word (`child_bytes` in shaders/bvh.glsl).
-fn byte(word: u32, k: usize) -> u32 {
+pub(super) fn byte(word: u32, k: usize) -> u32 {
     word >> (8 * k) & 0xff
 }
 
 /// 2^(biased - 127), as an f32 exponent field of `biased` means (biased 1 to 254).
-fn quantum(biased: u32) -> f64 {
+pub(super) fn quantum(biased: u32) -> f64 {
     2f64.powi(biased as i32 - 127)
 }
 
 /// The smallest exponent (biased as an f32's) whose quantum spans [min, max] in [`QUANTA`] steps
 /// with [`MARGIN`] to spare, so that a max bound plus the margin still fits in 255 steps. A flat
 /// axis gets the smallest normal quantum.
-fn quantum_exponent(min: f32, max: f32) -> u32 {
+pub(super) fn quantum_exponent(min: f32, max: f32) -> u32 {
     let extent = max as f64 - min as f64;
     let spans = |biased: u32| (QUANTA - MARGIN) * quantum(biased) >= extent;
     let mut biased = if extent > 0.0 { ((extent / QUANTA).log2().ceil() as i32 + 127).clamp(1, 254) as u32 } else { 1 };
@@ -175,17 +183,28 @@ const NODE_COST: f32 = 2.0;
 /// kernel's stack is sized by (`STACK_SIZE` in bvh.glsl). A root that is a leaf becomes a node of
 /// that one leaf; an empty BVH the node of no children.
 pub fn wide_nodes(nodes: &[BvhNode], max_leaf_size: usize) -> Vec<WideNode> {
+    wide_tree(nodes, max_leaf_size, WIDTH).iter().map(|children| WideNode::new(children)).collect()
+}
+
+/// Most children a node of [`wide_tree`] may take (the eight-wide nodes' width, eight_wide.rs).
+pub(super) const MAX_WIDTH: usize = 8;
+
+/// The wide tree of [`wide_nodes`] with up to `width` children a node (2 to [`MAX_WIDTH`]), before
+/// quantization: each node's children, root first, a node before the nodes below it (depth-first),
+/// an interior child naming its node by its index in the list.
+pub(super) fn wide_tree(nodes: &[BvhNode], max_leaf_size: usize, width: usize) -> Vec<Vec<WideChild>> {
+    assert!((2..=MAX_WIDTH).contains(&width), "width {width}");
     let root = &nodes[0];
     if root.is_leaf() {
-        return vec![WideNode::new(&[leaf_child(root)])];
+        return vec![vec![leaf_child(root)]];
     }
     if nodes.len() == 1 {
-        return vec![WideNode::EMPTY];
+        return vec![Vec::new()];
     }
     let mut plans = vec![Plan::UNSET; nodes.len()];
-    plan_subtree(nodes, 0, max_leaf_size as u32, &mut plans);
-    let mut wide = Vec::with_capacity(nodes.len() / 3 + 1);
-    emit_node(nodes, &plans, 0, &mut wide);
+    plan_subtree(nodes, 0, max_leaf_size as u32, width, &mut plans);
+    let mut wide = Vec::with_capacity(nodes.len() / (width - 1) + 1);
+    emit_node(nodes, &plans, 0, width, &mut wide);
     wide
 }
 
@@ -202,40 +221,40 @@ enum Layout {
     Opened(usize),
 }
 
-/// The cheapest layout of a binary subtree in 1 to WIDTH slots, and the primitives below it.
+/// The cheapest layout of a binary subtree in 1 to `width` slots, and the primitives below it.
 #[derive(Clone, Copy, Debug)]
 struct Plan {
     first: u32,
     count: u32,
     /// cost[i]: the surface-area cost in at most i slots (index 0 unused), areas absolute.
-    cost: [f32; WIDTH + 1],
-    layout: [Layout; WIDTH + 1],
+    cost: [f32; MAX_WIDTH + 1],
+    layout: [Layout; MAX_WIDTH + 1],
 }
 
 impl Plan {
     const UNSET: Plan =
-        Plan { first: 0, count: 0, cost: [f32::INFINITY; WIDTH + 1], layout: [Layout::Fewer; WIDTH + 1] };
+        Plan { first: 0, count: 0, cost: [f32::INFINITY; MAX_WIDTH + 1], layout: [Layout::Fewer; MAX_WIDTH + 1] };
 }
 
 /// Fills `plans` for the subtree at binary node `index`, children before parents.
-fn plan_subtree(nodes: &[BvhNode], index: usize, max_leaf_size: u32, plans: &mut [Plan]) {
+fn plan_subtree(nodes: &[BvhNode], index: usize, max_leaf_size: u32, width: usize, plans: &mut [Plan]) {
     let n = &nodes[index];
     let area = n.bounds().surface_area();
     let mut plan = Plan::UNSET;
     if n.is_leaf() {
         (plan.first, plan.count) = (n.offset, n.prim_count());
-        plan.cost = [area * plan.count as f32; WIDTH + 1];
+        plan.cost = [area * plan.count as f32; MAX_WIDTH + 1];
         plan.layout[1] = Layout::Leaf;
     } else {
         let [a, b] = binary_children(nodes, index);
-        plan_subtree(nodes, a, max_leaf_size, plans);
-        plan_subtree(nodes, b, max_leaf_size, plans);
+        plan_subtree(nodes, a, max_leaf_size, width, plans);
+        plan_subtree(nodes, b, max_leaf_size, width, plans);
         let (pa, pb) = (plans[a], plans[b]);
         (plan.first, plan.count) = (pa.first, pa.count + pb.count);
         let leaf = if plan.count <= max_leaf_size { area * plan.count as f32 } else { f32::INFINITY };
-        let node = area * NODE_COST + opened(&pa, &pb, WIDTH).0;
+        let node = area * NODE_COST + opened(&pa, &pb, width).0;
         (plan.cost[1], plan.layout[1]) = if leaf <= node { (leaf, Layout::Leaf) } else { (node, Layout::Node) };
-        for slots in 2..=WIDTH {
+        for slots in 2..=width {
             let (cost, k) = opened(&pa, &pb, slots);
             (plan.cost[slots], plan.layout[slots]) = if plan.cost[slots - 1] <= cost {
                 (plan.cost[slots - 1], Layout::Fewer)
@@ -268,27 +287,27 @@ fn slot_roots(nodes: &[BvhNode], plans: &[Plan], index: usize, slots: usize, roo
     }
 }
 
-/// Appends the wide node of binary interior node `index` (its two children opened into the four
-/// slots) and, depth first, those below it; returns its index in `wide`.
-fn emit_node(nodes: &[BvhNode], plans: &[Plan], index: usize, wide: &mut Vec<WideNode>) -> u32 {
+/// Appends the wide node of binary interior node `index` (its two children opened into the
+/// `width` slots) and, depth first, those below it; returns its index in `wide`.
+fn emit_node(nodes: &[BvhNode], plans: &[Plan], index: usize, width: usize, wide: &mut Vec<Vec<WideChild>>) -> u32 {
     let at = wide.len();
-    wide.push(WideNode::EMPTY);
+    wide.push(Vec::new());
     let [a, b] = binary_children(nodes, index);
-    let k = opened(&plans[a], &plans[b], WIDTH).1;
-    let mut roots = Vec::with_capacity(WIDTH);
+    let k = opened(&plans[a], &plans[b], width).1;
+    let mut roots = Vec::with_capacity(width);
     slot_roots(nodes, plans, a, k, &mut roots);
-    slot_roots(nodes, plans, b, WIDTH - k, &mut roots);
+    slot_roots(nodes, plans, b, width - k, &mut roots);
     let children: Vec<WideChild> = roots
         .into_iter()
         .map(|c| {
             let (plan, bounds) = (&plans[c], nodes[c].bounds());
             match plan.layout[1] {
                 Layout::Leaf => WideChild::Leaf { bounds, first: plan.first, count: plan.count },
-                _ => WideChild::Interior { bounds, node: emit_node(nodes, plans, c, wide) },
+                _ => WideChild::Interior { bounds, node: emit_node(nodes, plans, c, width, wide) },
             }
         })
         .collect();
-    wide[at] = WideNode::new(&children);
+    wide[at] = children;
     at as u32
 }
 

@@ -3,16 +3,21 @@
 //! (instances), all in one node array with the top-level root at node 0. A mesh placed many times
 //! is stored once.
 
+use super::bvh_width::BvhWidth;
 use super::layout::*;
-use crate::bvh::{self, wide_nodes, Aabb, BuildStats, WideNode, CHILD_INTERIOR, CHILD_NONE, WIDTH};
+use crate::bvh::{self, wide_nodes, Aabb, BuildStats, EightWideTree, WideNode, CHILD_INTERIOR, CHILD_NONE, WIDTH};
 use crate::scene::{Mesh, Scene, Shape};
 use glam::{Mat4, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
 
 pub struct Acceleration {
-    /// Every BVH as wide nodes (crate::bvh::WideNode), the top level's root at 0.
+    /// Every BVH as wide nodes (crate::bvh::WideNode), the top level's root at 0; the bottom
+    /// levels' nodes are eight-wide (two records each, crate::bvh::EightWideNode) where built
+    /// with [`BvhWidth::Eight`].
     pub nodes: Vec<WideNode>,
+    /// The bottom levels' node format.
+    pub bvh_width: BvhWidth,
     /// In top-level leaf order.
     pub instances: Vec<GpuInstance>,
     /// Per instance, in the same order: the index of the mesh it places (into `triangle_slots`),
@@ -157,6 +162,26 @@ fn transformed_bounds(b: &Aabb, m: Mat4) -> Aabb {
     }))
 }
 
+/// Appends a bottom level's nodes in the format `width` names, their links rebased onto the shared
+/// node array and leaf ranges onto the shared primitive array, whose primitives from `prim_base`
+/// on are to be stored in the order returned; returns its root's index too.
+fn append_bottom_level(
+    nodes: &mut Vec<WideNode>,
+    bottom: &bvh::Bvh,
+    prim_base: u32,
+    width: BvhWidth,
+) -> (u32, Vec<u32>) {
+    match width {
+        BvhWidth::Four => (append_nodes(nodes, bottom, prim_base), bottom.prim_order.clone()),
+        BvhWidth::Eight => {
+            let root = nodes.len() as u32;
+            let tree = EightWideTree::new(bottom, bvh::MAX_LEAF_SIZE, root, prim_base);
+            nodes.extend(tree.records());
+            (root, tree.prim_order)
+        }
+    }
+}
+
 /// Appends a bottom level's nodes as wide nodes, rebasing child links onto the shared node array
 /// and leaf ranges onto the shared primitive array; returns its root's index.
 fn append_nodes(nodes: &mut Vec<WideNode>, bottom: &bvh::Bvh, prim_base: u32) -> u32 {
@@ -175,7 +200,14 @@ fn append_nodes(nodes: &mut Vec<WideNode>, bottom: &bvh::Bvh, prim_base: u32) ->
 }
 
 impl Acceleration {
+    /// The scene's acceleration structure in the default format: four-wide nodes throughout.
     pub fn build(scene: &Scene) -> Acceleration {
+        Self::build_with(scene, BvhWidth::Four)
+    }
+
+    /// The scene's acceleration structure, its bottom levels' nodes as `width` says; the top level
+    /// is four-wide either way (the walk queue and the top-level walk read it so).
+    pub fn build_with(scene: &Scene, width: BvhWidth) -> Acceleration {
         let start = Instant::now();
         let group = (!scene.shapes.is_empty()).then(|| {
             let bounds: Vec<Aabb> = scene.shapes.iter().map(shape_bounds).collect();
@@ -204,8 +236,9 @@ impl Acceleration {
         let mut primitives = Vec::new();
         let mut group_root = 0;
         if let Some(g) = &group {
-            group_root = append_nodes(&mut nodes, &g.bvh, 0);
-            primitives = g.bvh.prim_order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
+            let order;
+            (group_root, order) = append_bottom_level(&mut nodes, &g.bvh, 0, width);
+            primitives = order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
         }
 
         let (mut triangles, mut triangle_materials) = (Vec::new(), Vec::new());
@@ -214,13 +247,14 @@ impl Acceleration {
         let mut triangle_slots = Vec::with_capacity(meshes.len());
         let mut mesh_flags = Vec::with_capacity(meshes.len());
         for (mesh, bottom) in scene.meshes.iter().zip(&meshes) {
-            mesh_roots.push(append_nodes(&mut nodes, &bottom.bvh, triangles.len() as u32));
+            let (root, order) = append_bottom_level(&mut nodes, &bottom.bvh, triangles.len() as u32, width);
+            mesh_roots.push(root);
             let vertex_base = vertex_count;
             vertex_count += mesh.positions.len() as u32;
-            triangles.extend(bottom.bvh.prim_order.iter().map(|&t| mesh_triangle(mesh, t as usize, vertex_base)));
-            triangle_materials.extend(bottom.bvh.prim_order.iter().map(|&t| mesh.triangle_materials[t as usize]));
+            triangles.extend(order.iter().map(|&t| mesh_triangle(mesh, t as usize, vertex_base)));
+            triangle_materials.extend(order.iter().map(|&t| mesh.triangle_materials[t as usize]));
             let mut slots = vec![0; mesh.triangles.len()];
-            for (slot, &t) in (triangles.len() as u32 - mesh.triangles.len() as u32..).zip(&bottom.bvh.prim_order) {
+            for (slot, &t) in (triangles.len() as u32 - mesh.triangles.len() as u32..).zip(&order) {
                 slots[t as usize] = slot;
             }
             triangle_slots.push(slots);
@@ -287,6 +321,7 @@ impl Acceleration {
         let bounds = if instances.is_empty() { Aabb::EMPTY } else { top.nodes[0].bounds() };
         Acceleration {
             nodes,
+            bvh_width: width,
             instances,
             instance_meshes,
             instance_sources,

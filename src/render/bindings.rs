@@ -355,6 +355,8 @@ mod tests {
         take_tiles: false,
         wavefront: None,
         walk_records: WalkRecords::Texels,
+        bvh_width: crate::render::BvhWidth::Four,
+        shadow_walk: crate::render::ShadowWalk::Sorted,
         traversal: crate::gpu::Traversal::Compute,
     };
 
@@ -366,7 +368,7 @@ mod tests {
         ..GENERAL
     };
 
-    const VARIANTS: [KernelVariant; 14] = [
+    const VARIANTS: [KernelVariant; 17] = [
         GENERAL,
         // The device's ray queries in place of the walk (ray_query.glsl), which bind the scene's
         // acceleration structure; in the wavefront's kernels too.
@@ -379,6 +381,11 @@ mod tests {
         // The walk's records from storage buffers (walk_records.rs), in the plain and queued walks.
         KernelVariant { walk_records: WalkRecords::Storage, ..GENERAL },
         KernelVariant { walk_records: WalkRecords::Storage, ..QUEUE },
+        // The eight-wide walk (bvh_width.rs), its nodes read as texels and from storage buffers.
+        KernelVariant { bvh_width: crate::render::BvhWidth::Eight, ..GENERAL },
+        KernelVariant { bvh_width: crate::render::BvhWidth::Eight, walk_records: WalkRecords::Storage, ..GENERAL },
+        // Shadow rays' four-wide walk without sorting (shadow_walk.rs).
+        KernelVariant { shadow_walk: crate::render::ShadowWalk::Unsorted, ..GENERAL },
         KernelVariant { aovs: true, ..GENERAL },
         KernelVariant { count_loop_iterations: true, ..GENERAL },
         KernelVariant { aovs: true, count_loop_iterations: true, ..GENERAL },

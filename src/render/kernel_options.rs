@@ -7,12 +7,15 @@
 //! A user or a script overrides a default for an A/B of one binary with `--kernel-option
 //! KEY=VALUE` on `render` and `bench` ([`KernelOptions::set_assignment`]), or with the matching
 //! `CAUSTICA_*` environment variable ([`KernelOptions::from_env`]; the command line wins). The
-//! keys ([`OPTIONS`]): `wavefront`, `walk-queue`, `walk-records`, `take-tiles`, `workgroup`.
+//! keys ([`OPTIONS`]): `wavefront`, `walk-queue`, `walk-records`, `take-tiles`, `workgroup`,
+//! `bvh-width`, `shadow-walk`.
 //! Values that run nowhere by default are labelled experimental in [`OPTIONS`]: they are built
 //! and tested, but no device class has measured a gain from them.
 
+use super::bvh_width::BvhWidth;
 use super::features::SceneFeatures;
 use super::layout::GpuInstance;
+use super::shadow_walk::ShadowWalk;
 use super::tile_taking;
 use super::walk_queue::{QueueRequest, WalkQueue};
 use super::walk_records::WalkRecords;
@@ -26,6 +29,8 @@ pub const WALK_QUEUE_VAR: &str = "CAUSTICA_WALK_QUEUE";
 pub const WALK_RECORDS_VAR: &str = "CAUSTICA_WALK_RECORDS";
 pub const TAKE_TILES_VAR: &str = "CAUSTICA_TAKE_TILES";
 pub const WORKGROUP_VAR: &str = "CAUSTICA_WORKGROUP";
+pub const BVH_WIDTH_VAR: &str = "CAUSTICA_BVH_WIDTH";
+pub const SHADOW_WALK_VAR: &str = "CAUSTICA_SHADOW_WALK";
 
 /// One run-time choice of the kernel: its key on the command line, its environment variable,
 /// the values it takes and which of them are experimental.
@@ -39,7 +44,7 @@ pub struct KernelOption {
 }
 
 /// Every kernel option, in the order `--kernel-option help` lists them.
-pub const OPTIONS: [KernelOption; 5] = [
+pub const OPTIONS: [KernelOption; 7] = [
     KernelOption {
         key: "wavefront",
         variable: WAVEFRONT_VAR,
@@ -71,6 +76,20 @@ pub const OPTIONS: [KernelOption; 5] = [
         values: "WxH: the kernel's workgroup shape, powers of two, at most 128 invocations (workgroup.rs)",
         experimental: "every shape but 8x8: no device measured gains more than 3 % from another",
     },
+    KernelOption {
+        key: "bvh-width",
+        variable: BVH_WIDTH_VAR,
+        values: "4: four-wide nodes sorted at each visit; 8: eight-wide compressed nodes in the ray's octant order \
+                 (bvh_width.rs), without the walk queue",
+        experimental: "8 everywhere: built for GPUs without ray-tracing hardware, unmeasured there; slower on lavapipe",
+    },
+    KernelOption {
+        key: "shadow-walk",
+        variable: SHADOW_WALK_VAR,
+        values: "sorted: a shadow ray's four-wide walk sorts each node's children as the closest hit's does; \
+                 unsorted: it takes them in stored order (shadow_walk.rs)",
+        experimental: "unsorted everywhere: unmeasured on a GPU",
+    },
 ];
 
 /// What was asked of the kernel, option by option; `None` leaves the choice to the device
@@ -82,6 +101,8 @@ pub struct KernelOptions {
     pub walk_records: Option<WalkRecords>,
     pub take_tiles: Option<bool>,
     pub workgroup: Option<Workgroup>,
+    pub bvh_width: Option<BvhWidth>,
+    pub shadow_walk: Option<ShadowWalk>,
 }
 
 impl KernelOptions {
@@ -143,6 +164,20 @@ impl KernelOptions {
                 )?)
             }
             "workgroup" => self.workgroup = Some(Workgroup::parse(value)?),
+            "bvh-width" => {
+                self.bvh_width = Some(match value {
+                    "4" => BvhWidth::Four,
+                    "8" => BvhWidth::Eight,
+                    _ => bail!("expected 4 (four-wide nodes) or 8 (eight-wide compressed nodes)"),
+                })
+            }
+            "shadow-walk" => {
+                self.shadow_walk = Some(match value {
+                    "sorted" => ShadowWalk::Sorted,
+                    "unsorted" => ShadowWalk::Unsorted,
+                    _ => bail!("expected sorted (children nearest first) or unsorted (in stored order)"),
+                })
+            }
             _ => bail!("no kernel option '{key}'; {}", keys_hint()),
         }
         Ok(())
@@ -176,13 +211,15 @@ pub fn help() -> String {
     for class in DeviceClass::ALL {
         let d = Defaults::for_class(class);
         out += &format!(
-            "  {}: wavefront {}, walk-queue {}, walk-records {}, take-tiles {}, workgroup {}\n",
+            "  {}: wavefront {}, walk-queue {}, walk-records {}, take-tiles {}, workgroup {}, bvh-width {}, shadow-walk {}\n",
             class.label(),
             u32::from(d.wavefront),
             if d.walk_queue { "1 (where the scene qualifies)" } else { "0" },
             d.walk_records.label(),
             if d.take_tiles { "1 (where possible)" } else { "0" },
-            d.workgroup.label()
+            d.workgroup.label(),
+            d.bvh_width.label(),
+            d.shadow_walk.label()
         );
     }
     out
@@ -265,6 +302,12 @@ pub struct Defaults {
     /// is laid out for eight of them; on an NVIDIA H200 no other shape gained more than 3 %
     /// (2026-12-04, `3e96a5c`).
     pub workgroup: Workgroup,
+    /// Four-wide nodes everywhere: the eight-wide walk lost on lavapipe (docs/benchmarks.md,
+    /// 2026-12-07) and is unmeasured on a GPU.
+    pub bvh_width: BvhWidth,
+    /// Sorted everywhere: the unsorted shadow walk is unmeasured on a GPU (docs/benchmarks.md
+    /// has lavapipe's figure).
+    pub shadow_walk: ShadowWalk,
 }
 
 impl Defaults {
@@ -275,6 +318,8 @@ impl Defaults {
             walk_records: WalkRecords::Texels,
             take_tiles: false,
             workgroup: Workgroup::EIGHT_BY_EIGHT,
+            bvh_width: BvhWidth::Four,
+            shadow_walk: ShadowWalk::Sorted,
         };
         match class {
             DeviceClass::Gpu | DeviceClass::LavapipeWithLoopLimit => base,
@@ -296,6 +341,8 @@ pub struct KernelChoices {
     pub walk_records: WalkRecords,
     pub take_tiles: bool,
     pub workgroup: Workgroup,
+    pub bvh_width: BvhWidth,
+    pub shadow_walk: ShadowWalk,
 }
 
 /// The scene facts the choices depend on: the kernel's features and the top level of its BVH.
@@ -308,6 +355,13 @@ pub struct SceneShape<'s> {
 }
 
 impl KernelOptions {
+    /// The node format of the meshes' and shapes' BVHs on `device` (whose loops are cut short
+    /// where `loop_limit`): needed before the scene's data is built, which [`Self::choose`]
+    /// reads.
+    pub fn bvh_width(&self, device: &DeviceInfo, loop_limit: bool) -> BvhWidth {
+        self.bvh_width.unwrap_or(Defaults::for_class(DeviceClass::of(device, loop_limit)).bvh_width)
+    }
+
     /// The choices for `scene` on `device` (whose loops are cut short where `loop_limit`). An
     /// error where an option asks for what cannot run there.
     pub fn choose(&self, device: &DeviceInfo, loop_limit: bool, scene: SceneShape) -> Result<KernelChoices> {
@@ -320,10 +374,17 @@ impl KernelOptions {
                 device.name
             );
         }
-        let queue_request = match self.walk_queue {
-            Some(request) => request,
-            None if defaults.walk_queue => QueueRequest::On,
-            None => QueueRequest::Off,
+        let bvh_width = self.bvh_width(device, loop_limit);
+        // The queue walks four-wide nodes alone (walk_queue.glsl): the eight-wide walk goes
+        // without it.
+        let queue_request = match (self.walk_queue, bvh_width) {
+            (Some(QueueRequest::Off), _) | (None, BvhWidth::Eight) => QueueRequest::Off,
+            (Some(_), BvhWidth::Eight) => {
+                bail!("walk-queue: the walk queue walks four-wide nodes alone; bvh-width=8 walks without it (walk-queue=0)")
+            }
+            (Some(request), BvhWidth::Four) => request,
+            (None, BvhWidth::Four) if defaults.walk_queue => QueueRequest::On,
+            (None, BvhWidth::Four) => QueueRequest::Off,
         };
         let walk_queue = match wavefront || scene.ray_queries {
             true => None,
@@ -340,7 +401,8 @@ impl KernelOptions {
         let take_tiles =
             tile_taking::takes_tiles(self.take_tiles, defaults.take_tiles, device, loop_limit, wavefront, workgroup)?;
         let walk_records = self.walk_records.unwrap_or(defaults.walk_records);
-        Ok(KernelChoices { wavefront, walk_queue, walk_records, take_tiles, workgroup })
+        let shadow_walk = self.shadow_walk.unwrap_or(defaults.shadow_walk);
+        Ok(KernelChoices { wavefront, walk_queue, walk_records, take_tiles, workgroup, bvh_width, shadow_walk })
     }
 }
 
@@ -379,6 +441,8 @@ mod tests {
         o.set_assignment("walk-records=storage").unwrap();
         o.set_assignment("take-tiles=0").unwrap();
         o.set_assignment("workgroup=16x8").unwrap();
+        o.set_assignment("bvh-width=8").unwrap();
+        o.set_assignment("shadow-walk=unsorted").unwrap();
         assert_eq!(
             o,
             KernelOptions {
@@ -387,6 +451,8 @@ mod tests {
                 walk_records: Some(WalkRecords::Storage),
                 take_tiles: Some(false),
                 workgroup: Some(Workgroup { width: 16, height: 8 }),
+                bvh_width: Some(BvhWidth::Eight),
+                shadow_walk: Some(ShadowWalk::Unsorted),
             }
         );
         for (bad, says) in [
@@ -395,6 +461,8 @@ mod tests {
             ("walk-records=ssbo", "expected texels"),
             ("take-tiles=on", "expected 0"),
             ("workgroup=12x8", "powers of two"),
+            ("bvh-width=16", "expected 4"),
+            ("shadow-walk=any", "expected sorted"),
             ("walkqueue=1", "no kernel option 'walkqueue'"),
             ("wavefront", "expected KEY=VALUE"),
         ] {
@@ -426,6 +494,8 @@ mod tests {
         let amd = Defaults::for_class(DeviceClass::LavapipeMesa25Amd);
         assert!(amd.walk_queue && amd.take_tiles && amd.walk_records == WalkRecords::Storage);
         assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).workgroup == Workgroup::EIGHT_BY_EIGHT));
+        assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).bvh_width == BvhWidth::Four));
+        assert!(DeviceClass::ALL.iter().all(|&c| Defaults::for_class(c).shadow_walk == ShadowWalk::Sorted));
     }
 
     #[test]

@@ -69,7 +69,8 @@ impl KernelPlan {
         let texel_bytes = texels.chunked_element().expect("texels may be split").bytes;
         let texture_budget =
             TEXTURE_BUDGET_BYTES.min(chunks::capacity_bytes(texel_bytes, binding_range(&ctx.info, texels)));
-        let data = SceneData::new(scene, texture_budget);
+        let loop_limit = ctx.loop_limit()?;
+        let data = SceneData::with_bvh_width(scene, texture_budget, options.bvh_width(&ctx.info, loop_limit.is_some()));
         if data.texture_bytes() < data.texture_bytes_requested {
             log::warn!(
                 "caustica: {}: textures downsampled from {:.1} MiB to {:.1} MiB to fit the texture budget",
@@ -80,7 +81,6 @@ impl KernelPlan {
         }
         let image_bytes = scene.film.width as u64 * scene.film.height as u64 * 16;
         let params = frame_params(scene, &data, seed);
-        let loop_limit = ctx.loop_limit()?;
         let features = match choice {
             KernelChoice::ForScene => SceneFeatures::of(&data),
             KernelChoice::General => SceneFeatures::ALL,
@@ -104,6 +104,8 @@ impl KernelPlan {
             take_tiles: choices.take_tiles,
             wavefront: choices.wavefront.then_some(WavefrontStage::Extend),
             walk_records: choices.walk_records,
+            bvh_width: choices.bvh_width,
+            shadow_walk: choices.shadow_walk,
             traversal,
         };
         let mut plan = KernelPlan {

@@ -4,6 +4,7 @@
 mod acceleration;
 mod aov;
 pub mod bindings;
+mod bvh_width;
 mod chunks;
 mod env_sampling;
 mod features;
@@ -21,6 +22,7 @@ pub mod light_tree_index;
 mod ray_query_scene;
 mod renderer;
 mod scene_data;
+mod shadow_walk;
 #[cfg(test)]
 mod spirv_reflect;
 mod textured_emission;
@@ -33,6 +35,7 @@ mod workgroup;
 
 pub use acceleration::{Acceleration, AccelerationStats};
 pub use aov::{AovSet, AovSums};
+pub use bvh_width::BvhWidth;
 pub use chunks::UNSPLIT;
 pub use features::{FewShapes, SceneFeatures, ALPHA_DELTA, FEW_PRIMITIVES};
 pub use frame::{frame_params, TEXTURE_BUDGET_BYTES};
@@ -44,6 +47,7 @@ pub use kernel_options::{
 };
 pub use renderer::{GeometryReport, LightTreeReport, Renderer, MAX_SAMPLES_PER_PIXEL};
 pub use scene_data::SceneData;
+pub use shadow_walk::ShadowWalk;
 pub use variant::{KernelChoice, KernelVariant};
 pub use walk_queue::{QueueRequest, WalkQueue};
 pub use walk_records::WalkRecords;

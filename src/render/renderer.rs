@@ -9,12 +9,14 @@
 use super::acceleration::AccelerationStats;
 use super::aov::{AovSet, AovSums};
 use super::bindings::{BufferBinding, KernelBuffer};
+use super::bvh_width::BvhWidth;
 use super::features::SceneFeatures;
 use super::frame::set_camera_params;
 use super::group_order::GroupOrder;
 use super::kernel_options::KernelOptions;
 use super::kernel_setup::{scene_hash, Initial, KernelPlan, Kernels, CLEARED_STATS};
 use super::layout::{FrameParams, GpuStats, PassParams, LOOP_CHECK_ITERATIONS};
+use super::shadow_walk::ShadowWalk;
 use super::variant::KernelChoice;
 use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
@@ -66,6 +68,10 @@ pub struct Renderer<'a> {
     pub take_tiles: bool,
     /// How the kernel reads the walk's nodes and triangles (walk_records.rs).
     pub walk_records: WalkRecords,
+    /// The node format of the meshes' and shapes' BVHs the kernel walks (bvh_width.rs).
+    pub bvh_width: BvhWidth,
+    /// How a shadow ray's four-wide walk orders a node's children (shadow_walk.rs).
+    pub shadow_walk: ShadowWalk,
     /// The kernel's workgroup shape (workgroup.rs).
     pub workgroup: Workgroup,
     /// How the kernel finds what rays hit: the device's choice (`GpuContext::traversal`), or the
@@ -215,6 +221,8 @@ impl<'a> Renderer<'a> {
             walk_queue: choices.walk_queue,
             take_tiles: choices.take_tiles,
             walk_records: choices.walk_records,
+            bvh_width: choices.bvh_width,
+            shadow_walk: choices.shadow_walk,
             workgroup: choices.workgroup,
             traversal: variant.traversal,
             structure,

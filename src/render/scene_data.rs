@@ -2,6 +2,7 @@
 //! materials, textures, the emitter list and the environment texels.
 
 use super::acceleration::{gpu_primitive, Acceleration};
+use super::bvh_width::BvhWidth;
 use super::env_sampling::EnvDistribution;
 use super::layout::*;
 use super::light_selection::{area_light_power, emission_luminance, punctual_light_power, LightDistribution};
@@ -255,7 +256,13 @@ fn gpu_alpha(alpha: Option<Alpha>) -> [f32; 4] {
 impl SceneData {
     /// `texture_budget`: most bytes of texels to upload; larger texture sets are downsampled.
     pub fn new(scene: &Scene, texture_budget: u64) -> SceneData {
-        let acceleration = Acceleration::build(scene);
+        Self::with_bvh_width(scene, texture_budget, BvhWidth::Four)
+    }
+
+    /// As [`SceneData::new`], the meshes' and shapes' BVHs in the node format `width` names
+    /// (bvh_width.rs).
+    pub fn with_bvh_width(scene: &Scene, texture_budget: u64, width: BvhWidth) -> SceneData {
+        let acceleration = Acceleration::build_with(scene, width);
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
         let texture_bytes_requested = scene.textures.iter().map(|t| t.width as u64 * t.height as u64 * 4).sum();
         let mut textures = Vec::new();

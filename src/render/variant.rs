@@ -2,7 +2,9 @@
 //! choices of how it walks, shares out work and reads its records. The bindings table (bindings.rs)
 //! says which variants bind a buffer, and kernel.rs turns a variant into `#define`s.
 
+use super::bvh_width::BvhWidth;
 use super::features::SceneFeatures;
+use super::shadow_walk::ShadowWalk;
 use super::walk_queue::WalkQueue;
 use super::walk_records::WalkRecords;
 use super::wavefront::WavefrontStage;
@@ -29,6 +31,10 @@ pub struct KernelVariant {
     pub wavefront: Option<WavefrontStage>,
     /// How it reads the walk's nodes and mesh triangles (walk_records.rs).
     pub walk_records: WalkRecords,
+    /// The node format of the meshes' and shapes' BVHs it walks (bvh_width.rs).
+    pub bvh_width: BvhWidth,
+    /// How a shadow ray's four-wide walk orders a node's children (shadow_walk.rs).
+    pub shadow_walk: ShadowWalk,
     /// How it finds what rays hit: its own walk, or the device's ray queries (ray_query.glsl),
     /// which bind the scene's acceleration structure.
     pub traversal: Traversal,

@@ -567,12 +567,16 @@ impl<'a> Viewer<'a> {
                     size.1
                 );
                 crate::image::png::write_srgb8(&path, screen.width, screen.height, &screen.rgb)?;
+                // With the speed the title shows, so that a run under a virtual display
+                // (scripts/gpu-measure.sh) reads the viewer's frame rate and samples/s.
                 log::info!(
-                    "caustica view: wrote {} ({}x{}, {} spp)",
+                    "caustica view: wrote {} ({}x{}, {} spp; {:.2} Msamples/s, {:.1} fps)",
                     path.display(),
                     screen.width,
                     screen.height,
-                    self.session.as_ref().map_or(0, |s| s.renderer.samples_done)
+                    self.session.as_ref().map_or(0, |s| s.renderer.samples_done),
+                    self.speed.per_second() / 1e6,
+                    1.0 / self.frame_seconds.max(1e-6)
                 );
                 return Ok(false);
             }
