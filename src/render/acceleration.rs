@@ -235,10 +235,12 @@ impl Acceleration {
 
         let mut primitives = Vec::new();
         let mut group_root = 0;
+        // The shapes in the order the primitive array holds them, which the eight-wide build
+        // changes from its binary tree's (the light tree's index of hit emitters follows it).
+        let mut shape_order = Vec::new();
         if let Some(g) = &group {
-            let order;
-            (group_root, order) = append_bottom_level(&mut nodes, &g.bvh, 0, width);
-            primitives = order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
+            (group_root, shape_order) = append_bottom_level(&mut nodes, &g.bvh, 0, width);
+            primitives = shape_order.iter().map(|&i| gpu_primitive(&scene.shapes[i as usize])).collect();
         }
 
         let (mut triangles, mut triangle_materials) = (Vec::new(), Vec::new());
@@ -307,7 +309,6 @@ impl Acceleration {
             .iter()
             .map(|&p| placements[p as usize].0.map(|_| (p as usize - first_instance) as u32))
             .collect();
-        let shape_order = group.as_ref().map_or(Vec::new(), |g| g.bvh.prim_order.clone());
         let stats = AccelerationStats {
             mesh_triangles: triangles.len(),
             instanced_triangles: scene.instances.iter().map(|i| scene.meshes[i.mesh as usize].triangles.len()).sum(),
