@@ -207,6 +207,7 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         triangles: triangles.to_vec(),
         triangle_materials: vec![material; 2],
         tangents: vec![Vec4::new(1.0, 0.0, 0.0, 1.0); 4],
+        colors: Vec::new(),
     };
     // The floor faces up; the lamp above it faces down.
     scene.meshes = vec![

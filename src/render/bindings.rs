@@ -47,12 +47,13 @@ pub enum KernelBuffer {
     AovNormalHits,
     PathStates,
     SceneStructure,
+    VertexColors,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::SceneStructure as usize + 1;
+    pub const COUNT: usize = KernelBuffer::VertexColors as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -301,6 +302,9 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // instance's bottom level its mesh's triangles or the boxes of the scene's own shapes
     // (ray_query_scene.rs): what ray queries trace in place of `nodes` (ray_query.glsl).
     BufferBinding { buffer: SceneStructure, binding: 23, name: "scene_structure", shape: Shape::AccelerationStructure, access: Read, bound_in: RayQueryKernels, what: "acceleration structures" },
+    // Linear RGB colours of the vertices of meshes with vertex colours (glTF COLOR_0), by global
+    // vertex index (w unused); empty when no mesh has them.
+    BufferBinding { buffer: VertexColors, binding: 24, name: "vertex_colors", shape: texel_buffer::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "vertex colours" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,

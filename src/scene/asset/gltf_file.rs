@@ -4,7 +4,10 @@
 //! file is read through [`InputFiles`] (regular files, size caps, `--confine`).
 //!
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
-//! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture.
+//! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture; `COLOR_0` (RGB or
+//!   RGBA; floats, or normalized unsigned bytes or shorts) multiplies both per vertex,
+//!   interpolated across each triangle (SCENE_VERTEX_COLORS; white for a primitive without it).
+//!   Its alpha is not read: a warning names a MASK or BLEND material it would have thinned.
 //! - Texture coordinates: a material's textures are read through one `texCoord` set (0 or 1) and
 //!   one `KHR_texture_transform` (offset, rotation, scale, its `texCoord` override), those of its
 //!   first texture among base colour, emissive, metallic-roughness and normal; they are applied
@@ -166,6 +169,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         uv_mappings.push(uv_mapping.mapping);
     }
     let mut skipped_primitives = 0;
+    let mut colour_alpha_ignored = false;
     let mut default_material = None;
     let mut limits = AccessorLimits::new(&buffers, file_bytes);
     for mesh in document.meshes() {
@@ -176,6 +180,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             &mut asset.materials,
             &mut default_material,
             &mut skipped_primitives,
+            &mut colour_alpha_ignored,
         )
         .map_err(|m| AssetError::invalid(path, format!("mesh {}: {m}", mesh.index())))?;
         asset.dropped_triangles += converted.drop_degenerate();
@@ -183,6 +188,12 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     }
     if skipped_primitives > 0 {
         log::warn!("caustica: {}: skipped {skipped_primitives} point or line primitive(s)", path.display());
+    }
+    if colour_alpha_ignored {
+        log::warn!(
+            "caustica: warning: {}: COLOR_0 alpha is not implemented: vertex colours' alpha below 1 on MASK or BLEND materials is ignored (their RGB is read)",
+            path.display()
+        );
     }
 
     let mut walk = Walk { ancestors: Vec::new(), visited: vec![false; document.nodes().len()], asset: &mut asset };
@@ -688,6 +699,7 @@ fn convert_mesh(
     materials: &mut Vec<Material>,
     default_material: &mut Option<u32>,
     skipped_primitives: &mut usize,
+    colour_alpha_ignored: &mut bool,
 ) -> Result<MeshData, String> {
     let mut out = MeshData::default();
     let (mut all_normals, mut all_uvs, mut all_tangents) = (true, true, true);
@@ -746,6 +758,39 @@ fn convert_mesh(
             _ => all_uvs = false,
         }
 
+        // COLOR_0 multiplies the base colour; a primitive without it is white, so a merged mesh
+        // keeps colours when any primitive has them.
+        if let Some(accessor) = primitive.get(&Semantic::Colors(0)) {
+            let dimensions = match accessor.dimensions() {
+                Dimensions::Vec4 => Dimensions::Vec4,
+                _ => Dimensions::Vec3,
+            };
+            limits
+                .admit(&accessor, dimensions, &[DataType::F32, DataType::U8, DataType::U16])
+                .map_err(|m| format!("primitive {p}: COLOR_0 {m}"))?;
+            let read: Vec<[f32; 4]> =
+                reader.read_colors(0).ok_or_else(|| outside("COLOR_0"))?.into_rgba_f32().collect();
+            if read.len() != positions.len() {
+                return Err(format!(
+                    "primitive {p}: COLOR_0 has {} values for {} vertices",
+                    read.len(),
+                    positions.len()
+                ));
+            }
+            if read.iter().any(|c| c[3] < 1.0) && primitive.material().alpha_mode() != gltf::material::AlphaMode::Opaque
+            {
+                *colour_alpha_ignored = true;
+            }
+            out.colors.resize(out.positions.len(), Vec3::ONE);
+            // glTF's colours lie in [0, 1]; a float outside it (or not a number) would create or
+            // destroy energy, so it is clamped (NaN to black).
+            out.colors.extend(read.iter().map(|&[r, g, b, _]| {
+                Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE).map(|c| if c.is_nan() { 0.0 } else { c })
+            }));
+        } else if !out.colors.is_empty() {
+            out.colors.resize(out.positions.len() + positions.len(), Vec3::ONE);
+        }
+
         let indices: Vec<u32> = match primitive.indices() {
             Some(accessor) => {
                 limits
@@ -769,6 +814,9 @@ fn convert_mesh(
         out.triangle_materials.extend(std::iter::repeat_n(material, triangles.len()));
         out.triangles.extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
         out.positions.extend(positions);
+    }
+    if !out.colors.is_empty() {
+        out.colors.resize(out.positions.len(), Vec3::ONE);
     }
     out.normals = if all_normals { unit_normals(&normals) } else { Vec::new() };
     if !all_uvs || out.uvs.iter().any(|uv| !uv.is_finite()) {
