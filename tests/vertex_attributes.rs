@@ -39,26 +39,79 @@ struct Attribute {
     bytes: Vec<u8>,
 }
 
+impl Attribute {
+    /// The view of this attribute's bytes at `offset` in the buffer, and the bytes to put there:
+    /// glTF aligns each vertex's element to 4 bytes, so elements of other sizes (three shorts,
+    /// three bytes) are padded and the view given that stride.
+    fn view(&self, offset: usize) -> (String, Vec<u8>) {
+        let element = self.bytes.len() / 4;
+        let stride = element.div_ceil(4) * 4;
+        let mut bytes = Vec::new();
+        for e in self.bytes.chunks(element) {
+            bytes.extend(e);
+            bytes.resize(bytes.len() + stride - element, 0);
+        }
+        let stride_member = if stride == element { String::new() } else { format!(r#", "byteStride": {stride}"#) };
+        (format!(r#"{{"buffer": 0, "byteOffset": {offset}, "byteLength": {}{stride_member}}}"#, bytes.len()), bytes)
+    }
+}
+
 fn floats(values: &[f32]) -> Vec<u8> {
     values.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
 /// `square.gltf` in `dir`: the square with POSITION, `attributes`, and material 0 = `material`.
 fn write_square(dir: &Path, attributes: &[Attribute], material: &str) {
-    let mut buffer = floats(&CORNERS.concat());
-    let mut views = vec![format!(r#"{{"buffer": 0, "byteOffset": 0, "byteLength": {}}}"#, buffer.len())];
+    let position = Attribute {
+        name: "POSITION",
+        component_type: 5126,
+        kind: "VEC3",
+        normalized: false,
+        bytes: floats(&CORNERS.concat()),
+    };
+    write_square_with(dir, &position, attributes, material, &Extras::default());
+}
+
+/// JSON members a test adds to the square's file: to its mesh (`"weights": [...]`), to its node
+/// (`"scale": ...`), and at the top level (`"extensionsRequired": [...]`), each starting with a
+/// comma; and more nodes with the mesh (`{"mesh": 0, ...}` objects, each after a comma).
+#[derive(Default)]
+struct Extras {
+    mesh: String,
+    node: String,
+    nodes: String,
+    top: String,
+}
+
+/// [`write_square`] with its own POSITION accessor (min and max are the corners'; glTF asks for
+/// them) and `extras`. An attribute named `T<k>/<NAME>` is morph target k's NAME.
+fn write_square_with(dir: &Path, position: &Attribute, attributes: &[Attribute], material: &str, extras: &Extras) {
+    let (view, mut buffer) = position.view(0);
+    let mut views = vec![view];
     let mut accessors = vec![format!(
-        r#"{{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [{m}, 0, {m}], "max": [{HALF}, 0, {HALF}]}}"#,
-        m = -HALF
+        r#"{{"bufferView": 0, "componentType": {}, "normalized": {}, "count": 4, "type": "VEC3", "min": [{m}, 0, {m}], "max": [{h}, 0, {h}]}}"#,
+        position.component_type,
+        position.normalized,
+        m = if position.component_type == 5126 { -HALF } else { -500.0 },
+        h = if position.component_type == 5126 { HALF } else { 500.0 },
     )];
     let mut members = vec![r#""POSITION": 0"#.to_owned()];
+    let mut targets: Vec<Vec<String>> = Vec::new();
     for a in attributes {
         while buffer.len() % 4 != 0 {
             buffer.push(0);
         }
-        views.push(format!(r#"{{"buffer": 0, "byteOffset": {}, "byteLength": {}}}"#, buffer.len(), a.bytes.len()));
-        buffer.extend(&a.bytes);
-        members.push(format!(r#""{}": {}"#, a.name, accessors.len()));
+        let (view, bytes) = a.view(buffer.len());
+        views.push(view);
+        buffer.extend(bytes);
+        match a.name.strip_prefix('T').and_then(|t| t.split_once('/')) {
+            Some((k, name)) => {
+                let k: usize = k.parse().unwrap();
+                targets.resize(targets.len().max(k + 1), Vec::new());
+                targets[k].push(format!(r#""{name}": {}"#, accessors.len()));
+            }
+            None => members.push(format!(r#""{}": {}"#, a.name, accessors.len())),
+        }
         accessors.push(format!(
             r#"{{"bufferView": {}, "componentType": {}, "normalized": {}, "count": 4, "type": "{}"}}"#,
             views.len() - 1,
@@ -71,16 +124,27 @@ fn write_square(dir: &Path, attributes: &[Attribute], material: &str) {
     buffer.extend(TRIANGLES.concat().iter().flat_map(|&i| (i as u16).to_le_bytes()));
     accessors
         .push(format!(r#"{{"bufferView": {}, "componentType": 5123, "count": 6, "type": "SCALAR"}}"#, views.len() - 1));
+    let targets = match targets.is_empty() {
+        true => String::new(),
+        false => {
+            let list: Vec<String> = targets.iter().map(|t| format!("{{{}}}", t.join(", "))).collect();
+            format!(r#", "targets": [{}]"#, list.join(", "))
+        }
+    };
+    let node_count = 1 + extras.nodes.matches(r#""mesh""#).count();
+    let scene_nodes: Vec<String> = (0..node_count).map(|n| n.to_string()).collect();
+    let Extras { mesh: mesh_extra, node: node_extra, nodes, top } = extras;
     let json = format!(
         r#"{{
-  "asset": {{"version": "2.0"}},
-  "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
-  "meshes": [{{"primitives": [{{"attributes": {{{}}}, "indices": {}, "material": 0}}]}}],
+  "asset": {{"version": "2.0"}}{top},
+  "scene": 0, "scenes": [{{"nodes": [{}]}}], "nodes": [{{"mesh": 0{node_extra}}}{nodes}],
+  "meshes": [{{"primitives": [{{"attributes": {{{}}}, "indices": {}, "material": 0{targets}}}]{mesh_extra}}}],
   "materials": [{material}],
   "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}],
   "bufferViews": [{}],
   "accessors": [{}]
 }}"#,
+        scene_nodes.join(", "),
         members.join(", "),
         accessors.len() - 1,
         buffer.len(),
@@ -250,4 +314,113 @@ fn a_two_component_colour_is_an_error() {
     let err = Scene::parse(toml, "test scene", &dir).err().expect("a VEC2 COLOR_0 is refused");
     let err = format!("{err:#}");
     assert!(err.contains("square.gltf") && err.contains("COLOR_0"), "{err}");
+}
+
+fn shorts(values: &[i16]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// `KHR_mesh_quantization`, as gltfpack writes it: integer positions (here signed shorts, not
+/// normalized, 1000 a unit, scaled back by the node), normals as normalized signed bytes (each
+/// padded to 4 bytes) and texture coordinates as normalized unsigned shorts, read as the
+/// numbers they stand for; the file may require the extension.
+#[test]
+fn quantized_attributes_are_read_as_the_numbers_they_stand_for() {
+    let dir = temp_dir("quantized");
+    let position = Attribute {
+        name: "POSITION",
+        component_type: 5122,
+        kind: "VEC3",
+        normalized: false,
+        bytes: shorts(&CORNERS.concat().iter().map(|&c| (c * 1000.0) as i16).collect::<Vec<_>>()),
+    };
+    let normals = Attribute {
+        name: "NORMAL",
+        component_type: 5120,
+        kind: "VEC3",
+        normalized: true,
+        bytes: [[0i8, -127, 0]; 4].concat().iter().map(|&c| c as u8).collect(),
+    };
+    let uvs = Attribute {
+        name: "TEXCOORD_0",
+        component_type: 5123,
+        kind: "VEC2",
+        normalized: true,
+        bytes: [[0u16, 0], [65535, 0], [65535, 65535], [0, 65535]]
+            .concat()
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+    };
+    let extras = Extras {
+        node: r#", "scale": [0.001, 0.001, 0.001]"#.to_owned(),
+        top: r#", "extensionsUsed": ["KHR_mesh_quantization"], "extensionsRequired": ["KHR_mesh_quantization"]"#
+            .to_owned(),
+        ..Extras::default()
+    };
+    write_square_with(&dir, &position, &[normals, uvs], &mirror_material(), &extras);
+    let asset = caustica::scene::load_asset(&dir.join("square.gltf")).expect("a quantized square loads");
+    let mesh = &asset.meshes[0];
+    let corners: Vec<glam::Vec3> = CORNERS.iter().map(|&c| glam::Vec3::from(c) * 1000.0).collect();
+    assert_eq!(mesh.positions, corners, "positions are the shorts' values");
+    assert!(mesh.normals.iter().all(|&n| (n - glam::Vec3::NEG_Y).length() < 1e-6), "{:?}", mesh.normals);
+    let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(glam::Vec2::from);
+    assert_eq!(mesh.uvs, uvs, "normalized shorts are fractions of 65535");
+    let world = asset.instances[0].1.transform_point3(mesh.positions[2]);
+    assert!((world - glam::Vec3::from(CORNERS[2])).length() < 1e-6, "the node scales them back: {world}");
+}
+
+/// Morph targets displace the vertices by the mesh's default `weights`, and a node's own
+/// `weights` replace the mesh's for that node's instance alone (a second, differently morphed
+/// copy of the mesh). Targets without a weight weigh 0.
+#[test]
+fn morph_targets_are_applied_with_the_mesh_s_or_the_node_s_weights() {
+    let dir = temp_dir("morph");
+    let lift = |corner: usize, height: f32| {
+        let mut d = [[0.0f32; 3]; 4];
+        d[corner][1] = height;
+        floats(&d.concat())
+    };
+    let targets = [
+        Attribute { name: "T0/POSITION", component_type: 5126, kind: "VEC3", normalized: false, bytes: lift(2, 1.0) },
+        Attribute { name: "T1/POSITION", component_type: 5126, kind: "VEC3", normalized: false, bytes: lift(0, 2.0) },
+        Attribute { name: "T2/POSITION", component_type: 5126, kind: "VEC3", normalized: false, bytes: lift(1, 4.0) },
+    ];
+    let position = Attribute {
+        name: "POSITION",
+        component_type: 5126,
+        kind: "VEC3",
+        normalized: false,
+        bytes: floats(&CORNERS.concat()),
+    };
+    let extras = Extras {
+        mesh: r#", "weights": [0.5, 0.25]"#.to_owned(),
+        nodes: r#", {"mesh": 0, "weights": [0.0, 1.0, 0.0]}"#.to_owned(),
+        ..Extras::default()
+    };
+    write_square_with(&dir, &position, &targets, &mirror_material(), &extras);
+    let asset = caustica::scene::load_asset(&dir.join("square.gltf")).expect("a morphed square loads");
+    let heights = |mesh: usize| asset.meshes[mesh].positions.iter().map(|p| p.y).collect::<Vec<_>>();
+    assert_eq!(asset.instances.len(), 2);
+    let (default_instance, node_instance) = (asset.instances[0].0, asset.instances[1].0);
+    assert_eq!(heights(default_instance), vec![0.5, 0.0, 0.5, 0.0], "the mesh's weights: 0.5 x 1 and 0.25 x 2");
+    assert_ne!(default_instance, node_instance, "the node's weights need a mesh of their own");
+    assert_eq!(heights(node_instance), vec![2.0, 0.0, 0.0, 0.0], "the node's weights replace the mesh's");
+}
+
+/// `doubleSided: false` (glTF's default) is a one-sided surface, black from behind, unless it
+/// transmits; `doubleSided: true` is two-sided.
+#[test]
+fn double_sided_false_is_one_sided_unless_transmissive() {
+    let dir = temp_dir("double-sided");
+    for (material, one_sided) in [
+        (r#"{"doubleSided": false}"#, true),
+        (r#"{}"#, true),
+        (r#"{"doubleSided": true}"#, false),
+        (r#"{"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1}}}"#, false),
+    ] {
+        write_square(&dir, &[], material);
+        let asset = caustica::scene::load_asset(&dir.join("square.gltf")).expect("the square loads");
+        assert_eq!(asset.materials[0].one_sided, one_sided, "{material}");
+    }
 }

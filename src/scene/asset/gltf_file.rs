@@ -40,7 +40,9 @@
 //!   `attenuationDistance` (world units) as Beer–Lambert absorption along each path inside.
 //!   `thicknessFactor` and `thicknessTexture` are ignored: they stand in for the thickness a
 //!   rasterizer cannot trace, and a path tracer has the real one.
-//! - Primitives without a material get [`Material::default`] (0.8 grey diffuse).
+//! - `doubleSided: false` (the default) → a one-sided material, black from behind (the back
+//!   faces a rasterizer culls), unless it transmits; `doubleSided: true` → two-sided.
+//! - Primitives without a material get [`Material::default`] (0.8 grey diffuse, two-sided).
 //!
 //! `KHR_lights_punctual` lights become [`Light`]s, converted from glTF's photometric units to
 //! caustica's radiometric ones at 683 lm/W (the luminous efficacy that defines the candela):
@@ -53,10 +55,16 @@
 //!
 //! Extensions: the seven above (`KHR_lights_punctual`, `KHR_materials_emissive_strength`,
 //! `KHR_materials_transmission`, `KHR_materials_ior`, `KHR_texture_transform`,
-//! `KHR_materials_clearcoat`, `KHR_materials_volume`) are read. A file that requires any other is
+//! `KHR_materials_clearcoat`, `KHR_materials_volume`) and `KHR_mesh_quantization` are read: the
+//! last lets positions, normals, tangents, texture coordinates and morph targets be stored as
+//! (normalized) integers, which are read as the numbers they stand for (gltf_accessors.rs). A file that requires any other is
 //! an error naming the file and the extension; one that merely uses another renders without it,
 //! with one warning per extension. Occlusion textures are ignored (a path tracer computes
 //! occlusion), with one warning per file that has them.
+//!
+//! Morph targets (POSITION, NORMAL, TANGENT displacements) are applied once on load with the
+//! node's `weights`, else the mesh's (a node with weights of its own gets its own morphed copy of
+//! the mesh); animations do not move them.
 //!
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
@@ -72,19 +80,20 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
 
-use super::gltf_accessors::AccessorLimits;
+use super::gltf_accessors::{read_floats, AccessorLimits, DIRECTION_TYPES, QUANTIZED_TYPES};
 use super::{
     texture, unit_normals, Alpha, AlphaMode, Asset, AssetCamera, AssetError, Attenuation, Clearcoat, Conductor, Light,
     Material, MeshData, MetallicRoughness, NormalMap, TextureMaps, Wrap,
 };
 use crate::input_file::{InputFiles, InputKind};
+use gltf::accessor::Item;
 
 /// Lumens per watt of radiant flux at 555 nm, the constant of the candela's definition: glTF's
 /// photometric light units over this are radiometric.
 const LUMENS_PER_WATT: f32 = 683.0;
 
 /// The glTF extensions caustica reads (see the mapping above).
-const IMPLEMENTED_EXTENSIONS: [&str; 7] = [
+const IMPLEMENTED_EXTENSIONS: [&str; 8] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_transmission",
@@ -92,6 +101,7 @@ const IMPLEMENTED_EXTENSIONS: [&str; 7] = [
     "KHR_texture_transform",
     "KHR_materials_clearcoat",
     "KHR_materials_volume",
+    "KHR_mesh_quantization",
 ];
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
@@ -172,7 +182,20 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
     let mut colour_alpha_ignored = false;
     let mut default_material = None;
     let mut limits = AccessorLimits::new(&buffers, file_bytes);
-    for mesh in document.meshes() {
+    // Each mesh morphed by its own default weights, then once more for every node that gives
+    // its morph targets other weights (that node's instance uses the extra copy).
+    let morph_variants = document.nodes().filter_map(|node| {
+        let (mesh, weights) = (node.mesh()?, node.weights()?);
+        let has_targets = mesh.primitives().any(|p| p.morph_targets().len() > 0);
+        (has_targets && Some(weights) != mesh.weights()).then_some((Some(node.index()), mesh, weights))
+    });
+    let mut node_meshes = HashMap::new();
+    let variants: Vec<_> = document
+        .meshes()
+        .map(|mesh| (None, mesh.clone(), mesh.weights().unwrap_or(&[])))
+        .chain(morph_variants)
+        .collect();
+    for (node, mesh, weights) in variants {
         let mut converted = convert_mesh(
             &mesh,
             &uv_mappings,
@@ -181,9 +204,13 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             &mut default_material,
             &mut skipped_primitives,
             &mut colour_alpha_ignored,
+            weights,
         )
         .map_err(|m| AssetError::invalid(path, format!("mesh {}: {m}", mesh.index())))?;
         asset.dropped_triangles += converted.drop_degenerate();
+        if let Some(node) = node {
+            node_meshes.insert(node, asset.meshes.len());
+        }
         asset.meshes.push(converted);
     }
     if skipped_primitives > 0 {
@@ -196,7 +223,12 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         );
     }
 
-    let mut walk = Walk { ancestors: Vec::new(), visited: vec![false; document.nodes().len()], asset: &mut asset };
+    let mut walk = Walk {
+        ancestors: Vec::new(),
+        visited: vec![false; document.nodes().len()],
+        node_meshes: &node_meshes,
+        asset: &mut asset,
+    };
     for root in root_nodes(&document) {
         walk.visit(root, Mat4::IDENTITY).map_err(|m| AssetError::invalid(path, m))?;
     }
@@ -646,6 +678,10 @@ fn convert_material(
         maps: TextureMaps { emission: emission_texture, normal, alpha },
         clearcoat,
         attenuation,
+        // `doubleSided: false` (glTF's default) culls back faces in a rasterizer; here the
+        // surface is black from behind. A transmissive material stays two-sided: the light it
+        // lets in leaves through its back.
+        one_sided: !material.double_sided() && transmission == 0.0,
         ..Material::default()
     };
     Ok((converted, uvs))
@@ -656,8 +692,8 @@ fn outside_buffer(p: usize, what: &str) -> String {
     format!("primitive {p}: the {what} accessor lies outside its buffer")
 }
 
-/// A float vertex attribute that a merged mesh keeps only when every primitive has it (normals,
-/// tangents).
+/// A vertex attribute that a merged mesh keeps only when every primitive has it (normals,
+/// tangents): floats, or the normalized signed integers of `KHR_mesh_quantization`.
 struct VertexAttribute {
     semantic: Semantic,
     name: &'static str,
@@ -667,22 +703,31 @@ struct VertexAttribute {
 impl VertexAttribute {
     /// Appends `primitive`'s values to `values` while the primitives before it all had some
     /// (`complete`); returns whether the merged mesh still has one per vertex of its `vertices`.
-    fn append<T, I: Iterator<Item = T>>(
+    fn append<T, const N: usize>(
         &self,
         primitive: &gltf::Primitive,
         limits: &mut AccessorLimits,
         complete: bool,
         values: &mut Vec<T>,
         vertices: usize,
-        read: impl FnOnce() -> Option<I>,
-    ) -> Result<bool, String> {
+        convert: impl Fn([f32; N]) -> T,
+    ) -> Result<bool, String>
+    where
+        [f32; N]: Item,
+        [i8; N]: Item,
+        [u8; N]: Item,
+        [i16; N]: Item,
+        [u16; N]: Item,
+        [u32; N]: Item,
+    {
         let p = primitive.index();
         match primitive.get(&self.semantic) {
             Some(accessor) if complete => {
                 limits
-                    .admit(&accessor, self.dimensions, &[DataType::F32])
+                    .admit(&accessor, self.dimensions, &DIRECTION_TYPES)
                     .map_err(|m| format!("primitive {p}: {} {m}", self.name))?;
-                values.extend(read().ok_or_else(|| outside_buffer(p, self.name))?);
+                let read = read_floats::<N>(accessor, limits.buffers()).ok_or_else(|| outside_buffer(p, self.name))?;
+                values.extend(read.into_iter().map(convert));
                 Ok(values.len() == vertices)
             }
             _ => Ok(false),
@@ -700,6 +745,7 @@ fn convert_mesh(
     default_material: &mut Option<u32>,
     skipped_primitives: &mut usize,
     colour_alpha_ignored: &mut bool,
+    weights: &[f32],
 ) -> Result<MeshData, String> {
     let mut out = MeshData::default();
     let (mut all_normals, mut all_uvs, mut all_tangents) = (true, true, true);
@@ -717,10 +763,15 @@ fn convert_mesh(
         let position_accessor =
             primitive.get(&Semantic::Positions).ok_or_else(|| format!("primitive {p} has no POSITION"))?;
         limits
-            .admit(&position_accessor, Dimensions::Vec3, &[DataType::F32])
+            .admit(&position_accessor, Dimensions::Vec3, &QUANTIZED_TYPES)
             .map_err(|m| format!("primitive {p}: POSITION {m}"))?;
-        let positions: Vec<Vec3> =
-            reader.read_positions().ok_or_else(|| outside("POSITION"))?.map(Vec3::from).collect();
+        let mut positions: Vec<Vec3> = read_floats::<3>(position_accessor, buffers)
+            .ok_or_else(|| outside("POSITION"))?
+            .into_iter()
+            .map(Vec3::from)
+            .collect();
+        let first_normal = normals.len();
+        let first_tangent = tangents.len();
         if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
             return Err(format!("primitive {p}: vertex {i} has a non-finite position"));
         }
@@ -730,13 +781,20 @@ fn convert_mesh(
 
         let vertices = out.positions.len() + positions.len();
         let normal = VertexAttribute { semantic: Semantic::Normals, name: "NORMAL", dimensions: Dimensions::Vec3 };
-        all_normals = normal.append(&primitive, limits, all_normals, &mut normals, vertices, || {
-            reader.read_normals().map(|r| r.map(Vec3::from))
-        })?;
+        all_normals = normal.append(&primitive, limits, all_normals, &mut normals, vertices, Vec3::from)?;
         let tangent = VertexAttribute { semantic: Semantic::Tangents, name: "TANGENT", dimensions: Dimensions::Vec4 };
-        all_tangents = tangent.append(&primitive, limits, all_tangents, &mut tangents, vertices, || {
-            reader.read_tangents().map(|r| r.map(Vec4::from))
-        })?;
+        all_tangents = tangent.append(&primitive, limits, all_tangents, &mut tangents, vertices, Vec4::from)?;
+        // Morph targets displace the vertices by their weights (the node's, else the mesh's:
+        // `weights`), once, here: the kernel sees the morphed mesh.
+        let morphed = Morphed {
+            positions: &mut positions,
+            normals: (all_normals && normals.len() == vertices).then(|| &mut normals[first_normal..]),
+            tangents: (all_tangents && tangents.len() == vertices).then(|| &mut tangents[first_tangent..]),
+        };
+        morphed.apply(&primitive, weights, limits)?;
+        if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
+            return Err(format!("primitive {p}: morphed vertex {i} has a non-finite position"));
+        }
         // The coordinates its material's textures are read through, mapped as they say.
         let uv_mapping =
             primitive.material().index().and_then(|m| uv_mappings.get(m)).copied().unwrap_or(UvMapping::PLAIN);
@@ -744,13 +802,12 @@ fn convert_mesh(
         match primitive.get(&Semantic::TexCoords(set)) {
             Some(accessor) if all_uvs => {
                 limits
-                    .admit(&accessor, Dimensions::Vec2, &[DataType::F32, DataType::U8, DataType::U16])
+                    .admit(&accessor, Dimensions::Vec2, &QUANTIZED_TYPES)
                     .map_err(|m| format!("primitive {p}: TEXCOORD_{set} {m}"))?;
                 out.uvs.extend(
-                    reader
-                        .read_tex_coords(set)
+                    read_floats::<2>(accessor, buffers)
                         .ok_or_else(|| outside(&format!("TEXCOORD_{set}")))?
-                        .into_f32()
+                        .into_iter()
                         .map(|uv| uv_mapping.transform.transform_point2(Vec2::from(uv))),
                 );
                 all_uvs = out.uvs.len() == out.positions.len() + positions.len();
@@ -838,6 +895,62 @@ fn convert_mesh(
     Ok(out)
 }
 
+/// One primitive's vertex data as read, which its morph targets displace.
+struct Morphed<'m> {
+    positions: &'m mut [Vec3],
+    /// The primitive's normals and tangents, where the merged mesh still keeps them.
+    normals: Option<&'m mut [Vec3]>,
+    tangents: Option<&'m mut [Vec4]>,
+}
+
+impl Morphed<'_> {
+    /// Adds each morph target's displacements times its weight (glTF: targets beyond `weights`
+    /// weigh 0). Normals and tangents are renormalized later with the rest of the mesh's.
+    fn apply(self, primitive: &gltf::Primitive, weights: &[f32], limits: &mut AccessorLimits) -> Result<(), String> {
+        let p = primitive.index();
+        let count = self.positions.len();
+        let Morphed { positions, mut normals, mut tangents } = self;
+        for (k, target) in primitive.morph_targets().enumerate() {
+            let weight = weights.get(k).copied().unwrap_or(0.0);
+            if weight == 0.0 {
+                continue;
+            }
+            if !weight.is_finite() {
+                return Err(format!("primitive {p}: morph target {k}'s weight is not finite"));
+            }
+            let displacements = |accessor: Option<gltf::Accessor>, what: &str, limits: &mut AccessorLimits| {
+                let Some(accessor) = accessor else { return Ok(None) };
+                limits
+                    .admit(&accessor, Dimensions::Vec3, &QUANTIZED_TYPES)
+                    .map_err(|m| format!("primitive {p}: morph target {k} {what} {m}"))?;
+                let read = read_floats::<3>(accessor, limits.buffers())
+                    .ok_or_else(|| outside_buffer(p, &format!("morph target {k} {what}")))?;
+                if read.len() != count {
+                    return Err(format!(
+                        "primitive {p}: morph target {k} {what} has {} values for {count} vertices",
+                        read.len()
+                    ));
+                }
+                Ok(Some(read))
+            };
+            if let Some(d) = displacements(target.positions(), "POSITION", limits)? {
+                positions.iter_mut().zip(d).for_each(|(v, d)| *v += weight * Vec3::from(d));
+            }
+            if let (Some(normals), Some(d)) =
+                (normals.as_deref_mut(), displacements(target.normals(), "NORMAL", limits)?)
+            {
+                normals.iter_mut().zip(d).for_each(|(n, d)| *n += weight * Vec3::from(d));
+            }
+            if let (Some(tangents), Some(d)) =
+                (tangents.as_deref_mut(), displacements(target.tangents(), "TANGENT", limits)?)
+            {
+                tangents.iter_mut().zip(d).for_each(|(t, d)| *t += weight * Vec3::from(d).extend(0.0));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Triangles of a triangle-list, strip or fan primitive; strips alternate winding so that every
 /// triangle keeps the orientation of the first.
 fn triangulate(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
@@ -869,6 +982,9 @@ fn root_nodes(document: &Document) -> Vec<gltf::Node<'_>> {
 struct Walk<'a> {
     ancestors: Vec<usize>,
     visited: Vec<bool>,
+    /// Nodes whose morph weights differ from their mesh's: the index of their own morphed copy
+    /// in `asset.meshes`.
+    node_meshes: &'a HashMap<usize, usize>,
     asset: &'a mut Asset,
 }
 
@@ -890,7 +1006,8 @@ impl Walk<'_> {
         }
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
-            self.asset.instances.push((mesh.index(), world));
+            let mesh = self.node_meshes.get(&index).copied().unwrap_or(mesh.index());
+            self.asset.instances.push((mesh, world));
         }
         if let (None, Some(camera)) = (&self.asset.camera, node.camera()) {
             if let gltf::camera::Projection::Perspective(perspective) = camera.projection() {
