@@ -40,11 +40,29 @@ struct Attribute {
 }
 
 impl Attribute {
+    /// Bytes of one element, unpadded.
+    fn element_bytes(&self) -> usize {
+        let components = match self.kind {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            "VEC4" => 4,
+            "MAT4" => 16,
+            other => panic!("no such accessor type {other}"),
+        };
+        let size = match self.component_type {
+            5120 | 5121 => 1,
+            5122 | 5123 => 2,
+            _ => 4,
+        };
+        components * size
+    }
+
     /// The view of this attribute's bytes at `offset` in the buffer, and the bytes to put there:
     /// glTF aligns each vertex's element to 4 bytes, so elements of other sizes (three shorts,
     /// three bytes) are padded and the view given that stride.
     fn view(&self, offset: usize) -> (String, Vec<u8>) {
-        let element = self.bytes.len() / 4;
+        let element = self.element_bytes();
         let stride = element.div_ceil(4) * 4;
         let mut bytes = Vec::new();
         for e in self.bytes.chunks(element) {
@@ -74,7 +92,7 @@ fn write_square(dir: &Path, attributes: &[Attribute], material: &str) {
 
 /// JSON members a test adds to the square's file: to its mesh (`"weights": [...]`), to its node
 /// (`"scale": ...`), and at the top level (`"extensionsRequired": [...]`), each starting with a
-/// comma; and more nodes with the mesh (`{"mesh": 0, ...}` objects, each after a comma).
+/// comma; and more nodes (flat JSON objects, each after a comma), all roots of the scene.
 #[derive(Default)]
 struct Extras {
     mesh: String,
@@ -105,6 +123,8 @@ fn write_square_with(dir: &Path, position: &Attribute, attributes: &[Attribute],
         views.push(view);
         buffer.extend(bytes);
         match a.name.strip_prefix('T').and_then(|t| t.split_once('/')) {
+            // Data for something other than the primitive (a skin's matrices): an accessor alone.
+            _ if a.name.starts_with('#') => {}
             Some((k, name)) => {
                 let k: usize = k.parse().unwrap();
                 targets.resize(targets.len().max(k + 1), Vec::new());
@@ -113,10 +133,11 @@ fn write_square_with(dir: &Path, position: &Attribute, attributes: &[Attribute],
             None => members.push(format!(r#""{}": {}"#, a.name, accessors.len())),
         }
         accessors.push(format!(
-            r#"{{"bufferView": {}, "componentType": {}, "normalized": {}, "count": 4, "type": "{}"}}"#,
+            r#"{{"bufferView": {}, "componentType": {}, "normalized": {}, "count": {}, "type": "{}"}}"#,
             views.len() - 1,
             a.component_type,
             a.normalized,
+            a.bytes.len() / a.element_bytes(),
             a.kind
         ));
     }
@@ -131,7 +152,7 @@ fn write_square_with(dir: &Path, position: &Attribute, attributes: &[Attribute],
             format!(r#", "targets": [{}]"#, list.join(", "))
         }
     };
-    let node_count = 1 + extras.nodes.matches(r#""mesh""#).count();
+    let node_count = 1 + extras.nodes.matches('}').count();
     let scene_nodes: Vec<String> = (0..node_count).map(|n| n.to_string()).collect();
     let Extras { mesh: mesh_extra, node: node_extra, nodes, top } = extras;
     let json = format!(
@@ -422,5 +443,76 @@ fn double_sided_false_is_one_sided_unless_transmissive() {
         write_square(&dir, &[], material);
         let asset = caustica::scene::load_asset(&dir.join("square.gltf")).expect("the square loads");
         assert_eq!(asset.materials[0].one_sided, one_sided, "{material}");
+    }
+}
+
+/// A skinned square is posed by its joints at their nodes' transforms: corners weighted to a joint
+/// raised by 1 rise by 1, a corner split evenly between the joints by half that, and the skinned
+/// node's own transform (a shift along x) is ignored, as glTF says. The inverse bind matrix of
+/// the second joint undoes a shift of its node along z, which therefore moves nothing.
+#[test]
+fn skins_are_posed_by_their_joints() {
+    let dir = temp_dir("skin");
+    let joints = Attribute {
+        name: "JOINTS_0",
+        component_type: 5121,
+        kind: "VEC4",
+        normalized: false,
+        bytes: [[0u8, 1, 0, 0]; 4].concat(),
+    };
+    // Corner 0 stays with joint 0, corners 2 and 3 follow joint 1, corner 1 is split evenly.
+    let weights = Attribute {
+        name: "WEIGHTS_0",
+        component_type: 5126,
+        kind: "VEC4",
+        normalized: false,
+        bytes: floats(
+            &[[1.0f32, 0.0, 0.0, 0.0], [0.5, 0.5, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]].concat(),
+        ),
+    };
+    // Inverse bind matrices (column-major): identity for joint 0, a shift by -3 along z for
+    // joint 1, bound where its node stood before it was raised.
+    let mut binds = vec![0.0f32; 32];
+    for (m, shift) in [(0, 0.0), (1, -3.0)] {
+        for d in 0..4 {
+            binds[16 * m + 5 * d] = 1.0;
+        }
+        binds[16 * m + 14] = shift;
+    }
+    let ibm = Attribute {
+        name: "#inverseBindMatrices",
+        component_type: 5126,
+        kind: "MAT4",
+        normalized: false,
+        bytes: floats(&binds),
+    };
+    let position = Attribute {
+        name: "POSITION",
+        component_type: 5126,
+        kind: "VEC3",
+        normalized: false,
+        bytes: floats(&CORNERS.concat()),
+    };
+    let extras = Extras {
+        node: r#", "skin": 0, "translation": [5, 0, 0]"#.to_owned(),
+        nodes: r#", {"translation": [0, 0, 0]}, {"translation": [0, 1, 3]}"#.to_owned(),
+        // Accessor 4 is the IBM attribute's: POSITION, JOINTS_0, WEIGHTS_0, IBM, then indices.
+        top: r#", "skins": [{"joints": [1, 2], "inverseBindMatrices": 3}]"#.to_owned(),
+        ..Extras::default()
+    };
+    write_square_with(&dir, &position, &[joints, weights, ibm], &mirror_material(), &extras);
+    let asset = caustica::scene::load_asset(&dir.join("square.gltf")).expect("a skinned square loads");
+    assert_eq!(asset.instances.len(), 1);
+    let (mesh, transform) = asset.instances[0];
+    assert_eq!(transform, glam::Mat4::IDENTITY, "a posed skin is in world space");
+    let posed = &asset.meshes[mesh].positions;
+    let expected = [
+        glam::Vec3::from(CORNERS[0]),
+        glam::Vec3::from(CORNERS[1]) + glam::Vec3::new(0.0, 0.5, 0.0),
+        glam::Vec3::from(CORNERS[2]) + glam::Vec3::Y,
+        glam::Vec3::from(CORNERS[3]) + glam::Vec3::Y,
+    ];
+    for (k, (got, want)) in posed.iter().zip(expected).enumerate() {
+        assert!((*got - want).length() < 1e-6, "corner {k}: {got}, expected {want}");
     }
 }

@@ -64,7 +64,10 @@
 //!
 //! Morph targets (POSITION, NORMAL, TANGENT displacements) are applied once on load with the
 //! node's `weights`, else the mesh's (a node with weights of its own gets its own morphed copy of
-//! the mesh); animations do not move them.
+//! the mesh); animations do not move them. Skins (JOINTS_0/1, WEIGHTS_0/1, inverseBindMatrices)
+//! pose their meshes on load by the joints' node transforms (gltf_skin.rs). Animations are not
+//! played (a warning), nor are orthographic cameras read (a warning); a file with several
+//! cameras renders through the first one its node hierarchy reaches (a warning).
 //!
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
@@ -81,6 +84,7 @@ use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
 
 use super::gltf_accessors::{read_floats, AccessorLimits, DIRECTION_TYPES, QUANTIZED_TYPES};
+use super::gltf_skin::{self, VertexInfluences};
 use super::{
     texture, unit_normals, Alpha, AlphaMode, Asset, AssetCamera, AssetError, Attenuation, Clearcoat, Conductor, Light,
     Material, MeshData, MetallicRoughness, NormalMap, TextureMaps, Wrap,
@@ -190,13 +194,14 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         (has_targets && Some(weights) != mesh.weights()).then_some((Some(node.index()), mesh, weights))
     });
     let mut node_meshes = HashMap::new();
+    let mut mesh_influences = Vec::new();
     let variants: Vec<_> = document
         .meshes()
         .map(|mesh| (None, mesh.clone(), mesh.weights().unwrap_or(&[])))
         .chain(morph_variants)
         .collect();
     for (node, mesh, weights) in variants {
-        let mut converted = convert_mesh(
+        let (mut converted, influences) = convert_mesh(
             &mesh,
             &uv_mappings,
             &mut limits,
@@ -212,6 +217,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             node_meshes.insert(node, asset.meshes.len());
         }
         asset.meshes.push(converted);
+        mesh_influences.push(influences);
     }
     if skipped_primitives > 0 {
         log::warn!("caustica: {}: skipped {skipped_primitives} point or line primitive(s)", path.display());
@@ -227,10 +233,37 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         ancestors: Vec::new(),
         visited: vec![false; document.nodes().len()],
         node_meshes: &node_meshes,
+        worlds: vec![None; document.nodes().len()],
+        skinned: Vec::new(),
         asset: &mut asset,
     };
     for root in root_nodes(&document) {
         walk.visit(root, Mat4::IDENTITY).map_err(|m| AssetError::invalid(path, m))?;
+    }
+    let (worlds, skinned) = (walk.worlds, walk.skinned);
+    // Skinned instances: their mesh posed by the joints' world transforms, in world space.
+    for (instance, node) in skinned {
+        let node = document.nodes().nth(node).expect("a visited node");
+        let skin = node.skin().expect("a skinned node");
+        let mesh = asset.instances[instance].0;
+        if mesh_influences[mesh].is_empty() {
+            continue;
+        }
+        let joint_worlds = skin
+            .joints()
+            .map(|joint| {
+                worlds[joint.index()].ok_or_else(|| {
+                    format!("skin {}: joint node {} is not in the rendered scene", skin.index(), joint.index())
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|m| AssetError::invalid(path, m))?;
+        let node_world = worlds[node.index()].expect("a visited node");
+        let posed =
+            gltf_skin::pose(&asset.meshes[mesh], &mesh_influences[mesh], &skin, &joint_worlds, node_world, &mut limits)
+                .map_err(|m| AssetError::invalid(path, format!("node {}: {m}", node.index())))?;
+        asset.instances[instance] = (asset.meshes.len(), Mat4::IDENTITY);
+        asset.meshes.push(posed);
     }
     if document.lights().into_iter().flatten().any(|l| l.range().is_some()) {
         log::warn!(
@@ -263,6 +296,44 @@ fn ignored_features(json: &gltf::json::Root) -> Vec<String> {
         let coat = m.extensions.as_ref().and_then(|e| e.others.get("KHR_materials_clearcoat"));
         coat.is_some_and(|c| c.get("clearcoatNormalTexture").is_some())
     };
+    if !json.animations.is_empty() {
+        ignored.push(format!(
+            "{} animation(s) are not played: nodes, morph targets and skins stand as the file saves them",
+            json.animations.len()
+        ));
+    }
+    let orthographic = json
+        .cameras
+        .iter()
+        .filter(|c| matches!(c.type_, gltf::json::validation::Checked::Valid(gltf::json::camera::Type::Orthographic)))
+        .count();
+    if orthographic > 0 {
+        ignored.push(format!(
+            "{orthographic} orthographic camera(s) are not implemented: the first perspective camera is used"
+        ));
+    }
+    if json.cameras.len() - orthographic > 1 {
+        ignored.push(format!(
+            "the file has {} perspective cameras: the first one the node hierarchy reaches is used",
+            json.cameras.len() - orthographic
+        ));
+    }
+    let extra_influences = json.meshes.iter().flat_map(|m| &m.primitives).any(|p| {
+        p.attributes.keys().any(
+            |s| matches!(s, gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Joints(n)) if *n >= 2),
+        )
+    });
+    if extra_influences {
+        ignored.push("JOINTS_2 and later sets are ignored: skins are posed by at most 8 joints a vertex".to_owned());
+    }
+    let extra_colours = json.meshes.iter().flat_map(|m| &m.primitives).any(|p| {
+        p.attributes.keys().any(
+            |s| matches!(s, gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Colors(n)) if *n >= 1),
+        )
+    });
+    if extra_colours {
+        ignored.push("COLOR_1 and later sets are ignored: COLOR_0 multiplies the base colour".to_owned());
+    }
     if json.materials.iter().any(coat_normal) {
         ignored.push(
             "KHR_materials_clearcoat clearcoatNormalTexture is not implemented: clear coats use the material's normal"
@@ -746,8 +817,9 @@ fn convert_mesh(
     skipped_primitives: &mut usize,
     colour_alpha_ignored: &mut bool,
     weights: &[f32],
-) -> Result<MeshData, String> {
+) -> Result<(MeshData, VertexInfluences), String> {
     let mut out = MeshData::default();
+    let mut influences = VertexInfluences::default();
     let (mut all_normals, mut all_uvs, mut all_tangents) = (true, true, true);
     let (mut normals, mut tangents) = (Vec::new(), Vec::new());
     for primitive in mesh.primitives() {
@@ -770,6 +842,7 @@ fn convert_mesh(
             .into_iter()
             .map(Vec3::from)
             .collect();
+        influences.append(&primitive, positions.len(), limits)?;
         let first_normal = normals.len();
         let first_tangent = tangents.len();
         if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
@@ -892,7 +965,7 @@ fn convert_mesh(
             .collect();
         out.tangents = unit.unwrap_or_default();
     }
-    Ok(out)
+    Ok((out, influences))
 }
 
 /// One primitive's vertex data as read, which its morph targets displace.
@@ -985,6 +1058,10 @@ struct Walk<'a> {
     /// Nodes whose morph weights differ from their mesh's: the index of their own morphed copy
     /// in `asset.meshes`.
     node_meshes: &'a HashMap<usize, usize>,
+    /// Every visited node's world transform, for skins' joints.
+    worlds: Vec<Option<Mat4>>,
+    /// (index into `asset.instances`, node) of every instance of a skinned node.
+    skinned: Vec<(usize, usize)>,
     asset: &'a mut Asset,
 }
 
@@ -1005,8 +1082,12 @@ impl Walk<'_> {
             return Err(format!("node {index} has a non-finite transform"));
         }
         let world = parent * local;
+        self.worlds[index] = Some(world);
         if let Some(mesh) = node.mesh() {
             let mesh = self.node_meshes.get(&index).copied().unwrap_or(mesh.index());
+            if node.skin().is_some() {
+                self.skinned.push((self.asset.instances.len(), index));
+            }
             self.asset.instances.push((mesh, world));
         }
         if let (None, Some(camera)) = (&self.asset.camera, node.camera()) {

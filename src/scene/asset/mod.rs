@@ -4,6 +4,7 @@
 
 mod gltf_accessors;
 mod gltf_file;
+mod gltf_skin;
 mod obj;
 mod ply;
 mod serialized;
