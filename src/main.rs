@@ -241,7 +241,7 @@ enum Command {
         #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = define)]
         define: Vec<(String, String)>,
     },
-    /// Compare an image with a reference (PFM or EXR): relative MSE, mean absolute error and the
+    /// Compare an image with a reference (PFM, EXR or Radiance .hdr): relative MSE, mean absolute error and the
     /// ratio of their means.
     Compare { image: PathBuf, reference: PathBuf },
     /// Render a scene (default: the Cornell box) and report geometry, BVH build, memory, and samples
