@@ -1,14 +1,19 @@
 //! What is interpolated across mesh triangles, pixel by pixel (issue 51): glTF vertex colours
-//! (COLOR_0, in each encoding glTF allows) multiplying the base colour.
+//! (COLOR_0, in each encoding glTF allows) multiplying the base colour, texture coordinates and
+//! vertex normals; and what the glTF loader does to vertices before the kernel sees them
+//! (KHR_mesh_quantization, morph targets, skins, doubleSided).
 //!
-//! A glTF square (two triangles, corners of distinct colours) is a smooth mirror (metallic 1,
-//! roughness 0: glTF's Schlick Fresnel with the base colour as F0) under a white constant sky,
-//! seen head-on from far away through a narrow field of view. Every camera ray meets it within
-//! 0.15 degrees of its normal, where Schlick's term adds less than 1e-12 to F0, and reflects
-//! into the sky: each sample is exactly the base colour times the colour interpolated at the
-//! point it meets. The film plane maps linearly onto the square, and the colour is linear across
-//! each triangle, so a pixel's mean over its box filter is the colour at its centre: a closed
-//! form for every pixel off the diagonal, where the two triangles' interpolations meet.
+//! The colour and texture tests make a glTF square (two triangles, corners of distinct values) a
+//! smooth mirror (metallic 1, roughness 0: glTF's Schlick Fresnel with the base colour as F0)
+//! under a white constant sky, seen head-on from far away through a narrow field of view. Every
+//! camera ray meets it within 0.15 degrees of its normal, where Schlick's term adds less than
+//! 1e-12 to F0, and reflects into the sky: each sample is exactly the base colour at the point it
+//! meets. The film plane maps linearly onto the square, and what is interpolated is linear across
+//! each triangle, so a pixel's mean over its box filter is the value at its centre: a closed form
+//! for every pixel off the diagonal, where the two triangles' interpolations meet. The normal test
+//! lights a matte square by a directional light instead (the Lambert term of the interpolated
+//! normal). Each render is deterministic (a fixed seed), and its tolerance is derived from the
+//! spread of 64 box-filtered samples over a pixel.
 
 mod common;
 
@@ -179,15 +184,22 @@ fn write_square_with(dir: &Path, position: &Attribute, attributes: &[Attribute],
 /// The square of `dir` seen head-on from `DISTANCE` below, filling a `SIZE` x `SIZE` film, under a
 /// white sky.
 fn render_square(ctx: &caustica::gpu::GpuContext, dir: &Path) -> RgbImage {
+    render_square_in(ctx, dir, "environment = { color = [1.0, 1.0, 1.0] }", "")
+}
+
+/// The square of `dir` seen as [`render_square`] sees it, in a scene of `world` (TOML: lights,
+/// environment, materials) with `mesh` (TOML keys) added to its `[[meshes]]` entry.
+fn render_square_in(ctx: &caustica::gpu::GpuContext, dir: &Path, world: &str, mesh: &str) -> RgbImage {
     let fov = 2.0 * (HALF / DISTANCE).atan().to_degrees();
     let scene = Scene::parse(
         &format!(
             r#"
             camera = {{ position = [0.0, -{DISTANCE}, 0.0], look_at = [0.0, 0.0, 0.0], up = [0.0, 0.0, -1.0], fov = {fov} }}
             film = {{ width = {SIZE}, height = {SIZE}, spp = {SPP} }}
-            environment = {{ color = [1.0, 1.0, 1.0] }}
+            {world}
             [[meshes]]
             file = "square.gltf"
+            {mesh}
             "#
         ),
         "test scene",
@@ -515,4 +527,108 @@ fn skins_are_posed_by_their_joints() {
     for (k, (got, want)) in posed.iter().zip(expected).enumerate() {
         assert!((*got - want).length() < 1e-6, "corner {k}: {got}, expected {want}");
     }
+}
+
+/// Smooth shading: a diffuse square (albedo 0.5) whose corners' normals lean different ways, lit
+/// by a directional light of irradiance pi from below, under a black sky. Each sample is the
+/// Lambert term 0.5 x cos(shading normal, light) of the normal interpolated where it meets the
+/// square and normalized; the pixel's mean is that at its centre to within the curvature of the
+/// cosine over a pixel (below 1e-3 here). A normal interpolated with the wrong corner's weight, or
+/// flat shading (the geometric normal, -y, everywhere), is off by 0.02 to 0.2 over most pixels.
+#[test]
+fn vertex_normals_are_interpolated_pixel_by_pixel() {
+    let (_lock, ctx) = gpu();
+    let dir = temp_dir("vertex-normals");
+    let normals: [[f32; 3]; 4] = [[0.5, -1.0, 0.0], [0.0, -1.0, 0.6], [-0.4, -1.0, -0.3], [0.3, -1.0, 0.7]];
+    let unit = normals.map(|n| glam::Vec3::from(n).normalize());
+    let attribute = Attribute {
+        name: "NORMAL",
+        component_type: 5126,
+        kind: "VEC3",
+        normalized: false,
+        bytes: floats(&unit.map(|n| n.to_array()).concat()),
+    };
+    write_square(&dir, &[attribute], &mirror_material());
+    let travels = glam::Vec3::new(0.2, 1.0, -0.3).normalize();
+    let world = format!(
+        r#"
+        [materials.matte]
+        albedo = [0.5, 0.5, 0.5]
+        [[lights]]
+        type = "directional"
+        direction = [{}, {}, {}]
+        irradiance = [{pi}, {pi}, {pi}]
+        "#,
+        travels.x,
+        travels.y,
+        travels.z,
+        pi = std::f32::consts::PI
+    );
+    let image = render_square_in(&ctx, &dir, &world, r#"material = "matte""#);
+    assert_pixels(
+        &image,
+        |tri, w| {
+            let n: glam::Vec3 = tri.iter().zip(w).map(|(&k, w)| w * unit[k]).sum::<glam::Vec3>().normalize();
+            [0.5 * n.dot(-travels).max(0.0); 3]
+        },
+        0.01,
+        "smooth-shaded square",
+    );
+}
+
+/// Texture coordinates: the mirror square with a 2 x 2 base colour texture (clamped at its
+/// edges, so bilinear lookups blend the four texels smoothly across it) and corner coordinates
+/// that no single affine map gives, so each triangle maps the texture its own way. Each pixel is
+/// the texture at the coordinates interpolated at its centre, in closed form (bilinear filtering,
+/// sRGB decoded per texel). Coordinates interpolated with the wrong corner's weight fail.
+#[test]
+fn texture_coordinates_are_interpolated_pixel_by_pixel() {
+    let (_lock, ctx) = gpu();
+    let dir = temp_dir("vertex-uvs");
+    let uvs: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.1], [0.8, 1.0], [0.1, 0.6]];
+    let attribute = Attribute {
+        name: "TEXCOORD_0",
+        component_type: 5126,
+        kind: "VEC2",
+        normalized: false,
+        bytes: floats(&uvs.concat()),
+    };
+    // Texels, top row first: distinct values in each channel.
+    let texels: [[u8; 4]; 4] = [[255, 0, 40, 255], [0, 255, 120, 255], [60, 30, 255, 255], [200, 200, 0, 255]];
+    let mut png = Vec::new();
+    let mut encoder = png::Encoder::new(&mut png, 2, 2);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.write_header().unwrap().write_image_data(&texels.concat()).unwrap();
+    let material = format!(
+        r#"{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicFactor": 1, "roughnessFactor": 0}}}}],
+  "textures": [{{"source": 0, "sampler": 0}}], "samplers": [{{"wrapS": 33071, "wrapT": 33071}}],
+  "images": [{{"uri": "{}"}}"#,
+        common::gltf_square::png_uri(&png)
+    );
+    write_square(&dir, &[attribute], &material);
+    let image = render_square(&ctx, &dir);
+    let linear = texels.map(|t| [0, 1, 2].map(|c| srgb_to_linear(t[c])));
+    let bilinear = |u: f32, v: f32| {
+        // Texel centres at 0.25 and 0.75; clamped outside them.
+        let x = (2.0 * u - 0.5).clamp(0.0, 1.0);
+        let y = (2.0 * v - 0.5).clamp(0.0, 1.0);
+        [0, 1, 2].map(|c| {
+            let top = linear[0][c] * (1.0 - x) + linear[1][c] * x;
+            let bottom = linear[2][c] * (1.0 - x) + linear[3][c] * x;
+            top * (1.0 - y) + bottom * y
+        })
+    };
+    assert_pixels(
+        &image,
+        |tri, w| {
+            let (mut u, mut v) = (0.0, 0.0);
+            for (k, &corner) in tri.iter().enumerate() {
+                u += w[k] * uvs[corner][0];
+                v += w[k] * uvs[corner][1];
+            }
+            bilinear(u, v)
+        },
+        0.02,
+        "UV-textured square",
+    );
 }
