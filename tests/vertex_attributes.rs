@@ -344,7 +344,7 @@ fn a_two_component_colour_is_an_error() {
         Attribute { name: "COLOR_0", component_type: 5126, kind: "VEC2", normalized: false, bytes: floats(&[0.5; 8]) };
     write_square(&dir, &[attribute], &mirror_material());
     let toml = "camera = { position = [0.0, -1.0, 0.0], look_at = [0.0, 0.0, 0.0], up = [0.0, 0.0, 1.0] }\n[[meshes]]\nfile = \"square.gltf\"";
-    let err = Scene::parse(toml, "test scene", &dir).err().expect("a VEC2 COLOR_0 is refused");
+    let Err(err) = Scene::parse(toml, "test scene", &dir) else { panic!("a VEC2 COLOR_0 is refused") };
     let err = format!("{err:#}");
     assert!(err.contains("square.gltf") && err.contains("COLOR_0"), "{err}");
 }

@@ -182,8 +182,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         asset.materials.push(converted);
         uv_mappings.push(uv_mapping.mapping);
     }
-    let mut skipped_primitives = 0;
-    let mut colour_alpha_ignored = false;
+    let mut notes = MeshNotes::default();
     let mut default_material = None;
     let mut limits = AccessorLimits::new(&buffers, file_bytes);
     // Each mesh morphed by its own default weights, then once more for every node that gives
@@ -207,8 +206,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
             &mut limits,
             &mut asset.materials,
             &mut default_material,
-            &mut skipped_primitives,
-            &mut colour_alpha_ignored,
+            &mut notes,
             weights,
         )
         .map_err(|m| AssetError::invalid(path, format!("mesh {}: {m}", mesh.index())))?;
@@ -219,6 +217,7 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         asset.meshes.push(converted);
         mesh_influences.push(influences);
     }
+    let MeshNotes { skipped_primitives, colour_alpha_ignored } = notes;
     if skipped_primitives > 0 {
         log::warn!("caustica: {}: skipped {skipped_primitives} point or line primitive(s)", path.display());
     }
@@ -806,6 +805,15 @@ impl VertexAttribute {
     }
 }
 
+/// What converting meshes left out, said once per file after all are converted.
+#[derive(Default)]
+struct MeshNotes {
+    /// Point and line primitives skipped.
+    skipped_primitives: usize,
+    /// A MASK or BLEND material's primitive has COLOR_0 alpha below 1, which is not read.
+    colour_alpha_ignored: bool,
+}
+
 /// Merges a mesh's triangle primitives. An attribute (normals, uvs) is kept only when every
 /// primitive has it, since the result needs exactly one per position.
 fn convert_mesh(
@@ -814,8 +822,7 @@ fn convert_mesh(
     limits: &mut AccessorLimits,
     materials: &mut Vec<Material>,
     default_material: &mut Option<u32>,
-    skipped_primitives: &mut usize,
-    colour_alpha_ignored: &mut bool,
+    notes: &mut MeshNotes,
     weights: &[f32],
 ) -> Result<(MeshData, VertexInfluences), String> {
     let mut out = MeshData::default();
@@ -825,7 +832,7 @@ fn convert_mesh(
     for primitive in mesh.primitives() {
         let p = primitive.index();
         if matches!(primitive.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
-            *skipped_primitives += 1;
+            notes.skipped_primitives += 1;
             continue;
         }
         let buffers = limits.buffers();
@@ -909,7 +916,7 @@ fn convert_mesh(
             }
             if read.iter().any(|c| c[3] < 1.0) && primitive.material().alpha_mode() != gltf::material::AlphaMode::Opaque
             {
-                *colour_alpha_ignored = true;
+                notes.colour_alpha_ignored = true;
             }
             out.colors.resize(out.positions.len(), Vec3::ONE);
             // glTF's colours lie in [0, 1]; a float outside it (or not a number) would create or
