@@ -10,6 +10,10 @@ struct Surface {
                     // not normal to ns; zero where there is none). Kernels without anisotropic
                     // materials (SCENE_ANISOTROPIC) leave it zero.
     vec2 uv;
+#if SCENE_VERTEX_COLORS
+    vec3 color;     // the interpolated vertex colour (glTF COLOR_0) the albedo is multiplied by;
+                    // white where there is none
+#endif
     uint material;
 };
 
@@ -82,6 +86,9 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
         s.ns = s.ng;
         s.tangent = SCENE_ANISOTROPIC == 1 ? primitive_tangent(p, s.point) : vec3(0.0);
         s.uv = vec2(0.0);
+#if SCENE_VERTEX_COLORS
+        s.color = vec3(1.0);
+#endif
         s.material = prim_material(p);
         return s;
     }
@@ -103,6 +110,12 @@ Surface surface_at(Hit hit, vec3 o, vec3 d) {
     if (SCENE_TEXTURES == 1 && (info.z & INSTANCE_HAS_UVS) != 0u) {
         s.uv = w.x * load_vertex_uvs(tri.x) + w.y * load_vertex_uvs(tri.y) + w.z * load_vertex_uvs(tri.z);
     }
+#if SCENE_VERTEX_COLORS
+    s.color = vec3(1.0);
+    if ((info.z & INSTANCE_HAS_COLORS) != 0u) {
+        s.color = w.x * load_vertex_colors(tri.x).rgb + w.y * load_vertex_colors(tri.y).rgb + w.z * load_vertex_colors(tri.z).rgb;
+    }
+#endif
     s.material = load_triangle_materials(hit.prim);
     if ((info.z & INSTANCE_HAS_NORMALS) != 0u) {
         vec3 n = w.x * unpack_normal(load_vertex_normals(tri.x)) + w.y * unpack_normal(load_vertex_normals(tri.y))
@@ -138,11 +151,15 @@ Primitive world_primitive(Hit hit) {
     return p;
 }
 
-// Material at the surface, with the albedo, emission and clear coat textures applied, and the glTF
+// Material at the surface, with the vertex colour, the albedo, emission and clear coat textures applied, and the glTF
 // metallic-roughness texture (G = roughness, B = metallic) turned into R, T and alpha as the loader
 // does factors.
 Material surface_material(Surface s) {
     Material m = load_materials(s.material);
+#if SCENE_VERTEX_COLORS
+    // glTF: the vertex colour multiplies the base colour (and so a metal's F0), before textures.
+    m.albedo_r.rgb *= s.color;
+#endif
 #if SCENE_TEXTURES
     uint texture_index = floatBitsToUint(m.params.z);
     if (texture_index != NO_TEXTURE) m.albedo_r.rgb *= texture_rgb(texture_index, s.uv);

@@ -30,7 +30,7 @@ pub enum InputKind {
     /// A PNG or JPEG texture as stored: 1 GiB, the raw size of the largest texture caustica
     /// accepts (16384 x 16384 RGBA8), which any real encoding stays below.
     Texture,
-    /// A PFM or EXR radiance image (environment maps, `compare`): 4 GiB, the largest PFM accepted
+    /// A PFM, EXR or Radiance .hdr radiance image (environment maps, `compare`): 4 GiB, the largest PFM accepted
     /// (2^28 RGB float pixels, 3 GiB) with room to spare.
     RadianceImage,
     /// A partial render or checkpoint (EXR) read by `merge` and `--resume`: 32 GiB, a 16384 x 16384
@@ -61,7 +61,7 @@ impl InputKind {
             InputKind::Mesh => "a mesh file or glTF buffer",
             InputKind::MaterialLibrary => "an MTL material library",
             InputKind::Texture => "a texture",
-            InputKind::RadianceImage => "a PFM or EXR image",
+            InputKind::RadianceImage => "a PFM, EXR or Radiance .hdr image",
             InputKind::PartialRender => "a partial render",
             InputKind::Shader => "a shader file",
         }

@@ -164,6 +164,8 @@ enum Command {
         #[arg(long, value_enum, num_args = 0..=1, default_missing_value = "high", value_name = "QUALITY")]
         denoise: Option<Quality>,
         #[command(flatten)]
+        framing: FramingArgs,
+        #[command(flatten)]
         output_args: OutputArgs,
         #[command(flatten)]
         farm: FarmArgs,
@@ -282,7 +284,7 @@ enum Command {
         #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = define)]
         define: Vec<(String, String)>,
     },
-    /// Compare an image with a reference (PFM or EXR): relative MSE, mean absolute error and the
+    /// Compare an image with a reference (PFM, EXR or Radiance .hdr): relative MSE, mean absolute error and the
     /// ratio of their means.
     Compare { image: PathBuf, reference: PathBuf },
     /// Render a scene (default: the Cornell box) and report geometry, BVH build, memory, and samples
@@ -336,6 +338,48 @@ enum Command {
         #[command(flatten)]
         gpu: DeviceArgs,
     },
+}
+
+/// Cameras that frame the scene's bounding box in place of its own (render; src/scene/framing.rs).
+#[derive(clap::Args, Clone)]
+struct FramingArgs {
+    /// Look at the scene's bounding box from these angles in degrees, fitted to it: azimuth about
+    /// +y (0 from +z, 90 from +x) and elevation (90 from straight above), e.g. 30,20. Replaces the
+    /// scene's camera with a 40 degree one.
+    #[arg(long, value_name = "AZ,EL", value_parser = orbit_angles, allow_hyphen_values = true)]
+    camera_orbit: Option<(f32, f32)>,
+    /// Move the scene's camera along its viewing axis, aimed at the bounding box's centre, to the
+    /// nearest place from which the whole box is in view (its direction and field of view kept).
+    #[arg(long, conflicts_with = "camera_orbit")]
+    camera_fit: bool,
+}
+
+impl FramingArgs {
+    /// The scene's camera replaced or moved as asked, for its film as it will be rendered.
+    fn apply(&self, scene: &mut Scene) -> Result<()> {
+        if self.camera_orbit.is_none() && !self.camera_fit {
+            return Ok(());
+        }
+        let Some(bounds) = caustica::scene::framing::scene_bounds(scene) else {
+            anyhow::bail!("--camera-orbit and --camera-fit need a scene with shapes or meshes to frame");
+        };
+        let aspect = scene.film.width as f32 / scene.film.height as f32;
+        scene.camera = match self.camera_orbit {
+            Some((azimuth, elevation)) => caustica::scene::framing::orbit_camera(bounds, azimuth, elevation, aspect),
+            None => caustica::scene::framing::fit_camera(&scene.camera, bounds, aspect),
+        };
+        Ok(())
+    }
+}
+
+/// `--camera-orbit`'s AZ,EL: finite degrees, the elevation within [-90, 90].
+fn orbit_angles(text: &str) -> Result<(f32, f32), String> {
+    let parse = |t: &str| t.trim().parse::<f32>().ok().filter(|v| v.is_finite());
+    match text.split_once(',').map(|(a, e)| (parse(a), parse(e))) {
+        Some((Some(azimuth), Some(elevation))) if (-90.0..=90.0).contains(&elevation) => Ok((azimuth, elevation)),
+        Some((Some(_), Some(elevation))) => Err(format!("elevation {elevation} is outside -90..90 degrees")),
+        _ => Err(format!("'{text}' is not AZ,EL in degrees (e.g. 30,20)")),
+    }
 }
 
 /// Which files a scene may read (render and bench).
@@ -1024,6 +1068,7 @@ fn run() -> Result<()> {
             seed,
             aov,
             denoise,
+            framing,
             output_args,
             farm,
             quiet,
@@ -1036,6 +1081,7 @@ fn run() -> Result<()> {
             let Some(kernel) = kernel.options()? else { return Ok(()) };
             let mut s = scene_files.load_scene(scene.as_ref())?;
             apply_overrides(&mut s, width, height, spp)?;
+            framing.apply(&mut s)?;
             // A time budget alone lifts the scene's sample count.
             let spp = if farm.time.is_some() { spp } else { Some(s.film.spp) };
             render(

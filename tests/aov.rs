@@ -196,6 +196,7 @@ fn textured_mesh_gives_material_albedo_times_texture() {
         triangles: vec![[0, 3, 2], [0, 2, 1]],
         triangle_materials: vec![0, 0],
         tangents: Vec::new(),
+        colors: Vec::new(),
     }];
     scene.instances = vec![Instance { mesh: 0, transform: Mat4::IDENTITY }];
     let expected = [0.5 * srgb_to_linear(texel[0]), srgb_to_linear(texel[1]), 0.8 * srgb_to_linear(texel[2])];

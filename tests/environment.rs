@@ -191,3 +191,32 @@ fn grace_probe_texel_centres_are_seen_in_their_directions() {
     }
     assert!(checked > 40, "only {checked} texels checked");
 }
+
+/// A Radiance `.hdr` (RGBE) lat-long map loads from a scene file like PFM and EXR ones, decoded
+/// as (mantissa + 0.5) / 256 x 2^(exponent - 128), and the kernel sees its values.
+#[test]
+fn radiance_hdr_maps_load_from_scene_files() {
+    let dir = temp_dir("env-hdr");
+    let (width, height) = (8, 4);
+    let mut file = format!("#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {height} +X {width}\n").into_bytes();
+    for _ in 0..width * height {
+        file.extend([64u8, 128, 192, 129]);
+    }
+    std::fs::write(dir.join("sky.hdr"), file).unwrap();
+    let scene = Scene::parse(
+        r#"
+        camera = { position = [0.0, 0.0, 0.0], look_at = [1.0, 0.0, 0.0], up = [0.0, 1.0, 0.0] }
+        environment = { latlong = "sky.hdr" }
+        "#,
+        "test scene",
+        &dir,
+    )
+    .expect("a scene with an .hdr map loads");
+    let expected = [64.5 / 128.0, 128.5 / 128.0, 192.5 / 128.0];
+    let Environment::Map(ref map) = scene.environment else { panic!("the environment is a map") };
+    assert_eq!((map.image.width, map.image.height), (width, height));
+    assert!(map.image.pixels.iter().all(|&p| p == expected), "{:?}", map.image.pixels[0]);
+    let (_lock, ctx) = gpu();
+    let seen = radiance_along(&ctx, &scene.environment, Vec3::new(1.0, 0.3, -0.2));
+    assert!(close(Vec3::from(seen), Vec3::from(expected)), "{seen:?}");
+}

@@ -346,6 +346,7 @@ fn textured_albedo_is_sampled_bilinearly_with_wrapping() {
         triangles: vec![[0, 3, 2], [0, 2, 1]],
         triangle_materials: vec![0, 0],
         tangents: Vec::new(),
+        colors: Vec::new(),
     }];
     scene.instances = vec![Instance { mesh: 0, transform: Mat4::IDENTITY }];
 
@@ -585,6 +586,7 @@ fn sphere_scene() -> Scene {
         normals: vec![],
         uvs: vec![],
         tangents: vec![],
+        colors: vec![],
         triangles: vec![],
         triangle_materials: vec![],
     };

@@ -66,7 +66,7 @@ fn every_checked_in_scene_renders_the_same_with_its_own_kernel() {
 /// A textured, instanced mesh with a rough metal (GGX and Beckmann, both anisotropic: oriented
 /// by the spheres' longitude), a one-sided clear-coated plastic, a thin pane and a sphere of
 /// absorbing glass under an environment map, lit by a mesh lamp with an emission texture, the
-/// floor normal-mapped and anisotropically glossy along its tangents, and two squares with
+/// floor normal-mapped, vertex-coloured and anisotropically glossy along its tangents, and two squares with
 /// alpha over it (a textured BLEND and a textured MASK), beside a glowing sphere, a quad, a
 /// triangle, a spot light and a sun with a disk: every feature on, which the checked-in scenes
 /// without the shared data lack (textures, several instances, textured emitters, normal maps,
@@ -207,6 +207,7 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         triangles: triangles.to_vec(),
         triangle_materials: vec![material; 2],
         tangents: vec![Vec4::new(1.0, 0.0, 0.0, 1.0); 4],
+        colors: vec![Vec3::new(1.0, 0.8, 0.6), Vec3::new(0.6, 1.0, 0.8), Vec3::new(0.8, 0.6, 1.0), Vec3::ONE],
     };
     // The floor faces up; the lamp above it faces down.
     scene.meshes = vec![

@@ -10,6 +10,7 @@ mod exr_header_order;
 pub mod exr_layers;
 pub mod pfm;
 pub mod png;
+pub mod rgbe;
 pub mod tonemap;
 
 use std::path::Path;
@@ -90,6 +91,8 @@ pub enum ImageError {
     UnsupportedExtension { file: String, expected: &'static str },
     #[error("{file}: bad PFM header: {reason}")]
     PfmHeader { file: String, reason: String },
+    #[error("{file}: bad Radiance RGBE (.hdr) file: {reason}")]
+    RgbeHeader { file: String, reason: String },
     #[error("{file}: truncated: expected {expected} bytes of pixel data, found {found}")]
     Truncated { file: String, expected: usize, found: usize },
     #[error("{file}: image of {width} x {height} pixels is too large (limit 2^28 pixels)")]
@@ -135,7 +138,8 @@ pub fn read_image_from(files: &InputFiles, path: &Path) -> Result<RgbImage, Imag
     match extension(path).as_deref() {
         Some("pfm") => pfm::read(files, path),
         Some("exr") => exr::read(files, path),
-        _ => Err(ImageError::UnsupportedExtension { file: file_name(path), expected: ".pfm or .exr" }),
+        Some("hdr") => rgbe::read(files, path),
+        _ => Err(ImageError::UnsupportedExtension { file: file_name(path), expected: ".pfm, .exr or .hdr" }),
     }
 }
 

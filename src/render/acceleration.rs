@@ -45,6 +45,10 @@ pub struct Acceleration {
     /// Tangent and bitangent sign, one a vertex of meshes with tangents (see `Mesh::tangents`;
     /// others have zeros where a later mesh needs entries).
     pub tangents: Vec<[f32; 4]>,
+    /// Linear RGB colour (w unused, 1) one a vertex of meshes with vertex colours (see
+    /// `Mesh::colors`; white where a later mesh needs entries), read only by kernels built
+    /// with SCENE_VERTEX_COLORS.
+    pub colors: Vec<[f32; 4]>,
     /// Everything placed, in world space (`Aabb::EMPTY` for an empty scene).
     pub bounds: Aabb,
     pub stats: AccelerationStats,
@@ -245,6 +249,7 @@ impl Acceleration {
 
         let (mut triangles, mut triangle_materials) = (Vec::new(), Vec::new());
         let (mut vertex_count, mut normals, mut uvs, mut tangents) = (0u32, Vec::new(), Vec::new(), Vec::new());
+        let mut colors = Vec::new();
         let mut mesh_roots = Vec::with_capacity(meshes.len());
         let mut triangle_slots = Vec::with_capacity(meshes.len());
         let mut mesh_flags = Vec::with_capacity(meshes.len());
@@ -277,6 +282,11 @@ impl Acceleration {
                 tangents.resize(vertex_base as usize, [0.0; 4]);
                 tangents.extend(mesh.tangents.iter().map(|t| t.to_array()));
                 flags |= INSTANCE_HAS_TANGENTS;
+            }
+            if !mesh.colors.is_empty() {
+                colors.resize(vertex_base as usize, [1.0; 4]);
+                colors.extend(mesh.colors.iter().map(|c| c.extend(1.0).to_array()));
+                flags |= INSTANCE_HAS_COLORS;
             }
             mesh_flags.push(flags);
         }
@@ -334,6 +344,7 @@ impl Acceleration {
             normals,
             uvs,
             tangents,
+            colors,
             bounds,
             stats,
         }
@@ -347,7 +358,8 @@ impl Acceleration {
             + std::mem::size_of_val(&self.triangle_materials[..])
             + std::mem::size_of_val(&self.normals[..])
             + std::mem::size_of_val(&self.uvs[..])
-            + std::mem::size_of_val(&self.tangents[..])) as u64
+            + std::mem::size_of_val(&self.tangents[..])
+            + std::mem::size_of_val(&self.colors[..])) as u64
     }
 }
 

@@ -49,12 +49,13 @@ pub enum KernelBuffer {
     SceneStructure,
     LightTree,
     LightTreeIndex,
+    VertexColors,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::LightTreeIndex as usize + 1;
+    pub const COUNT: usize = KernelBuffer::VertexColors as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -310,6 +311,9 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // instance where its hits find their lights, per shape its light, per mesh triangle its rank
     // among its mesh's emitters. Empty with the tree.
     BufferBinding { buffer: LightTreeIndex, binding: 25, name: "light_tree_index", shape: texel_buffer::<u32>(), access: Read, bound_in: EveryKernel, what: "light tree index" },
+    // Linear RGB colours of the vertices of meshes with vertex colours (glTF COLOR_0), by global
+    // vertex index (w unused); empty when no mesh has them.
+    BufferBinding { buffer: VertexColors, binding: 26, name: "vertex_colors", shape: texel_buffer::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "vertex colours" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,

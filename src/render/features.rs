@@ -119,6 +119,8 @@ pub struct SceneFeatures {
     pub emissive_textures: bool,
     /// Tangent-space normal maps on meshes with tangents: the shading normal bent per texel.
     pub normal_maps: bool,
+    /// Meshes with vertex colours (glTF COLOR_0): the interpolated colour multiplies the albedo.
+    pub vertex_colors: bool,
     /// Mesh materials with alpha (glTF MASK or BLEND, MTL `d` / `map_d`): traversal looks up
     /// the material of every triangle a ray meets (shaders/alpha.glsl); without them it never does.
     pub alpha: bool,
@@ -190,6 +192,7 @@ impl SceneFeatures {
         textures: true,
         emissive_textures: true,
         normal_maps: true,
+        vertex_colors: true,
         alpha: true,
         environment_map: true,
         rough_lobes: true,
@@ -250,6 +253,7 @@ impl SceneFeatures {
                 .any(|m| m.maps[0].to_bits() != NO_TEXTURE && m.emission_t[..3].iter().any(|&e| e > 0.0)),
             normal_maps: !data.acceleration.tangents.is_empty()
                 && data.materials.iter().any(|m| m.maps[1].to_bits() != NO_TEXTURE),
+            vertex_colors: !data.acceleration.colors.is_empty(),
             alpha: has_instance(INSTANCE_MESH) && data.materials.iter().any(|m| m.alpha[3].to_bits() != ALPHA_OPAQUE),
             environment_map: data.env_kind != ENV_CONSTANT,
             rough_lobes: data
@@ -300,7 +304,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 31] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 32] {
         [
             ("bvh", "SCENE_BVH", self.bvh()),
             ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes()),
@@ -311,6 +315,7 @@ impl SceneFeatures {
             ("textures", "SCENE_TEXTURES", self.textures),
             ("emissive_textures", "SCENE_EMISSIVE_TEXTURES", self.emissive_textures),
             ("normal_maps", "SCENE_NORMAL_MAPS", self.normal_maps),
+            ("vertex_colors", "SCENE_VERTEX_COLORS", self.vertex_colors),
             ("alpha", "SCENE_ALPHA", self.alpha),
             ("environment_map", "SCENE_ENV_MAP", self.environment_map),
             ("rough_lobes", "SCENE_ROUGH_LOBES", self.rough_lobes),

@@ -302,6 +302,7 @@ pub(super) fn initial_contents<'d>(
         PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
         TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
         VertexTangents => bytemuck::cast_slice(&a.tangents),
+        VertexColors => bytemuck::cast_slice(&a.colors),
         // Built from the scene's data rather than uploaded (ray_query_scene.rs).
         SceneStructure => &[],
         LightTree => data.light_tree.as_ref().map_or(&[][..], |t| bytemuck::cast_slice(&t.tree.nodes)),

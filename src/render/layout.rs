@@ -29,8 +29,8 @@ glsl_constants! {
     /// transform), or a placed triangle mesh.
     INSTANCE_KINDS { INSTANCE_PRIMITIVES = 0, INSTANCE_MESH = 1 }
     /// Instance flags: the mesh has per-vertex normals / texture coordinates / tangents (for
-    /// normal maps; a mesh with tangents has the other two).
-    INSTANCE_FLAGS { INSTANCE_HAS_NORMALS = 1, INSTANCE_HAS_UVS = 2, INSTANCE_HAS_TANGENTS = 4 }
+    /// normal maps; a mesh with tangents has the other two) / colours (glTF COLOR_0).
+    INSTANCE_FLAGS { INSTANCE_HAS_NORMALS = 1, INSTANCE_HAS_UVS = 2, INSTANCE_HAS_TANGENTS = 4, INSTANCE_HAS_COLORS = 8 }
     /// A texture index that names no texture.
     NO_TEXTURES { NO_TEXTURE = u32::MAX }
     /// Texture flags: RGB is sRGB-encoded colour (else linear data, read as stored); the

@@ -507,9 +507,9 @@ pub struct EnvironmentFile {
     pub color: Option<Triple>,
     /// Debevec angular-map light probe (PFM).
     pub probe: Option<String>,
-    /// Equirectangular (lat-long) map, PFM or EXR.
+    /// Equirectangular (lat-long) map, PFM, EXR or Radiance .hdr.
     pub latlong: Option<String>,
-    /// pbrt-v4's equal-area octahedral map (square PFM or EXR), resampled to a lat-long map on
+    /// pbrt-v4's equal-area octahedral map (square PFM, EXR or Radiance .hdr), resampled to a lat-long map on
     /// load (`scene::equal_area_map`).
     pub octahedral: Option<String>,
     /// With `octahedral` or `latlong`: the world directions of the map's x, y and z axes,

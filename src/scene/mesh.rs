@@ -27,6 +27,9 @@ pub struct Mesh {
     /// map or is anisotropic (its lobes' x axis): the unit tangent along which u grows, and in w the sign (+-1) that makes
     /// cross(normal, tangent) x w the bitangent (glTF's TANGENT).
     pub tangents: Vec<Vec4>,
+    /// Empty, or one a vertex: a linear RGB colour multiplying the albedo of the vertex's
+    /// material (glTF's COLOR_0), interpolated across each triangle.
+    pub colors: Vec<Vec3>,
     /// Front side faces (v1 - v0) x (v2 - v0).
     pub triangles: Vec<[u32; 3]>,
     /// One a triangle: index into `Scene::materials`.
@@ -263,6 +266,9 @@ fn add_asset(scene: &mut Scene, path: &Path, asset: Asset, material: Option<u32>
             normals: m.normals,
             uvs: m.uvs,
             tangents: m.tangents,
+            // The colours belong to the file's own materials: a material the scene puts in their
+            // place is drawn as it says.
+            colors: if material.is_none() { m.colors } else { Vec::new() },
             triangles: m.triangles,
         });
     }

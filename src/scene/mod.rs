@@ -6,6 +6,7 @@ mod camera_toml;
 mod environment;
 mod equal_area_map;
 mod format;
+pub mod framing;
 pub mod import;
 mod light;
 mod material_maps;
@@ -397,8 +398,9 @@ impl Scene {
         Scene::parse_from(files, &text, &path.display().to_string(), &base)
     }
 
-    /// A mesh file as a whole scene: its own camera (glTF) or one framing it from the front, under
-    /// a white sky, with the default film and integrator.
+    /// A mesh file as a whole scene: its own camera (glTF) or one framing it in a three-quarter
+    /// view from above its largest face (framing.rs), under a white sky, with the default film and
+    /// integrator.
     pub fn from_model(path: &Path) -> Result<Scene> {
         Scene::model_from(&InputFiles::anywhere(), path)
     }
@@ -824,21 +826,14 @@ fn integrator_from(i: &IntegratorFile) -> Result<Integrator> {
     })
 }
 
-/// Looks at the scene's world bounds from the front (+z), far enough for a 40 degree view to hold them.
+/// A three-quarter view from above the largest face of the scene's world bounds, fitted to
+/// them for its film (framing.rs); a camera at +z looking at the origin when the scene is empty.
 fn framing_camera(scene: &Scene) -> Camera {
-    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-    for inst in &scene.instances {
-        for p in &scene.meshes[inst.mesh as usize].positions {
-            let w = inst.transform.transform_point3(*p);
-            lo = lo.min(w);
-            hi = hi.max(w);
-        }
-    }
-    let center = 0.5 * (lo + hi);
-    let radius = (0.5 * (hi - lo).length()).max(1e-3);
-    let fov_deg: f32 = 40.0;
-    let distance = radius / (0.5 * fov_deg).to_radians().sin() * 1.05;
-    Camera::pinhole(center + Vec3::Z * distance, center, Vec3::Y, fov_deg)
+    let Some(bounds) = framing::scene_bounds(scene) else {
+        return Camera::pinhole(Vec3::Z, Vec3::ZERO, Vec3::Y, framing::FRAMING_FOV_DEGREES);
+    };
+    let (azimuth, elevation) = framing::default_orbit(bounds);
+    framing::orbit_camera(bounds, azimuth, elevation, scene.film.width as f32 / scene.film.height as f32)
 }
 
 /// Object-to-world transform: scale, then rotate about x, y and z (degrees), then translate.

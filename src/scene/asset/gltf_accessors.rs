@@ -15,7 +15,8 @@
 
 use std::rc::Rc;
 
-use gltf::accessor::{DataType, Dimensions};
+use gltf::accessor::util::Item;
+use gltf::accessor::{DataType, Dimensions, Iter};
 use gltf::Accessor;
 
 use crate::input_file::describe_bytes;
@@ -156,3 +157,47 @@ impl<'b> AccessorLimits<'b> {
 fn extent(offset: u64, stride: u64, count: u64, element: u64) -> u64 {
     offset.saturating_add(stride.saturating_mul(count.saturating_sub(1))).saturating_add(element)
 }
+
+/// An accessor's elements as `N` floats each: floats as stored; integers, as glTF's
+/// `KHR_mesh_quantization` allows them for positions, normals, tangents, texture coordinates and
+/// morph targets, as the fractions glTF defines where the accessor is `normalized` (signed:
+/// max(c / MAX, -1); unsigned: c / MAX), else as their values. None where the data lies outside
+/// its buffer. Admit the accessor ([`AccessorLimits::admit`]) first.
+pub(super) fn read_floats<const N: usize>(accessor: Accessor, buffers: &[Rc<Vec<u8>>]) -> Option<Vec<[f32; N]>>
+where
+    [f32; N]: Item,
+    [i8; N]: Item,
+    [u8; N]: Item,
+    [i16; N]: Item,
+    [u16; N]: Item,
+    [u32; N]: Item,
+{
+    let normalized = accessor.normalized();
+    let data = |buffer: gltf::Buffer| buffers.get(buffer.index()).map(|b| b.as_slice());
+    fn convert<T: Copy, const N: usize>(iter: Iter<'_, [T; N]>, f: impl Fn(T) -> f32) -> Vec<[f32; N]>
+    where
+        [T; N]: Item,
+    {
+        iter.map(|element| element.map(&f)).collect()
+    }
+    let scale = |value: f32, max: f32, signed: bool| match (normalized, signed) {
+        (true, true) => (value / max).max(-1.0),
+        (true, false) => value / max,
+        (false, _) => value,
+    };
+    Some(match accessor.data_type() {
+        DataType::F32 => Iter::<[f32; N]>::new(accessor, data)?.collect(),
+        DataType::I8 => convert(Iter::<[i8; N]>::new(accessor, data)?, |c| scale(c as f32, 127.0, true)),
+        DataType::U8 => convert(Iter::<[u8; N]>::new(accessor, data)?, |c| scale(c as f32, 255.0, false)),
+        DataType::I16 => convert(Iter::<[i16; N]>::new(accessor, data)?, |c| scale(c as f32, 32767.0, true)),
+        DataType::U16 => convert(Iter::<[u16; N]>::new(accessor, data)?, |c| scale(c as f32, 65535.0, false)),
+        DataType::U32 => convert(Iter::<[u32; N]>::new(accessor, data)?, |c| c as f32),
+    })
+}
+
+/// Every component type a quantized attribute may have (`KHR_mesh_quantization`): the loader
+/// admits each attribute with the subset glTF allows it.
+pub(super) const QUANTIZED_TYPES: [DataType; 5] =
+    [DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16];
+/// Normals and tangents: floats or normalized signed integers.
+pub(super) const DIRECTION_TYPES: [DataType; 3] = [DataType::F32, DataType::I8, DataType::I16];

@@ -4,7 +4,10 @@
 //! file is read through [`InputFiles`] (regular files, size caps, `--confine`).
 //!
 //! Material mapping (metallic-roughness PBR onto the renderer's diffuse/mirror/glass mix):
-//! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture.
+//! - `baseColorFactor.rgb` → albedo; `baseColorTexture` → albedo texture; `COLOR_0` (RGB or
+//!   RGBA; floats, or normalized unsigned bytes or shorts) multiplies both per vertex,
+//!   interpolated across each triangle (SCENE_VERTEX_COLORS; white for a primitive without it).
+//!   Its alpha is not read: a warning names a MASK or BLEND material it would have thinned.
 //! - Texture coordinates: a material's textures are read through one `texCoord` set (0 or 1) and
 //!   one `KHR_texture_transform` (offset, rotation, scale, its `texCoord` override), those of its
 //!   first texture among base colour, emissive, metallic-roughness and normal; they are applied
@@ -37,7 +40,9 @@
 //!   `attenuationDistance` (world units) as Beer–Lambert absorption along each path inside.
 //!   `thicknessFactor` and `thicknessTexture` are ignored: they stand in for the thickness a
 //!   rasterizer cannot trace, and a path tracer has the real one.
-//! - Primitives without a material get [`Material::default`] (0.8 grey diffuse).
+//! - `doubleSided: false` (the default) → a one-sided material, black from behind (the back
+//!   faces a rasterizer culls), unless it transmits; `doubleSided: true` → two-sided.
+//! - Primitives without a material get [`Material::default`] (0.8 grey diffuse, two-sided).
 //!
 //! `KHR_lights_punctual` lights become [`Light`]s, converted from glTF's photometric units to
 //! caustica's radiometric ones at 683 lm/W (the luminous efficacy that defines the candela):
@@ -50,10 +55,19 @@
 //!
 //! Extensions: the seven above (`KHR_lights_punctual`, `KHR_materials_emissive_strength`,
 //! `KHR_materials_transmission`, `KHR_materials_ior`, `KHR_texture_transform`,
-//! `KHR_materials_clearcoat`, `KHR_materials_volume`) are read. A file that requires any other is
+//! `KHR_materials_clearcoat`, `KHR_materials_volume`) and `KHR_mesh_quantization` are read: the
+//! last lets positions, normals, tangents, texture coordinates and morph targets be stored as
+//! (normalized) integers, which are read as the numbers they stand for (gltf_accessors.rs). A file that requires any other is
 //! an error naming the file and the extension; one that merely uses another renders without it,
 //! with one warning per extension. Occlusion textures are ignored (a path tracer computes
 //! occlusion), with one warning per file that has them.
+//!
+//! Morph targets (POSITION, NORMAL, TANGENT displacements) are applied once on load with the
+//! node's `weights`, else the mesh's (a node with weights of its own gets its own morphed copy of
+//! the mesh); animations do not move them. Skins (JOINTS_0/1, WEIGHTS_0/1, inverseBindMatrices)
+//! pose their meshes on load by the joints' node transforms (gltf_skin.rs). Animations are not
+//! played (a warning), nor are orthographic cameras read (a warning); a file with several
+//! cameras renders through the first one its node hierarchy reaches (a warning).
 //!
 //! Each glTF mesh becomes one [`MeshData`] (its primitives merged). Triangle strips and fans are
 //! converted to triangles; points and lines are skipped with a note on stderr.
@@ -69,19 +83,21 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::{Document, Semantic};
 
-use super::gltf_accessors::AccessorLimits;
+use super::gltf_accessors::{read_floats, AccessorLimits, DIRECTION_TYPES, QUANTIZED_TYPES};
+use super::gltf_skin::{self, VertexInfluences};
 use super::{
     texture, unit_normals, Alpha, AlphaMode, Asset, AssetCamera, AssetError, Attenuation, Clearcoat, Conductor, Light,
     Material, MeshData, MetallicRoughness, NormalMap, TextureMaps, Wrap,
 };
 use crate::input_file::{InputFiles, InputKind};
+use gltf::accessor::Item;
 
 /// Lumens per watt of radiant flux at 555 nm, the constant of the candela's definition: glTF's
 /// photometric light units over this are radiometric.
 const LUMENS_PER_WATT: f32 = 683.0;
 
 /// The glTF extensions caustica reads (see the mapping above).
-const IMPLEMENTED_EXTENSIONS: [&str; 7] = [
+const IMPLEMENTED_EXTENSIONS: [&str; 8] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_transmission",
@@ -89,6 +105,7 @@ const IMPLEMENTED_EXTENSIONS: [&str; 7] = [
     "KHR_texture_transform",
     "KHR_materials_clearcoat",
     "KHR_materials_volume",
+    "KHR_mesh_quantization",
 ];
 
 /// Deeper node hierarchies are rejected: real files stay far below, and the walk recurses.
@@ -165,29 +182,87 @@ pub(super) fn load(files: &InputFiles, path: &Path) -> Result<Asset, AssetError>
         asset.materials.push(converted);
         uv_mappings.push(uv_mapping.mapping);
     }
-    let mut skipped_primitives = 0;
+    let mut notes = MeshNotes::default();
     let mut default_material = None;
     let mut limits = AccessorLimits::new(&buffers, file_bytes);
-    for mesh in document.meshes() {
-        let mut converted = convert_mesh(
+    // Each mesh morphed by its own default weights, then once more for every node that gives
+    // its morph targets other weights (that node's instance uses the extra copy).
+    let morph_variants = document.nodes().filter_map(|node| {
+        let (mesh, weights) = (node.mesh()?, node.weights()?);
+        let has_targets = mesh.primitives().any(|p| p.morph_targets().len() > 0);
+        (has_targets && Some(weights) != mesh.weights()).then_some((Some(node.index()), mesh, weights))
+    });
+    let mut node_meshes = HashMap::new();
+    let mut mesh_influences = Vec::new();
+    let variants: Vec<_> = document
+        .meshes()
+        .map(|mesh| (None, mesh.clone(), mesh.weights().unwrap_or(&[])))
+        .chain(morph_variants)
+        .collect();
+    for (node, mesh, weights) in variants {
+        let (mut converted, influences) = convert_mesh(
             &mesh,
             &uv_mappings,
             &mut limits,
             &mut asset.materials,
             &mut default_material,
-            &mut skipped_primitives,
+            &mut notes,
+            weights,
         )
         .map_err(|m| AssetError::invalid(path, format!("mesh {}: {m}", mesh.index())))?;
         asset.dropped_triangles += converted.drop_degenerate();
+        if let Some(node) = node {
+            node_meshes.insert(node, asset.meshes.len());
+        }
         asset.meshes.push(converted);
+        mesh_influences.push(influences);
     }
+    let MeshNotes { skipped_primitives, colour_alpha_ignored } = notes;
     if skipped_primitives > 0 {
         log::warn!("caustica: {}: skipped {skipped_primitives} point or line primitive(s)", path.display());
     }
+    if colour_alpha_ignored {
+        log::warn!(
+            "caustica: warning: {}: COLOR_0 alpha is not implemented: vertex colours' alpha below 1 on MASK or BLEND materials is ignored (their RGB is read)",
+            path.display()
+        );
+    }
 
-    let mut walk = Walk { ancestors: Vec::new(), visited: vec![false; document.nodes().len()], asset: &mut asset };
+    let mut walk = Walk {
+        ancestors: Vec::new(),
+        visited: vec![false; document.nodes().len()],
+        node_meshes: &node_meshes,
+        worlds: vec![None; document.nodes().len()],
+        skinned: Vec::new(),
+        asset: &mut asset,
+    };
     for root in root_nodes(&document) {
         walk.visit(root, Mat4::IDENTITY).map_err(|m| AssetError::invalid(path, m))?;
+    }
+    let (worlds, skinned) = (walk.worlds, walk.skinned);
+    // Skinned instances: their mesh posed by the joints' world transforms, in world space.
+    for (instance, node) in skinned {
+        let node = document.nodes().nth(node).expect("a visited node");
+        let skin = node.skin().expect("a skinned node");
+        let mesh = asset.instances[instance].0;
+        if mesh_influences[mesh].is_empty() {
+            continue;
+        }
+        let joint_worlds = skin
+            .joints()
+            .map(|joint| {
+                worlds[joint.index()].ok_or_else(|| {
+                    format!("skin {}: joint node {} is not in the rendered scene", skin.index(), joint.index())
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|m| AssetError::invalid(path, m))?;
+        let node_world = worlds[node.index()].expect("a visited node");
+        let posed =
+            gltf_skin::pose(&asset.meshes[mesh], &mesh_influences[mesh], &skin, &joint_worlds, node_world, &mut limits)
+                .map_err(|m| AssetError::invalid(path, format!("node {}: {m}", node.index())))?;
+        asset.instances[instance] = (asset.meshes.len(), Mat4::IDENTITY);
+        asset.meshes.push(posed);
     }
     if document.lights().into_iter().flatten().any(|l| l.range().is_some()) {
         log::warn!(
@@ -220,6 +295,44 @@ fn ignored_features(json: &gltf::json::Root) -> Vec<String> {
         let coat = m.extensions.as_ref().and_then(|e| e.others.get("KHR_materials_clearcoat"));
         coat.is_some_and(|c| c.get("clearcoatNormalTexture").is_some())
     };
+    if !json.animations.is_empty() {
+        ignored.push(format!(
+            "{} animation(s) are not played: nodes, morph targets and skins stand as the file saves them",
+            json.animations.len()
+        ));
+    }
+    let orthographic = json
+        .cameras
+        .iter()
+        .filter(|c| matches!(c.type_, gltf::json::validation::Checked::Valid(gltf::json::camera::Type::Orthographic)))
+        .count();
+    if orthographic > 0 {
+        ignored.push(format!(
+            "{orthographic} orthographic camera(s) are not implemented: the first perspective camera is used"
+        ));
+    }
+    if json.cameras.len() - orthographic > 1 {
+        ignored.push(format!(
+            "the file has {} perspective cameras: the first one the node hierarchy reaches is used",
+            json.cameras.len() - orthographic
+        ));
+    }
+    let extra_influences = json.meshes.iter().flat_map(|m| &m.primitives).any(|p| {
+        p.attributes.keys().any(
+            |s| matches!(s, gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Joints(n)) if *n >= 2),
+        )
+    });
+    if extra_influences {
+        ignored.push("JOINTS_2 and later sets are ignored: skins are posed by at most 8 joints a vertex".to_owned());
+    }
+    let extra_colours = json.meshes.iter().flat_map(|m| &m.primitives).any(|p| {
+        p.attributes.keys().any(
+            |s| matches!(s, gltf::json::validation::Checked::Valid(gltf::json::mesh::Semantic::Colors(n)) if *n >= 1),
+        )
+    });
+    if extra_colours {
+        ignored.push("COLOR_1 and later sets are ignored: COLOR_0 multiplies the base colour".to_owned());
+    }
     if json.materials.iter().any(coat_normal) {
         ignored.push(
             "KHR_materials_clearcoat clearcoatNormalTexture is not implemented: clear coats use the material's normal"
@@ -635,6 +748,10 @@ fn convert_material(
         maps: TextureMaps { emission: emission_texture, normal, alpha },
         clearcoat,
         attenuation,
+        // `doubleSided: false` (glTF's default) culls back faces in a rasterizer; here the
+        // surface is black from behind. A transmissive material stays two-sided: the light it
+        // lets in leaves through its back.
+        one_sided: !material.double_sided() && transmission == 0.0,
         ..Material::default()
     };
     Ok((converted, uvs))
@@ -645,8 +762,8 @@ fn outside_buffer(p: usize, what: &str) -> String {
     format!("primitive {p}: the {what} accessor lies outside its buffer")
 }
 
-/// A float vertex attribute that a merged mesh keeps only when every primitive has it (normals,
-/// tangents).
+/// A vertex attribute that a merged mesh keeps only when every primitive has it (normals,
+/// tangents): floats, or the normalized signed integers of `KHR_mesh_quantization`.
 struct VertexAttribute {
     semantic: Semantic,
     name: &'static str,
@@ -656,27 +773,45 @@ struct VertexAttribute {
 impl VertexAttribute {
     /// Appends `primitive`'s values to `values` while the primitives before it all had some
     /// (`complete`); returns whether the merged mesh still has one per vertex of its `vertices`.
-    fn append<T, I: Iterator<Item = T>>(
+    fn append<T, const N: usize>(
         &self,
         primitive: &gltf::Primitive,
         limits: &mut AccessorLimits,
         complete: bool,
         values: &mut Vec<T>,
         vertices: usize,
-        read: impl FnOnce() -> Option<I>,
-    ) -> Result<bool, String> {
+        convert: impl Fn([f32; N]) -> T,
+    ) -> Result<bool, String>
+    where
+        [f32; N]: Item,
+        [i8; N]: Item,
+        [u8; N]: Item,
+        [i16; N]: Item,
+        [u16; N]: Item,
+        [u32; N]: Item,
+    {
         let p = primitive.index();
         match primitive.get(&self.semantic) {
             Some(accessor) if complete => {
                 limits
-                    .admit(&accessor, self.dimensions, &[DataType::F32])
+                    .admit(&accessor, self.dimensions, &DIRECTION_TYPES)
                     .map_err(|m| format!("primitive {p}: {} {m}", self.name))?;
-                values.extend(read().ok_or_else(|| outside_buffer(p, self.name))?);
+                let read = read_floats::<N>(accessor, limits.buffers()).ok_or_else(|| outside_buffer(p, self.name))?;
+                values.extend(read.into_iter().map(convert));
                 Ok(values.len() == vertices)
             }
             _ => Ok(false),
         }
     }
+}
+
+/// What converting meshes left out, said once per file after all are converted.
+#[derive(Default)]
+struct MeshNotes {
+    /// Point and line primitives skipped.
+    skipped_primitives: usize,
+    /// A MASK or BLEND material's primitive has COLOR_0 alpha below 1, which is not read.
+    colour_alpha_ignored: bool,
 }
 
 /// Merges a mesh's triangle primitives. An attribute (normals, uvs) is kept only when every
@@ -687,15 +822,17 @@ fn convert_mesh(
     limits: &mut AccessorLimits,
     materials: &mut Vec<Material>,
     default_material: &mut Option<u32>,
-    skipped_primitives: &mut usize,
-) -> Result<MeshData, String> {
+    notes: &mut MeshNotes,
+    weights: &[f32],
+) -> Result<(MeshData, VertexInfluences), String> {
     let mut out = MeshData::default();
+    let mut influences = VertexInfluences::default();
     let (mut all_normals, mut all_uvs, mut all_tangents) = (true, true, true);
     let (mut normals, mut tangents) = (Vec::new(), Vec::new());
     for primitive in mesh.primitives() {
         let p = primitive.index();
         if matches!(primitive.mode(), Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) {
-            *skipped_primitives += 1;
+            notes.skipped_primitives += 1;
             continue;
         }
         let buffers = limits.buffers();
@@ -705,10 +842,16 @@ fn convert_mesh(
         let position_accessor =
             primitive.get(&Semantic::Positions).ok_or_else(|| format!("primitive {p} has no POSITION"))?;
         limits
-            .admit(&position_accessor, Dimensions::Vec3, &[DataType::F32])
+            .admit(&position_accessor, Dimensions::Vec3, &QUANTIZED_TYPES)
             .map_err(|m| format!("primitive {p}: POSITION {m}"))?;
-        let positions: Vec<Vec3> =
-            reader.read_positions().ok_or_else(|| outside("POSITION"))?.map(Vec3::from).collect();
+        let mut positions: Vec<Vec3> = read_floats::<3>(position_accessor, buffers)
+            .ok_or_else(|| outside("POSITION"))?
+            .into_iter()
+            .map(Vec3::from)
+            .collect();
+        influences.append(&primitive, positions.len(), limits)?;
+        let first_normal = normals.len();
+        let first_tangent = tangents.len();
         if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
             return Err(format!("primitive {p}: vertex {i} has a non-finite position"));
         }
@@ -718,13 +861,20 @@ fn convert_mesh(
 
         let vertices = out.positions.len() + positions.len();
         let normal = VertexAttribute { semantic: Semantic::Normals, name: "NORMAL", dimensions: Dimensions::Vec3 };
-        all_normals = normal.append(&primitive, limits, all_normals, &mut normals, vertices, || {
-            reader.read_normals().map(|r| r.map(Vec3::from))
-        })?;
+        all_normals = normal.append(&primitive, limits, all_normals, &mut normals, vertices, Vec3::from)?;
         let tangent = VertexAttribute { semantic: Semantic::Tangents, name: "TANGENT", dimensions: Dimensions::Vec4 };
-        all_tangents = tangent.append(&primitive, limits, all_tangents, &mut tangents, vertices, || {
-            reader.read_tangents().map(|r| r.map(Vec4::from))
-        })?;
+        all_tangents = tangent.append(&primitive, limits, all_tangents, &mut tangents, vertices, Vec4::from)?;
+        // Morph targets displace the vertices by their weights (the node's, else the mesh's:
+        // `weights`), once, here: the kernel sees the morphed mesh.
+        let morphed = Morphed {
+            positions: &mut positions,
+            normals: (all_normals && normals.len() == vertices).then(|| &mut normals[first_normal..]),
+            tangents: (all_tangents && tangents.len() == vertices).then(|| &mut tangents[first_tangent..]),
+        };
+        morphed.apply(&primitive, weights, limits)?;
+        if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
+            return Err(format!("primitive {p}: morphed vertex {i} has a non-finite position"));
+        }
         // The coordinates its material's textures are read through, mapped as they say.
         let uv_mapping =
             primitive.material().index().and_then(|m| uv_mappings.get(m)).copied().unwrap_or(UvMapping::PLAIN);
@@ -732,18 +882,50 @@ fn convert_mesh(
         match primitive.get(&Semantic::TexCoords(set)) {
             Some(accessor) if all_uvs => {
                 limits
-                    .admit(&accessor, Dimensions::Vec2, &[DataType::F32, DataType::U8, DataType::U16])
+                    .admit(&accessor, Dimensions::Vec2, &QUANTIZED_TYPES)
                     .map_err(|m| format!("primitive {p}: TEXCOORD_{set} {m}"))?;
                 out.uvs.extend(
-                    reader
-                        .read_tex_coords(set)
+                    read_floats::<2>(accessor, buffers)
                         .ok_or_else(|| outside(&format!("TEXCOORD_{set}")))?
-                        .into_f32()
+                        .into_iter()
                         .map(|uv| uv_mapping.transform.transform_point2(Vec2::from(uv))),
                 );
                 all_uvs = out.uvs.len() == out.positions.len() + positions.len();
             }
             _ => all_uvs = false,
+        }
+
+        // COLOR_0 multiplies the base colour; a primitive without it is white, so a merged mesh
+        // keeps colours when any primitive has them.
+        if let Some(accessor) = primitive.get(&Semantic::Colors(0)) {
+            let dimensions = match accessor.dimensions() {
+                Dimensions::Vec4 => Dimensions::Vec4,
+                _ => Dimensions::Vec3,
+            };
+            limits
+                .admit(&accessor, dimensions, &[DataType::F32, DataType::U8, DataType::U16])
+                .map_err(|m| format!("primitive {p}: COLOR_0 {m}"))?;
+            let read: Vec<[f32; 4]> =
+                reader.read_colors(0).ok_or_else(|| outside("COLOR_0"))?.into_rgba_f32().collect();
+            if read.len() != positions.len() {
+                return Err(format!(
+                    "primitive {p}: COLOR_0 has {} values for {} vertices",
+                    read.len(),
+                    positions.len()
+                ));
+            }
+            if read.iter().any(|c| c[3] < 1.0) && primitive.material().alpha_mode() != gltf::material::AlphaMode::Opaque
+            {
+                notes.colour_alpha_ignored = true;
+            }
+            out.colors.resize(out.positions.len(), Vec3::ONE);
+            // glTF's colours lie in [0, 1]; a float outside it (or not a number) would create or
+            // destroy energy, so it is clamped (NaN to black).
+            out.colors.extend(read.iter().map(|&[r, g, b, _]| {
+                Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE).map(|c| if c.is_nan() { 0.0 } else { c })
+            }));
+        } else if !out.colors.is_empty() {
+            out.colors.resize(out.positions.len() + positions.len(), Vec3::ONE);
         }
 
         let indices: Vec<u32> = match primitive.indices() {
@@ -770,6 +952,9 @@ fn convert_mesh(
         out.triangles.extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
         out.positions.extend(positions);
     }
+    if !out.colors.is_empty() {
+        out.colors.resize(out.positions.len(), Vec3::ONE);
+    }
     out.normals = if all_normals { unit_normals(&normals) } else { Vec::new() };
     if !all_uvs || out.uvs.iter().any(|uv| !uv.is_finite()) {
         out.uvs.clear();
@@ -787,7 +972,63 @@ fn convert_mesh(
             .collect();
         out.tangents = unit.unwrap_or_default();
     }
-    Ok(out)
+    Ok((out, influences))
+}
+
+/// One primitive's vertex data as read, which its morph targets displace.
+struct Morphed<'m> {
+    positions: &'m mut [Vec3],
+    /// The primitive's normals and tangents, where the merged mesh still keeps them.
+    normals: Option<&'m mut [Vec3]>,
+    tangents: Option<&'m mut [Vec4]>,
+}
+
+impl Morphed<'_> {
+    /// Adds each morph target's displacements times its weight (glTF: targets beyond `weights`
+    /// weigh 0). Normals and tangents are renormalized later with the rest of the mesh's.
+    fn apply(self, primitive: &gltf::Primitive, weights: &[f32], limits: &mut AccessorLimits) -> Result<(), String> {
+        let p = primitive.index();
+        let count = self.positions.len();
+        let Morphed { positions, mut normals, mut tangents } = self;
+        for (k, target) in primitive.morph_targets().enumerate() {
+            let weight = weights.get(k).copied().unwrap_or(0.0);
+            if weight == 0.0 {
+                continue;
+            }
+            if !weight.is_finite() {
+                return Err(format!("primitive {p}: morph target {k}'s weight is not finite"));
+            }
+            let displacements = |accessor: Option<gltf::Accessor>, what: &str, limits: &mut AccessorLimits| {
+                let Some(accessor) = accessor else { return Ok(None) };
+                limits
+                    .admit(&accessor, Dimensions::Vec3, &QUANTIZED_TYPES)
+                    .map_err(|m| format!("primitive {p}: morph target {k} {what} {m}"))?;
+                let read = read_floats::<3>(accessor, limits.buffers())
+                    .ok_or_else(|| outside_buffer(p, &format!("morph target {k} {what}")))?;
+                if read.len() != count {
+                    return Err(format!(
+                        "primitive {p}: morph target {k} {what} has {} values for {count} vertices",
+                        read.len()
+                    ));
+                }
+                Ok(Some(read))
+            };
+            if let Some(d) = displacements(target.positions(), "POSITION", limits)? {
+                positions.iter_mut().zip(d).for_each(|(v, d)| *v += weight * Vec3::from(d));
+            }
+            if let (Some(normals), Some(d)) =
+                (normals.as_deref_mut(), displacements(target.normals(), "NORMAL", limits)?)
+            {
+                normals.iter_mut().zip(d).for_each(|(n, d)| *n += weight * Vec3::from(d));
+            }
+            if let (Some(tangents), Some(d)) =
+                (tangents.as_deref_mut(), displacements(target.tangents(), "TANGENT", limits)?)
+            {
+                tangents.iter_mut().zip(d).for_each(|(t, d)| *t += weight * Vec3::from(d).extend(0.0));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Triangles of a triangle-list, strip or fan primitive; strips alternate winding so that every
@@ -821,6 +1062,13 @@ fn root_nodes(document: &Document) -> Vec<gltf::Node<'_>> {
 struct Walk<'a> {
     ancestors: Vec<usize>,
     visited: Vec<bool>,
+    /// Nodes whose morph weights differ from their mesh's: the index of their own morphed copy
+    /// in `asset.meshes`.
+    node_meshes: &'a HashMap<usize, usize>,
+    /// Every visited node's world transform, for skins' joints.
+    worlds: Vec<Option<Mat4>>,
+    /// (index into `asset.instances`, node) of every instance of a skinned node.
+    skinned: Vec<(usize, usize)>,
     asset: &'a mut Asset,
 }
 
@@ -841,8 +1089,13 @@ impl Walk<'_> {
             return Err(format!("node {index} has a non-finite transform"));
         }
         let world = parent * local;
+        self.worlds[index] = Some(world);
         if let Some(mesh) = node.mesh() {
-            self.asset.instances.push((mesh.index(), world));
+            let mesh = self.node_meshes.get(&index).copied().unwrap_or(mesh.index());
+            if node.skin().is_some() {
+                self.skinned.push((self.asset.instances.len(), index));
+            }
+            self.asset.instances.push((mesh, world));
         }
         if let (None, Some(camera)) = (&self.asset.camera, node.camera()) {
             if let gltf::camera::Projection::Perspective(perspective) = camera.projection() {

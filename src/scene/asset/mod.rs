@@ -4,6 +4,7 @@
 
 mod gltf_accessors;
 mod gltf_file;
+mod gltf_skin;
 mod obj;
 mod ply;
 mod serialized;
@@ -52,6 +53,9 @@ pub struct MeshData {
     /// sign in w, as glTF's TANGENT; from the file, or MikkTSpace (tangents.rs) for meshes with a
     /// normal-mapped material.
     pub tangents: Vec<Vec4>,
+    /// Empty, or exactly one per position: a linear RGB colour that multiplies the base colour
+    /// of the vertex's material (glTF's COLOR_0; white where a primitive has none).
+    pub colors: Vec<Vec3>,
     /// Indices into positions, counter-clockwise = front.
     pub triangles: Vec<[u32; 3]>,
     /// One per triangle: index into [`Asset::materials`].

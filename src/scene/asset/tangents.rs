@@ -79,6 +79,9 @@ pub fn generate(mesh: &mut MeshData) -> bool {
                 mesh.positions.push(mesh.positions[v as usize]);
                 mesh.normals.push(mesh.normals[v as usize]);
                 mesh.uvs.push(mesh.uvs[v as usize]);
+                if !mesh.colors.is_empty() {
+                    mesh.colors.push(mesh.colors[v as usize]);
+                }
                 tangents.push(tangent);
                 mesh.positions.len() as u32 - 1
             }
@@ -105,6 +108,7 @@ mod tests {
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             triangle_materials: vec![0, 0],
             tangents: Vec::new(),
+            colors: Vec::new(),
         }
     }
 
