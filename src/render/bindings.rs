@@ -7,8 +7,8 @@
 
 use super::glsl_block::{GlslBlock, GlslMember, GlslTexels, GlslType, Texel};
 use super::layout::{
-    FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMeshTriangle, GpuPrimitive, GpuPunctualLight, GpuStats,
-    GpuTexture,
+    FrameParams, GpuAliasEntry, GpuInstance, GpuMaterial, GpuMedium, GpuMeshTriangle, GpuPrimitive, GpuPunctualLight,
+    GpuStats, GpuTexture,
 };
 use super::variant::KernelVariant;
 use super::walk_records::WalkRecords;
@@ -47,12 +47,13 @@ pub enum KernelBuffer {
     AovNormalHits,
     PathStates,
     SceneStructure,
+    Media,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::SceneStructure as usize + 1;
+    pub const COUNT: usize = KernelBuffer::Media as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -301,6 +302,9 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // instance's bottom level its mesh's triangles or the boxes of the scene's own shapes
     // (ray_query_scene.rs): what ray queries trace in place of `nodes` (ray_query.glsl).
     BufferBinding { buffer: SceneStructure, binding: 23, name: "scene_structure", shape: Shape::AccelerationStructure, access: Read, bound_in: RayQueryKernels, what: "acceleration structures" },
+    // Participating media (scene::Medium), by the index in their codes (MEDIUM_CODES); empty
+    // without media.
+    BufferBinding { buffer: Media, binding: 24, name: "media", shape: array::<GpuMedium>(), access: Read, bound_in: EveryKernel, what: "participating media" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,

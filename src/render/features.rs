@@ -13,7 +13,8 @@
 use super::layout::ENV_CONSTANT;
 use super::layout::{
     GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL,
-    MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
+    MATERIAL_BECKMANN, MATERIAL_INTERIOR_SHIFT, MATERIAL_NULL, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE,
+    PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
 };
 use super::scene_data::SceneData;
 use crate::bvh::{CHILD_INTERIOR, WIDTH};
@@ -32,6 +33,9 @@ pub const FEW_PRIMITIVES: usize = 32;
 pub const FEW_SHAPE_SELECTS: usize = 12;
 
 pub use crate::scene::ALPHA_DELTA;
+
+/// The bits of a material's flags that hold its interior medium's code (MEDIUM_CODES).
+const MEDIUM_CODE_MASK: u32 = 0xff << MATERIAL_INTERIOR_SHIFT;
 
 /// The kinds (PRIM_*) of a scene's few shapes in the order they are stored: its rays test them as
 /// straight-line code, each shape by its own kind's test, before walking any mesh (bvh.glsl,
@@ -173,6 +177,10 @@ pub struct SceneFeatures {
     /// Directional lights with an angular size (a sun's disk): what a path that escapes sees of
     /// them.
     pub light_disks: bool,
+    /// Participating media or null boundaries (shaders/medium.glsl): the medium a path is in,
+    /// free-flight sampling and scattering in it, and shadow rays that pass null boundaries and
+    /// are attenuated by the media they cross. Without it the kernel is the surface-only one.
+    pub media: bool,
 }
 
 impl SceneFeatures {
@@ -208,6 +216,7 @@ impl SceneFeatures {
         punctual_lights: true,
         light_pick: true,
         light_disks: true,
+        media: true,
     };
 
     /// What `data` uses.
@@ -278,6 +287,8 @@ impl SceneFeatures {
                 .punctual_lights
                 .iter()
                 .any(|l| l.position_kind[3].to_bits() == LIGHT_DIRECTIONAL && l.shape[2] > 0.0),
+            media: !data.media.is_empty()
+                || data.materials.iter().any(|m| flags(m) & (MATERIAL_NULL | MEDIUM_CODE_MASK) != 0),
         }
     }
 
@@ -295,7 +306,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 30] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 31] {
         [
             ("bvh", "SCENE_BVH", self.bvh()),
             ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes()),
@@ -327,6 +338,7 @@ impl SceneFeatures {
             ("punctual_lights", "SCENE_PUNCTUAL_LIGHTS", self.punctual_lights),
             ("light_pick", "SCENE_LIGHT_PICK", self.light_pick),
             ("light_disks", "SCENE_LIGHT_DISKS", self.light_disks),
+            ("media", "SCENE_MEDIA", self.media),
         ]
     }
 

@@ -300,6 +300,7 @@ pub(super) fn initial_contents<'d>(
         PunctualLights => bytemuck::cast_slice(&data.punctual_lights),
         TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
         VertexTangents => bytemuck::cast_slice(&a.tangents),
+        Media => bytemuck::cast_slice(&data.media),
         // Built from the scene's data rather than uploaded (ray_query_scene.rs).
         SceneStructure => &[],
     })

@@ -16,6 +16,7 @@ mod kernel_options;
 mod kernel_setup;
 pub mod layout;
 mod light_selection;
+mod media;
 mod ray_query_scene;
 mod renderer;
 mod scene_data;

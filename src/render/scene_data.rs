@@ -40,6 +40,8 @@ pub struct SceneData {
     /// The map's sampling distribution (env_sampling.rs); empty for a constant sky, a black map,
     /// or when the scene turns map sampling off.
     pub env_cdf: Vec<f32>,
+    /// Participating media (media.rs), in the scene's order.
+    pub media: Vec<GpuMedium>,
 }
 
 /// An emitter in world space, with the luminance of its radiance that light selection weighs it by.
@@ -202,7 +204,9 @@ fn material_flags(m: &Material) -> u32 {
     let thin = if m.thin { MATERIAL_THIN } else { 0 };
     let one_sided = if m.one_sided { MATERIAL_ONE_SIDED } else { 0 };
     let coat_internal = if m.coat_internal_reflections { MATERIAL_COAT_INTERNAL } else { 0 };
-    beckmann | thin | one_sided | coat_internal
+    let null = if m.null_surface { MATERIAL_NULL } else { 0 };
+    let interior = super::media::interior_code(m.interior) << MATERIAL_INTERIOR_SHIFT;
+    beckmann | thin | one_sided | coat_internal | null | interior
 }
 
 /// A material's `alpha` row: texture, factor, cutoff and mode (layout.glsl).
@@ -276,6 +280,7 @@ impl SceneData {
             LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
         let lights = area_lights.iter().map(AreaLight::gpu).collect();
         SceneData {
+            media: scene.media.iter().map(super::media::gpu_medium).collect(),
             env_cdf,
             lights,
             punctual_lights,
@@ -304,7 +309,8 @@ impl SceneData {
                 + std::mem::size_of_val(&self.light_distribution.table[..])
                 + std::mem::size_of_val(&self.triangle_emission[..])
                 + std::mem::size_of_val(&self.env_texels[..])
-                + std::mem::size_of_val(&self.env_cdf[..])) as u64
+                + std::mem::size_of_val(&self.env_cdf[..])
+                + std::mem::size_of_val(&self.media[..])) as u64
     }
 
     /// Probability that next-event estimation samples the environment map rather than an emitter:

@@ -223,6 +223,7 @@ impl Mapper<'_> {
             fov: fov as f32,
             aperture: aperture as f32,
             focus_distance: focus_distance.map(|f| f as f32),
+            medium: None,
         };
         Ok((camera, film, sampler))
     }
