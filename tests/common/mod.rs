@@ -2,6 +2,7 @@
 //! statistics that turn sample counts into tolerances.
 #![allow(dead_code)]
 
+pub mod chi_square;
 pub mod furnace;
 pub mod gltf_square;
 pub mod two_meshes;
