@@ -220,7 +220,7 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
         if (shadow_wanted) {
             bool crosses = (dot(shadow.dir, n) < 0.0) == front;
             uint stack = crosses ? stack_crossing(path.media, m, front) : path.media;
-            path.radiance += shadow.contribution * shadow_transmittance(shadow.origin, shadow.dir, shadow.t_max, stack, rays);
+            path.radiance += shadow.contribution * shadow_transmittance(shadow.origin, shadow.dir, shadow.t_max, stack, rng, rays);
         }
 #else
         if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;

@@ -53,7 +53,7 @@ bool medium_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstH
             rays += 1u;
             float phase = phase_hg(g, dot(path.dir, ls.dir));
             // Stop short of the light so its own surface does not count as a blocker.
-            vec3 transmittance = shadow_transmittance(point, ls.dir, ls.dist * (1.0 - 1e-4), path.media, rays);
+            vec3 transmittance = shadow_transmittance(point, ls.dir, ls.dist * (1.0 - 1e-4), path.media, rng, rays);
             float weight = ls.delta ? 1.0 : power_heuristic(ls.pdf, phase);
             path.radiance += path.throughput * transmittance * ls.radiance * (phase * weight / ls.pdf);
         }
@@ -68,6 +68,41 @@ bool medium_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstH
     return true;
 }
 
+// Delta tracking (Woodcock) through a heterogeneous medium up to t_surface, as a null-scattering
+// path (Miller et al. 2019): tentative collisions at the majorant's rate; at each, a real
+// collision with probability sigma_t / majorant in the path's channel (the path scatters there),
+// else a null one, with sigma_n = majorant - sigma_t. Each decision's contribution and per-channel
+// probabilities go through spectral MIS as the homogeneous medium's (the majorant is the same in
+// every channel, so its exponentials cancel). True when the path scattered and goes on; false
+// with `scattered` when it scattered and ended (or took MAX_TRACKING_STEPS); false otherwise when
+// it reached t_surface.
+bool grid_free_flight(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first, Medium med, float t_surface, out bool scattered) {
+    scattered = false;
+    float majorant = medium_majorant(med);
+    float t, t1;
+    if (majorant <= 0.0 || !grid_span(med, path.origin, path.dir, t_surface, t, t1)) return false;
+    for (uint step = 0u; step < MAX_TRACKING_STEPS; ++step) {
+        LOOP_ITERATION();
+        t -= log(1.0 - rng_next(rng)) / majorant;
+        if (t >= t1) return false;
+        vec3 point = path.origin + t * path.dir;
+        vec3 sigma_t = medium_sigma_t(med) * medium_density(med, point);
+        if (rng_next(rng) * majorant < channel_of(sigma_t, path.channel)) {
+            spectral_event(path, sigma_t * medium_albedo(med), sigma_t);
+            scattered = true;
+            return medium_vertex(path, rng, rays, first, point, path.travelled + t, med);
+        }
+        vec3 sigma_n = vec3(majorant) - sigma_t;
+        spectral_event(path, sigma_n, sigma_n);
+        if (max3(path.throughput) <= 0.0) {
+            scattered = true;
+            return false;
+        }
+    }
+    scattered = true;
+    return false;
+}
+
 // What happens to the path's ray (traced to `found`, `hit`) before any surface vertex: in a
 // medium, a particle met on the way (the path scatters there: `scattered`, and the result is
 // whether it goes on), or the transmittance to the surface folded into the throughput; a null
@@ -76,8 +111,14 @@ bool medium_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstH
 bool medium_walk(inout Path path, inout Rng rng, inout uint rays, inout FirstHit first, inout bool found, inout Hit hit, out bool scattered) {
     scattered = false;
     for (uint crossing = 0u; crossing <= MAX_NULL_CROSSINGS; ++crossing) {
+        LOOP_ITERATION();
         uint code = current_medium(path.media);
-        if (code != MEDIUM_VACUUM) {
+        if (code != MEDIUM_VACUUM && medium_is_grid(medium_of(code))) {
+            if (path.channel == NO_CHANNEL) path.channel = min(uint(rng_next(rng) * 3.0), 2u);
+            float t_surface = found ? hit.t : 1e30;
+            if (grid_free_flight(path, rng, rays, first, medium_of(code), t_surface, scattered)) return true;
+            if (scattered) return false;
+        } else if (code != MEDIUM_VACUUM) {
             Medium med = medium_of(code);
             vec3 sigma_t = medium_sigma_t(med);
             if (path.channel == NO_CHANNEL) path.channel = min(uint(rng_next(rng) * 3.0), 2u);

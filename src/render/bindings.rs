@@ -48,12 +48,13 @@ pub enum KernelBuffer {
     PathStates,
     SceneStructure,
     Media,
+    MediumDensities,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::Media as usize + 1;
+    pub const COUNT: usize = KernelBuffer::MediumDensities as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -305,6 +306,9 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Participating media (scene::Medium), by the index in their codes (MEDIUM_CODES); empty
     // without media.
     BufferBinding { buffer: Media, binding: 24, name: "media", shape: array::<GpuMedium>(), access: Read, bound_in: EveryKernel, what: "participating media" },
+    // The density grids of heterogeneous media, one after another (GpuMedium::grid says where
+    // each starts); empty without them.
+    BufferBinding { buffer: MediumDensities, binding: 25, name: "medium_densities", shape: texel_buffer::<f32>(), access: Read, bound_in: EveryKernel, what: "medium density grids" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,

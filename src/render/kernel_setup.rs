@@ -301,6 +301,7 @@ pub(super) fn initial_contents<'d>(
         TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
         VertexTangents => bytemuck::cast_slice(&a.tangents),
         Media => bytemuck::cast_slice(&data.media),
+        MediumDensities => bytemuck::cast_slice(&data.medium_densities),
         // Built from the scene's data rather than uploaded (ray_query_scene.rs).
         SceneStructure => &[],
     })

@@ -56,7 +56,7 @@ glsl_constants! {
     /// MEDIUM_STACK_DEPTH codes, the innermost in the low byte.
     MEDIUM_CODES { MATERIAL_INTERIOR_SHIFT = 24, MEDIUM_STACK_EMPTY = 0, MEDIUM_VACUUM = 255, MEDIUM_STACK_DEPTH = 4 }
     /// Medium kinds.
-    MEDIUM_KINDS { MEDIUM_HOMOGENEOUS = 0 }
+    MEDIUM_KINDS { MEDIUM_HOMOGENEOUS = 0, MEDIUM_HETEROGENEOUS = 1 }
     /// Alpha modes: always there; there where the opacity reaches the cutoff (glTF MASK); met
     /// with probability equal to the opacity (glTF BLEND, MTL d).
     ALPHA_MODES { ALPHA_OPAQUE = 0, ALPHA_MASK = 1, ALPHA_BLEND = 2 }
@@ -138,6 +138,14 @@ glsl_block! {
         pub sigma_t_g: [f32; 4],
         /// rgb = single-scattering albedo sigma_s / sigma_t; w = the MEDIUM_* kind (uint bits).
         pub albedo_kind: [f32; 4],
+        /// MEDIUM_HETEROGENEOUS: x = its density grid's first value in `medium_densities`, y / z /
+        /// w = its cells along x, y and z (values x fastest, at the cells' centres).
+        pub grid: [u32; 4],
+        /// xyz = the world box's min corner the grid fills; w = the majorant: the largest
+        /// sigma_t of any channel anywhere in the grid, the rate of delta and ratio tracking.
+        pub box_min_majorant: [f32; 4],
+        /// xyz = the world box's max corner; w unused.
+        pub box_max: [f32; 4],
     }
 }
 
@@ -472,8 +480,11 @@ mod tests {
 
     #[test]
     fn medium_matches_glsl_std430() {
-        assert_eq!(size_of::<GpuMedium>(), 32);
+        assert_eq!(size_of::<GpuMedium>(), 80);
         assert_eq!(offset_of!(GpuMedium, albedo_kind), 16);
+        assert_eq!(offset_of!(GpuMedium, grid), 32);
+        assert_eq!(offset_of!(GpuMedium, box_min_majorant), 48);
+        assert_eq!(offset_of!(GpuMedium, box_max), 64);
     }
 
     #[test]
@@ -593,6 +604,7 @@ mod tests {
             ("MATERIAL_NULL", MATERIAL_NULL),
             ("MEDIUM_VACUUM", MEDIUM_VACUUM),
             ("MEDIUM_HOMOGENEOUS", MEDIUM_HOMOGENEOUS),
+            ("MEDIUM_HETEROGENEOUS", MEDIUM_HETEROGENEOUS),
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
             ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
             ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),

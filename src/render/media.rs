@@ -2,15 +2,34 @@
 //! and the 8-bit codes by which materials, the camera and a path's medium stack name them
 //! (MEDIUM_CODES in layout.rs).
 
-use super::layout::{GpuMedium, MEDIUM_HOMOGENEOUS, MEDIUM_STACK_EMPTY, MEDIUM_VACUUM};
+use super::layout::{GpuMedium, MEDIUM_HETEROGENEOUS, MEDIUM_HOMOGENEOUS, MEDIUM_STACK_EMPTY, MEDIUM_VACUUM};
 use crate::scene::{Medium, MAX_MEDIA};
 
-/// The record of `medium`.
-pub fn gpu_medium(medium: &Medium) -> GpuMedium {
-    GpuMedium {
-        sigma_t_g: medium.sigma_t.extend(medium.phase.g()).into(),
-        albedo_kind: medium.albedo.extend(f32::from_bits(MEDIUM_HOMOGENEOUS)).into(),
-    }
+/// The records of `media`, and every density grid's values one after another.
+pub fn gpu_media(media: &[Medium]) -> (Vec<GpuMedium>, Vec<f32>) {
+    let mut densities = Vec::new();
+    let records = media
+        .iter()
+        .map(|medium| {
+            let mut record = GpuMedium {
+                sigma_t_g: medium.sigma_t.extend(medium.phase.g()).into(),
+                albedo_kind: medium.albedo.extend(f32::from_bits(MEDIUM_HOMOGENEOUS)).into(),
+                ..bytemuck::Zeroable::zeroed()
+            };
+            if let Some(grid) = &medium.density {
+                let [x, y, z] = grid.resolution;
+                record.albedo_kind[3] = f32::from_bits(MEDIUM_HETEROGENEOUS);
+                record.grid = [densities.len() as u32, x, y, z];
+                // Trilinear interpolation stays within the cells' values: their largest bounds it.
+                let majorant = medium.sigma_t.max_element() * grid.max_value();
+                record.box_min_majorant = grid.bounds.0.extend(majorant).into();
+                record.box_max = grid.bounds.1.extend(0.0).into();
+                densities.extend_from_slice(&grid.values);
+            }
+            record
+        })
+        .collect();
+    (records, densities)
 }
 
 /// The code of the medium at `index` in the scene's media (its index + 1); `vacuum` for none:

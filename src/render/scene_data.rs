@@ -42,6 +42,8 @@ pub struct SceneData {
     pub env_cdf: Vec<f32>,
     /// Participating media (media.rs), in the scene's order.
     pub media: Vec<GpuMedium>,
+    /// The density grids of heterogeneous media, one after another.
+    pub medium_densities: Vec<f32>,
 }
 
 /// An emitter in world space, with the luminance of its radiance that light selection weighs it by.
@@ -279,8 +281,10 @@ impl SceneData {
         let light_distribution =
             LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
         let lights = area_lights.iter().map(AreaLight::gpu).collect();
+        let (media, medium_densities) = super::media::gpu_media(&scene.media);
         SceneData {
-            media: scene.media.iter().map(super::media::gpu_medium).collect(),
+            media,
+            medium_densities,
             env_cdf,
             lights,
             punctual_lights,
@@ -310,7 +314,8 @@ impl SceneData {
                 + std::mem::size_of_val(&self.triangle_emission[..])
                 + std::mem::size_of_val(&self.env_texels[..])
                 + std::mem::size_of_val(&self.env_cdf[..])
-                + std::mem::size_of_val(&self.media[..])) as u64
+                + std::mem::size_of_val(&self.media[..])
+                + std::mem::size_of_val(&self.medium_densities[..])) as u64
     }
 
     /// Probability that next-event estimation samples the environment map rather than an emitter:

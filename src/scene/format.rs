@@ -322,16 +322,23 @@ pub enum MaterialKind {
     Null,
 }
 
-/// A `[[media]]` entry: a participating medium, homogeneous (coefficients per world unit, RGB).
-/// Its coefficients are `sigma_a` and `sigma_s`, or `sigma_t` and `albedo` (sigma_s = albedo
-/// sigma_t), each times `scale`.
+/// A `[[media]]` entry: a participating medium, homogeneous or heterogeneous (coefficients per
+/// world unit, RGB). Its coefficients are `sigma_a` and `sigma_s`, or `sigma_t` and `albedo`
+/// (sigma_s = albedo sigma_t), each times `scale` and, heterogeneous, times the density grid.
 #[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MediumFile {
     pub name: String,
-    /// "homogeneous".
+    /// "homogeneous" or "heterogeneous" (with `density`).
     #[serde(rename = "type")]
     pub kind: MediumKind,
+    /// A heterogeneous medium's density grid: a Mitsuba `.vol` file of one channel, whose values
+    /// (trilinearly interpolated between cell centres, 0 outside its box) scale the coefficients.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<String>,
+    /// The world box [min, max] the density grid fills; absent: the box the `.vol` file gives.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<Array<Triple, 2>>,
     /// Absorption coefficient per world unit, per channel, >= 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sigma_a: Option<Triple>,
@@ -361,6 +368,8 @@ pub struct MediumFile {
 pub enum MediumKind {
     /// The same coefficients everywhere.
     Homogeneous,
+    /// The coefficients scaled by a density grid.
+    Heterogeneous,
 }
 
 /// A medium's `phase`.

@@ -4,23 +4,31 @@
 //! sigma_s / sigma_t that scatters (the albedo), and the phase function that scatters it.
 
 use super::format::{MediumFile, MediumKind, PhaseKind, Triple};
-use anyhow::{bail, Result};
+use super::grid_volume::{parse_vol, DensityGrid};
+use crate::input_file::{InputFiles, InputKind};
+use anyhow::{bail, Context as _, Result};
 use glam::Vec3;
+use std::path::Path;
+use std::sync::Arc;
 
 /// Most media a scene may define: the kernel tracks which medium a path is in as 8-bit codes
 /// (render/layout.rs, MEDIUM_* constants), two of which mean "none" and "empty space".
 pub const MAX_MEDIA: usize = 254;
 
-/// A homogeneous medium, coefficients per world unit with the file's `scale` applied.
+/// A medium, coefficients per world unit with the file's `scale` applied: the same everywhere, or
+/// times a density grid.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Medium {
     pub name: String,
-    /// Extinction sigma_a + sigma_s, per channel, finite and >= 0.
+    /// Extinction sigma_a + sigma_s, per channel, finite and >= 0 (times the density, if any).
     pub sigma_t: Vec3,
     /// sigma_s / sigma_t per channel, in [0, 1] (0 where sigma_t is 0).
     pub albedo: Vec3,
     /// The phase function.
     pub phase: Phase,
+    /// A heterogeneous medium's density grid, its `bounds` in world space (shared: scenes are
+    /// cloned whole).
+    pub density: Option<Arc<DensityGrid>>,
 }
 
 impl Medium {
@@ -54,13 +62,13 @@ impl Phase {
 
 /// Every `[[media]]` entry, in file order (their indices): names distinct, coefficients finite
 /// and not negative, given as sigma_a + sigma_s or as sigma_t + albedo.
-pub fn media_from(files: &[MediumFile]) -> Result<Vec<Medium>> {
+pub fn media_from(files: &[MediumFile], base: &Path, inputs: &InputFiles) -> Result<Vec<Medium>> {
     if files.len() > MAX_MEDIA {
         bail!("[[media]]: at most {MAX_MEDIA} media, got {}", files.len());
     }
     let mut media: Vec<Medium> = Vec::with_capacity(files.len());
     for (k, file) in files.iter().enumerate() {
-        let medium = medium_from(k, file)?;
+        let medium = medium_from(k, file, base, inputs)?;
         if media.iter().any(|m| m.name == medium.name) {
             bail!("media[{k}].name: '{}' is defined twice", medium.name);
         }
@@ -69,12 +77,40 @@ pub fn media_from(files: &[MediumFile]) -> Result<Vec<Medium>> {
     Ok(media)
 }
 
-fn medium_from(k: usize, file: &MediumFile) -> Result<Medium> {
+fn medium_from(k: usize, file: &MediumFile, base: &Path, inputs: &InputFiles) -> Result<Medium> {
     let key = |field: &str| format!("media[{k}].{field}");
     if file.name.is_empty() {
         bail!("{}: a medium needs a name", key("name"));
     }
-    let MediumKind::Homogeneous = file.kind;
+    let density = match (file.kind, &file.density) {
+        (MediumKind::Homogeneous, None) => {
+            if file.bounds.is_some() {
+                bail!("{} is a density grid's: it needs type = \"heterogeneous\"", key("bounds"));
+            }
+            None
+        }
+        (MediumKind::Homogeneous, Some(_)) => {
+            bail!("{} needs type = \"heterogeneous\" (a homogeneous medium has no grid)", key("density"))
+        }
+        (MediumKind::Heterogeneous, None) => bail!("{} = \"heterogeneous\" needs density (a .vol file)", key("type")),
+        (MediumKind::Heterogeneous, Some(name)) => {
+            let path = super::resolve(base, name);
+            let bytes = inputs.read(&path, InputKind::DensityGrid)?;
+            let mut grid = parse_vol(&bytes).with_context(|| format!("{}: {}", key("density"), path.display()))?;
+            if let Some(bounds) = file.bounds {
+                let (min, max) = (Vec3::from(bounds.0[0].0), Vec3::from(bounds.0[1].0));
+                if !min.is_finite() || !max.is_finite() || min.cmpge(max).any() {
+                    bail!(
+                        "{} must be finite with min < max on every axis, got {:?}",
+                        key("bounds"),
+                        bounds.0.map(|b| b.0)
+                    );
+                }
+                grid.bounds = (min, max);
+            }
+            Some(Arc::new(grid))
+        }
+    };
     let scale = file.scale;
     if !scale.is_finite() || scale < 0.0 {
         bail!("{} must be finite and >= 0, got {scale}", key("scale"));
@@ -119,7 +155,7 @@ fn medium_from(k: usize, file: &MediumFile) -> Result<Medium> {
             Phase::HenyeyGreenstein { g }
         }
     };
-    Ok(Medium { name: file.name.clone(), sigma_t, albedo, phase })
+    Ok(Medium { name: file.name.clone(), sigma_t, albedo, phase, density })
 }
 
 /// The index of the medium `name`, or an error naming `key` and the media defined.
@@ -145,6 +181,8 @@ mod tests {
         MediumFile {
             name: "fog".into(),
             kind: MediumKind::Homogeneous,
+            density: None,
+            bounds: None,
             sigma_a: Some(Array([0.1, 0.2, 0.3])),
             sigma_s: Some(Array([0.3, 0.2, 0.0])),
             sigma_t: None,
@@ -157,7 +195,7 @@ mod tests {
 
     #[test]
     fn sigma_a_and_sigma_s_become_sigma_t_and_albedo_scaled() {
-        let m = media_from(&[file()]).unwrap().remove(0);
+        let m = media_from(&[file()], Path::new("."), &InputFiles::anywhere()).unwrap().remove(0);
         assert!((m.sigma_t - Vec3::new(0.8, 0.8, 0.6)).abs().max_element() < 1e-6, "{:?}", m.sigma_t);
         assert!((m.albedo - Vec3::new(0.75, 0.5, 0.0)).abs().max_element() < 1e-6, "{:?}", m.albedo);
         assert!((m.sigma_s() - Vec3::new(0.6, 0.4, 0.0)).abs().max_element() < 1e-6);
@@ -165,7 +203,8 @@ mod tests {
 
     #[test]
     fn bad_coefficients_are_refused_naming_the_key() {
-        let message = |f: MediumFile| format!("{:#}", media_from(&[f]).unwrap_err());
+        let message =
+            |f: MediumFile| format!("{:#}", media_from(&[f], Path::new("."), &InputFiles::anywhere()).unwrap_err());
         let e = message(MediumFile { sigma_a: Some(Array([-0.1, 0.0, 0.0])), ..file() });
         assert!(e.contains("media[0].sigma_a"), "{e}");
         let e = message(MediumFile { sigma_s: Some(Array([f32::NAN, 0.0, 0.0])), ..file() });
@@ -186,7 +225,7 @@ mod tests {
         assert!(e.contains("media[0].g"), "{e}");
         let e = message(MediumFile { phase: PhaseKind::Hg, ..file() });
         assert!(e.contains("needs g"), "{e}");
-        let e = format!("{:#}", media_from(&[file(), file()]).unwrap_err());
+        let e = format!("{:#}", media_from(&[file(), file()], Path::new("."), &InputFiles::anywhere()).unwrap_err());
         assert!(e.contains("defined twice"), "{e}");
     }
 }

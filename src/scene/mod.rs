@@ -6,6 +6,7 @@ mod camera_toml;
 mod environment;
 mod equal_area_map;
 mod format;
+pub mod grid_volume;
 pub mod import;
 mod light;
 mod material_maps;
@@ -542,7 +543,7 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
     check_film(&film)?;
     let integrator = integrator_from(&file.integrator)?;
     let mut materials = materials_from(&file.materials)?;
-    let media = medium::media_from(&file.media)?;
+    let media = medium::media_from(&file.media, base, files)?;
     for ((mname, m), material) in file.materials.iter().zip(materials.iter_mut()) {
         if let Some(interior) = &m.interior {
             material.interior = Some(medium::medium_named(&media, &format!("materials.{mname}.interior"), interior)?);
