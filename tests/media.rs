@@ -545,3 +545,62 @@ fn henyey_greenstein_samples_follow_its_density() {
     results.destroy(&ctx);
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Mitsuba 3's media: a homogeneous fog the sensor is in (volpathmis), a null-bounded sphere of a
+/// heterogeneous medium whose gridvolume is placed by its to_world, and a dielectric sphere with
+/// a homogeneous interior; an exterior that is not the sensor's medium is refused.
+#[test]
+fn mitsuba_media_import_as_media_interiors_and_null_boundaries() {
+    let dir = temp_dir("media-mitsuba");
+    std::fs::write(dir.join("g.vol"), constant_grid(0.5)).unwrap();
+    let xml = |exterior: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+  <integrator type="volpathmis"><integer name="max_depth" value="16"/></integrator>
+  <medium type="homogeneous" id="fog">
+    <rgb name="sigma_t" value="0.1, 0.2, 0.3"/>
+    <float name="albedo" value="0.9"/>
+    <phase type="hg"><float name="g" value="0.4"/></phase>
+  </medium>
+  <medium type="homogeneous" id="other"><float name="sigma_t" value="1"/></medium>
+  <sensor type="perspective"><ref id="fog"/></sensor>
+  <shape type="sphere">
+    <bsdf type="null"/>
+    <medium type="heterogeneous" name="interior">
+      <volume type="gridvolume" name="sigma_t">
+        <string name="filename" value="g.vol"/>
+        <transform name="to_world"><scale value="2"/><translate x="-1" y="-1" z="-1"/></transform>
+      </volume>
+      <float name="scale" value="3"/>
+    </medium>
+    <ref name="exterior" id="{exterior}"/>
+  </shape>
+  <shape type="sphere">
+    <point name="center" x="3" y="0" z="0"/>
+    <bsdf type="dielectric"/>
+    <medium type="homogeneous" name="interior"><float name="sigma_t" value="5"/></medium>
+  </shape>
+</scene>"#
+        )
+    };
+    let load = |text: String| {
+        let path = dir.join("scene.xml");
+        std::fs::write(&path, text).unwrap();
+        Scene::load_with(&caustica::input_file::InputFiles::anywhere(), &path, &[])
+    };
+    let scene = load(xml("fog")).expect("the scene imports");
+    assert_eq!(scene.media.len(), 3, "{:?}", scene.media);
+    let fog = scene.camera_medium.expect("the sensor's medium") as usize;
+    assert!((scene.media[fog].sigma_t - glam::Vec3::new(0.1, 0.2, 0.3)).abs().max_element() < 1e-6);
+    assert_eq!(scene.media[fog].phase, caustica::scene::Phase::HenyeyGreenstein { g: 0.4 });
+    let null = scene.materials.iter().find(|m| m.null_surface).expect("the null boundary");
+    let grid = &scene.media[null.interior.expect("its interior") as usize];
+    assert_eq!(grid.sigma_t, glam::Vec3::splat(3.0), "scale times the unit sigma_t");
+    assert_eq!(grid.albedo, glam::Vec3::splat(0.75), "Mitsuba's default albedo");
+    let density = grid.density.as_ref().expect("a density grid");
+    assert_eq!(density.bounds, (glam::Vec3::splat(-1.0), glam::Vec3::splat(1.0)), "the to_world's box");
+    let glass = scene.materials.iter().find(|m| m.transparency > 0.0).expect("the dielectric");
+    assert_eq!(scene.media[glass.interior.expect("its interior") as usize].sigma_t, glam::Vec3::splat(5.0));
+    let message = format!("{:#}", load(xml("other")).expect_err("refused"));
+    assert!(message.contains("exterior medium 'other' is not the sensor's"), "{message}");
+}
