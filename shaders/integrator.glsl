@@ -31,6 +31,11 @@ float survival_probability(vec3 throughput) {
     return clamp(max3(throughput), frame.rr_survival_min, frame.rr_survival_max);
 }
 
+#if SCENE_MEDIA
+#include "medium.glsl"
+#include "phase.glsl"
+#endif
+
 // A shadow ray of next-event estimation and what it adds to the path's radiance when nothing blocks it
 // (the path's throughput at the vertex times the MIS-weighted light sample).
 struct ShadowRay {
@@ -97,11 +102,28 @@ struct Path {
     float bsdf_pdf;
     vec3 prev_point;
     uint depth;
+#if SCENE_MEDIA
+    // The media it is in (medium.glsl's stack), the channel its distances are sampled by, their
+    // pdfs per channel over that channel's (medium_path.glsl), and how far its ray has come from
+    // prev_point through null boundaries.
+    uint media;
+    uint channel;
+    vec3 spectral;
+    float travelled;
+#endif
 };
 
 Path path_start(vec3 origin, vec3 dir) {
+#if SCENE_MEDIA
+    return Path(origin, dir, vec3(0.0), vec3(1.0), 0.0, origin, 0u, MEDIUM_STACK_EMPTY, NO_CHANNEL, vec3(1.0), 0.0);
+#else
     return Path(origin, dir, vec3(0.0), vec3(1.0), 0.0, origin, 0u);
+#endif
 }
+
+#if SCENE_MEDIA
+#include "medium_path.glsl"
+#endif
 
 // The path's vertex at what its ray (path.origin, path.dir) met: `found` and `hit`, as trace_ray
 // returns them. Adds what is seen there, samples the light and the next direction. In a kernel
@@ -142,7 +164,11 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
         // Written at every vertex while open, so a path that ends on a specular chain keeps
         // its last surface.
         if (depth == 0u) {
+#if SCENE_MEDIA
+            first.depth = path.travelled + hit.t;
+#else
             first.depth = hit.t;
+#endif
             first.hit = true;
         }
         first.albedo = m.albedo_r.rgb;
@@ -153,7 +179,13 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
     if (max3(le) > 0.0) {
         float weight = 1.0;
         if (nee && path.bsdf_pdf > 0.0) {
-            weight = power_heuristic(path.bsdf_pdf, hit_light_pdf(hit, path.prev_point, path.dir, hit.t));
+#if SCENE_MEDIA
+            // From the last vertex, through the null boundaries passed since.
+            float dist = path.travelled + hit.t;
+#else
+            float dist = hit.t;
+#endif
+            weight = power_heuristic(path.bsdf_pdf, hit_light_pdf(hit, path.prev_point, path.dir, dist));
         }
         path.radiance += path.throughput * le * weight;
     }
@@ -182,13 +214,28 @@ bool path_vertex(inout Path path, inout Rng rng, inout uint rays, inout FirstHit
 #if !WALK_QUEUE && !WAVEFRONT
         // Traced here where no queue or wavefront takes it: held past the BSDF sample's state, it measured
         // 1-4 % slower on lavapipe (docs/benchmarks/history.md, 2026-12-04, `d1c2c17`).
+#if SCENE_MEDIA
+        // Through the media it crosses and the null boundaries it passes, from the side it
+        // leaves towards (medium.glsl).
+        if (shadow_wanted) {
+            bool crosses = (dot(shadow.dir, n) < 0.0) == front;
+            uint stack = crosses ? stack_crossing(path.media, m, front) : path.media;
+            path.radiance += shadow.contribution * shadow_transmittance(shadow.origin, shadow.dir, shadow.t_max, stack, rng, rays);
+        }
+#else
         if (shadow_wanted && !occluded(shadow.origin, shadow.dir, shadow.t_max)) path.radiance += shadow.contribution;
+#endif
         shadow_wanted = false;
 #endif
     }
     if (!sampled) return false;
     // Shading normals can send a ray through the geometric surface; such paths end here.
     if (dot(s.dir, surface.ns) * dot(s.dir, n) <= 0.0) return false;
+#if SCENE_MEDIA
+    // Refracted through a solid surface: into its inside or out of it (medium.glsl).
+    if ((dot(s.dir, n) < 0.0) == front) path.media = stack_crossing(path.media, m, front);
+    path.travelled = 0.0;
+#endif
     path.throughput *= s.weight;
     path.bsdf_pdf = s.delta ? 0.0 : s.pdf;
     path.prev_point = point;
@@ -215,6 +262,11 @@ bool path_step(inout Path path, inout Rng rng, inout uint rays, inout FirstHit f
     Hit hit;
     rays += 1u;
     bool found = trace_ray(path.origin, path.dir, 1e30, false, hit);
+#if SCENE_MEDIA
+    bool scattered;
+    bool goes_on = medium_walk(path, rng, rays, first, found, hit, scattered);
+    if (scattered) return goes_on;
+#endif
     bool shadow_wanted;  // false: without the queue, path_vertex traces its shadow ray itself
     ShadowRay shadow;
     return path_vertex(path, rng, rays, first, found, hit, shadow_wanted, shadow);

@@ -94,6 +94,13 @@ WavefrontState load_state(uint base) {
     s.path.throughput = uintBitsToFloat(w5.xyz);
     s.sums.nonfinite = w5.w;
     s.path.prev_point = uintBitsToFloat(w6.xyz);
+#if SCENE_MEDIA
+    // The wavefront runs no scene with media (src/render/kernel_options.rs): a path in none.
+    s.path.media = MEDIUM_STACK_EMPTY;
+    s.path.channel = NO_CHANNEL;
+    s.path.spectral = vec3(1.0);
+    s.path.travelled = 0.0;
+#endif
     s.hit.t = uintBitsToFloat(w6.w);
     s.hit.prim = w7.x;
     s.hit.instance = w7.y;

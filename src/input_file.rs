@@ -36,6 +36,8 @@ pub enum InputKind {
     /// A partial render or checkpoint (EXR) read by `merge` and `--resume`: 32 GiB, a 16384 x 16384
     /// render with every AOV stored uncompressed.
     PartialRender,
+    /// A medium's density grid (Mitsuba's `.vol`): 4 GiB, a 1024^3 grid of floats.
+    DensityGrid,
     /// A kernel shader file read from `$CAUSTICA_SHADER_DIR` (shader work, mutation testing):
     /// 4 MiB, a hundred times the largest shader file.
     Shader,
@@ -51,6 +53,7 @@ impl InputKind {
             InputKind::Texture => 1 << 30,
             InputKind::RadianceImage => 4 << 30,
             InputKind::PartialRender => 32 << 30,
+            InputKind::DensityGrid => 4 << 30,
             InputKind::Shader => 4 << 20,
         }
     }
@@ -63,6 +66,7 @@ impl InputKind {
             InputKind::Texture => "a texture",
             InputKind::RadianceImage => "a PFM, EXR or Radiance .hdr image",
             InputKind::PartialRender => "a partial render",
+            InputKind::DensityGrid => "a density grid",
             InputKind::Shader => "a shader file",
         }
     }

@@ -38,6 +38,8 @@ fn radiance_along(ctx: &GpuContext, environment: &Environment, dir: Vec3) -> [f3
         textures: vec![],
         environment: environment.clone(),
         lights: vec![],
+        media: vec![],
+        camera_medium: None,
     };
     render(ctx, &scene, 1).pixels[0]
 }

@@ -322,7 +322,7 @@ fn unsupported_or_bad_input_is_an_error_naming_file_line_and_element() {
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"plastic\"><texture type=\"checkerboard\" name=\"diffuse_reflectance\"/></bsdf></shape>"), vec!["scene.xml:8:", "textures ('diffuse_reflectance') are not supported"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"><bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"1.2, 0.5, 0.5\"/></bsdf></shape>"), vec!["scene.xml:8:", "reflectance must be in [0, 1]"]),
         (format!("{SENSOR}\n<emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"10\"/><float name=\"beam_width\" value=\"20\"/></emitter>"), vec!["scene.xml:8:", "beam_width"]),
-        (format!("{SENSOR}\n<integrator type=\"volpath\"/>"), vec!["scene.xml:8:", "<integrator type=\"volpath\">"]),
+        (format!("{SENSOR}\n<integrator type=\"ptracer\"/>"), vec!["scene.xml:8:", "<integrator type=\"ptracer\">"]),
         (format!("{SENSOR}\n<shape type=\"sphere\"></shapee>"), vec!["scene.xml", "not well-formed"]),
         ("<shape type=\"sphere\"/>".to_owned(), vec!["scene.xml", "no <sensor>"]),
     ] {

@@ -78,6 +78,10 @@ fn probes() -> Vec<(Listed, String)> {
         (Listed::Variants("Sampler"), after_camera(&format!("[integrator]\nsampler = \"{z}\"\n"))),
         (Listed::Variants("LightSelection"), after_camera(&format!("[integrator]\nlight_selection = \"{z}\"\n"))),
         (Listed::Variants("Microfacet"), after_camera(&format!("[materials.m]\ndistribution = \"{z}\"\n"))),
+        (Listed::Fields("MediumFile"), after_camera(&format!("[[media]]\n{z} = 1\n"))),
+        (Listed::Variants("MediumKind"), after_camera(&format!("[[media]]\ntype = \"{z}\"\n"))),
+        (Listed::Variants("PhaseKind"), after_camera(&format!("[[media]]\nphase = \"{z}\"\n"))),
+        (Listed::Variants("MaterialKind"), after_camera(&format!("[materials.m]\ntype = \"{z}\"\n"))),
         (
             Listed::Variants("Encoding"),
             after_camera(&format!("[materials.m]\nopacity_texture = {{ encoding = \"{z}\" }}\n")),
@@ -98,21 +102,26 @@ fn body<'a>(source: &'a str, keyword: &str, item: &str) -> Vec<&'a str> {
     lines.take_while(|line| *line != "}").collect()
 }
 
-/// The keys of a struct as serde reads them: its fields, less those marked `#[serde(skip)]`.
+/// The keys of a struct as serde reads them: its fields, less those marked `#[serde(skip)]`, by
+/// the names `#[serde(rename = "...")]` gives them.
 fn fields(source: &str, item: &str) -> Vec<String> {
     let mut names = vec![];
     let mut skipped = false;
+    let mut renamed = None;
     for line in body(source, "struct", item) {
         let line = line.trim();
         if line.starts_with("#[serde(")
             && (line.contains("skip)") || line.contains("skip,") || line.contains("skip_deserializing"))
         {
             skipped = true;
+        } else if let Some(rest) = line.strip_prefix("#[serde(").and_then(|rest| rest.split_once("rename = \"")) {
+            renamed = rest.1.split('"').next().map(str::to_owned);
         } else if let Some(field) = line.strip_prefix("pub ").and_then(|rest| rest.split_once(':')) {
             if !skipped {
-                names.push(field.0.to_owned());
+                names.push(renamed.take().unwrap_or_else(|| field.0.to_owned()));
             }
             skipped = false;
+            renamed = None;
         }
     }
     names

@@ -7,7 +7,7 @@
 
 use super::glsl_block::{GlslBlock, GlslMember, GlslTexels, GlslType, Texel};
 use super::layout::{
-    FrameParams, GpuAliasEntry, GpuInstance, GpuLightTreeNode, GpuMaterial, GpuMeshTriangle, GpuPrimitive,
+    FrameParams, GpuAliasEntry, GpuInstance, GpuLightTreeNode, GpuMaterial, GpuMedium, GpuMeshTriangle, GpuPrimitive,
     GpuPunctualLight, GpuStats, GpuTexture,
 };
 use super::variant::KernelVariant;
@@ -50,12 +50,14 @@ pub enum KernelBuffer {
     LightTree,
     LightTreeIndex,
     VertexColors,
+    Media,
+    MediumDensities,
 }
 
 impl KernelBuffer {
     /// How many buffers there are: the last variant's index + 1 (a variant added after it takes its
     /// place here).
-    pub const COUNT: usize = KernelBuffer::VertexColors as usize + 1;
+    pub const COUNT: usize = KernelBuffer::MediumDensities as usize + 1;
 
     /// The table's entry for this buffer.
     pub fn entry(self) -> &'static BufferBinding {
@@ -314,6 +316,12 @@ pub const BINDINGS: [BufferBinding; KernelBuffer::COUNT] = [
     // Linear RGB colours of the vertices of meshes with vertex colours (glTF COLOR_0), by global
     // vertex index (w unused); empty when no mesh has them.
     BufferBinding { buffer: VertexColors, binding: 26, name: "vertex_colors", shape: texel_buffer::<[f32; 4]>(), access: Read, bound_in: EveryKernel, what: "vertex colours" },
+    // Participating media (scene::Medium), by the index in their codes (MEDIUM_CODES); empty
+    // without media.
+    BufferBinding { buffer: Media, binding: 27, name: "media", shape: array::<GpuMedium>(), access: Read, bound_in: EveryKernel, what: "participating media" },
+    // The density grids of heterogeneous media, one after another (GpuMedium::grid says where
+    // each starts); empty without them.
+    BufferBinding { buffer: MediumDensities, binding: 28, name: "medium_densities", shape: texel_buffer::<f32>(), access: Read, bound_in: EveryKernel, what: "medium density grids" },
 ];
 
 // The table is in key order, its bindings are distinct and below the extra windows' bindings,

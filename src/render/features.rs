@@ -13,7 +13,8 @@
 use super::layout::ENV_CONSTANT;
 use super::layout::{
     GpuMaterial, GpuPrimitive, ALPHA_OPAQUE, CONDUCTOR_COMPLEX, INSTANCE_MESH, INSTANCE_PRIMITIVES, LIGHT_DIRECTIONAL,
-    MATERIAL_BECKMANN, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
+    MATERIAL_BECKMANN, MATERIAL_INTERIOR_SHIFT, MATERIAL_NULL, MATERIAL_ONE_SIDED, MATERIAL_THIN, NO_TEXTURE,
+    PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
 };
 use super::scene_data::SceneData;
 use crate::bvh::{CHILD_INTERIOR, WIDTH};
@@ -32,6 +33,9 @@ pub const FEW_PRIMITIVES: usize = 32;
 pub const FEW_SHAPE_SELECTS: usize = 12;
 
 pub use crate::scene::ALPHA_DELTA;
+
+/// The bits of a material's flags that hold its interior medium's code (MEDIUM_CODES).
+const MEDIUM_CODE_MASK: u32 = 0xff << MATERIAL_INTERIOR_SHIFT;
 
 /// The kinds (PRIM_*) of a scene's few shapes in the order they are stored: its rays test them as
 /// straight-line code, each shape by its own kind's test, before walking any mesh (bvh.glsl,
@@ -178,6 +182,10 @@ pub struct SceneFeatures {
     /// Lights picked by the light tree (shaders/light_tree.glsl): `light_selection = "bvh"` and
     /// more than one light. Else the alias table or a uniform pick, and no tree walk.
     pub light_tree: bool,
+    /// Participating media or null boundaries (shaders/medium.glsl): the medium a path is in,
+    /// free-flight sampling and scattering in it, and shadow rays that pass null boundaries and
+    /// are attenuated by the media they cross. Without it the kernel is the surface-only one.
+    pub media: bool,
 }
 
 impl SceneFeatures {
@@ -215,6 +223,7 @@ impl SceneFeatures {
         light_pick: true,
         light_disks: true,
         light_tree: true,
+        media: true,
     };
 
     /// What `data` uses.
@@ -287,6 +296,8 @@ impl SceneFeatures {
                 .iter()
                 .any(|l| l.position_kind[3].to_bits() == LIGHT_DIRECTIONAL && l.shape[2] > 0.0),
             light_tree: data.light_tree.is_some(),
+            media: !data.media.is_empty()
+                || data.materials.iter().any(|m| flags(m) & (MATERIAL_NULL | MEDIUM_CODE_MASK) != 0),
         }
     }
 
@@ -304,7 +315,7 @@ impl SceneFeatures {
     }
 
     /// Each feature's name (as `bench --json` reports it), its kernel define, and whether it is on.
-    fn table(&self) -> [(&'static str, &'static str, bool); 32] {
+    fn table(&self) -> [(&'static str, &'static str, bool); 33] {
         [
             ("bvh", "SCENE_BVH", self.bvh()),
             ("walked_shapes", "SCENE_WALKED_SHAPES", self.walked_shapes()),
@@ -338,6 +349,7 @@ impl SceneFeatures {
             ("light_pick", "SCENE_LIGHT_PICK", self.light_pick),
             ("light_disks", "SCENE_LIGHT_DISKS", self.light_disks),
             ("light_tree", "SCENE_LIGHT_TREE", self.light_tree),
+            ("media", "SCENE_MEDIA", self.media),
         ]
     }
 

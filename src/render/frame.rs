@@ -79,6 +79,7 @@ fn frame_params_without_camera(scene: &Scene, data: &SceneData, seed: u32) -> Fr
             .iter()
             .position(|i| i.info[0] == INSTANCE_PRIMITIVES)
             .map_or(u32::MAX, |i| i as u32),
+        camera_medium: super::media::camera_medium_code(scene.camera_medium),
         ..FrameParams::zeroed()
     }
 }

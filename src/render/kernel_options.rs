@@ -368,6 +368,11 @@ impl KernelOptions {
         let defaults = Defaults::for_class(DeviceClass::of(device, loop_limit));
         let workgroup = self.workgroup.unwrap_or(defaults.workgroup);
         let wavefront = self.wavefront.unwrap_or(defaults.wavefront);
+        if wavefront && scene.features.media {
+            bail!(
+                "wavefront=1: the scene has participating media, whose shadow rays pass null boundaries in a loop of their own that only the megakernel runs (shaders/medium.glsl)"
+            );
+        }
         if wavefront && loop_limit {
             bail!(
                 "wavefront=1: {} ends shader loops early, and the wavefront runs only where loops run to their end",

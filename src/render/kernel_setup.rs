@@ -303,6 +303,8 @@ pub(super) fn initial_contents<'d>(
         TriangleEmission => bytemuck::cast_slice(&data.triangle_emission),
         VertexTangents => bytemuck::cast_slice(&a.tangents),
         VertexColors => bytemuck::cast_slice(&a.colors),
+        Media => bytemuck::cast_slice(&data.media),
+        MediumDensities => bytemuck::cast_slice(&data.medium_densities),
         // Built from the scene's data rather than uploaded (ray_query_scene.rs).
         SceneStructure => &[],
         LightTree => data.light_tree.as_ref().map_or(&[][..], |t| bytemuck::cast_slice(&t.tree.nodes)),

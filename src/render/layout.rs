@@ -48,7 +48,15 @@ glsl_constants! {
     /// T lobe is a thin sheet rather than the surface of a solid; the surface scatters on its
     /// front side only and is black from behind (Mitsuba's BSDFs); a plastic whose coat reflects
     /// light back down onto its base.
-    MATERIAL_FLAGS { MATERIAL_BECKMANN = 1, MATERIAL_THIN = 2, MATERIAL_ONE_SIDED = 4, MATERIAL_COAT_INTERNAL = 16 }
+    MATERIAL_FLAGS { MATERIAL_BECKMANN = 1, MATERIAL_THIN = 2, MATERIAL_ONE_SIDED = 4, MATERIAL_COAT_INTERNAL = 16, MATERIAL_NULL = 32 }
+    /// Participating media (shaders/medium.glsl). A medium is named by an 8-bit code: its index in
+    /// `media` + 1, MEDIUM_VACUUM for empty space, MEDIUM_STACK_EMPTY for no entry. A material's
+    /// interior medium's code sits in its flags from bit MATERIAL_INTERIOR_SHIFT (MEDIUM_STACK_EMPTY:
+    /// none given, the inside is empty space). A path keeps the media it entered in a stack of
+    /// MEDIUM_STACK_DEPTH codes, the innermost in the low byte.
+    MEDIUM_CODES { MATERIAL_INTERIOR_SHIFT = 24, MEDIUM_STACK_EMPTY = 0, MEDIUM_VACUUM = 255, MEDIUM_STACK_DEPTH = 4 }
+    /// Medium kinds.
+    MEDIUM_KINDS { MEDIUM_HOMOGENEOUS = 0, MEDIUM_HETEROGENEOUS = 1 }
     /// Alpha modes: always there; there where the opacity reaches the cutoff (glTF MASK); met
     /// with probability equal to the opacity (glTF BLEND, MTL d).
     ALPHA_MODES { ALPHA_OPAQUE = 0, ALPHA_MASK = 1, ALPHA_BLEND = 2 }
@@ -123,6 +131,24 @@ glsl_block! {
         /// path_step; 0: clear); w = the alpha along v of an anisotropic material's R and T lobes
         /// and coat, params.w being the one along u (0: isotropic, params.w along both).
         pub volume: [f32; 4],
+    }
+}
+
+glsl_block! {
+    /// `struct Medium`: a participating medium (scene::Medium), coefficients per world unit.
+    pub struct GpuMedium as "Medium" {
+        /// rgb = extinction sigma_t per channel; w = Henyey-Greenstein's g (0: isotropic).
+        pub sigma_t_g: [f32; 4],
+        /// rgb = single-scattering albedo sigma_s / sigma_t; w = the MEDIUM_* kind (uint bits).
+        pub albedo_kind: [f32; 4],
+        /// MEDIUM_HETEROGENEOUS: x = its density grid's first value in `medium_densities`, y / z /
+        /// w = its cells along x, y and z (values x fastest, at the cells' centres).
+        pub grid: [u32; 4],
+        /// xyz = the world box's min corner the grid fills; w = the majorant: the largest
+        /// sigma_t of any channel anywhere in the grid, the rate of delta and ratio tracking.
+        pub box_min_majorant: [f32; 4],
+        /// xyz = the world box's max corner; w unused.
+        pub box_max: [f32; 4],
     }
 }
 
@@ -233,6 +259,7 @@ pub fn records_glsl() -> String {
         glsl_struct::<GpuPunctualLight>(),
         glsl_struct::<GpuAliasEntry>(),
         glsl_struct::<GpuLightTreeNode>(),
+        glsl_struct::<GpuMedium>(),
     ] {
         out += "\n";
         out += &declaration;
@@ -315,7 +342,8 @@ glsl_block! {
         /// The instance of the scene's own shapes (`u32::MAX` where there are none): where the
         /// kernel's hits on its few shapes, tested apart from the walk, lie (SCENE_FEW_SHAPES).
         pub shape_instance: u32,
-        pub pad7: u32,
+        /// The code of the medium the camera is in (MEDIUM_CODES): MEDIUM_VACUUM for none.
+        pub camera_medium: u32,
         /// Total power of the lights (area and punctual) when they are picked by power (0: picked
         /// uniformly).
         pub light_total_power: f32,
@@ -400,6 +428,9 @@ impl GlslType for GpuAliasEntry {
 impl GlslType for GpuLightTreeNode {
     const NAME: &'static str = <Self as GlslBlock>::NAME;
 }
+impl GlslType for GpuMedium {
+    const NAME: &'static str = <Self as GlslBlock>::NAME;
+}
 impl GlslType for WideNode {
     const NAME: &'static str = "WideNode";
 }
@@ -476,6 +507,15 @@ mod tests {
         assert_eq!(offset_of!(GpuPunctualLight, axis_cos), 16);
         assert_eq!(offset_of!(GpuPunctualLight, value_power), 32);
         assert_eq!(offset_of!(GpuPunctualLight, shape), 48);
+    }
+
+    #[test]
+    fn medium_matches_glsl_std430() {
+        assert_eq!(size_of::<GpuMedium>(), 80);
+        assert_eq!(offset_of!(GpuMedium, albedo_kind), 16);
+        assert_eq!(offset_of!(GpuMedium, grid), 32);
+        assert_eq!(offset_of!(GpuMedium, box_min_majorant), 48);
+        assert_eq!(offset_of!(GpuMedium, box_max), 64);
     }
 
     #[test]
@@ -600,6 +640,10 @@ mod tests {
             ("MATERIAL_THIN", MATERIAL_THIN),
             ("MATERIAL_ONE_SIDED", MATERIAL_ONE_SIDED),
             ("MATERIAL_COAT_INTERNAL", MATERIAL_COAT_INTERNAL),
+            ("MATERIAL_NULL", MATERIAL_NULL),
+            ("MEDIUM_VACUUM", MEDIUM_VACUUM),
+            ("MEDIUM_HOMOGENEOUS", MEDIUM_HOMOGENEOUS),
+            ("MEDIUM_HETEROGENEOUS", MEDIUM_HETEROGENEOUS),
             ("CONDUCTOR_MIRROR", CONDUCTOR_MIRROR),
             ("CONDUCTOR_COMPLEX", CONDUCTOR_COMPLEX),
             ("CONDUCTOR_ALBEDO", CONDUCTOR_ALBEDO),
@@ -644,6 +688,7 @@ mod tests {
             "PunctualLight",
             "LightAlias",
             "LightTreeNode",
+            "Medium",
         ] {
             assert_eq!(records.matches(&format!("struct {name} {{")).count(), 1, "{name}");
             assert!(!layout.contains(&format!("struct {name} {{")), "layout.glsl declares {name} by hand");

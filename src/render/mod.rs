@@ -19,6 +19,7 @@ pub mod layout;
 mod light_selection;
 pub mod light_tree;
 pub mod light_tree_index;
+mod media;
 mod ray_query_scene;
 mod renderer;
 mod scene_data;

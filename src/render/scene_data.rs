@@ -46,6 +46,10 @@ pub struct SceneData {
     /// The map's sampling distribution (env_sampling.rs); empty for a constant sky, a black map,
     /// or when the scene turns map sampling off.
     pub env_cdf: Vec<f32>,
+    /// Participating media (media.rs), in the scene's order.
+    pub media: Vec<GpuMedium>,
+    /// The density grids of heterogeneous media, one after another.
+    pub medium_densities: Vec<f32>,
 }
 
 /// An emitter in world space, with the luminance of its radiance that light selection weighs it by.
@@ -236,7 +240,9 @@ fn material_flags(m: &Material) -> u32 {
     let thin = if m.thin { MATERIAL_THIN } else { 0 };
     let one_sided = if m.one_sided { MATERIAL_ONE_SIDED } else { 0 };
     let coat_internal = if m.coat_internal_reflections { MATERIAL_COAT_INTERNAL } else { 0 };
-    beckmann | thin | one_sided | coat_internal
+    let null = if m.null_surface { MATERIAL_NULL } else { 0 };
+    let interior = super::media::interior_code(m.interior) << MATERIAL_INTERIOR_SHIFT;
+    beckmann | thin | one_sided | coat_internal | null | interior
 }
 
 /// A material's `alpha` row: texture, factor, cutoff and mode (layout.glsl).
@@ -334,7 +340,10 @@ impl SceneData {
         let light_distribution =
             LightDistribution::new(&powers, scene.integrator.light_selection == LightSelection::Power);
         let lights = area_lights.iter().map(AreaLight::gpu).collect();
+        let (media, medium_densities) = super::media::gpu_media(&scene.media);
         SceneData {
+            media,
+            medium_densities,
             env_cdf,
             lights,
             punctual_lights,
@@ -364,7 +373,9 @@ impl SceneData {
                 + std::mem::size_of_val(&self.light_distribution.table[..])
                 + std::mem::size_of_val(&self.triangle_emission[..])
                 + std::mem::size_of_val(&self.env_texels[..])
-                + std::mem::size_of_val(&self.env_cdf[..])) as u64
+                + std::mem::size_of_val(&self.env_cdf[..])
+                + std::mem::size_of_val(&self.media[..])
+                + std::mem::size_of_val(&self.medium_densities[..])) as u64
             + self.light_tree.as_ref().map_or(0, KernelLightTree::gpu_bytes)
     }
 

@@ -83,7 +83,9 @@ impl WalkQueue {
             bail!("walk-queue=barriers: lavapipe runs a subgroup barrier as a workgroup barrier, so its kernel needs a workgroup of one subgroup ({} lanes, e.g. workgroup={}x1), not {lanes}", device.subgroup_size, device.subgroup_size);
         }
         let flat_top_level = features.bvh() && features.top_level && !features.top_level_tree;
-        if loop_limit || !flat_top_level {
+        // A scene with media traces its shadow rays through null boundaries and media, a loop the
+        // queue does not take (shaders/medium.glsl): it runs without it.
+        if loop_limit || !flat_top_level || features.media {
             return Ok(None);
         }
         let Some(root) = root else { return Ok(None) };

@@ -86,6 +86,10 @@ pub struct SceneFile {
     /// Lights without a surface: point, spot and directional (radiometric units).
     #[serde(default)]
     pub lights: Vec<LightFile>,
+    /// Participating media (fog, smoke, milk), named for the materials' `interior` and the
+    /// camera's `medium` (scene/medium.rs).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub media: Vec<MediumFile>,
     /// Meshes an importer found written in its scene and keeps as meshes (they need texture
     /// coordinates, which `[[triangles]]` lack). No key of the TOML format: `caustica convert`
     /// writes each as a PLY file and lists it in `[[meshes]]`.
@@ -118,6 +122,7 @@ impl SceneFile {
             meshes: vec![],
             environment: None,
             lights: vec![],
+            media: vec![],
             inline_meshes: vec![],
         }
     }
@@ -138,6 +143,9 @@ pub struct CameraFile {
     pub aperture: f32,
     /// Distance of the plane in focus along the viewing axis; absent: the distance to look_at.
     pub focus_distance: Option<f32>,
+    /// The `[[media]]` entry the camera is in (fog that fills the scene); absent: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub medium: Option<String>,
 }
 
 fn default_up() -> Triple {
@@ -299,6 +307,84 @@ pub struct MaterialFile {
     /// normals and texture coordinates only.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub normal_texture: Option<ImageTextureFile>,
+    /// "null": the surface is no surface at all, only where the `interior` medium begins (light
+    /// passes it unchanged); absent: the material the other keys describe.
+    #[serde(rename = "type", skip_serializing_if = "Option::is_none")]
+    pub kind: Option<MaterialKind>,
+    /// The `[[media]]` entry that fills the inside of closed shapes of this material (behind their
+    /// geometric normal), entered where a path refracts or passes through. Absent: the inside is
+    /// empty space (or Beer-Lambert absorption, `attenuation_color`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interior: Option<String>,
+}
+
+/// A material's `type`.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum MaterialKind {
+    /// An index-matched boundary of a medium: no scattering, no refraction.
+    Null,
+}
+
+/// A `[[media]]` entry: a participating medium, homogeneous or heterogeneous (coefficients per
+/// world unit, RGB). Its coefficients are `sigma_a` and `sigma_s`, or `sigma_t` and `albedo`
+/// (sigma_s = albedo sigma_t), each times `scale` and, heterogeneous, times the density grid.
+#[derive(Deserialize, Serialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MediumFile {
+    pub name: String,
+    /// "homogeneous" or "heterogeneous" (with `density`).
+    #[serde(rename = "type")]
+    pub kind: MediumKind,
+    /// A heterogeneous medium's density grid: a Mitsuba `.vol` file of one channel, whose values
+    /// (trilinearly interpolated between cell centres, 0 outside its box) scale the coefficients.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density: Option<String>,
+    /// The world box [min, max] the density grid fills; absent: the box the `.vol` file gives.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<Array<Triple, 2>>,
+    /// Absorption coefficient per world unit, per channel, >= 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_a: Option<Triple>,
+    /// Scattering coefficient per world unit, per channel, >= 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_s: Option<Triple>,
+    /// Extinction coefficient per world unit (sigma_a + sigma_s), per channel, >= 0; with `albedo`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_t: Option<Triple>,
+    /// Single-scattering albedo sigma_s / sigma_t, per channel in [0, 1]; with `sigma_t`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub albedo: Option<Triple>,
+    /// Multiplies the coefficients (a unit change: 100 for coefficients per cm in a scene in m).
+    #[serde(default = "one")]
+    pub scale: f32,
+    /// The phase function: "isotropic" (default) or "hg", Henyey-Greenstein (with `g`).
+    #[serde(default)]
+    pub phase: PhaseKind,
+    /// Henyey-Greenstein's mean cosine, in (-1, 1): > 0 forward scattering, < 0 backward.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub g: Option<f32>,
+}
+
+/// A medium's `type`.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum MediumKind {
+    /// The same coefficients everywhere.
+    Homogeneous,
+    /// The coefficients scaled by a density grid.
+    Heterogeneous,
+}
+
+/// A medium's `phase`.
+#[derive(Deserialize, Serialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PhaseKind {
+    /// Every direction alike.
+    #[default]
+    Isotropic,
+    /// Henyey-Greenstein of mean cosine `g` (Mitsuba's and pbrt's "hg").
+    Hg,
 }
 
 /// A material's image texture of data (opacity, normals), read at texture coordinates mapped by
@@ -379,6 +465,8 @@ impl Default for MaterialFile {
             opacity: None,
             opacity_texture: None,
             normal_texture: None,
+            kind: None,
+            interior: None,
         }
     }
 }

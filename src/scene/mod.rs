@@ -7,9 +7,11 @@ mod environment;
 mod equal_area_map;
 mod format;
 pub mod framing;
+pub mod grid_volume;
 pub mod import;
 mod light;
 mod material_maps;
+mod medium;
 mod mesh;
 mod optics;
 mod toml_error;
@@ -22,6 +24,7 @@ pub use camera_toml::camera_toml;
 pub use environment::{angular_map_uv, Environment, EnvironmentMap, MapProjection};
 pub use format::{Filter, LightSelection, Microfacet, Sampler};
 pub use light::{Light, MIN_DISK_DEGREES};
+pub use medium::{Medium, Phase, MAX_MEDIA};
 pub use mesh::{AssetCamera, Instance, Mesh, MeshImporter, Sides, Texture};
 pub use optics::{average_fresnel, fresnel_dielectric, metal, METALS};
 
@@ -130,6 +133,12 @@ pub struct Material {
     pub clearcoat: Option<Clearcoat>,
     /// Absorption inside the material, a dielectric (`transparency` > 0); None: clear.
     pub attenuation: Option<Attenuation>,
+    /// The medium (an index into `Scene::media`) inside closed shapes of this material, behind
+    /// their geometric normal; None: empty space.
+    pub interior: Option<u32>,
+    /// Not a surface: only the boundary of `interior` (the TOML's `type = "null"`, Mitsuba's
+    /// `null` BSDF, pbrt's `interface`). Rays pass it unchanged.
+    pub null_surface: bool,
 }
 
 impl Default for Material {
@@ -155,6 +164,8 @@ impl Default for Material {
             maps: TextureMaps::default(),
             clearcoat: None,
             attenuation: None,
+            interior: None,
+            null_surface: false,
         }
     }
 }
@@ -361,6 +372,10 @@ pub struct Scene {
     pub environment: Environment,
     /// Point, spot and directional lights (`[[lights]]`, glTF KHR_lights_punctual).
     pub lights: Vec<Light>,
+    /// Participating media (`[[media]]`), named by materials' `interior` and `camera_medium`.
+    pub media: Vec<Medium>,
+    /// The medium the camera is in, which fills the space outside every closed boundary.
+    pub camera_medium: Option<u32>,
 }
 
 impl Scene {
@@ -420,6 +435,8 @@ impl Scene {
             textures: vec![],
             environment: Environment::Constant(Vec3::ONE),
             lights: vec![],
+            media: vec![],
+            camera_medium: None,
         };
         match MeshImporter::new(files).place(&mut scene, path, None, Mat4::IDENTITY)? {
             Some(c) => {
@@ -528,6 +545,14 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
     check_film(&film)?;
     let integrator = integrator_from(&file.integrator)?;
     let mut materials = materials_from(&file.materials)?;
+    let media = medium::media_from(&file.media, base, files)?;
+    for ((mname, m), material) in file.materials.iter().zip(materials.iter_mut()) {
+        if let Some(interior) = &m.interior {
+            material.interior = Some(medium::medium_named(&media, &format!("materials.{mname}.interior"), interior)?);
+        }
+    }
+    let camera_medium =
+        file.camera.medium.as_deref().map(|name| medium::medium_named(&media, "camera.medium", name)).transpose()?;
     let mut textures = vec![];
     let mut uv_maps = HashMap::new();
     for (index, (mname, m)) in file.materials.iter().enumerate() {
@@ -568,6 +593,8 @@ fn build(file: SceneFile, name: &str, base: &Path, files: &InputFiles) -> Result
         textures,
         environment,
         lights,
+        media,
+        camera_medium,
     };
     let mut importer = MeshImporter::new(files).with_uv_maps(uv_maps);
     place_meshes(&mut scene, &file.meshes, &material, base, &mut importer)?;
@@ -618,6 +645,16 @@ fn materials_from(file: &BTreeMap<String, MaterialFile>) -> Result<Vec<Material>
 
 fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
     let key = |field: &str| format!("materials.{mname}.{field}");
+    if m.kind == Some(format::MaterialKind::Null) {
+        // A boundary and nothing else: any other key would describe a surface that is not there.
+        let bare = MaterialFile { kind: None, interior: None, ..m.clone() };
+        if bare != MaterialFile::default() {
+            bail!(
+                "materials.{mname}: type = \"null\" is only a medium's boundary; it takes `interior` and no other key"
+            );
+        }
+        return Ok(Material { name: mname.to_owned(), null_surface: true, ..Material::default() });
+    }
     let conductor = conductor_from(m, &key)?;
     let default_r = if conductor == Conductor::Mirror { 0.0 } else { 1.0 };
     let material = Material {
@@ -665,6 +702,15 @@ fn material_from(mname: &str, m: &MaterialFile) -> Result<Material> {
     }
     if material.attenuation.is_some() && material.transparency <= 0.0 {
         bail!("{} needs {} > 0: absorption happens inside a dielectric", key("attenuation_color"), key("transparency"));
+    }
+    // A path enters the inside by refracting through the surface: only a solid dielectric (or a
+    // null boundary) has one to enter.
+    if m.interior.is_some() && (material.transparency <= 0.0 || material.thin) {
+        bail!(
+            "{} needs {} > 0 and not thin (or type = \"null\"): a path enters the medium through the surface",
+            key("interior"),
+            key("transparency")
+        );
     }
     Ok(material)
 }

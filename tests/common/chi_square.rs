@@ -1,5 +1,6 @@
-//! Pearson's chi-square goodness-of-fit test with its p-value, for the tests that compare a
-//! sampler's counts with the pdf it reports (BSDF lobes, the light tree's pick).
+//! Pearson's chi-square goodness-of-fit test and the incomplete gamma function behind its p-value,
+//! for the tests that compare a sampler's counts with the pdf it reports (BSDF lobes, the light
+//! tree's pick, phase functions).
 
 use std::f64::consts::PI;
 

@@ -56,7 +56,7 @@ fn base_or_dot(p: &Path) -> &Path {
     }
 }
 
-/// Mesh files, texture images and environment maps, relative to `base`, made absolute: the TOML
+/// Mesh files, texture images, environment maps and density grids, relative to `base`, made absolute: the TOML
 /// lives elsewhere.
 fn absolute_paths(value: &mut toml::Value, base: &Path) {
     let absolute = |s: &mut String| {
@@ -85,6 +85,14 @@ fn absolute_paths(value: &mut toml::Value, base: &Path) {
     for key in ["latlong", "octahedral"] {
         if let Some(toml::Value::String(s)) = value.get_mut("environment").and_then(|e| e.get_mut(key)) {
             absolute(s);
+        }
+    }
+    // Media's density grids.
+    if let Some(media) = value.get_mut("media").and_then(|m| m.as_array_mut()) {
+        for medium in media {
+            if let Some(toml::Value::String(s)) = medium.get_mut("density") {
+                absolute(s);
+            }
         }
     }
 }

@@ -5,8 +5,8 @@
 
 use super::super::format::{
     AlbedoTextureFile, Array, CameraFile, DirectionalLightFile, Encoding, EnvironmentFile, FilmFile, Filter,
-    ImageTextureFile, IntegratorFile, LightFile, MaterialFile, MeshFile, Microfacet, PointLightFile, QuadFile, Sampler,
-    SceneFile, SphereFile, SpotLightFile, TriangleFile, Triple,
+    ImageTextureFile, IntegratorFile, LightFile, MaterialFile, MaterialKind, MediumFile, MeshFile, Microfacet,
+    PointLightFile, QuadFile, Sampler, SceneFile, SphereFile, SpotLightFile, TriangleFile, Triple,
 };
 use super::super::material_maps::needs_mesh;
 use super::mitsuba_xml::{self, Object, Resolver};
@@ -71,6 +71,9 @@ pub fn import(
         material_names: HashMap::new(),
         open_adapters: vec![],
         file: None,
+        media: vec![],
+        medium_names: HashMap::new(),
+        camera_medium: None,
     };
     let file = mapper.scene(&document.objects)?;
     Ok((file, base))
@@ -82,12 +85,18 @@ struct Mapper<'a> {
     base: PathBuf,
     scene_file: PathBuf,
     materials: BTreeMap<String, MaterialFile>,
-    /// (BSDF, area emitter) objects, by address, to the material made of them.
-    material_names: HashMap<(usize, usize), String>,
+    /// (BSDF, area emitter) objects, by address, and the interior medium, to the material made
+    /// of them.
+    material_names: HashMap<(usize, usize, Option<String>), String>,
     /// The adapter BSDFs (twosided, mask, normalmap) whose nested BSDF is being read, outermost
     /// first, so that one containing itself through a `<ref>` is refused instead of recursing.
     open_adapters: Vec<*const Object>,
     file: Option<SceneFile>,
+    /// Media mapped (mitsuba_media.rs), by object address to their `[[media]]` names.
+    media: Vec<MediumFile>,
+    medium_names: HashMap<usize, String>,
+    /// The sensor's medium: what lies outside every shape's interior.
+    camera_medium: Option<String>,
 }
 
 fn point(m: DMat4, p: DVec3) -> DVec3 {
@@ -139,6 +148,8 @@ impl Mapper<'_> {
         }
         let mut file = self.file.take().expect("set above");
         file.materials = std::mem::take(&mut self.materials);
+        file.media = std::mem::take(&mut self.media);
+        file.camera.medium = self.camera_medium.clone();
         Ok(file)
     }
 
@@ -210,6 +221,9 @@ impl Mapper<'_> {
                 });
             }
         }
+        if let Some(medium) = s.child("medium")? {
+            self.camera_medium = Some(self.medium(&medium)?);
+        }
         let focus_distance = s.float_if_given("focus_distance")?;
         let aperture = if thin_lens { s.float("aperture_radius", 1.0)? } else { 0.0 };
         if thin_lens && focus_distance.is_none() {
@@ -223,6 +237,7 @@ impl Mapper<'_> {
             fov: fov as f32,
             aperture: aperture as f32,
             focus_distance: focus_distance.map(|f| f as f32),
+            medium: None,
         };
         Ok((camera, film, sampler))
     }
@@ -344,8 +359,10 @@ impl Mapper<'_> {
             [i] => i,
             [_, second, ..] => return Err(second.error("a second integrator")),
         };
-        if i.plugin != "path" {
-            return Err(i.error("only the path integrator is supported"));
+        // volpath and volpathmis trace media as caustica's path tracer does where a scene has
+        // them (spectral MIS over the channels, as volpathmis).
+        if !matches!(i.plugin.as_str(), "path" | "volpath" | "volpathmis") {
+            return Err(i.error("only the path, volpath and volpathmis integrators are supported"));
         }
         file.max_bounces = match i.integer("max_depth", -1)? {
             -1 => UNBOUNDED_DEPTH,
@@ -489,18 +506,46 @@ impl Mapper<'_> {
         self.out().quads.push(quad);
     }
 
+    /// The `[[media]]` name of Mitsuba medium `m`, mapped once.
+    fn medium(&mut self, m: &Rc<Object>) -> Result<String> {
+        let address = Rc::as_ptr(m) as usize;
+        if let Some(name) = self.medium_names.get(&address) {
+            return Ok(name.clone());
+        }
+        let mut name = object_name(m);
+        while self.media.iter().any(|f| f.name == name) {
+            name += "'";
+        }
+        let file = super::mitsuba_media::medium_file(m, name.clone(), &self.resolver, &self.base)?;
+        self.media.push(file);
+        self.medium_names.insert(address, name.clone());
+        Ok(name)
+    }
+
     /// The material of a shape's BSDF (Mitsuba's default: diffuse 0.5) with its area emitter's
-    /// radiance, made once per pair.
+    /// radiance and its interior medium, made once per combination. Its exterior medium must be
+    /// the sensor's: caustica's media nest (docs/scene-format.md), entering a shape pushes its
+    /// interior and leaving returns to what was outside.
     fn shape_material(&mut self, s: &Object) -> Result<String> {
         let bsdf = s.child("bsdf")?;
         let emitter = s.child("emitter")?;
+        let interior = match s.named_child("medium", "interior")? {
+            Some(m) => Some(self.medium(&m)?),
+            None => None,
+        };
+        if let Some(exterior) = s.named_child("medium", "exterior")? {
+            let exterior = self.medium(&exterior)?;
+            if self.camera_medium.as_ref() != Some(&exterior) {
+                return Err(s.error(format!("its exterior medium '{exterior}' is not the sensor's: caustica's media nest, and what lies outside every shape is the sensor's medium")));
+            }
+        }
         if let Some(e) = &emitter {
             if e.plugin != "area" {
                 return Err(e.error("only area emitters can be attached to a shape"));
             }
         }
         let address = |o: &Option<Rc<Object>>| o.as_ref().map_or(0, |o| Rc::as_ptr(o) as usize);
-        let key = (address(&bsdf), address(&emitter));
+        let key = (address(&bsdf), address(&emitter), interior.clone());
         if let Some(name) = self.material_names.get(&key) {
             return Ok(name.clone());
         }
@@ -510,9 +555,19 @@ impl Mapper<'_> {
         };
         let mut name = bsdf.as_ref().map_or("default diffuse".to_owned(), |b| object_name(b));
         if let Some(e) = &emitter {
+            if material.kind.is_some() {
+                return Err(e.error("an emitter on a null BSDF (a medium's boundary only) is not supported"));
+            }
             material.emission = f32x3(self.color(e, "radiance", 1.0)?);
             e.check_all_used()?;
             name = format!("{name} + {}", object_name(e));
+        }
+        if let Some(interior) = &interior {
+            if material.kind.is_none() && material.transparency <= 0.0 {
+                return Err(s.error("an interior medium inside a shape whose BSDF is neither null nor a dielectric: no path could enter it"));
+            }
+            material.interior = Some(interior.clone());
+            name = format!("{name} + {interior}");
         }
         let name = unique_name(&self.materials, name);
         self.materials.insert(name.clone(), material);
@@ -563,6 +618,8 @@ impl Mapper<'_> {
                 material.normal_texture = Some(self.data_texture(&t)?);
                 material
             }
+            // Only a medium's boundary: caustica's type = "null" (its interior from the shape).
+            "null" => MaterialFile { kind: Some(MaterialKind::Null), ..MaterialFile::default() },
             "diffuse" => {
                 match b.texture("reflectance")? {
                     Some(t) => MaterialFile { albedo: Array([1.0; 3]), albedo_texture: Some(self.albedo_texture(&t)?), ..defaults },

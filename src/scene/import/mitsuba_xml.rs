@@ -174,8 +174,20 @@ impl Source {
 }
 
 /// Element names that are objects (plugin instances) rather than properties.
-const OBJECT_TAGS: [&str; 9] =
-    ["bsdf", "shape", "emitter", "sensor", "film", "sampler", "rfilter", "integrator", "texture"];
+const OBJECT_TAGS: [&str; 12] = [
+    "bsdf",
+    "shape",
+    "emitter",
+    "sensor",
+    "film",
+    "sampler",
+    "rfilter",
+    "integrator",
+    "texture",
+    "medium",
+    "phase",
+    "volume",
+];
 
 impl Reader<'_> {
     fn read_file(&mut self, path: &Path, resolver: &mut Resolver) -> Result<()> {
@@ -656,6 +668,19 @@ impl Object {
             }
         }
         Ok(found)
+    }
+
+    /// The nested object (or `<ref>`) with element `tag` given for the parameter `name` (a
+    /// shape's `interior` medium), marked used.
+    pub fn named_child(&self, tag: &str, name: &str) -> Result<Option<Rc<Object>>> {
+        for ((child_name, child), used) in self.children.iter().zip(&self.children_used) {
+            let object = self.resolve(child)?;
+            if object.tag == tag && child_name.as_deref() == Some(name) {
+                used.set(true);
+                return Ok(Some(object));
+            }
+        }
+        Ok(None)
     }
 
     /// At most one nested object with element `tag`.

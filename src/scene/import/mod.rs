@@ -8,6 +8,7 @@
 
 mod convert;
 mod mitsuba;
+mod mitsuba_media;
 mod mitsuba_xml;
 mod pbrt;
 mod scene_parts;

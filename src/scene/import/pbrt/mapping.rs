@@ -81,6 +81,7 @@ pub fn map(model: &Model, files: &InputFiles, base: &Path, scene: &Path, notes: 
         fov: 90.0,
         aperture: 0.0,
         focus_distance: None,
+        medium: None,
     };
     let out = SceneFile::empty(camera, FilmFile::default(), IntegratorFile::default());
     let mut mapper = Mapper {
@@ -208,6 +209,7 @@ impl Mapper<'_> {
             fov: vertical as f32,
             aperture: aperture as f32,
             focus_distance: (aperture > 0.0).then_some(focus as f32),
+            medium: None,
         })
     }
 
