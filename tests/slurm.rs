@@ -20,9 +20,10 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant, SystemTime};
 
 const TASKS: u32 = 8;
-/// Samples per pixel of one task: about 1.5 s of lavapipe on a 32x32 image, so a task can be
-/// interrupted halfway.
-const SPP_PER_TASK: u32 = 1536;
+/// Samples per pixel of one task: a few seconds of Mesa 25's lavapipe on a 32x32 image even on an
+/// idle machine, so that a task can be caught between two checkpoints (at 1536 spp an idle CI
+/// machine finished tasks 2 to 4 before the test could pause one).
+const SPP_PER_TASK: u32 = 8192;
 const SIZE: u32 = 32;
 /// The tasks' `--checkpoint-every` (CHECKPOINT_EVERY of the script): several per task.
 const CHECKPOINT_EVERY: &str = "300ms";
