@@ -113,6 +113,20 @@ fn a_scene_with_every_feature_renders_the_same_with_its_own_kernel() {
         transparency = 1.0
         attenuation_color = [0.6, 0.7, 0.9]
         attenuation_distance = 0.2
+        [materials.haze_boundary]
+        type = "null"
+        interior = "haze"
+        [[media]]
+        name = "haze"
+        type = "homogeneous"
+        sigma_a = [0.5, 0.6, 0.7]
+        sigma_s = [2.0, 1.5, 1.0]
+        phase = "hg"
+        g = 0.4
+        [[spheres]]
+        center = [-0.5, 0.15, 0.7]
+        radius = 0.15
+        material = "haze_boundary"
         [[spheres]]
         center = [0.0, 0.25, 0.4]
         radius = 0.25
